@@ -1,0 +1,182 @@
+// penumbra: the command-line front end. `penumbra render cfg.json -o out.png` renders a
+// config headless; `penumbra devices` lists the Vulkan devices the loader sees.
+#include "penumbra/config/Config.h"
+#include "penumbra/core/Error.h"
+#include "penumbra/gpu/Context.h"
+#include "penumbra/io/Png.h"
+#include "penumbra/render/FrameRenderer.h"
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <optional>
+
+namespace {
+
+struct DeviceFlags {
+    std::string name;
+    std::string type;
+    bool validation = false;
+};
+
+struct RenderFlags {
+    std::string config;
+    std::string output;
+    std::optional<uint32_t> frames;
+    uint32_t warmup = 1;
+    bool timings = false;
+    std::optional<uint32_t> width;
+    std::optional<uint32_t> height;
+};
+
+double median(std::vector<double> v)
+{
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    const size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+penumbra::gpu::ContextOptions contextOptions(const DeviceFlags& flags)
+{
+    penumbra::gpu::ContextOptions options;
+    options.device.nameContains = flags.name;
+    options.device.type = flags.type;
+    options = penumbra::gpu::contextOptionsFromEnvironment(options);
+    if (flags.validation) options.validation = true;
+    return options;
+}
+
+void printTimings(const std::vector<penumbra::render::FrameTimings>& frames)
+{
+    // Passes keep their record order; collect each pass's samples by name.
+    std::vector<std::string> order;
+    std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> samples;
+    std::vector<double> gpuTotal, frameCpu;
+    for (const auto& frame : frames) {
+        double total = 0.0;
+        for (const auto& pass : frame.passes) {
+            if (!samples.count(pass.name)) order.push_back(pass.name);
+            samples[pass.name].first.push_back(pass.gpuMs);
+            samples[pass.name].second.push_back(pass.cpuMs);
+            total += pass.gpuMs;
+        }
+        gpuTotal.push_back(total);
+        frameCpu.push_back(frame.frameCpuMs);
+    }
+    fmt::print("timings: median of {} frame(s)\n", frames.size());
+    fmt::print("  {:<28} {:>10} {:>12}\n", "pass", "GPU ms", "CPU rec ms");
+    for (const std::string& name : order) {
+        fmt::print("  {:<28} {:>10.3f} {:>12.3f}\n", name, median(samples[name].first), median(samples[name].second));
+    }
+    fmt::print("  {:<28} {:>10.3f}\n", "sum of passes (GPU)", median(gpuTotal));
+    fmt::print("  {:<28} {:>10.3f}\n", "frame wall clock (CPU)", median(frameCpu));
+}
+
+int runRender(const RenderFlags& flags, const DeviceFlags& deviceFlags)
+{
+    penumbra::config::RenderConfig config = penumbra::config::loadConfig(flags.config);
+    if (flags.width) config.width = *flags.width;
+    if (flags.height) config.height = *flags.height;
+    if (flags.frames) config.frames = *flags.frames;
+    // Fail on a bad output path before spending seconds rendering.
+    penumbra::io::checkWritable(flags.output);
+
+    penumbra::gpu::Context context(contextOptions(deviceFlags));
+    spdlog::info("device: {} ({})", context.deviceInfo().name, context.deviceInfo().type);
+    const penumbra::scene::Scene scene = penumbra::config::buildScene(config.scene);
+    penumbra::render::FrameRenderer renderer(context, scene, config);
+    spdlog::info("scene: {} instances, {} triangles; {}x{}, {} light(s)", scene.instances.size(),
+                 scene.triangleCount(), config.width, config.height, config.lights.size());
+
+    // Warm-up frames absorb one-time costs (lavapipe JIT-compiles pipelines at first use).
+    const uint32_t warmup = config.frames > 1 ? flags.warmup : 0;
+    std::vector<penumbra::render::FrameTimings> measured;
+    for (uint32_t i = 0; i < warmup + config.frames; ++i) {
+        penumbra::render::FrameTimings t = renderer.renderFrame();
+        if (i >= warmup) measured.push_back(std::move(t));
+    }
+    if (flags.timings) printTimings(measured);
+
+    penumbra::io::writePng(flags.output, renderer.width(), renderer.height(), renderer.readColor());
+    spdlog::info("wrote {}", flags.output);
+
+    if (context.validationEnabled() && context.validationMessageCount() > 0) {
+        spdlog::error("the Vulkan validation layer reported {} message(s)", context.validationMessageCount());
+        return 3;
+    }
+    return 0;
+}
+
+int runDevices()
+{
+    const auto devices = penumbra::gpu::Context::listDevices();
+    if (devices.empty()) {
+        fmt::print(stderr, "penumbra: no Vulkan device found (install mesa-vulkan-drivers for lavapipe)\n");
+        return 1;
+    }
+    for (const auto& d : devices) {
+        fmt::print("{} ({}), Vulkan {}.{}.{}, {}\n", d.name, d.type, VK_API_VERSION_MAJOR(d.apiVersion),
+                   VK_API_VERSION_MINOR(d.apiVersion), VK_API_VERSION_PATCH(d.apiVersion), d.driverInfo);
+    }
+    return 0;
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    spdlog::set_pattern("%^%l%$: %v");
+    CLI::App app{"penumbra: real-time shadows, every technique a plugin"};
+    app.require_subcommand(1);
+    bool verbose = false;
+    app.add_flag("-v,--verbose", verbose, "Log debug detail");
+
+    DeviceFlags deviceFlags;
+    auto addDeviceFlags = [&](CLI::App* cmd) {
+        cmd->add_option("--device", deviceFlags.name,
+                        "Use the Vulkan device whose name contains this text (env PENUMBRA_DEVICE)");
+        cmd->add_option("--device-type", deviceFlags.type, "Use a device of this type")
+            ->check(CLI::IsMember({"discrete", "integrated", "virtual", "cpu"}));
+        cmd->add_flag("--validation", deviceFlags.validation,
+                      "Enable the Vulkan validation layer; exit 3 if it reports anything (env PENUMBRA_VALIDATION=1)");
+    };
+
+    RenderFlags renderFlags;
+    CLI::App* render = app.add_subcommand("render", "Render a scene config to a PNG, headless");
+    render->add_option("config", renderFlags.config, "Scene config (JSON)")->required();
+    render->add_option("-o,--output", renderFlags.output, "Output PNG")->required();
+    render->add_option("--frames", renderFlags.frames, "Frames to render (overrides the config)")
+        ->check(CLI::Range(1u, 100000u));
+    render->add_option("--warmup", renderFlags.warmup, "Untimed frames before the measured ones (with --frames > 1)")
+        ->capture_default_str();
+    render->add_flag("--timings", renderFlags.timings, "Print the median GPU and CPU ms of every pass");
+    render->add_option("--width", renderFlags.width, "Output width (overrides the config)")->check(CLI::Range(1u, 16384u));
+    render->add_option("--height", renderFlags.height, "Output height (overrides the config)")->check(CLI::Range(1u, 16384u));
+    addDeviceFlags(render);
+
+    CLI::App* devices = app.add_subcommand("devices", "List the Vulkan devices the loader reports");
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e);
+    }
+    if (verbose) spdlog::set_level(spdlog::level::debug);
+
+    try {
+        if (render->parsed()) return runRender(renderFlags, deviceFlags);
+        if (devices->parsed()) return runDevices();
+    } catch (const penumbra::Error& e) {
+        fmt::print(stderr, "penumbra: error: {}\n", e.what());
+        return 1;
+    } catch (const std::exception& e) {
+        fmt::print(stderr, "penumbra: internal error: {}\n", e.what());
+        return 2;
+    }
+    return 0;
+}

@@ -1,0 +1,118 @@
+#pragma once
+// The Vulkan 1.3 instance, the chosen physical device, the logical device and its one
+// queue. Headless: no surface extension is needed to render to a PNG.
+#include <vulkan/vulkan.h>
+
+#include <atomic>
+#include <functional>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace penumbra::gpu {
+
+struct DeviceRequest {
+    // Case-insensitive substring of the device name ("llvmpipe", "NVIDIA"); empty = any.
+    std::string nameContains;
+    // "discrete", "integrated", "virtual", "cpu" or empty for any.
+    std::string type;
+};
+
+struct ContextOptions {
+    DeviceRequest device;
+    // Loads VK_LAYER_KHRONOS_validation with synchronization validation and counts
+    // every warning or error it reports (see Context::validationMessageCount).
+    bool validation = false;
+};
+
+// Reads PENUMBRA_DEVICE ("name" or "type:cpu") and PENUMBRA_VALIDATION (0/1) so that a
+// flag is not the only way to pick a device; explicit fields in `base` win.
+ContextOptions contextOptionsFromEnvironment(ContextOptions base);
+
+struct DeviceInfo {
+    std::string name;
+    std::string type;  // "discrete", "integrated", "virtual", "cpu", "other"
+    uint32_t apiVersion = 0;
+    std::string driverInfo;
+};
+
+class Context {
+public:
+    explicit Context(const ContextOptions& options);
+    ~Context();
+    Context(const Context&) = delete;
+    Context& operator=(const Context&) = delete;
+
+    VkInstance instance() const { return instance_; }
+    VkPhysicalDevice physicalDevice() const { return physicalDevice_; }
+    VkDevice device() const { return device_; }
+    VkQueue queue() const { return queue_; }
+    uint32_t queueFamily() const { return queueFamily_; }
+    const DeviceInfo& deviceInfo() const { return info_; }
+    const VkPhysicalDeviceProperties& properties() const { return properties_; }
+    const VkPhysicalDeviceMemoryProperties& memoryProperties() const { return memoryProperties_; }
+    bool validationEnabled() const { return validation_; }
+
+    // Warnings and errors reported by the validation layer since creation.
+    uint32_t validationMessageCount() const { return validationMessages_.load(); }
+    // The first few messages, for a test to print when the count is not zero.
+    std::vector<std::string> validationMessages() const;
+
+    // Index of a memory type allowed by typeBits with all `required` flags, preferring
+    // one that also has `preferred`. Throws GpuError when none fits.
+    uint32_t findMemoryType(uint32_t typeBits, VkMemoryPropertyFlags required,
+                            VkMemoryPropertyFlags preferred = 0) const;
+
+    // Records commands into a one-time command buffer, submits and waits for them.
+    void submitAndWait(const std::function<void(VkCommandBuffer)>& record);
+    // Submits an already recorded command buffer and waits for it (at most 60 s).
+    void submitAndWait(VkCommandBuffer cmd);
+
+    // Debug label for a Vulkan object (VK_EXT_debug_utils, when validation is on).
+    void setName(VkObjectType type, uint64_t handle, const std::string& name) const;
+    void beginLabel(VkCommandBuffer cmd, const std::string& name) const;
+    void endLabel(VkCommandBuffer cmd) const;
+
+    VkCommandPool commandPool() const { return commandPool_; }
+
+    // vkCmdPushDescriptorSetKHR (an extension entry point, loaded at device creation).
+    void pushDescriptorSet(VkCommandBuffer cmd, VkPipelineBindPoint bindPoint, VkPipelineLayout layout,
+                           const std::vector<VkWriteDescriptorSet>& writes) const;
+
+    // Every physical device the loader reports, for error messages and `--list-devices`.
+    static std::vector<DeviceInfo> listDevices();
+
+private:
+    static VKAPI_ATTR VkBool32 VKAPI_CALL onDebugMessage(
+        VkDebugUtilsMessageSeverityFlagBitsEXT severity, VkDebugUtilsMessageTypeFlagsEXT types,
+        const VkDebugUtilsMessengerCallbackDataEXT* data, void* self);
+
+    void createInstance(bool validation);
+    void selectPhysicalDevice(const DeviceRequest& request);
+    void createDevice();
+    void destroy();
+
+    VkInstance instance_ = VK_NULL_HANDLE;
+    VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
+    VkPhysicalDevice physicalDevice_ = VK_NULL_HANDLE;
+    VkDevice device_ = VK_NULL_HANDLE;
+    VkQueue queue_ = VK_NULL_HANDLE;
+    uint32_t queueFamily_ = 0;
+    VkCommandPool commandPool_ = VK_NULL_HANDLE;
+    VkFence fence_ = VK_NULL_HANDLE;
+    DeviceInfo info_;
+    VkPhysicalDeviceProperties properties_{};
+    VkPhysicalDeviceMemoryProperties memoryProperties_{};
+    bool validation_ = false;
+    bool debugUtils_ = false;
+    std::atomic<uint32_t> validationMessages_{0};
+    mutable std::mutex messagesMutex_;
+    std::vector<std::string> firstMessages_;
+    PFN_vkSetDebugUtilsObjectNameEXT setObjectName_ = nullptr;
+    PFN_vkCmdBeginDebugUtilsLabelEXT cmdBeginLabel_ = nullptr;
+    PFN_vkCmdEndDebugUtilsLabelEXT cmdEndLabel_ = nullptr;
+    PFN_vkCmdPushDescriptorSetKHR cmdPushDescriptorSet_ = nullptr;
+};
+
+} // namespace penumbra::gpu

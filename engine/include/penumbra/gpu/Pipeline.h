@@ -1,0 +1,113 @@
+#pragma once
+// Compute and graphics pipelines with one push-descriptor set (VK_KHR_push_descriptor:
+// no descriptor pools to size; lavapipe has no descriptor indexing, so bindings are
+// plain and few) and push constants.
+#include "penumbra/gpu/ShaderCompiler.h"
+
+#include <vulkan/vulkan.h>
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace penumbra::gpu {
+
+class Context;
+class Buffer;
+class Image;
+
+struct Binding {
+    uint32_t binding = 0;
+    VkDescriptorType type = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+    uint32_t count = 1;
+};
+
+struct VertexLayout {
+    uint32_t stride = 0;                        // 0: no vertex buffer
+    std::vector<VkVertexInputAttributeDescription> attributes;
+};
+
+struct GraphicsPipelineDesc {
+    std::string name;
+    std::filesystem::path vertexShader;
+    std::optional<std::filesystem::path> fragmentShader;  // none: depth-only pass
+    std::vector<ShaderDefine> defines;
+    std::vector<Binding> bindings;
+    uint32_t pushConstantBytes = 0;
+    VertexLayout vertexLayout;
+    std::vector<VkFormat> colorFormats;
+    VkFormat depthFormat = VK_FORMAT_UNDEFINED;
+    VkCompareOp depthCompare = VK_COMPARE_OP_GREATER_OR_EQUAL;  // reversed-Z
+    bool depthWrite = true;
+    bool depthBias = false;  // constant/slope/clamp set per draw (dynamic state)
+    VkCullModeFlags cullMode = VK_CULL_MODE_BACK_BIT;
+};
+
+struct ComputePipelineDesc {
+    std::string name;
+    std::filesystem::path shader;
+    std::vector<ShaderDefine> defines;
+    std::vector<Binding> bindings;
+    uint32_t pushConstantBytes = 0;
+};
+
+class Pipeline {
+public:
+    Pipeline() = default;
+    Pipeline(Context& context, const ShaderCompiler& compiler, const ComputePipelineDesc& desc);
+    Pipeline(Context& context, const ShaderCompiler& compiler, const GraphicsPipelineDesc& desc);
+    ~Pipeline();
+    Pipeline(Pipeline&& other) noexcept;
+    Pipeline& operator=(Pipeline&& other) noexcept;
+    Pipeline(const Pipeline&) = delete;
+    Pipeline& operator=(const Pipeline&) = delete;
+
+    VkPipeline handle() const { return pipeline_; }
+    VkPipelineLayout layout() const { return layout_; }
+    VkPipelineBindPoint bindPoint() const { return bindPoint_; }
+    VkShaderStageFlags stages() const { return stages_; }
+
+    void bind(VkCommandBuffer cmd) const;
+    void pushConstants(VkCommandBuffer cmd, const void* data, uint32_t bytes) const;
+
+private:
+    void createLayout(const std::vector<Binding>& bindings, uint32_t pushConstantBytes, const std::string& name);
+    void release();
+
+    VkDevice device_ = VK_NULL_HANDLE;
+    VkDescriptorSetLayout setLayout_ = VK_NULL_HANDLE;
+    VkPipelineLayout layout_ = VK_NULL_HANDLE;
+    VkPipeline pipeline_ = VK_NULL_HANDLE;
+    VkPipelineBindPoint bindPoint_ = VK_PIPELINE_BIND_POINT_COMPUTE;
+    VkShaderStageFlags stages_ = 0;
+};
+
+// Collects the descriptors of one draw or dispatch and pushes them.
+class DescriptorPush {
+public:
+    DescriptorPush& storageImage(uint32_t binding, const Image& image);
+    DescriptorPush& sampledImage(uint32_t binding, const Image& image, VkSampler sampler,
+                                 VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    // One array binding of combined image samplers, all in `layout`.
+    DescriptorPush& sampledImages(uint32_t binding, const std::vector<const Image*>& images, VkSampler sampler,
+                                  VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    DescriptorPush& storageBuffer(uint32_t binding, const Buffer& buffer);
+    DescriptorPush& uniformBuffer(uint32_t binding, const Buffer& buffer);
+    void push(const Context& context, VkCommandBuffer cmd, const Pipeline& pipeline);
+
+private:
+    struct Entry {
+        uint32_t binding;
+        VkDescriptorType type;
+        std::vector<VkDescriptorImageInfo> images;
+        VkDescriptorBufferInfo buffer{};
+    };
+    std::vector<Entry> entries_;
+};
+
+// A sampler owned by the caller; compare = true makes a depth-comparison sampler.
+VkSampler createSampler(Context& context, VkFilter filter, VkSamplerAddressMode address,
+                        std::optional<VkCompareOp> compare = std::nullopt);
+
+} // namespace penumbra::gpu

@@ -1,0 +1,90 @@
+#pragma once
+// GPU buffers and images with their memory. One allocation per resource for now; the
+// pass scheduler (graph module) is where transient memory gets aliased.
+#include <vulkan/vulkan.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace penumbra::gpu {
+
+class Context;
+
+class Buffer {
+public:
+    Buffer() = default;
+    // Host-visible buffers are persistently mapped (mapped() != nullptr).
+    Buffer(Context& context, VkDeviceSize size, VkBufferUsageFlags usage, bool hostVisible,
+           const std::string& name);
+    ~Buffer();
+    Buffer(Buffer&& other) noexcept;
+    Buffer& operator=(Buffer&& other) noexcept;
+    Buffer(const Buffer&) = delete;
+    Buffer& operator=(const Buffer&) = delete;
+
+    VkBuffer handle() const { return buffer_; }
+    VkDeviceSize size() const { return size_; }
+    void* mapped() const { return mapped_; }
+
+private:
+    void release();
+    VkDevice device_ = VK_NULL_HANDLE;
+    VkBuffer buffer_ = VK_NULL_HANDLE;
+    VkDeviceMemory memory_ = VK_NULL_HANDLE;
+    VkDeviceSize size_ = 0;
+    void* mapped_ = nullptr;
+};
+
+struct ImageDesc {
+    uint32_t width = 1;
+    uint32_t height = 1;
+    VkFormat format = VK_FORMAT_R8G8B8A8_UNORM;
+    VkImageUsageFlags usage = 0;
+    std::string name;
+};
+
+class Image {
+public:
+    Image() = default;
+    Image(Context& context, const ImageDesc& desc);
+    ~Image();
+    Image(Image&& other) noexcept;
+    Image& operator=(Image&& other) noexcept;
+    Image(const Image&) = delete;
+    Image& operator=(const Image&) = delete;
+
+    VkImage handle() const { return image_; }
+    VkImageView view() const { return view_; }
+    const ImageDesc& desc() const { return desc_; }
+    VkImageAspectFlags aspect() const;
+    VkDeviceSize memorySize() const { return memorySize_; }
+
+private:
+    void release();
+    VkDevice device_ = VK_NULL_HANDLE;
+    VkImage image_ = VK_NULL_HANDLE;
+    VkImageView view_ = VK_NULL_HANDLE;
+    VkDeviceMemory memory_ = VK_NULL_HANDLE;
+    VkDeviceSize memorySize_ = 0;
+    ImageDesc desc_;
+};
+
+bool isDepthFormat(VkFormat format);
+// Bytes per texel of the formats the engine reads back.
+uint32_t texelSize(VkFormat format);
+
+// Creates a device-local buffer filled with `bytes` (through a staging copy).
+Buffer uploadBuffer(Context& context, std::span<const std::byte> bytes, VkBufferUsageFlags usage,
+                    const std::string& name);
+
+// Copies a whole 2D image (in `layout`, left in that layout) into host memory, rows
+// tightly packed. Used for PNG output and for tests.
+std::vector<std::byte> readImage(Context& context, const Image& image, VkImageLayout layout);
+
+// Same, as floats: R32_SFLOAT gives one float per texel, R32G32B32A32_SFLOAT four.
+std::vector<float> readImageFloats(Context& context, const Image& image, VkImageLayout layout);
+
+} // namespace penumbra::gpu

@@ -1,0 +1,47 @@
+#pragma once
+// Run-time GLSL -> SPIR-V with the glslang library, so that shaders can be edited
+// without rebuilding. `#include "x.glsl"` resolves against the including file's folder
+// first, then the search path (the engine's shaders/ folder, then a plugin's folder).
+#include <vulkan/vulkan.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace penumbra::gpu {
+
+struct ShaderDefine {
+    std::string name;
+    std::string value;
+};
+
+class ShaderCompiler {
+public:
+    explicit ShaderCompiler(std::vector<std::filesystem::path> searchPath);
+
+    // Compiles `file` (absolute, or relative to the search path) for the stage implied
+    // by its extension (.vert .frag .comp .geom .tesc .tese). Throws ShaderCompileError
+    // whose message has one "path:line: error: message" line per diagnostic.
+    std::vector<uint32_t> compile(const std::filesystem::path& file,
+                                  const std::vector<ShaderDefine>& defines = {}) const;
+
+    // Same, for source text that names itself `virtualPath` in diagnostics.
+    std::vector<uint32_t> compileSource(const std::string& source, const std::filesystem::path& virtualPath,
+                                        VkShaderStageFlagBits stage,
+                                        const std::vector<ShaderDefine>& defines = {}) const;
+
+    std::filesystem::path resolve(const std::filesystem::path& file) const;
+    const std::vector<std::filesystem::path>& searchPath() const { return searchPath_; }
+
+private:
+    std::vector<std::filesystem::path> searchPath_;
+};
+
+// The engine's shader folder: $PENUMBRA_SHADER_DIR, else the source tree's shaders/.
+std::filesystem::path engineShaderDir();
+
+VkShaderStageFlagBits stageFromExtension(const std::filesystem::path& file);
+
+} // namespace penumbra::gpu

@@ -1,0 +1,273 @@
+#include "penumbra/gpu/Resources.h"
+
+#include "penumbra/core/Error.h"
+#include "penumbra/gpu/Check.h"
+#include "penumbra/gpu/Context.h"
+
+#include <fmt/format.h>
+
+#include <cstring>
+#include <utility>
+
+namespace penumbra::gpu {
+
+Buffer::Buffer(Context& context, VkDeviceSize size, VkBufferUsageFlags usage, bool hostVisible,
+               const std::string& name)
+    : device_(context.device()), size_(size)
+{
+    if (size == 0) {
+        throw GpuError(fmt::format("buffer '{}': size 0", name));
+    }
+    VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+    info.size = size;
+    info.usage = usage;
+    info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+    check(vkCreateBuffer(device_, &info, nullptr, &buffer_), "vkCreateBuffer " + name);
+    context.setName(VK_OBJECT_TYPE_BUFFER, reinterpret_cast<uint64_t>(buffer_), name);
+
+    VkMemoryRequirements req{};
+    vkGetBufferMemoryRequirements(device_, buffer_, &req);
+    VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+    alloc.allocationSize = req.size;
+    alloc.memoryTypeIndex = hostVisible
+        ? context.findMemoryType(req.memoryTypeBits,
+                                 VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
+                                 VK_MEMORY_PROPERTY_HOST_CACHED_BIT)
+        : context.findMemoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+    try {
+        check(vkAllocateMemory(device_, &alloc, nullptr, &memory_), "vkAllocateMemory buffer " + name);
+        check(vkBindBufferMemory(device_, buffer_, memory_, 0), "vkBindBufferMemory " + name);
+        if (hostVisible) {
+            check(vkMapMemory(device_, memory_, 0, VK_WHOLE_SIZE, 0, &mapped_), "vkMapMemory " + name);
+        }
+    } catch (...) {
+        release();
+        throw;
+    }
+}
+
+Buffer::~Buffer() { release(); }
+
+Buffer::Buffer(Buffer&& other) noexcept { *this = std::move(other); }
+
+Buffer& Buffer::operator=(Buffer&& other) noexcept
+{
+    if (this != &other) {
+        release();
+        device_ = std::exchange(other.device_, VK_NULL_HANDLE);
+        buffer_ = std::exchange(other.buffer_, VK_NULL_HANDLE);
+        memory_ = std::exchange(other.memory_, VK_NULL_HANDLE);
+        size_ = std::exchange(other.size_, 0);
+        mapped_ = std::exchange(other.mapped_, nullptr);
+    }
+    return *this;
+}
+
+void Buffer::release()
+{
+    if (!device_) {
+        return;
+    }
+    if (buffer_) vkDestroyBuffer(device_, buffer_, nullptr);
+    if (memory_) vkFreeMemory(device_, memory_, nullptr);
+    buffer_ = VK_NULL_HANDLE;
+    memory_ = VK_NULL_HANDLE;
+    mapped_ = nullptr;
+    device_ = VK_NULL_HANDLE;
+}
+
+bool isDepthFormat(VkFormat format)
+{
+    return format == VK_FORMAT_D32_SFLOAT || format == VK_FORMAT_D16_UNORM ||
+           format == VK_FORMAT_X8_D24_UNORM_PACK32 || format == VK_FORMAT_D24_UNORM_S8_UINT ||
+           format == VK_FORMAT_D32_SFLOAT_S8_UINT;
+}
+
+uint32_t texelSize(VkFormat format)
+{
+    switch (format) {
+    case VK_FORMAT_R8G8B8A8_UNORM:
+    case VK_FORMAT_R8G8B8A8_SRGB:
+    case VK_FORMAT_R32_SFLOAT:
+    case VK_FORMAT_D32_SFLOAT:
+    case VK_FORMAT_R32_UINT: return 4;
+    case VK_FORMAT_R16_SFLOAT: return 2;
+    case VK_FORMAT_R16G16B16A16_SFLOAT:
+    case VK_FORMAT_R32G32_SFLOAT: return 8;
+    case VK_FORMAT_R32G32B32A32_SFLOAT: return 16;
+    default: throw GpuError(fmt::format("texelSize: format {} is not supported for read-back",
+                                        static_cast<int>(format)));
+    }
+}
+
+Image::Image(Context& context, const ImageDesc& desc) : device_(context.device()), desc_(desc)
+{
+    if (desc.width == 0 || desc.height == 0) {
+        throw GpuError(fmt::format("image '{}': size {}x{} is empty", desc.name, desc.width, desc.height));
+    }
+    const uint32_t maxDim = context.properties().limits.maxImageDimension2D;
+    if (desc.width > maxDim || desc.height > maxDim) {
+        throw GpuError(fmt::format("image '{}': size {}x{} exceeds the device limit {}", desc.name,
+                                   desc.width, desc.height, maxDim));
+    }
+    VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+    info.imageType = VK_IMAGE_TYPE_2D;
+    info.format = desc.format;
+    info.extent = {desc.width, desc.height, 1};
+    info.mipLevels = 1;
+    info.arrayLayers = 1;
+    info.samples = VK_SAMPLE_COUNT_1_BIT;
+    info.tiling = VK_IMAGE_TILING_OPTIMAL;
+    info.usage = desc.usage;
+    info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+    info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    check(vkCreateImage(device_, &info, nullptr, &image_), "vkCreateImage " + desc.name);
+    context.setName(VK_OBJECT_TYPE_IMAGE, reinterpret_cast<uint64_t>(image_), desc.name);
+    try {
+        VkMemoryRequirements req{};
+        vkGetImageMemoryRequirements(device_, image_, &req);
+        VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+        alloc.allocationSize = req.size;
+        alloc.memoryTypeIndex = context.findMemoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+        check(vkAllocateMemory(device_, &alloc, nullptr, &memory_), "vkAllocateMemory image " + desc.name);
+        memorySize_ = req.size;
+        check(vkBindImageMemory(device_, image_, memory_, 0), "vkBindImageMemory " + desc.name);
+
+        VkImageViewCreateInfo viewInfo{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+        viewInfo.image = image_;
+        viewInfo.viewType = VK_IMAGE_VIEW_TYPE_2D;
+        viewInfo.format = desc.format;
+        viewInfo.subresourceRange = {aspect(), 0, 1, 0, 1};
+        check(vkCreateImageView(device_, &viewInfo, nullptr, &view_), "vkCreateImageView " + desc.name);
+    } catch (...) {
+        release();
+        throw;
+    }
+}
+
+Image::~Image() { release(); }
+
+Image::Image(Image&& other) noexcept { *this = std::move(other); }
+
+Image& Image::operator=(Image&& other) noexcept
+{
+    if (this != &other) {
+        release();
+        device_ = std::exchange(other.device_, VK_NULL_HANDLE);
+        image_ = std::exchange(other.image_, VK_NULL_HANDLE);
+        view_ = std::exchange(other.view_, VK_NULL_HANDLE);
+        memory_ = std::exchange(other.memory_, VK_NULL_HANDLE);
+        memorySize_ = std::exchange(other.memorySize_, 0);
+        desc_ = std::move(other.desc_);
+    }
+    return *this;
+}
+
+void Image::release()
+{
+    if (!device_) {
+        return;
+    }
+    if (view_) vkDestroyImageView(device_, view_, nullptr);
+    if (image_) vkDestroyImage(device_, image_, nullptr);
+    if (memory_) vkFreeMemory(device_, memory_, nullptr);
+    view_ = VK_NULL_HANDLE;
+    image_ = VK_NULL_HANDLE;
+    memory_ = VK_NULL_HANDLE;
+    device_ = VK_NULL_HANDLE;
+}
+
+VkImageAspectFlags Image::aspect() const
+{
+    return isDepthFormat(desc_.format) ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT;
+}
+
+Buffer uploadBuffer(Context& context, std::span<const std::byte> bytes, VkBufferUsageFlags usage,
+                    const std::string& name)
+{
+    Buffer staging(context, bytes.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, name + " (staging)");
+    std::memcpy(staging.mapped(), bytes.data(), bytes.size());
+    Buffer buffer(context, bytes.size(), usage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false, name);
+    context.submitAndWait([&](VkCommandBuffer cmd) {
+        VkBufferCopy region{0, 0, bytes.size()};
+        vkCmdCopyBuffer(cmd, staging.handle(), buffer.handle(), 1, &region);
+        VkMemoryBarrier2 barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
+        barrier.srcStageMask = VK_PIPELINE_STAGE_2_COPY_BIT;
+        barrier.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
+        barrier.dstStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+        barrier.dstAccessMask = VK_ACCESS_2_MEMORY_READ_BIT;
+        VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+        dep.memoryBarrierCount = 1;
+        dep.pMemoryBarriers = &barrier;
+        vkCmdPipelineBarrier2(cmd, &dep);
+    });
+    return buffer;
+}
+
+std::vector<std::byte> readImage(Context& context, const Image& image, VkImageLayout layout)
+{
+    const ImageDesc& desc = image.desc();
+    const VkDeviceSize size = VkDeviceSize(desc.width) * desc.height * texelSize(desc.format);
+    Buffer staging(context, size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, desc.name + " (read-back)");
+    context.submitAndWait([&](VkCommandBuffer cmd) {
+        VkImageMemoryBarrier2 toSrc{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2};
+        toSrc.srcStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+        toSrc.srcAccessMask = VK_ACCESS_2_MEMORY_WRITE_BIT;
+        toSrc.dstStageMask = VK_PIPELINE_STAGE_2_COPY_BIT;
+        toSrc.dstAccessMask = VK_ACCESS_2_TRANSFER_READ_BIT;
+        toSrc.oldLayout = layout;
+        toSrc.newLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+        toSrc.image = image.handle();
+        toSrc.subresourceRange = {image.aspect(), 0, 1, 0, 1};
+        VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+        dep.imageMemoryBarrierCount = 1;
+        dep.pImageMemoryBarriers = &toSrc;
+        vkCmdPipelineBarrier2(cmd, &dep);
+
+        VkBufferImageCopy region{};
+        region.imageSubresource = {image.aspect(), 0, 0, 1};
+        region.imageExtent = {desc.width, desc.height, 1};
+        vkCmdCopyImageToBuffer(cmd, image.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, staging.handle(), 1,
+                               &region);
+
+        VkImageMemoryBarrier2 back = toSrc;
+        back.srcStageMask = VK_PIPELINE_STAGE_2_COPY_BIT;
+        back.srcAccessMask = 0;
+        back.dstStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+        back.dstAccessMask = VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT;
+        back.oldLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+        back.newLayout = layout;
+        VkBufferMemoryBarrier2 toHost{VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER_2};
+        toHost.srcStageMask = VK_PIPELINE_STAGE_2_COPY_BIT;
+        toHost.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
+        toHost.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
+        toHost.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
+        toHost.buffer = staging.handle();
+        toHost.size = VK_WHOLE_SIZE;
+        VkDependencyInfo dep2{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+        dep2.imageMemoryBarrierCount = 1;
+        dep2.pImageMemoryBarriers = &back;
+        dep2.bufferMemoryBarrierCount = 1;
+        dep2.pBufferMemoryBarriers = &toHost;
+        vkCmdPipelineBarrier2(cmd, &dep2);
+    });
+    std::vector<std::byte> out(size);
+    std::memcpy(out.data(), staging.mapped(), size);
+    return out;
+}
+
+std::vector<float> readImageFloats(Context& context, const Image& image, VkImageLayout layout)
+{
+    const VkFormat format = image.desc().format;
+    if (format != VK_FORMAT_R32_SFLOAT && format != VK_FORMAT_R32G32B32A32_SFLOAT &&
+        format != VK_FORMAT_D32_SFLOAT && format != VK_FORMAT_R32G32_SFLOAT) {
+        throw GpuError(fmt::format("readImageFloats: image '{}' is not a 32-bit float format",
+                                   image.desc().name));
+    }
+    const std::vector<std::byte> bytes = readImage(context, image, layout);
+    std::vector<float> out(bytes.size() / sizeof(float));
+    std::memcpy(out.data(), bytes.data(), out.size() * sizeof(float));
+    return out;
+}
+
+} // namespace penumbra::gpu

@@ -1,0 +1,207 @@
+#include "penumbra/gpu/ShaderCompiler.h"
+
+#include "penumbra/core/Error.h"
+
+#include <glslang/SPIRV/GlslangToSpv.h>
+#include <glslang/Public/ResourceLimits.h>
+#include <glslang/Public/ShaderLang.h>
+#include <fmt/format.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <memory>
+#include <mutex>
+#include <regex>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace penumbra::gpu {
+namespace {
+
+// glslang keeps global state: initialise once per process, finalise at exit.
+struct GlslangProcess {
+    GlslangProcess() { glslang::InitializeProcess(); }
+    ~GlslangProcess() { glslang::FinalizeProcess(); }
+};
+
+void ensureGlslang()
+{
+    static GlslangProcess process;
+}
+
+std::string readText(const fs::path& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    if (!in) {
+        throw ShaderCompileError(fmt::format("{}: cannot open shader file", path.string()));
+    }
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+EShLanguage toLanguage(VkShaderStageFlagBits stage)
+{
+    switch (stage) {
+    case VK_SHADER_STAGE_VERTEX_BIT: return EShLangVertex;
+    case VK_SHADER_STAGE_FRAGMENT_BIT: return EShLangFragment;
+    case VK_SHADER_STAGE_COMPUTE_BIT: return EShLangCompute;
+    case VK_SHADER_STAGE_GEOMETRY_BIT: return EShLangGeometry;
+    case VK_SHADER_STAGE_TESSELLATION_CONTROL_BIT: return EShLangTessControl;
+    case VK_SHADER_STAGE_TESSELLATION_EVALUATION_BIT: return EShLangTessEvaluation;
+    default: throw ShaderCompileError("unsupported shader stage");
+    }
+}
+
+// Resolves #include: the including file's folder first, then the search path.
+class Includer : public glslang::TShader::Includer {
+public:
+    explicit Includer(const std::vector<fs::path>& searchPath) : searchPath_(searchPath) {}
+
+    IncludeResult* includeLocal(const char* header, const char* includer, size_t depth) override
+    {
+        fs::path dir = fs::path(includer).parent_path();
+        if (!dir.empty()) {
+            if (IncludeResult* r = tryOpen(dir / header)) return r;
+        }
+        return includeSystem(header, includer, depth);
+    }
+
+    IncludeResult* includeSystem(const char* header, const char*, size_t) override
+    {
+        for (const fs::path& dir : searchPath_) {
+            if (IncludeResult* r = tryOpen(dir / header)) return r;
+        }
+        return nullptr;  // glslang reports "cannot find include file" at the #include line
+    }
+
+    void releaseInclude(IncludeResult* result) override
+    {
+        if (result) {
+            delete static_cast<std::string*>(result->userData);
+            delete result;
+        }
+    }
+
+private:
+    IncludeResult* tryOpen(const fs::path& path)
+    {
+        std::error_code ec;
+        if (!fs::is_regular_file(path, ec)) return nullptr;
+        auto* text = new std::string(readText(path));
+        return new IncludeResult(fs::weakly_canonical(path).string(), text->data(), text->size(), text);
+    }
+
+    const std::vector<fs::path>& searchPath_;
+};
+
+// glslang writes "ERROR: <name>:<line>: <message>"; we rewrite each diagnostic as the
+// compiler-style "<path>:<line>: error: <message>" that editors and terminals link.
+std::string formatLog(const std::string& log, const std::string& mainName)
+{
+    static const std::regex diag(R"(^(ERROR|WARNING): ([^:]*):(\d+): (.*)$)");
+    std::ostringstream out;
+    std::istringstream in(log);
+    std::string line;
+    while (std::getline(in, line)) {
+        std::smatch m;
+        if (std::regex_match(line, m, diag)) {
+            std::string file = m[2].str();
+            if (file.empty() || file == "0") file = mainName;
+            out << file << ':' << m[3].str() << ": " << (m[1].str() == "ERROR" ? "error" : "warning") << ": "
+                << m[4].str() << '\n';
+        } else if (!line.empty() && line.find("compilation errors") == std::string::npos) {
+            out << mainName << ": " << line << '\n';
+        }
+    }
+    return out.str();
+}
+
+} // namespace
+
+VkShaderStageFlagBits stageFromExtension(const fs::path& file)
+{
+    const std::string ext = file.extension().string();
+    if (ext == ".vert") return VK_SHADER_STAGE_VERTEX_BIT;
+    if (ext == ".frag") return VK_SHADER_STAGE_FRAGMENT_BIT;
+    if (ext == ".comp") return VK_SHADER_STAGE_COMPUTE_BIT;
+    if (ext == ".geom") return VK_SHADER_STAGE_GEOMETRY_BIT;
+    if (ext == ".tesc") return VK_SHADER_STAGE_TESSELLATION_CONTROL_BIT;
+    if (ext == ".tese") return VK_SHADER_STAGE_TESSELLATION_EVALUATION_BIT;
+    throw ShaderCompileError(fmt::format("{}: unknown shader stage for extension '{}' "
+                                         "(expected .vert .frag .comp .geom .tesc .tese)",
+                                         file.string(), ext));
+}
+
+fs::path engineShaderDir()
+{
+    if (const char* env = std::getenv("PENUMBRA_SHADER_DIR"); env && *env) {
+        return env;
+    }
+    return PENUMBRA_DEFAULT_SHADER_DIR;
+}
+
+ShaderCompiler::ShaderCompiler(std::vector<fs::path> searchPath) : searchPath_(std::move(searchPath)) {}
+
+fs::path ShaderCompiler::resolve(const fs::path& file) const
+{
+    std::error_code ec;
+    if (file.is_absolute()) {
+        if (fs::is_regular_file(file, ec)) return file;
+    } else {
+        for (const fs::path& dir : searchPath_) {
+            if (fs::is_regular_file(dir / file, ec)) return fs::weakly_canonical(dir / file);
+        }
+    }
+    std::string dirs;
+    for (const fs::path& dir : searchPath_) dirs += (dirs.empty() ? "" : ", ") + dir.string();
+    throw ShaderCompileError(fmt::format("{}: shader file not found (searched: {})", file.string(), dirs));
+}
+
+std::vector<uint32_t> ShaderCompiler::compile(const fs::path& file, const std::vector<ShaderDefine>& defines) const
+{
+    const fs::path path = resolve(file);
+    return compileSource(readText(path), path, stageFromExtension(path), defines);
+}
+
+std::vector<uint32_t> ShaderCompiler::compileSource(const std::string& source, const fs::path& virtualPath,
+                                                    VkShaderStageFlagBits stage,
+                                                    const std::vector<ShaderDefine>& defines) const
+{
+    ensureGlslang();
+    const EShLanguage language = toLanguage(stage);
+    glslang::TShader shader(language);
+    const std::string name = virtualPath.string();
+    const char* text = source.c_str();
+    const int length = static_cast<int>(source.size());
+    const char* names = name.c_str();
+    shader.setStringsWithLengthsAndNames(&text, &length, &names, 1);
+
+    std::string preamble = "#extension GL_GOOGLE_include_directive : require\n";
+    for (const ShaderDefine& d : defines) {
+        preamble += fmt::format("#define {} {}\n", d.name, d.value);
+    }
+    shader.setPreamble(preamble.c_str());
+    shader.setEnvInput(glslang::EShSourceGlsl, language, glslang::EShClientVulkan, 100);
+    shader.setEnvClient(glslang::EShClientVulkan, glslang::EShTargetVulkan_1_3);
+    shader.setEnvTarget(glslang::EShTargetSpv, glslang::EShTargetSpv_1_6);
+
+    Includer includer(searchPath_);
+    const auto messages = static_cast<EShMessages>(EShMsgSpvRules | EShMsgVulkanRules);
+    if (!shader.parse(GetDefaultResources(), 460, false, messages, includer)) {
+        throw ShaderCompileError(formatLog(std::string(shader.getInfoLog()) + shader.getInfoDebugLog(), name));
+    }
+    glslang::TProgram program;
+    program.addShader(&shader);
+    if (!program.link(messages)) {
+        throw ShaderCompileError(formatLog(std::string(program.getInfoLog()) + program.getInfoDebugLog(), name));
+    }
+    std::vector<uint32_t> spirv;
+    glslang::SpvOptions options;
+    options.generateDebugInfo = false;
+    glslang::GlslangToSpv(*program.getIntermediate(language), spirv, &options);
+    return spirv;
+}
+
+} // namespace penumbra::gpu

@@ -1,0 +1,18 @@
+// The one contract between the engine and a shadow technique (DESIGN.md): for each light
+// a screen-space image V_l, one float per pixel, holding the fraction of that light that
+// reaches the surface seen in the pixel: 1 lit, 0 umbra, in between for penumbrae and
+// translucent casters. Pixels that see no geometry hold 1. Stored as R32F.
+#ifndef PENUMBRA_VISIBILITY_GLSL
+#define PENUMBRA_VISIBILITY_GLSL
+
+#define VISIBILITY_FORMAT r32f
+#define VISIBILITY_NO_GEOMETRY 1.0
+
+// Every writer clamps: a technique may never hand the shading pass a NaN or a value
+// outside [0, 1] (NaN fails every comparison, so it maps to 0 here, then to the clamp).
+float sanitizeVisibility(float v)
+{
+    return (v >= 0.0) ? min(v, 1.0) : 0.0;
+}
+
+#endif
