@@ -5,6 +5,7 @@
 #include "penumbra/gpu/Context.h"
 
 #include <fmt/format.h>
+#include <glm/gtc/packing.hpp>
 
 #include <cstring>
 #include <utility>
@@ -259,12 +260,19 @@ std::vector<std::byte> readImage(Context& context, const Image& image, VkImageLa
 std::vector<float> readImageFloats(Context& context, const Image& image, VkImageLayout layout)
 {
     const VkFormat format = image.desc().format;
+    const std::vector<std::byte> bytes = readImage(context, image, layout);
+    if (format == VK_FORMAT_R16_SFLOAT || format == VK_FORMAT_R16G16B16A16_SFLOAT) {
+        std::vector<uint16_t> halves(bytes.size() / sizeof(uint16_t));
+        std::memcpy(halves.data(), bytes.data(), halves.size() * sizeof(uint16_t));
+        std::vector<float> out(halves.size());
+        for (size_t i = 0; i < halves.size(); ++i) out[i] = glm::unpackHalf1x16(halves[i]);
+        return out;
+    }
     if (format != VK_FORMAT_R32_SFLOAT && format != VK_FORMAT_R32G32B32A32_SFLOAT &&
         format != VK_FORMAT_D32_SFLOAT && format != VK_FORMAT_R32G32_SFLOAT) {
-        throw GpuError(fmt::format("readImageFloats: image '{}' is not a 32-bit float format",
+        throw GpuError(fmt::format("readImageFloats: image '{}' is not a 16- or 32-bit float format",
                                    image.desc().name));
     }
-    const std::vector<std::byte> bytes = readImage(context, image, layout);
     std::vector<float> out(bytes.size() / sizeof(float));
     std::memcpy(out.data(), bytes.data(), out.size() * sizeof(float));
     return out;

@@ -258,4 +258,9 @@ std::vector<float> FrameRenderer::readPositions() const
     return gpu::readImageFloats(context_, gPosition_, VK_IMAGE_LAYOUT_GENERAL);
 }
 
+std::vector<float> FrameRenderer::readNormals() const
+{
+    return gpu::readImageFloats(context_, gNormal_, VK_IMAGE_LAYOUT_GENERAL);
+}
+
 } // namespace penumbra::render

@@ -84,7 +84,8 @@ Buffer uploadBuffer(Context& context, std::span<const std::byte> bytes, VkBuffer
 // tightly packed. Used for PNG output and for tests.
 std::vector<std::byte> readImage(Context& context, const Image& image, VkImageLayout layout);
 
-// Same, as floats: R32_SFLOAT gives one float per texel, R32G32B32A32_SFLOAT four.
+// Same, as floats: one per channel (R32F gives one per texel, RGBA16F/RGBA32F four);
+// half floats are widened.
 std::vector<float> readImageFloats(Context& context, const Image& image, VkImageLayout layout);
 
 } // namespace penumbra::gpu

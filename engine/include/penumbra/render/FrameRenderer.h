@@ -52,6 +52,8 @@ public:
     std::vector<float> readVisibility(size_t light) const;
     // G-buffer world positions, four floats per pixel (w = 0 where no geometry).
     std::vector<float> readPositions() const;
+    // G-buffer world normals, four floats per pixel.
+    std::vector<float> readNormals() const;
 
 private:
     void recordGBuffer(VkCommandBuffer cmd);

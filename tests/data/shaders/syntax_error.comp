@@ -1,0 +1,7 @@
+#version 460
+layout(local_size_x = 1) in;
+
+void main()
+{
+    float x = undefinedThing * 2.0;
+}

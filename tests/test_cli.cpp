@@ -1,0 +1,175 @@
+// The `penumbra` command as a user runs it: exit codes, messages that say what and where,
+// and no partial or clobbered output file on failure.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliResult {
+    int exitCode = -1;
+    std::string out;
+    std::string err;
+};
+
+std::string slurp(const fs::path& p)
+{
+    std::ifstream in(p, std::ios::binary);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+class Cli : public ::testing::Test {
+protected:
+    void SetUp() override
+    {
+        dir = fs::temp_directory_path() /
+              fmt::format("penumbra_cli_{}_{}", ::getpid(), ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::create_directories(dir);
+    }
+    void TearDown() override { fs::remove_all(dir); }
+
+    // Runs penumbra with `args` (already shell-quoted), `env` prepended as VAR=value pairs.
+    CliResult run(const std::string& args, const std::string& env = "") const
+    {
+        const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+        const std::string cmd = fmt::format("{} '{}' {} > '{}' 2> '{}' < /dev/null", env, PENUMBRA_EXE, args,
+                                            out.string(), err.string());
+        const int status = std::system(cmd.c_str());
+        CliResult r;
+        r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+        r.out = slurp(out);
+        r.err = slurp(err);
+        return r;
+    }
+
+    std::string config(const std::string& name) const { return fmt::format("'{}/config/{}'", PENUMBRA_SOURCE_DIR, name); }
+    std::string data(const std::string& name) const { return fmt::format("'{}/{}'", PENUMBRA_TEST_DATA_DIR, name); }
+
+    fs::path dir;
+};
+
+} // namespace
+
+TEST_F(Cli, RendersTheDefaultSceneToPng)
+{
+    const fs::path png = dir / "out.png";
+    const CliResult r = run(fmt::format("render {} -o '{}' --width 160 --height 90 --validation", config("default.json"), png.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const std::string bytes = slurp(png);
+    ASSERT_GT(bytes.size(), 8u);
+    EXPECT_EQ(bytes.substr(1, 3), "PNG");
+}
+
+TEST_F(Cli, TimingsListEveryPass)
+{
+    const fs::path png = dir / "out.png";
+    const CliResult r = run(fmt::format("render {} -o '{}' --width 160 --height 90 --frames 3 --timings", config("default.json"),
+                                  png.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    for (const char* pass : {"gbuffer", "light0.hard.shadow_map", "light0.hard.visibility", "shading", "median of 3 frame(s)"}) {
+        EXPECT_NE(r.out.find(pass), std::string::npos) << pass << "\n" << r.out;
+    }
+}
+
+TEST_F(Cli, MissingConfig)
+{
+    const CliResult r = run(fmt::format("render '{}/nope.json' -o '{}/out.png'", dir.string(), dir.string()));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("nope.json: config file not found"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out.png"));
+}
+
+TEST_F(Cli, MalformedConfig)
+{
+    const CliResult r = run(fmt::format("render {} -o '{}/out.png'", data("configs/malformed.json"), dir.string()));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("malformed.json: malformed JSON"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("line 4"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out.png"));
+}
+
+TEST_F(Cli, InvalidConfigNamesJsonPath)
+{
+    const fs::path cfg = dir / "bad.json";
+    std::ofstream(cfg) << R"({"camera": {"position": [0, 5, 10], "target": [0, 0, 0]},
+        "lights": [{"position": [0, 10, 0], "target": [0, 0, 0], "intensity": -3}]})";
+    const CliResult r = run(fmt::format("render '{}' -o '{}/out.png'", cfg.string(), dir.string()));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("bad.json: /lights/0/intensity: must be in [0, "), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out.png"));
+}
+
+TEST_F(Cli, UnknownDeviceNameListsDevices)
+{
+    const CliResult r = run(fmt::format("render {} -o '{}/out.png' --device no-such-gpu", config("default.json"), dir.string()));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("no suitable device"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("no-such-gpu"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("available:"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out.png"));
+}
+
+TEST_F(Cli, UnknownDeviceFromEnvironment)
+{
+    const CliResult r = run(fmt::format("render {} -o '{}/out.png'", config("default.json"), dir.string()),
+                      "PENUMBRA_DEVICE=no-such-gpu");
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("no suitable device"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, NoVulkanDriver)
+{
+    // Point the loader at a driver manifest that does not exist: no ICD at all.
+    const CliResult r = run(fmt::format("render {} -o '{}/out.png'", config("default.json"), dir.string()),
+                      "VK_DRIVER_FILES=/nonexistent/icd.json VK_ICD_FILENAMES=/nonexistent/icd.json");
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("Vulkan"), std::string::npos) << r.err;
+    EXPECT_TRUE(r.err.find("no Vulkan") != std::string::npos || r.err.find("driver") != std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out.png"));
+}
+
+TEST_F(Cli, MissingOutputFolder)
+{
+    const CliResult r = run(fmt::format("render {} -o '{}/no/such/dir/out.png'", config("default.json"), dir.string()));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("does not exist"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, UnwritableOutputLeavesNoFile)
+{
+    // /proc refuses new files even for root; the error must name the path.
+    const CliResult r = run(fmt::format("render {} -o /proc/penumbra-out.png --width 32 --height 32", config("default.json")));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.err.find("/proc/penumbra-out.png"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists("/proc/penumbra-out.png"));
+}
+
+TEST_F(Cli, FailedRenderKeepsTheExistingOutput)
+{
+    const fs::path png = dir / "out.png";
+    std::ofstream(png) << "keep me";
+    const CliResult r = run(fmt::format("render {} -o '{}' --device no-such-gpu", config("default.json"), png.string()));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_EQ(slurp(png), "keep me");
+    // No temporary files left beside it either.
+    size_t files = 0;
+    for (const auto& e : fs::directory_iterator(dir)) files += e.path().extension() != ".txt";
+    EXPECT_EQ(files, 1u);
+}
+
+TEST_F(Cli, UsageErrors)
+{
+    EXPECT_NE(run("").exitCode, 0);
+    EXPECT_NE(run("render").exitCode, 0);
+    EXPECT_NE(run(fmt::format("render {} -o x.png --frames 0", config("default.json"))).exitCode, 0);
+}

@@ -1,0 +1,71 @@
+#include "TestContext.h"
+
+#include "penumbra/core/Error.h"
+#include "penumbra/gpu/Context.h"
+
+#include <gtest/gtest.h>
+
+using namespace penumbra;
+
+TEST(Device, CreatesOnLavapipeWithValidation)
+{
+    gpu::ContextOptions options;
+    options.device.nameContains = "llvmpipe";
+    options.validation = true;
+    gpu::Context context(options);
+    EXPECT_NE(context.device(), VK_NULL_HANDLE);
+    EXPECT_NE(context.queue(), VK_NULL_HANDLE);
+    EXPECT_EQ(context.deviceInfo().type, "cpu");
+    EXPECT_GE(context.deviceInfo().apiVersion, VK_API_VERSION_1_3);
+    EXPECT_NE(context.deviceInfo().name.find("llvmpipe"), std::string::npos);
+    test::expectNoValidationMessages(context);
+}
+
+TEST(Device, SelectsByTypeCaseInsensitiveName)
+{
+    gpu::ContextOptions options;
+    options.device.nameContains = "LLVMPIPE";
+    options.device.type = "cpu";
+    gpu::Context context(options);
+    EXPECT_EQ(context.deviceInfo().type, "cpu");
+}
+
+TEST(Device, UnknownNameListsAvailableDevices)
+{
+    gpu::ContextOptions options;
+    options.device.nameContains = "no-such-gpu-9000";
+    try {
+        gpu::Context context(options);
+        FAIL() << "expected GpuError";
+    } catch (const GpuError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("no-such-gpu-9000"), std::string::npos) << what;
+        EXPECT_NE(what.find("available"), std::string::npos) << what;
+        EXPECT_NE(what.find("llvmpipe"), std::string::npos) << what;
+    }
+}
+
+TEST(Device, UnknownTypeIsRejected)
+{
+    gpu::ContextOptions options;
+    options.device.type = "quantum";
+    EXPECT_THROW(gpu::Context{options}, GpuError);
+}
+
+TEST(Device, ListsLavapipe)
+{
+    const auto devices = gpu::Context::listDevices();
+    ASSERT_FALSE(devices.empty());
+    bool found = false;
+    for (const auto& d : devices) found |= d.name.find("llvmpipe") != std::string::npos;
+    EXPECT_TRUE(found);
+}
+
+TEST(Device, EnvironmentPicksDevice)
+{
+    setenv("PENUMBRA_DEVICE", "type:cpu", 1);
+    const gpu::ContextOptions options = gpu::contextOptionsFromEnvironment({});
+    unsetenv("PENUMBRA_DEVICE");
+    EXPECT_EQ(options.device.type, "cpu");
+    EXPECT_TRUE(options.device.nameContains.empty());
+}

@@ -1,0 +1,63 @@
+#include "penumbra/core/Error.h"
+#include "penumbra/io/Png.h"
+
+#include <gtest/gtest.h>
+#define STB_IMAGE_IMPLEMENTATION
+#include <stb/stb_image.h>
+
+#include <fstream>
+
+using namespace penumbra;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path tempDir()
+{
+    const fs::path dir = fs::temp_directory_path() / ("penumbra_png_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    return dir;
+}
+
+} // namespace
+
+TEST(Png, WritesAndReadsBack)
+{
+    const fs::path file = tempDir() / "rgba.png";
+    std::vector<uint8_t> rgba = {255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 10, 20, 30, 255};
+    io::writePng(file, 2, 2, rgba);
+    int w = 0, h = 0, n = 0;
+    unsigned char* data = stbi_load(file.c_str(), &w, &h, &n, 4);
+    ASSERT_NE(data, nullptr);
+    EXPECT_EQ(w, 2);
+    EXPECT_EQ(h, 2);
+    EXPECT_TRUE(std::equal(rgba.begin(), rgba.end(), data));
+    stbi_image_free(data);
+    // Nothing but the PNG is left beside it (no temporary file).
+    size_t files = 0;
+    for ([[maybe_unused]] const auto& e : fs::directory_iterator(file.parent_path())) ++files;
+    EXPECT_EQ(files, 1u);
+    fs::remove_all(file.parent_path());
+}
+
+TEST(Png, MissingFolderIsNamed)
+{
+    try {
+        io::writePng("/nonexistent-dir/out.png", 1, 1, {0, 0, 0, 255});
+        FAIL() << "expected Error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("output folder '/nonexistent-dir' does not exist"), std::string::npos);
+    }
+}
+
+TEST(Png, SizeMismatchIsAnError)
+{
+    EXPECT_THROW(io::writePng(tempDir() / "x.png", 2, 2, {0, 0, 0, 255}), Error);
+    EXPECT_FALSE(fs::exists(tempDir() / "x.png"));
+    fs::remove_all(tempDir());
+}
+
+TEST(Png, DirectoryAsOutputIsAnError)
+{
+    EXPECT_THROW(io::checkWritable(fs::temp_directory_path()), Error);
+}
