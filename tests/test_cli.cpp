@@ -173,3 +173,22 @@ TEST_F(Cli, UsageErrors)
     EXPECT_NE(run("render").exitCode, 0);
     EXPECT_NE(run(fmt::format("render {} -o x.png --frames 0", config("default.json"))).exitCode, 0);
 }
+
+TEST_F(Cli, NoDeviceOfRequestedType)
+{
+    // The CI machine has only lavapipe (a CPU device): asking for a discrete GPU fails
+    // with the list of what there is.
+    const CliResult r = run(fmt::format("render {} -o '{}/out.png' --device-type discrete", config("default.json"), dir.string()),
+                            "PENUMBRA_DEVICE=");
+    if (r.exitCode == 0) GTEST_SKIP() << "this machine has a discrete GPU";
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("no suitable device: wanted a device of type 'discrete'"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out.png"));
+}
+
+TEST_F(Cli, ListsDevices)
+{
+    const CliResult r = run("devices");
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("Vulkan 1.3"), std::string::npos) << r.out;
+}

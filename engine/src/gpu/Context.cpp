@@ -2,6 +2,7 @@
 
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Check.h"
+#include "SanitizerSupport.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -119,6 +120,15 @@ std::string missingRequirements(VkPhysicalDevice device)
 
 } // namespace
 
+bool validationByDefault()
+{
+#ifdef NDEBUG
+    return false;
+#else
+    return true;
+#endif
+}
+
 ContextOptions contextOptionsFromEnvironment(ContextOptions base)
 {
     if (const char* env = std::getenv("PENUMBRA_DEVICE"); env && *env &&
@@ -225,6 +235,7 @@ void Context::createInstance(bool validation)
         info.pNext = &messengerInfo;
     }
     check(vkCreateInstance(&info, nullptr, &instance_), "vkCreateInstance");
+    pinLoadedLibrariesForLeakReports();
 
     if (validation) {
         messengerInfo.pNext = nullptr;
@@ -357,6 +368,7 @@ void Context::createDevice()
     info.enabledExtensionCount = 1;
     info.ppEnabledExtensionNames = extensions;
     check(vkCreateDevice(physicalDevice_, &info, nullptr, &device_), "vkCreateDevice");
+    pinLoadedLibrariesForLeakReports();
     vkGetDeviceQueue(device_, queueFamily_, 0, &queue_);
     cmdPushDescriptorSet_ = reinterpret_cast<PFN_vkCmdPushDescriptorSetKHR>(
         vkGetDeviceProcAddr(device_, "vkCmdPushDescriptorSetKHR"));
@@ -379,6 +391,7 @@ std::vector<DeviceInfo> Context::listDevices()
     info.pApplicationInfo = &app;
     VkInstance instance = VK_NULL_HANDLE;
     check(vkCreateInstance(&info, nullptr, &instance), "vkCreateInstance");
+    pinLoadedLibrariesForLeakReports();
     std::vector<DeviceInfo> out;
     try {
         for (VkPhysicalDevice device : enumerateDevices(instance)) {

@@ -19,11 +19,14 @@ struct DeviceRequest {
     std::string type;
 };
 
+// True in Debug builds of the engine: validation is on by default there.
+bool validationByDefault();
+
 struct ContextOptions {
     DeviceRequest device;
     // Loads VK_LAYER_KHRONOS_validation with synchronization validation and counts
     // every warning or error it reports (see Context::validationMessageCount).
-    bool validation = false;
+    bool validation = validationByDefault();
 };
 
 // Reads PENUMBRA_DEVICE ("name" or "type:cpu") and PENUMBRA_VALIDATION (0/1) so that a
