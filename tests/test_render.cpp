@@ -14,7 +14,24 @@ using namespace penumbra;
 
 namespace {
 
-class DefaultRender : public test::GpuTest {
+// The same scene and view at another scale: every length times s, intensities times s²
+// so that irradiance (I / d²) and the image stay the same. Nothing in the engine may
+// depend on absolute units.
+void scaleConfig(config::RenderConfig& c, float s)
+{
+    scene::BoxGridParams& g = c.scene.boxGrid;
+    for (float* length : {&g.boxSize, &g.spacing, &g.minHeight, &g.maxHeight, &g.sphereRadius, &g.planeSize}) *length *= s;
+    c.camera.position *= s;
+    c.camera.target *= s;
+    c.camera.nearWorld *= s;
+    for (config::LightConfig& l : c.lights) {
+        l.light.position *= s;
+        l.light.intensity *= s * s;
+    }
+}
+
+// Renders config/default.json at a scene scale (the test parameter).
+class DefaultRender : public test::GpuTest, public ::testing::WithParamInterface<float> {
 protected:
     void SetUp() override
     {
@@ -24,6 +41,7 @@ protected:
         // output resolution.
         config.width = 320;
         config.height = 180;
+        scaleConfig(config, GetParam());
         scene = config::buildScene(config.scene);
         renderer = std::make_unique<render::FrameRenderer>(*context, scene, config);
         renderer->renderFrame();
@@ -47,7 +65,7 @@ protected:
 
 } // namespace
 
-TEST_F(DefaultRender, VisibilityIsFiniteAndInUnitRange)
+TEST_P(DefaultRender, VisibilityIsFiniteAndInUnitRange)
 {
     ASSERT_EQ(visibility.size(), size_t(config.width) * config.height);
     size_t shadowed = 0;
@@ -62,7 +80,7 @@ TEST_F(DefaultRender, VisibilityIsFiniteAndInUnitRange)
     EXPECT_LT(shadowed, visibility.size() / 2);
 }
 
-TEST_F(DefaultRender, BackgroundIsLit)
+TEST_P(DefaultRender, BackgroundIsLit)
 {
     size_t background = 0;
     for (size_t i = 0; i < visibility.size(); ++i) {
@@ -74,7 +92,7 @@ TEST_F(DefaultRender, BackgroundIsLit)
     EXPECT_GT(background, 0u);  // the default camera sees sky
 }
 
-TEST_F(DefaultRender, VisibilityMatchesRayCastGeometry)
+TEST_P(DefaultRender, VisibilityMatchesRayCastGeometry)
 {
     // Cast a segment from every pixel's G-buffer surface point to the light. A pixel
     // counts as surely shadowed (or surely lit) only when it and its 8 neighbours agree:
@@ -134,7 +152,7 @@ TEST_F(DefaultRender, VisibilityMatchesRayCastGeometry)
     EXPECT_GT(surelyLit, 10000u);
 }
 
-TEST_F(DefaultRender, ColorImageHasShadowsDarkerThanLitGround)
+TEST_P(DefaultRender, ColorImageHasShadowsDarkerThanLitGround)
 {
     const std::vector<uint8_t> color = renderer->readColor();
     ASSERT_EQ(color.size(), size_t(config.width) * config.height * 4);
@@ -160,3 +178,10 @@ TEST_F(DefaultRender, ColorImageHasShadowsDarkerThanLitGround)
     ASSERT_GT(nShadow, 100u);
     EXPECT_GT(lit / double(nLit), 3.0 * shadow / double(nShadow));
 }
+
+// 1: the default scene; 1e-3 and 1e5: the scale extremes the engine promises to handle.
+INSTANTIATE_TEST_SUITE_P(Scales, DefaultRender, ::testing::Values(1.0f, 1e-3f, 1e5f),
+                         [](const ::testing::TestParamInfo<float>& info) {
+                             return info.param == 1.0f ? std::string("unit")
+                                                       : info.param < 1.0f ? std::string("milli") : std::string("e5");
+                         });

@@ -61,14 +61,18 @@ void main()
     for (uint i = 0u; i < pc.lightCount; ++i) {
         LightData light = lights[i];
         vec3 toLight = light.positionWorld.xyz - position.xyz;
-        // Guard: a surface point at the light's position receives nothing rather than inf.
-        float dist2 = max(dot(toLight, toLight), 1e-12);
+        // Guard: a surface point at the light's position must not divide by zero. The
+        // floor is FLT_MIN-sized, far below any squared distance in a scene of any scale;
+        // the irradiance it can produce is bounded by the clamp before tone mapping.
+        float dist2 = max(dot(toLight, toLight), 1e-30);
         vec3 l = toLight * inversesqrt(dist2);
         float cosTheta = max(dot(n, l), 0.0);
         float spot = spotFactor(light, -toLight);
         float v = lightVisibility(i, pixel);
         radiance += albedo / kPi * light.radiance.rgb * (cosTheta * spot * v / dist2);
     }
-    vec3 color = linearToSrgb(tonemapAces(radiance * pc.ambient.w));
+    // The tone curve saturates long before 1e4; the clamp keeps x*x inside fp32 so that
+    // a huge irradiance maps to white instead of inf/inf = NaN.
+    vec3 color = linearToSrgb(tonemapAces(min(radiance * pc.ambient.w, vec3(1e4))));
     imageStore(outColor, pixel, vec4(color, 1.0));
 }

@@ -11,7 +11,7 @@
 #include <fstream>
 #include <memory>
 #include <mutex>
-#include <regex>
+#include <cctype>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -98,22 +98,40 @@ private:
 
 // glslang writes "ERROR: <name>:<line>: <message>"; we rewrite each diagnostic as the
 // compiler-style "<path>:<line>: error: <message>" that editors and terminals link.
+// (Parsed by hand: GCC 12's <regex> trips -Wmaybe-uninitialized under the sanitizers.)
+std::string formatDiagnostic(const std::string& line, const std::string& mainName)
+{
+    std::string severity;
+    std::string rest;
+    for (const char* prefix : {"ERROR: ", "WARNING: "}) {
+        if (line.rfind(prefix, 0) == 0) {
+            severity = prefix[0] == 'E' ? "error" : "warning";
+            rest = line.substr(std::char_traits<char>::length(prefix));
+        }
+    }
+    if (severity.empty()) return line.empty() ? std::string() : mainName + ": " + line;
+    // "<name>:<line>: <message>", where <name> may itself contain ':' (never "...:<digits>: ").
+    for (size_t colon = rest.find(':'); colon != std::string::npos; colon = rest.find(':', colon + 1)) {
+        size_t end = colon + 1;
+        while (end < rest.size() && std::isdigit(static_cast<unsigned char>(rest[end]))) ++end;
+        if (end > colon + 1 && rest.compare(end, 2, ": ") == 0) {
+            std::string file = rest.substr(0, colon);
+            if (file.empty() || file == "0") file = mainName;
+            return file + ":" + rest.substr(colon + 1, end - colon - 1) + ": " + severity + ": " + rest.substr(end + 2);
+        }
+    }
+    return mainName + ": " + severity + ": " + rest;
+}
+
 std::string formatLog(const std::string& log, const std::string& mainName)
 {
-    static const std::regex diag(R"(^(ERROR|WARNING): ([^:]*):(\d+): (.*)$)");
     std::ostringstream out;
     std::istringstream in(log);
     std::string line;
     while (std::getline(in, line)) {
-        std::smatch m;
-        if (std::regex_match(line, m, diag)) {
-            std::string file = m[2].str();
-            if (file.empty() || file == "0") file = mainName;
-            out << file << ':' << m[3].str() << ": " << (m[1].str() == "ERROR" ? "error" : "warning") << ": "
-                << m[4].str() << '\n';
-        } else if (!line.empty() && line.find("compilation errors") == std::string::npos) {
-            out << mainName << ": " << line << '\n';
-        }
+        if (line.find("compilation errors") != std::string::npos) continue;  // glslang's summary line
+        const std::string formatted = formatDiagnostic(line, mainName);
+        if (!formatted.empty()) out << formatted << '\n';
     }
     return out.str();
 }

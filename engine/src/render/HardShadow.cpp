@@ -32,8 +32,8 @@ HardShadowPipelines::HardShadowPipelines(gpu::Context& ctx, const gpu::ShaderCom
                   {2, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
     c.pushConstantBytes = sizeof(glm::mat4);
     visibility = gpu::Pipeline(ctx, compiler, c);
-    // Nearest filtering: one comparison, a hard 0/1 result. Border white with
-    // CLAMP_TO_BORDER would also work; the shader treats outside-the-map as lit itself.
+    // Nearest filtering: one comparison, a hard 0/1 result. Points outside the map never
+    // reach the sampler: the shader treats them as lit.
     compareSampler = gpu::createSampler(ctx, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
                                         VK_COMPARE_OP_GREATER_OR_EQUAL);
 }
