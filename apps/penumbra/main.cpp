@@ -8,6 +8,7 @@
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -130,6 +131,8 @@ int runDevices()
 
 int main(int argc, char** argv)
 {
+    // Logs go to stderr so that stdout carries only results (timings) for scripts.
+    spdlog::set_default_logger(spdlog::stderr_color_mt("penumbra"));
     spdlog::set_pattern("%^%l%$: %v");
     CLI::App app{"penumbra: real-time shadows, every technique a plugin"};
     app.require_subcommand(1);

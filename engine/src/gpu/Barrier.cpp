@@ -23,4 +23,17 @@ void transition(VkCommandBuffer cmd, const Image& image, const ImageAccess& befo
     vkCmdPipelineBarrier2(cmd, &dep);
 }
 
+void memoryBarrier(VkCommandBuffer cmd, const MemoryAccess& before, const MemoryAccess& after)
+{
+    VkMemoryBarrier2 barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
+    barrier.srcStageMask = before.stage;
+    barrier.srcAccessMask = before.access;
+    barrier.dstStageMask = after.stage;
+    barrier.dstAccessMask = after.access;
+    VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+    dep.memoryBarrierCount = 1;
+    dep.pMemoryBarriers = &barrier;
+    vkCmdPipelineBarrier2(cmd, &dep);
+}
+
 } // namespace penumbra::gpu

@@ -1,6 +1,7 @@
 #include "penumbra/gpu/GpuTimer.h"
 
 #include "penumbra/core/Error.h"
+#include "penumbra/gpu/Barrier.h"
 #include "penumbra/gpu/Check.h"
 #include "penumbra/gpu/Context.h"
 
@@ -42,13 +43,7 @@ uint32_t GpuTimer::beginScope(VkCommandBuffer cmd, const std::string& name)
     // lavapipe resolves a timestamp when it flushes; without this barrier a timestamp
     // followed by compute work reads late (PLATFORM.md). On a GPU it makes the scope
     // measure the pass alone rather than its overlap with the previous one.
-    VkMemoryBarrier2 barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
-    barrier.srcStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
-    barrier.dstStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
-    VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-    dep.memoryBarrierCount = 1;
-    dep.pMemoryBarriers = &barrier;
-    vkCmdPipelineBarrier2(cmd, &dep);
+    memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0}, {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0});
     return scope;
 }
 

@@ -1,6 +1,7 @@
 #include "penumbra/gpu/Resources.h"
 
 #include "penumbra/core/Error.h"
+#include "penumbra/gpu/Barrier.h"
 #include "penumbra/gpu/Check.h"
 #include "penumbra/gpu/Context.h"
 
@@ -192,15 +193,8 @@ Buffer uploadBuffer(Context& context, std::span<const std::byte> bytes, VkBuffer
     context.submitAndWait([&](VkCommandBuffer cmd) {
         VkBufferCopy region{0, 0, bytes.size()};
         vkCmdCopyBuffer(cmd, staging.handle(), buffer.handle(), 1, &region);
-        VkMemoryBarrier2 barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
-        barrier.srcStageMask = VK_PIPELINE_STAGE_2_COPY_BIT;
-        barrier.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
-        barrier.dstStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
-        barrier.dstAccessMask = VK_ACCESS_2_MEMORY_READ_BIT;
-        VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-        dep.memoryBarrierCount = 1;
-        dep.pMemoryBarriers = &barrier;
-        vkCmdPipelineBarrier2(cmd, &dep);
+        memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT},
+                      {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT});
     });
     return buffer;
 }
@@ -210,47 +204,23 @@ std::vector<std::byte> readImage(Context& context, const Image& image, VkImageLa
     const ImageDesc& desc = image.desc();
     const VkDeviceSize size = VkDeviceSize(desc.width) * desc.height * texelSize(desc.format);
     Buffer staging(context, size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, desc.name + " (read-back)");
+    // `layout` with any earlier access -> copy source -> back to `layout`; the copy's
+    // writes are made visible to the host.
+    const ImageAccess before{layout, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT};
+    const ImageAccess copySource{VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
+                                 VK_ACCESS_2_TRANSFER_READ_BIT};
+    const ImageAccess after{layout, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                            VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT};
     context.submitAndWait([&](VkCommandBuffer cmd) {
-        VkImageMemoryBarrier2 toSrc{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2};
-        toSrc.srcStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
-        toSrc.srcAccessMask = VK_ACCESS_2_MEMORY_WRITE_BIT;
-        toSrc.dstStageMask = VK_PIPELINE_STAGE_2_COPY_BIT;
-        toSrc.dstAccessMask = VK_ACCESS_2_TRANSFER_READ_BIT;
-        toSrc.oldLayout = layout;
-        toSrc.newLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
-        toSrc.image = image.handle();
-        toSrc.subresourceRange = {image.aspect(), 0, 1, 0, 1};
-        VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-        dep.imageMemoryBarrierCount = 1;
-        dep.pImageMemoryBarriers = &toSrc;
-        vkCmdPipelineBarrier2(cmd, &dep);
-
+        transition(cmd, image, before, copySource);
         VkBufferImageCopy region{};
         region.imageSubresource = {image.aspect(), 0, 0, 1};
         region.imageExtent = {desc.width, desc.height, 1};
         vkCmdCopyImageToBuffer(cmd, image.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, staging.handle(), 1,
                                &region);
-
-        VkImageMemoryBarrier2 back = toSrc;
-        back.srcStageMask = VK_PIPELINE_STAGE_2_COPY_BIT;
-        back.srcAccessMask = 0;
-        back.dstStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
-        back.dstAccessMask = VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT;
-        back.oldLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
-        back.newLayout = layout;
-        VkBufferMemoryBarrier2 toHost{VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER_2};
-        toHost.srcStageMask = VK_PIPELINE_STAGE_2_COPY_BIT;
-        toHost.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
-        toHost.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
-        toHost.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
-        toHost.buffer = staging.handle();
-        toHost.size = VK_WHOLE_SIZE;
-        VkDependencyInfo dep2{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-        dep2.imageMemoryBarrierCount = 1;
-        dep2.pImageMemoryBarriers = &back;
-        dep2.bufferMemoryBarrierCount = 1;
-        dep2.pBufferMemoryBarriers = &toHost;
-        vkCmdPipelineBarrier2(cmd, &dep2);
+        transition(cmd, image, copySource, after);
+        memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT},
+                      {VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT});
     });
     std::vector<std::byte> out(size);
     std::memcpy(out.data(), staging.mapped(), size);

@@ -13,6 +13,14 @@ struct ImageAccess {
     VkAccessFlags2 access;
 };
 
+struct MemoryAccess {
+    VkPipelineStageFlags2 stage;
+    VkAccessFlags2 access;
+};
+
+// A global memory dependency: `before`'s writes become visible to `after`.
+void memoryBarrier(VkCommandBuffer cmd, const MemoryAccess& before, const MemoryAccess& after);
+
 // Transitions `image` from `before` (what last touched it) to `after` (the next use).
 void transition(VkCommandBuffer cmd, const Image& image, const ImageAccess& before, const ImageAccess& after);
 
