@@ -41,7 +41,7 @@ TEST(ShaderCompiler, CompilesEveryEngineShader)
     for (const auto& entry : fs::recursive_directory_iterator(gpu::engineShaderDir())) {
         if (!entry.is_regular_file() || entry.path().extension() == ".glsl") continue;
         SCOPED_TRACE(entry.path().string());
-        EXPECT_NO_THROW(compiler().compile(entry.path(), {{"MAX_LIGHTS", "8"}}));
+        EXPECT_NO_THROW(compiler().compile(entry.path(), {{"LIGHT_COUNT", "8"}}));
         ++count;
     }
     EXPECT_GE(count, 5u);

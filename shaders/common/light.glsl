@@ -1,4 +1,4 @@
-// Lights as the shading pass reads them (one std430 array; see render/Lighting.cpp).
+// Lights as the shading pass reads them (one std430 array, filled by render/FrameRenderer.cpp).
 #ifndef PENUMBRA_LIGHT_GLSL
 #define PENUMBRA_LIGHT_GLSL
 

@@ -28,7 +28,6 @@ struct LightData {  // matches shaders/common/light.glsl
 struct ShadingPush {
     glm::vec4 ambient;
     glm::vec4 background;
-    uint32_t lightCount;
 };
 
 double msSince(std::chrono::steady_clock::time_point start)
@@ -88,11 +87,11 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
     gpu::ComputePipelineDesc s;
     s.name = "shading";
     s.shader = "engine/shading.comp";
-    s.defines = {{"MAX_LIGHTS", std::to_string(config::kMaxLights)}};
+    s.defines = {{"LIGHT_COUNT", std::to_string(config.lights.size())}};
     s.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
                   {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
                   {2, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {3, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, config::kMaxLights},
+                  {3, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, static_cast<uint32_t>(config.lights.size())},
                   {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
                   {5, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
     s.pushConstantBytes = sizeof(ShadingPush);
@@ -221,10 +220,7 @@ void FrameRenderer::recordShading(VkCommandBuffer cmd)
 {
     gpu::transition(cmd, color_, gpu::access::kUndefined, gpu::access::kComputeWrite);
     std::vector<const gpu::Image*> visibility;
-    for (size_t i = 0; i < config::kMaxLights; ++i) {
-        // Unused slots repeat light 0's image: every descriptor in the array must be valid.
-        visibility.push_back(&shadows_[i < shadows_.size() ? i : 0]->visibility());
-    }
+    for (const auto& shadow : shadows_) visibility.push_back(&shadow->visibility());
     shadingPipeline_.bind(cmd);
     gpu::DescriptorPush()
         .storageImage(0, gPosition_)
@@ -234,7 +230,7 @@ void FrameRenderer::recordShading(VkCommandBuffer cmd)
         .storageBuffer(4, lightBuffer_)
         .storageImage(5, color_)
         .push(context_, cmd, shadingPipeline_);
-    const ShadingPush push{ambient_, background_, static_cast<uint32_t>(shadows_.size())};
+    const ShadingPush push{ambient_, background_};
     shadingPipeline_.pushConstants(cmd, &push, sizeof(push));
     vkCmdDispatch(cmd, (width_ + 7) / 8, (height_ + 7) / 8, 1);
     gpu::transition(cmd, color_, gpu::access::kComputeWrite, gpu::access::kComputeRead);
