@@ -10,7 +10,7 @@ RayCaster::RayCaster(const scene::Scene& scene)
     for (const scene::Instance& inst : scene.instances) {
         InstanceTriangles t;
         const scene::Mesh& mesh = scene.meshes.at(inst.mesh);
-        const glm::dmat4 m(inst.transform);
+        const glm::dmat4 m(scene.instanceTransform(inst));
         t.boxMin = glm::dvec3(std::numeric_limits<double>::max());
         t.boxMax = -t.boxMin;
         for (uint32_t index : mesh.indices) {

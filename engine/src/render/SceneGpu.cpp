@@ -44,7 +44,9 @@ SceneGpu::SceneGpu(gpu::Context& context, const scene::Scene& scene)
     std::vector<InstanceData> table;
     for (uint32_t i = 0; i < scene.instances.size(); ++i) {
         const scene::Instance& inst = scene.instances[i];
-        table.push_back({inst.transform, glm::inverseTranspose(inst.transform), inst.material.baseColor});
+        const glm::mat4& model = scene.instanceTransform(inst);
+        const scene::Material& material = scene.materials.at(scene.meshes.at(inst.mesh).material);
+        table.push_back({model, glm::inverseTranspose(model), material.baseColor});
         const Range& r = ranges.at(inst.mesh);
         if (r.indexCount > 0) {
             draws_.push_back({r.indexCount, r.firstIndex, r.vertexOffset, i});

@@ -25,30 +25,58 @@ void Aabb::extend(const Aabb& box)
     }
 }
 
-Aabb Scene::meshBounds(uint32_t mesh) const
+float Aabb::surfaceArea() const
 {
-    Aabb box;
-    for (const Vertex& v : meshes.at(mesh).vertices) box.extend(v.position);
-    return box;
+    const glm::vec3 e = extent();
+    return 2.0f * (e.x * e.y + e.y * e.z + e.z * e.x);
 }
 
-Aabb Scene::instanceBounds(const Instance& instance) const
+Aabb Aabb::transformed(const glm::mat4& m) const
 {
-    const Aabb local = meshBounds(instance.mesh);
-    Aabb world;
-    if (local.empty()) return world;
+    Aabb out;
+    if (empty()) return out;
     for (int corner = 0; corner < 8; ++corner) {
-        const glm::vec3 p{corner & 1 ? local.max.x : local.min.x, corner & 2 ? local.max.y : local.min.y,
-                          corner & 4 ? local.max.z : local.min.z};
-        world.extend(glm::vec3(instance.transform * glm::vec4(p, 1.0f)));
+        const glm::vec3 p{corner & 1 ? max.x : min.x, corner & 2 ? max.y : min.y, corner & 4 ? max.z : min.z};
+        out.extend(glm::vec3(m * glm::vec4(p, 1.0f)));
     }
-    return world;
+    return out;
+}
+
+void Mesh::computeBounds()
+{
+    bounds = Aabb{};
+    for (const Vertex& v : vertices) bounds.extend(v.position);
+}
+
+uint32_t Scene::addInstance(uint32_t mesh, uint32_t node)
+{
+    if (mesh >= meshes.size() || node >= graph.size()) {
+        throw Error(fmt::format("scene: instance of mesh {} under node {}: no such mesh or node", mesh, node));
+    }
+    instances.push_back({mesh, node, meshes[mesh].bounds.transformed(graph.world(node))});
+    return static_cast<uint32_t>(instances.size() - 1);
+}
+
+std::vector<uint32_t> Scene::updateTransforms()
+{
+    std::vector<uint32_t> changed;
+    const std::vector<uint32_t> moved = graph.update();
+    if (moved.empty()) return changed;
+    std::vector<uint8_t> nodeMoved(graph.size(), 0);
+    for (uint32_t n : moved) nodeMoved[n] = 1;
+    for (uint32_t i = 0; i < instances.size(); ++i) {
+        Instance& inst = instances[i];
+        if (!nodeMoved[inst.node]) continue;
+        inst.worldBounds = meshes[inst.mesh].bounds.transformed(graph.world(inst.node));
+        changed.push_back(i);
+    }
+    return changed;
 }
 
 Aabb Scene::bounds() const
 {
     Aabb box;
-    for (const Instance& instance : instances) box.extend(instanceBounds(instance));
+    for (const Instance& instance : instances) box.extend(instance.worldBounds);
     return box;
 }
 
@@ -70,7 +98,7 @@ Mesh makeBox(const std::string& name)
         const auto base = static_cast<uint32_t>(mesh.vertices.size());
         const glm::vec2 corners[4] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
         for (const glm::vec2& c : corners) {
-            mesh.vertices.push_back({0.5f * (n + c.x * t + c.y * b), n});
+            mesh.vertices.push_back({0.5f * (n + c.x * t + c.y * b), n, 0.5f * (c + 1.0f)});
         }
         // t × b = n, so the corners run counter-clockwise seen from outside.
         mesh.indices.insert(mesh.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
@@ -82,7 +110,7 @@ Mesh makePlane(const std::string& name)
 {
     Mesh mesh{name, {}, {}};
     const glm::vec3 n{0, 1, 0};
-    mesh.vertices = {{{-0.5f, 0, -0.5f}, n}, {{0.5f, 0, -0.5f}, n}, {{0.5f, 0, 0.5f}, n}, {{-0.5f, 0, 0.5f}, n}};
+    mesh.vertices = {{{-0.5f, 0, -0.5f}, n, {0, 0}}, {{0.5f, 0, -0.5f}, n, {1, 0}}, {{0.5f, 0, 0.5f}, n, {1, 1}}, {{-0.5f, 0, 0.5f}, n, {0, 1}}};
     // Counter-clockwise seen from above (+Y).
     mesh.indices = {0, 2, 1, 0, 3, 2};
     return mesh;
@@ -100,7 +128,7 @@ Mesh makeSphere(const std::string& name, uint32_t segments)
         for (uint32_t s = 0; s <= segments; ++s) {
             const float phi = glm::two_pi<float>() * float(s) / float(segments);
             const glm::vec3 p{std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi)};
-            mesh.vertices.push_back({p, p});
+            mesh.vertices.push_back({p, p, {float(s) / float(segments), float(r) / float(rings)}});
         }
     }
     const uint32_t stride = segments + 1;
@@ -118,14 +146,24 @@ Mesh makeSphere(const std::string& name, uint32_t segments)
 Scene generateBoxGrid(const BoxGridParams& p)
 {
     Scene scene;
-    scene.meshes.push_back(makePlane("ground"));
-    scene.meshes.push_back(makeBox("box"));
-    scene.meshes.push_back(makeSphere("sphere", p.sphereSegments));
+    auto addMesh = [&](Mesh mesh, const Material& material) {
+        mesh.material = static_cast<uint32_t>(scene.materials.size());
+        mesh.computeBounds();
+        scene.materials.push_back(material);
+        scene.meshes.push_back(std::move(mesh));
+        return static_cast<uint32_t>(scene.meshes.size() - 1);
+    };
+    const uint32_t root = scene.graph.addNode("box-grid", kNoParent, glm::mat4(1.0f));
+    auto place = [&](uint32_t mesh, const std::string& name, const glm::mat4& local) {
+        scene.addInstance(mesh, scene.graph.addNode(name, static_cast<int32_t>(root), local));
+    };
 
-    Instance ground{0, glm::scale(glm::mat4(1.0f), glm::vec3(p.planeSize, 1.0f, p.planeSize)), {}};
-    ground.material.baseColor = {0.75f, 0.75f, 0.72f, 1.0f};
-    scene.instances.push_back(ground);
+    Material groundMaterial{"ground", {0.75f, 0.75f, 0.72f, 1.0f}};
+    place(addMesh(makePlane("ground"), groundMaterial), "ground",
+          glm::scale(glm::mat4(1.0f), glm::vec3(p.planeSize, 1.0f, p.planeSize)));
 
+    // Each box has its own colour, hence its own mesh (a mesh is a glTF primitive, which
+    // carries its material); the sphere and the ground are single meshes.
     std::mt19937 rng(p.seed);
     std::uniform_real_distribution<float> height(p.minHeight, p.maxHeight);
     std::uniform_real_distribution<float> hue(0.0f, 1.0f);
@@ -135,19 +173,18 @@ Scene generateBoxGrid(const BoxGridParams& p)
         for (uint32_t col = 0; col < p.columns; ++col) {
             const float h = height(rng);
             const glm::vec3 centre{x0 + p.spacing * float(col), 0.5f * h, z0 + p.spacing * float(row)};
-            Instance box{1, glm::scale(glm::translate(glm::mat4(1.0f), centre), glm::vec3(p.boxSize, h, p.boxSize)), {}};
             const float t = hue(rng);
-            box.material.baseColor = {0.55f + 0.35f * t, 0.45f + 0.2f * (1.0f - t), 0.35f + 0.3f * t, 1.0f};
-            scene.instances.push_back(box);
+            const std::string name = fmt::format("box_{}_{}", row, col);
+            const Material material{name, {0.55f + 0.35f * t, 0.45f + 0.2f * (1.0f - t), 0.35f + 0.3f * t, 1.0f}};
+            place(addMesh(makeBox(name), material), name,
+                  glm::scale(glm::translate(glm::mat4(1.0f), centre), glm::vec3(p.boxSize, h, p.boxSize)));
         }
     }
     // The sphere floats beside the grid so that its shadow falls on the ground, apart
     // from the boxes' shadows.
-    const glm::vec3 sphereCentre{x0 + p.spacing * float(p.columns) + p.sphereRadius, 1.5f * p.sphereRadius,
-                                 0.0f};
-    Instance sphere{2, glm::scale(glm::translate(glm::mat4(1.0f), sphereCentre), glm::vec3(p.sphereRadius)), {}};
-    sphere.material.baseColor = {0.3f, 0.45f, 0.8f, 1.0f};
-    scene.instances.push_back(sphere);
+    const glm::vec3 sphereCentre{x0 + p.spacing * float(p.columns) + p.sphereRadius, 1.5f * p.sphereRadius, 0.0f};
+    place(addMesh(makeSphere("sphere", p.sphereSegments), Material{"sphere", {0.3f, 0.45f, 0.8f, 1.0f}}), "sphere",
+          glm::scale(glm::translate(glm::mat4(1.0f), sphereCentre), glm::vec3(p.sphereRadius)));
     return scene;
 }
 

@@ -1,8 +1,10 @@
 #pragma once
-// The scene as the renderer sees it: meshes (shared geometry), instances (a mesh under a
-// transform, with a material), a camera and lights. glTF loading, the scene graph and
-// the BVH arrive with the scenes issue; the generators here make the foundation's test
-// scenes from a seed.
+// The scene as the engine sees it: meshes (one glTF primitive each: geometry plus a
+// material), materials and textures, a node hierarchy (SceneGraph), and instances (a
+// mesh under a node, so one mesh under many nodes is instancing). Cameras and lights
+// with the config; glTF files and the procedural generators fill this same structure.
+#include "penumbra/scene/SceneGraph.h"
+
 #include <glm/glm.hpp>
 
 #include <cstdint>
@@ -15,12 +17,7 @@ namespace penumbra::scene {
 struct Vertex {
     glm::vec3 position;
     glm::vec3 normal;
-};
-
-struct Mesh {
-    std::string name;
-    std::vector<Vertex> vertices;
-    std::vector<uint32_t> indices;  // triangle list
+    glm::vec2 uv;
 };
 
 struct Aabb {
@@ -30,17 +27,47 @@ struct Aabb {
     void extend(const Aabb& box);
     bool empty() const { return min.x > max.x; }
     glm::vec3 center() const { return 0.5f * (min + max); }
-    float radius() const { return 0.5f * glm::length(max - min); }
+    glm::vec3 extent() const { return empty() ? glm::vec3(0.0f) : max - min; }
+    float radius() const { return empty() ? 0.0f : 0.5f * glm::length(max - min); }
+    float surfaceArea() const;
+    // The box of this box's eight corners under `m`.
+    Aabb transformed(const glm::mat4& m) const;
 };
 
+enum class AlphaMode { Opaque, Mask, Blend };
+
+// An RGBA8 image, base colour in sRGB encoding (glTF's convention).
+struct Texture {
+    std::string name;
+    uint32_t width = 0;
+    uint32_t height = 0;
+    std::vector<uint8_t> rgba;
+};
+
+inline constexpr int32_t kNoTexture = -1;
+
 struct Material {
-    glm::vec4 baseColor{0.8f, 0.8f, 0.8f, 1.0f};
+    std::string name = "default";
+    glm::vec4 baseColor{0.8f, 0.8f, 0.8f, 1.0f};  // linear rgb, a = alpha
+    int32_t baseColorTexture = kNoTexture;          // index into Scene::textures
+    AlphaMode alphaMode = AlphaMode::Opaque;
+    float alphaCutoff = 0.5f;  // AlphaMode::Mask: alpha below it is a hole
+    bool doubleSided = false;
+};
+
+struct Mesh {
+    std::string name;
+    std::vector<Vertex> vertices;
+    std::vector<uint32_t> indices;  // triangle list
+    uint32_t material = 0;          // index into Scene::materials
+    Aabb bounds;                    // object space; computeBounds() fills it
+    void computeBounds();
 };
 
 struct Instance {
     uint32_t mesh = 0;
-    glm::mat4 transform{1.0f};
-    Material material;
+    uint32_t node = 0;  // its world transform is graph.world(node)
+    Aabb worldBounds;   // kept current by Scene::updateTransforms()
 };
 
 struct Camera {
@@ -66,10 +93,19 @@ struct Light {
 class Scene {
 public:
     std::vector<Mesh> meshes;
+    std::vector<Material> materials{Material{}};  // index 0: the default material
+    std::vector<Texture> textures;
+    SceneGraph graph;
     std::vector<Instance> instances;
 
-    Aabb meshBounds(uint32_t mesh) const;
-    Aabb instanceBounds(const Instance& instance) const;
+    // Adds `mesh` under `node`; the mesh's bounds must be computed.
+    uint32_t addInstance(uint32_t mesh, uint32_t node);
+    const glm::mat4& instanceTransform(const Instance& instance) const { return graph.world(instance.node); }
+
+    // Propagates moved nodes to world transforms and instance world bounds; returns the
+    // instances whose bounds changed (ascending), for a BVH refit.
+    std::vector<uint32_t> updateTransforms();
+
     Aabb bounds() const;
     size_t triangleCount() const;
 };
