@@ -73,7 +73,7 @@ TEST(Config, UnknownKeySuggestsTheClosest)
     json doc = minimal();
     doc["lights"][0]["intensty"] = 5;
     const std::string what = errorOf(doc);
-    EXPECT_NE(what.find("/lights/0/intensty: unknown key; did you mean \"intensity\"?"), std::string::npos) << what;
+    EXPECT_NE(what.find("/lights/0/intensty: unknown key for a spot light; did you mean \"intensity\"?"), std::string::npos) << what;
 }
 
 TEST(Config, UnknownKeyFarFromAnyListsTheKnownOnes)

@@ -89,7 +89,7 @@ int runRender(const RenderFlags& flags, const DeviceFlags& deviceFlags)
 
     penumbra::gpu::Context context(contextOptions(deviceFlags));
     spdlog::info("device: {} ({})", context.deviceInfo().name, context.deviceInfo().type);
-    const penumbra::scene::Scene scene = penumbra::config::buildScene(config.scene);
+    const penumbra::scene::Scene scene = penumbra::config::buildScene(config);
     penumbra::render::FrameRenderer renderer(context, scene, config);
     spdlog::info("scene: {} instances, {} triangles; {}x{}, {} light(s)", scene.instances.size(),
                  scene.triangleCount(), config.width, config.height, config.lights.size());

@@ -22,18 +22,28 @@ layout(push_constant) uniform Push {
 
 const float kPi = 3.14159265;
 
-// Reflected radiance from one spot light with visibility v (Lambertian BRDF albedo/pi).
+// Reflected radiance from one light with visibility v (Lambertian BRDF albedo/pi).
+// Directional: irradiance = intensity * cos. Others: intensity / d² * cos, times the spot
+// cone for spots and the emitter's own cosine for rect and disk lights (they emit into
+// the hemisphere of their normal; hard shadows and this shading treat them as their
+// centre point - soft-shadow techniques use their extent).
 vec3 lightContribution(LightData light, vec3 position, vec3 n, vec3 albedo, float v)
 {
+    uint type = lightType(light);
+    if (type == LIGHT_DIRECTIONAL) {
+        float cosTheta = max(dot(n, -light.direction.xyz), 0.0);
+        return albedo / kPi * light.radiance.rgb * (cosTheta * v);
+    }
     vec3 toLight = light.positionWorld.xyz - position;
     // Guard: a surface point at the light's position must not divide by zero. The
     // floor is FLT_MIN-sized, far below any squared distance in a scene of any scale;
     // the irradiance it can produce is bounded by the clamp before tone mapping.
     float dist2 = max(dot(toLight, toLight), 1e-30);
     vec3 l = toLight * inversesqrt(dist2);
-    float cosTheta = max(dot(n, l), 0.0);
-    float spot = spotFactor(light, -toLight);
-    return albedo / kPi * light.radiance.rgb * (cosTheta * spot * v / dist2);
+    float falloff = max(dot(n, l), 0.0) * v / dist2;
+    if (type == LIGHT_SPOT) falloff *= spotFactor(light, -toLight);
+    if (type == LIGHT_RECT || type == LIGHT_DISK) falloff *= max(dot(light.direction.xyz, -l), 0.0);
+    return albedo / kPi * light.radiance.rgb * falloff;
 }
 
 // The pipeline is compiled for the frame's light count (LIGHT_COUNT, 1..8), and each

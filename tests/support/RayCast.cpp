@@ -43,23 +43,22 @@ bool segmentHitsBox(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& 
     return true;
 }
 
-// Möller–Trumbore; true for a hit with t strictly inside (0, 1).
-bool segmentHitsTriangle(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& a, const glm::dvec3& b,
-                         const glm::dvec3& c)
+// Möller–Trumbore: the ray parameter t of the hit (o + t·d), or -1 for a miss.
+double rayTriangle(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& a, const glm::dvec3& b,
+                   const glm::dvec3& c)
 {
     const glm::dvec3 e1 = b - a, e2 = c - a;
     const glm::dvec3 p = glm::cross(d, e2);
     const double det = glm::dot(e1, p);
-    if (std::abs(det) < 1e-18) return false;
+    if (det == 0.0) return -1.0;
     const double inv = 1.0 / det;
     const glm::dvec3 s = o - a;
     const double u = glm::dot(s, p) * inv;
-    if (u < 0.0 || u > 1.0) return false;
+    if (u < 0.0 || u > 1.0) return -1.0;
     const glm::dvec3 q = glm::cross(s, e1);
     const double v = glm::dot(d, q) * inv;
-    if (v < 0.0 || u + v > 1.0) return false;
-    const double t = glm::dot(e2, q) * inv;
-    return t > 0.0 && t < 1.0;
+    if (v < 0.0 || u + v > 1.0) return -1.0;
+    return glm::dot(e2, q) * inv;
 }
 
 } // namespace
@@ -70,10 +69,26 @@ bool RayCaster::segmentBlocked(const glm::dvec3& from, const glm::dvec3& to) con
     for (const InstanceTriangles& inst : instances_) {
         if (!segmentHitsBox(from, d, inst.boxMin, inst.boxMax)) continue;
         for (size_t i = 0; i + 2 < inst.vertices.size(); i += 3) {
-            if (segmentHitsTriangle(from, d, inst.vertices[i], inst.vertices[i + 1], inst.vertices[i + 2])) return true;
+            const double t = rayTriangle(from, d, inst.vertices[i], inst.vertices[i + 1], inst.vertices[i + 2]);
+            if (t > 0.0 && t < 1.0) return true;
         }
     }
     return false;
+}
+
+double RayCaster::closestHit(const glm::dvec3& origin, const glm::dvec3& dir) const
+{
+    double best = std::numeric_limits<double>::infinity();
+    // A segment long enough to leave every box: from the origin past the farthest corner.
+    for (const InstanceTriangles& inst : instances_) {
+        const double reach = glm::length(glm::max(glm::abs(inst.boxMin - origin), glm::abs(inst.boxMax - origin))) * 2.0;
+        if (!segmentHitsBox(origin, dir * reach, inst.boxMin, inst.boxMax)) continue;
+        for (size_t i = 0; i + 2 < inst.vertices.size(); i += 3) {
+            const double t = rayTriangle(origin, dir, inst.vertices[i], inst.vertices[i + 1], inst.vertices[i + 2]);
+            if (t > 0.0 && t < best) best = t;
+        }
+    }
+    return best;
 }
 
 } // namespace penumbra::test

@@ -15,6 +15,9 @@ public:
     explicit RayCaster(const scene::Scene& scene);
     // True if a triangle intersects the open segment from `from` to `to`.
     bool segmentBlocked(const glm::dvec3& from, const glm::dvec3& to) const;
+    // Distance along the unit direction `dir` from `origin` to the first triangle hit,
+    // or +inf when the ray hits nothing.
+    double closestHit(const glm::dvec3& origin, const glm::dvec3& dir) const;
 
 private:
     struct InstanceTriangles {

@@ -187,16 +187,24 @@ VkImageAspectFlags Image::aspect() const
 Buffer uploadBuffer(Context& context, std::span<const std::byte> bytes, VkBufferUsageFlags usage,
                     const std::string& name)
 {
-    Buffer staging(context, bytes.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, name + " (staging)");
-    std::memcpy(staging.mapped(), bytes.data(), bytes.size());
     Buffer buffer(context, bytes.size(), usage | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false, name);
+    updateBuffer(context, buffer, bytes);
+    return buffer;
+}
+
+void updateBuffer(Context& context, const Buffer& buffer, std::span<const std::byte> bytes)
+{
+    if (bytes.size() > buffer.size()) {
+        throw GpuError(fmt::format("updateBuffer: {} bytes do not fit a {}-byte buffer", bytes.size(), buffer.size()));
+    }
+    Buffer staging(context, bytes.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, "staging");
+    std::memcpy(staging.mapped(), bytes.data(), bytes.size());
     context.submitAndWait([&](VkCommandBuffer cmd) {
         VkBufferCopy region{0, 0, bytes.size()};
         vkCmdCopyBuffer(cmd, staging.handle(), buffer.handle(), 1, &region);
         memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT},
                       {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT});
     });
-    return buffer;
 }
 
 std::vector<std::byte> readImage(Context& context, const Image& image, VkImageLayout layout)

@@ -100,15 +100,10 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
 
     const scene::Aabb bounds = scene.bounds();
     auto pipelines = std::make_shared<HardShadowPipelines>(context, compiler_, sceneGpu_.vertexStride());
-    auto* lights = static_cast<LightData*>(lightBuffer_.mapped());
     for (size_t i = 0; i < config.lights.size(); ++i) {
-        const config::LightConfig& lc = config.lights[i];
-        shadows_.push_back(std::make_unique<HardShadow>(context, pipelines, lc, bounds, width_, height_, i));
-        const scene::Light& l = lc.light;
-        lights[i].positionWorld = glm::vec4(l.position, 1.0f);
-        lights[i].direction = glm::vec4(glm::normalize(l.direction), std::cos(glm::radians(l.outerConeDeg)));
-        lights[i].radiance = glm::vec4(l.color * l.intensity, std::cos(glm::radians(l.innerConeDeg)));
+        shadows_.push_back(std::make_unique<HardShadow>(context, pipelines, config.lights[i], bounds, width_, height_, i));
     }
+    updateLights(config, bounds);
 
     VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
     alloc.commandPool = context.commandPool();
@@ -126,7 +121,37 @@ FrameRenderer::~FrameRenderer()
 
 size_t FrameRenderer::lightCount() const { return shadows_.size(); }
 
-const LightFrustum& FrameRenderer::lightFrustum(size_t light) const { return shadows_.at(light)->frustum(); }
+const LightFrustum& FrameRenderer::lightFrustum(size_t light) const { return shadows_.at(light)->frusta().front(); }
+
+const std::vector<LightFrustum>& FrameRenderer::lightFrusta(size_t light) const { return shadows_.at(light)->frusta(); }
+
+void FrameRenderer::update(const config::RenderConfig& config, const scene::Scene& scene,
+                           const std::vector<uint32_t>& movedInstances)
+{
+    if (config.lights.size() != shadows_.size()) {
+        throw Error(fmt::format("FrameRenderer::update: {} lights, the renderer was built for {}", config.lights.size(),
+                                shadows_.size()));
+    }
+    cameraViewProj_ = render::cameraViewProj(config.camera, float(width_) / float(height_));
+    if (!movedInstances.empty()) sceneGpu_.updateInstances(context_, scene);
+    updateLights(config, scene.bounds());
+}
+
+void FrameRenderer::updateLights(const config::RenderConfig& config, const scene::Aabb& sceneBounds)
+{
+    static_assert(int(scene::LightType::Directional) == 0 && int(scene::LightType::Spot) == 1 &&
+                      int(scene::LightType::Point) == 2 && int(scene::LightType::Rect) == 3 &&
+                      int(scene::LightType::Disk) == 4,
+                  "type codes in shaders/common/light.glsl");
+    auto* lights = static_cast<LightData*>(lightBuffer_.mapped());
+    for (size_t i = 0; i < config.lights.size(); ++i) {
+        const scene::Light& l = config.lights[i].light;
+        lights[i].positionWorld = glm::vec4(l.position, float(int(l.type)));
+        lights[i].direction = glm::vec4(glm::normalize(l.direction), std::cos(glm::radians(l.outerConeDeg)));
+        lights[i].radiance = glm::vec4(l.color * l.intensity, std::cos(glm::radians(l.innerConeDeg)));
+        shadows_[i]->update(l, sceneBounds);
+    }
+}
 
 template <class F>
 void FrameRenderer::timedPass(VkCommandBuffer cmd, const std::string& name, FrameTimings& timings, F&& record)

@@ -6,6 +6,20 @@
 #include <fmt/format.h>
 
 namespace penumbra::render {
+namespace {
+
+struct VisibilityPush {  // matches shaders/hard/visibility.comp
+    glm::vec4 lightPosition;
+    uint32_t faceCount;
+    float faceTexels;
+};
+
+uint32_t faceCount(const scene::Light& light)
+{
+    return light.type == scene::LightType::Spot || light.type == scene::LightType::Directional ? 1u : 6u;
+}
+
+} // namespace
 
 HardShadowPipelines::HardShadowPipelines(gpu::Context& ctx, const gpu::ShaderCompiler& compiler, uint32_t vertexStride)
     : context(ctx)
@@ -29,8 +43,9 @@ HardShadowPipelines::HardShadowPipelines(gpu::Context& ctx, const gpu::ShaderCom
     c.shader = "hard/visibility.comp";
     c.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
                   {1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                  {2, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
-    c.pushConstantBytes = sizeof(glm::mat4);
+                  {2, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                  {3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
+    c.pushConstantBytes = sizeof(VisibilityPush);
     visibility = gpu::Pipeline(ctx, compiler, c);
     // Nearest filtering: one comparison, a hard 0/1 result. Points outside the map never
     // reach the sampler: the shader treats them as lit.
@@ -46,14 +61,27 @@ HardShadow::HardShadow(gpu::Context& context, std::shared_ptr<HardShadowPipeline
     : context_(context),
       pipelines_(std::move(pipelines)),
       settings_(light.shadow),
-      frustum_(spotLightFrustum(light.light, sceneBounds)),
-      shadowMap_(context, {settings_.resolution, settings_.resolution, VK_FORMAT_D32_SFLOAT,
+      faceCount_(faceCount(light.light)),
+      // Six faces share one atlas, 3 x 2 faces of resolution² each.
+      shadowMap_(context, {settings_.resolution * (faceCount_ == 6 ? 3u : 1u),
+                           settings_.resolution * (faceCount_ == 6 ? 2u : 1u), VK_FORMAT_D32_SFLOAT,
                            VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
                            fmt::format("light{}.shadow_map", lightIndex)}),
       visibility_(context, {width, height, VK_FORMAT_R32_SFLOAT,
                             VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                            fmt::format("light{}.visibility", lightIndex)})
+                            fmt::format("light{}.visibility", lightIndex)}),
+      frustumBuffer_(context, sizeof(glm::mat4) * kMaxFaces, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true,
+                     fmt::format("light{}.frusta", lightIndex))
 {
+    update(light.light, sceneBounds);
+}
+
+void HardShadow::update(const scene::Light& light, const scene::Aabb& sceneBounds)
+{
+    frusta_ = shadowFrusta(light, sceneBounds);
+    lightPosition_ = light.position;
+    auto* matrices = static_cast<glm::mat4*>(frustumBuffer_.mapped());
+    for (size_t i = 0; i < frusta_.size(); ++i) matrices[i] = frusta_[i].viewProj;
 }
 
 void HardShadow::recordShadowMap(VkCommandBuffer cmd, const SceneGpu& scene) const
@@ -65,23 +93,28 @@ void HardShadow::recordShadowMap(VkCommandBuffer cmd, const SceneGpu& scene) con
     depth.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
     depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
     depth.clearValue.depthStencil = {0.0f, 0};  // reversed-Z: far is 0
-    const uint32_t size = settings_.resolution;
+    const gpu::ImageDesc& map = shadowMap_.desc();
     VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
-    info.renderArea = {{0, 0}, {size, size}};
+    info.renderArea = {{0, 0}, {map.width, map.height}};
     info.layerCount = 1;
     info.pDepthAttachment = &depth;
     vkCmdBeginRendering(cmd, &info);
-    VkViewport viewport{0.0f, 0.0f, float(size), float(size), 0.0f, 1.0f};
-    VkRect2D scissor{{0, 0}, {size, size}};
-    vkCmdSetViewport(cmd, 0, 1, &viewport);
-    vkCmdSetScissor(cmd, 0, 1, &scissor);
     // Reversed-Z: "away from the light" is towards smaller depth, so every bias term is
     // negated. A negative clamp bounds the bias from below (Vulkan: max(bias, clamp)).
     vkCmdSetDepthBias(cmd, -settings_.depthBiasConstant, -settings_.depthBiasClamp, -settings_.depthBiasSlope);
     pipelines_->depth.bind(cmd);
     gpu::DescriptorPush().storageBuffer(0, scene.instanceBuffer()).push(context_, cmd, pipelines_->depth);
-    pipelines_->depth.pushConstants(cmd, &frustum_.viewProj, sizeof(glm::mat4));
-    scene.drawAll(cmd);
+    const uint32_t size = settings_.resolution;
+    for (uint32_t face = 0; face < frusta_.size(); ++face) {
+        // Each face draws into its own cell of the atlas (the scissor keeps it there).
+        const int32_t x = int32_t((face % 3) * size), y = int32_t((face / 3) * size);
+        VkViewport viewport{float(x), float(y), float(size), float(size), 0.0f, 1.0f};
+        VkRect2D scissor{{x, y}, {size, size}};
+        vkCmdSetViewport(cmd, 0, 1, &viewport);
+        vkCmdSetScissor(cmd, 0, 1, &scissor);
+        pipelines_->depth.pushConstants(cmd, &frusta_[face].viewProj, sizeof(glm::mat4));
+        scene.drawAll(cmd);
+    }
     vkCmdEndRendering(cmd);
     gpu::transition(cmd, shadowMap_, gpu::access::kDepthAttachment, gpu::access::kComputeSampledDepth);
 }
@@ -94,8 +127,10 @@ void HardShadow::recordVisibility(VkCommandBuffer cmd, const gpu::Image& gPositi
         .storageImage(0, gPosition)
         .sampledImage(1, shadowMap_, pipelines_->compareSampler, VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL)
         .storageImage(2, visibility_)
+        .storageBuffer(3, frustumBuffer_)
         .push(context_, cmd, pipelines_->visibility);
-    pipelines_->visibility.pushConstants(cmd, &frustum_.viewProj, sizeof(glm::mat4));
+    const VisibilityPush push{glm::vec4(lightPosition_, 1.0f), faceCount_, float(settings_.resolution)};
+    pipelines_->visibility.pushConstants(cmd, &push, sizeof(push));
     const gpu::ImageDesc& d = visibility_.desc();
     vkCmdDispatch(cmd, (d.width + 7) / 8, (d.height + 7) / 8, 1);
     gpu::transition(cmd, visibility_, gpu::access::kComputeWrite, gpu::access::kComputeSampled);

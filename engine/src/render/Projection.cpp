@@ -40,21 +40,89 @@ glm::mat4 cameraViewProj(const scene::Camera& camera, float aspect)
     return perspectiveReversedZ(glm::radians(camera.fovYDeg), aspect, camera.nearWorld) * cameraView(camera);
 }
 
-LightFrustum spotLightFrustum(const scene::Light& light, const scene::Aabb& bounds)
+namespace {
+
+// Near plane for a light at `position`: half the distance to the scene box, never less
+// than 1e-5 of the scene radius (reversed-Z keeps precision at any near distance, but
+// casters nearer than the near plane would be clipped).
+float lightNear(const glm::vec3& position, const scene::Aabb& bounds)
+{
+    if (bounds.empty()) return 1.0f;
+    const glm::vec3 outside = glm::max(glm::max(bounds.min - position, position - bounds.max), glm::vec3(0));
+    return std::max(0.5f * glm::length(outside), 1e-5f * std::max(bounds.radius(), 1e-30f));
+}
+
+LightFrustum perspectiveFrustum(const glm::vec3& position, const glm::vec3& dir, const glm::vec3& up, float fovRadians,
+                                const scene::Aabb& bounds)
+{
+    LightFrustum f{};
+    f.view = glm::lookAt(position, position + dir, up);
+    f.nearWorld = lightNear(position, bounds);
+    f.proj = perspectiveReversedZ(fovRadians, 1.0f, f.nearWorld);
+    f.viewProj = f.proj * f.view;
+    return f;
+}
+
+// Directional light: an orthographic box around the whole scene, seen along the light's
+// direction. Reversed-Z like every depth buffer here: depth 1 nearest the light, 0 at
+// the far side. The box is padded by 1% of the scene radius so that no caster touches
+// the clip planes.
+LightFrustum directionalFrustum(const scene::Light& light, const scene::Aabb& bounds)
 {
     LightFrustum f{};
     const glm::vec3 dir = glm::normalize(light.direction);
-    f.view = glm::lookAt(light.position, light.position + dir, stableUp(dir, glm::vec3(0, 1, 0)));
-    // Distance from the light to the scene box (0 when the light is inside it).
-    const glm::vec3 outside = glm::max(glm::max(bounds.min - light.position, light.position - bounds.max), glm::vec3(0));
-    const float distance = bounds.empty() ? 1.0f : glm::length(outside);
+    const glm::vec3 centre = bounds.empty() ? glm::vec3(0.0f) : bounds.center();
     const float radius = bounds.empty() ? 1.0f : std::max(bounds.radius(), 1e-30f);
-    f.nearWorld = std::max(0.5f * distance, 1e-5f * radius);
-    // The frustum covers the cone: its half-angle is the outer cone's (clamped below 90°
-    // by config validation).
-    f.proj = perspectiveReversedZ(2.0f * glm::radians(light.outerConeDeg), 1.0f, f.nearWorld);
+    f.view = glm::lookAt(centre - dir * radius, centre, stableUp(dir, glm::vec3(0, 1, 0)));
+    scene::Aabb box = bounds.empty() ? scene::Aabb{glm::vec3(-1.0f), glm::vec3(1.0f)} : bounds.transformed(f.view);
+    const float pad = 0.01f * radius;
+    box.min -= pad;
+    box.max += pad;
+    // View space looks down -z: distance along the light d = -z, from -box.max.z to -box.min.z.
+    const float dNear = -box.max.z, dFar = -box.min.z;
+    glm::mat4 m(1.0f);
+    m[0][0] = 2.0f / (box.max.x - box.min.x);
+    m[3][0] = -(box.max.x + box.min.x) / (box.max.x - box.min.x);
+    m[1][1] = -2.0f / (box.max.y - box.min.y);  // Vulkan clip space: y down
+    m[3][1] = (box.max.y + box.min.y) / (box.max.y - box.min.y);
+    // depth = (dFar - d) / (dFar - dNear) with d = -z: 1 at dNear, 0 at dFar.
+    m[2][2] = 1.0f / (dFar - dNear);
+    m[3][2] = dFar / (dFar - dNear);
+    f.proj = m;
     f.viewProj = f.proj * f.view;
+    f.nearWorld = dNear;
     return f;
+}
+
+} // namespace
+
+std::vector<LightFrustum> shadowFrusta(const scene::Light& light, const scene::Aabb& bounds)
+{
+    switch (light.type) {
+    case scene::LightType::Directional:
+        return {directionalFrustum(light, bounds)};
+    case scene::LightType::Spot: {
+        // The frustum covers the cone: its half-angle is the outer cone's (below 90° by
+        // config validation).
+        const glm::vec3 dir = glm::normalize(light.direction);
+        return {perspectiveFrustum(light.position, dir, stableUp(dir, glm::vec3(0, 1, 0)),
+                                   2.0f * glm::radians(light.outerConeDeg), bounds)};
+    }
+    case scene::LightType::Point:
+    case scene::LightType::Rect:
+    case scene::LightType::Disk: {
+        // Six 90° faces around the centre, in the order +X -X +Y -Y +Z -Z that
+        // shaders/hard/visibility.comp selects by the dominant axis.
+        static const glm::vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+        static const glm::vec3 ups[6] = {{0, 1, 0}, {0, 1, 0}, {0, 0, 1}, {0, 0, 1}, {0, 1, 0}, {0, 1, 0}};
+        std::vector<LightFrustum> faces;
+        for (int i = 0; i < 6; ++i) {
+            faces.push_back(perspectiveFrustum(light.position, axes[i], ups[i], glm::radians(90.0f), bounds));
+        }
+        return faces;
+    }
+    }
+    return {};
 }
 
 } // namespace penumbra::render

@@ -21,6 +21,18 @@ std::span<const std::byte> bytesOf(const std::vector<T>& v)
     return std::as_bytes(std::span<const T>(v));
 }
 
+std::vector<InstanceData> instanceTable(const scene::Scene& scene)
+{
+    std::vector<InstanceData> table;
+    table.reserve(scene.instances.size());
+    for (const scene::Instance& inst : scene.instances) {
+        const glm::mat4& model = scene.instanceTransform(inst);
+        const scene::Material& material = scene.materials.at(scene.meshes.at(inst.mesh).material);
+        table.push_back({model, glm::inverseTranspose(model), material.baseColor});
+    }
+    return table;
+}
+
 } // namespace
 
 SceneGpu::SceneGpu(gpu::Context& context, const scene::Scene& scene)
@@ -41,13 +53,8 @@ SceneGpu::SceneGpu(gpu::Context& context, const scene::Scene& scene)
         vertices.insert(vertices.end(), mesh.vertices.begin(), mesh.vertices.end());
         indices.insert(indices.end(), mesh.indices.begin(), mesh.indices.end());
     }
-    std::vector<InstanceData> table;
     for (uint32_t i = 0; i < scene.instances.size(); ++i) {
-        const scene::Instance& inst = scene.instances[i];
-        const glm::mat4& model = scene.instanceTransform(inst);
-        const scene::Material& material = scene.materials.at(scene.meshes.at(inst.mesh).material);
-        table.push_back({model, glm::inverseTranspose(model), material.baseColor});
-        const Range& r = ranges.at(inst.mesh);
+        const Range& r = ranges.at(scene.instances[i].mesh);
         if (r.indexCount > 0) {
             draws_.push_back({r.indexCount, r.firstIndex, r.vertexOffset, i});
             triangles_ += r.indexCount / 3;
@@ -58,7 +65,13 @@ SceneGpu::SceneGpu(gpu::Context& context, const scene::Scene& scene)
     }
     vertices_ = gpu::uploadBuffer(context, bytesOf(vertices), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, "scene vertices");
     indices_ = gpu::uploadBuffer(context, bytesOf(indices), VK_BUFFER_USAGE_INDEX_BUFFER_BIT, "scene indices");
-    instances_ = gpu::uploadBuffer(context, bytesOf(table), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "scene instances");
+    instances_ = gpu::uploadBuffer(context, bytesOf(instanceTable(scene)), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                   "scene instances");
+}
+
+void SceneGpu::updateInstances(gpu::Context& context, const scene::Scene& scene)
+{
+    gpu::updateBuffer(context, instances_, bytesOf(instanceTable(scene)));
 }
 
 void SceneGpu::drawAll(VkCommandBuffer cmd) const

@@ -11,6 +11,18 @@
 
 namespace penumbra::scene {
 
+const char* lightTypeName(LightType type)
+{
+    switch (type) {
+    case LightType::Directional: return "directional";
+    case LightType::Spot: return "spot";
+    case LightType::Point: return "point";
+    case LightType::Rect: return "rect";
+    case LightType::Disk: return "disk";
+    }
+    return "unknown";
+}
+
 void Aabb::extend(const glm::vec3& p)
 {
     min = glm::min(min, p);

@@ -1,13 +1,20 @@
 #pragma once
-// The scene config a user edits and a script writes (JSON). This is the foundation's
-// minimal form: scene generator, camera, lights with their shadow settings, output
-// size and frame count. Every error names the file, the JSON path and what is expected:
+// The scene config a user edits and a script writes (JSON): scene source (a glTF file or
+// a generator with parameters), camera, lights with their shadow technique and its
+// parameters, culling mode, output size, frame count, animation tracks that script a
+// whole run, `include` of other configs with overrides, and parameter sweeps.
+// config/schema/penumbra-config.schema.json describes the same format for editors.
+// Every error names the file (the one the value came from, through includes), the JSON
+// path and what is expected:
 //   "scene.json: /lights/0/outer_cone_deg: must be in (0, 89], got 120".
+#include "penumbra/config/Animation.h"
 #include "penumbra/scene/Scene.h"
 
-#include <nlohmann/json_fwd.hpp>
+#include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -15,7 +22,7 @@ namespace penumbra::config {
 
 struct ShadowSettings {
     std::string technique = "hard";
-    uint32_t resolution = 2048;  // shadow-map texels per side
+    uint32_t resolution = 2048;  // shadow-map texels per side (per cube face for point lights)
     // Depth bias in Vulkan's units: constant in multiples of the depth format's minimum
     // resolvable difference at the primitive's depth, slope as a factor of the
     // primitive's maximum depth slope, clamp as a depth difference (0: no clamp). The
@@ -30,13 +37,23 @@ struct ShadowSettings {
 };
 
 struct LightConfig {
+    std::string name;                 // for messages and animation targets; "light<i>" by default
     scene::Light light;
+    std::optional<glm::vec3> target;  // when given, direction = normalize(target - position)
     ShadowSettings shadow;
 };
 
+// Which casters the shadow passes draw (the visibility-culling issue implements them).
+enum class CullingMode { None, Frustum, LightOcclusion, ReceiverMask };
+const char* cullingModeName(CullingMode mode);
+
 struct SceneSource {
+    enum class Kind { Generator, Gltf };
+    Kind kind = Kind::Generator;
+    std::filesystem::path gltf;       // Kind::Gltf, resolved against the config's folder
     std::string generator = "box-grid";
-    scene::BoxGridParams boxGrid;
+    scene::BoxGridParams boxGrid;     // generator "box-grid"
+    float scale = 1.0f;               // every length times this (1e-3 ... 1e5 are tested)
 };
 
 struct RenderConfig {
@@ -44,19 +61,53 @@ struct RenderConfig {
     SceneSource scene;
     scene::Camera camera;
     std::vector<LightConfig> lights;
+    CullingMode culling = CullingMode::None;
     uint32_t width = 1280;
     uint32_t height = 720;
     uint32_t frames = 1;
+    Animation animation;
 };
 
-// Reads and validates a config file. Throws ConfigError naming file and JSON path.
+// A config file with its includes resolved: the merged document, and for each JSON
+// path the file its value came from (for messages).
+struct ConfigDocument {
+    std::filesystem::path file;
+    nlohmann::json json;
+    std::map<std::string, std::string> origin;  // JSON pointer -> file name
+    std::string fileFor(const std::string& pointer) const;
+};
+
+// Reads `file` and its includes: `"include": "base.json"` or a list, paths relative to
+// the including file, merged in order with RFC 7386 merge-patch semantics (objects merge
+// key by key, everything else - arrays too - is replaced, null removes a key), then the
+// including file on top. Include cycles and missing files are errors naming the chain.
+ConfigDocument loadDocument(const std::filesystem::path& file);
+
+// Validates a document (its "sweep" is ignored: the unswept values are the base run).
+RenderConfig parseConfig(const ConfigDocument& document);
+RenderConfig parseConfig(const nlohmann::json& json, const std::filesystem::path& file);
+
+// Reads, merges and validates a config file. Throws ConfigError naming file and path.
 RenderConfig loadConfig(const std::filesystem::path& file);
 
-// Validates an already-parsed document; `file` is only used in messages.
-RenderConfig parseConfig(const nlohmann::json& document, const std::filesystem::path& file);
+// A parameter sweep: "sweep": [{"path": "/lights/0/shadow/resolution", "values": [512,
+// 1024]}, ...] gives the Cartesian product of the listed values; each variant is the
+// document with those paths set. A config without a sweep has one variant, itself.
+struct SweepVariant {
+    std::string label;  // "/lights/0/shadow/resolution=512, ..."; empty without a sweep
+    RenderConfig config;
+};
+std::vector<SweepVariant> expandSweep(const ConfigDocument& document);
 
-// Builds the scene that the config's scene source describes.
+// Builds the scene that the config's scene source describes (at its scale), and checks
+// that the animation's node tracks name nodes of that scene.
+scene::Scene buildScene(const RenderConfig& config);
 scene::Scene buildScene(const SceneSource& source);
+
+// Moves camera, lights and scene nodes to time `timeS` of the config's animation.
+// `config` holds the animated values afterwards; nodes are set in `scene`'s graph (call
+// scene.updateTransforms() after).
+void applyAnimation(const Animation& animation, float timeS, RenderConfig& config, scene::Scene& scene);
 
 // The most lights one frame shades: the shading pass binds one visibility image each
 // and reads them with constant indices (shaders/engine/shading.comp).

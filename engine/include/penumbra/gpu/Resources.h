@@ -80,6 +80,10 @@ uint32_t texelSize(VkFormat format);
 Buffer uploadBuffer(Context& context, std::span<const std::byte> bytes, VkBufferUsageFlags usage,
                     const std::string& name);
 
+// Overwrites the start of a device-local buffer (created with TRANSFER_DST usage, as
+// uploadBuffer's are) with `bytes`, through a staging copy; waits for it.
+void updateBuffer(Context& context, const Buffer& buffer, std::span<const std::byte> bytes);
+
 // Copies a whole 2D image (in `layout`, left in that layout) into host memory, rows
 // tightly packed. Used for PNG output and for tests.
 std::vector<std::byte> readImage(Context& context, const Image& image, VkImageLayout layout);

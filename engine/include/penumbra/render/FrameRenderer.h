@@ -37,13 +37,21 @@ public:
     FrameRenderer(const FrameRenderer&) = delete;
     FrameRenderer& operator=(const FrameRenderer&) = delete;
 
+    // Takes the camera, the lights and moved scene nodes of an animated frame: call it
+    // after config::applyAnimation and scene.updateTransforms(), before renderFrame().
+    // `movedInstances` is what updateTransforms() returned.
+    void update(const config::RenderConfig& config, const scene::Scene& scene,
+                const std::vector<uint32_t>& movedInstances);
+
     // Records, submits and waits for one frame; returns the time of every pass.
     FrameTimings renderFrame();
 
     uint32_t width() const { return width_; }
     uint32_t height() const { return height_; }
     size_t lightCount() const;
+    // The light's first shadow frustum (its only one, except for cube-mapped lights).
     const LightFrustum& lightFrustum(size_t light) const;
+    const std::vector<LightFrustum>& lightFrusta(size_t light) const;
     const glm::mat4& cameraViewProj() const { return cameraViewProj_; }
 
     // Read-back after renderFrame(): sRGB RGBA8 rows, top row first.
@@ -56,6 +64,7 @@ public:
     std::vector<float> readNormals() const;
 
 private:
+    void updateLights(const config::RenderConfig& config, const scene::Aabb& sceneBounds);
     void recordGBuffer(VkCommandBuffer cmd);
     void recordShading(VkCommandBuffer cmd);
     template <class F>

@@ -7,6 +7,8 @@
 
 #include <glm/glm.hpp>
 
+#include <vector>
+
 namespace penumbra::render {
 
 glm::mat4 perspectiveReversedZ(float fovYRadians, float aspect, float nearWorld);
@@ -14,15 +16,16 @@ glm::mat4 perspectiveReversedZ(float fovYRadians, float aspect, float nearWorld)
 glm::mat4 cameraView(const scene::Camera& camera);
 glm::mat4 cameraViewProj(const scene::Camera& camera, float aspect);
 
-// The spot light's shadow frustum: square, covering the outer cone, with a near plane
-// fitted to the scene bounds (the closest the scene comes to the light, never less than
-// 1e-5 of the scene radius).
+// A light's shadow frusta: one for spot lights (covering the outer cone) and directional
+// lights (an orthographic box around the scene), six 90° cube faces (+X -X +Y -Y +Z -Z)
+// for point, rect and disk lights (hard shadows treat those as their centre point).
+// Near planes are fitted to the scene bounds.
 struct LightFrustum {
     glm::mat4 view;
     glm::mat4 proj;
     glm::mat4 viewProj;
     float nearWorld;
 };
-LightFrustum spotLightFrustum(const scene::Light& light, const scene::Aabb& sceneBounds);
+std::vector<LightFrustum> shadowFrusta(const scene::Light& light, const scene::Aabb& sceneBounds);
 
 } // namespace penumbra::render

@@ -13,6 +13,9 @@ class SceneGpu {
 public:
     SceneGpu(gpu::Context& context, const scene::Scene& scene);
 
+    // Re-uploads the instance table after nodes moved (Scene::updateTransforms()).
+    void updateInstances(gpu::Context& context, const scene::Scene& scene);
+
     const gpu::Buffer& instanceBuffer() const { return instances_; }
     // Binds vertex and index buffers and draws every instance.
     void drawAll(VkCommandBuffer cmd) const;

@@ -78,15 +78,29 @@ struct Camera {
     float nearWorld = 0.05f;
 };
 
-enum class LightType { Spot };
+// Light models. Point and spot lights are points; directional lights may have an angular
+// diameter (the sun: 0.53 degrees); rectangle and disk lights have a world-space size.
+// Hard-shadow techniques treat every light as its centre point (or its direction);
+// soft-shadow techniques use the extent.
+enum class LightType { Directional, Spot, Point, Rect, Disk };
+
+const char* lightTypeName(LightType type);
 
 struct Light {
     LightType type = LightType::Spot;
-    glm::vec3 position{0.0f, 10.0f, 0.0f};
-    glm::vec3 direction{0.0f, -1.0f, 0.0f};  // unit, where the spot points
-    float outerConeDeg = 40.0f;              // half-angle where the light reaches zero
-    float innerConeDeg = 32.0f;              // half-angle of full intensity
-    float intensity = 300.0f;                // radiant intensity on the axis (W/sr)
+    glm::vec3 position{0.0f, 10.0f, 0.0f};   // centre (all but directional)
+    // Unit vector. Directional: the direction the light travels; spot: the cone axis;
+    // rect and disk: the emitting side's normal (they emit into that hemisphere only).
+    glm::vec3 direction{0.0f, -1.0f, 0.0f};
+    glm::vec3 tangent{1.0f, 0.0f, 0.0f};     // rect: the width axis (unit, normal to direction)
+    float outerConeDeg = 40.0f;              // spot: half-angle where the light reaches zero
+    float innerConeDeg = 32.0f;              // spot: half-angle of full intensity
+    float angularDiameterDeg = 0.0f;         // directional: apparent size of the source
+    glm::vec2 sizeWorld{0.0f};               // rect: width, height
+    float radiusWorld = 0.0f;                // disk: radius
+    // Directional: irradiance on a surface facing the light (W/m²). Others: radiant
+    // intensity along the axis / normal (W/sr).
+    float intensity = 300.0f;
     glm::vec3 color{1.0f};
 };
 
