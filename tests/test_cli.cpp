@@ -192,3 +192,20 @@ TEST_F(Cli, ListsDevices)
     EXPECT_EQ(r.exitCode, 0) << r.err;
     EXPECT_NE(r.out.find("Vulkan 1.3"), std::string::npos) << r.out;
 }
+
+TEST_F(Cli, AnimatedRunWritesEveryFrame)
+{
+    const CliResult r = run(fmt::format("render {} -o '{}/f{{frame:02}}.png' --width 48 --height 32 --frames 3 --validation",
+                                        config("animated.json"), dir.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    for (const char* name : {"f00.png", "f01.png", "f02.png"}) EXPECT_TRUE(fs::exists(dir / name)) << name;
+    EXPECT_FALSE(fs::exists(dir / "f03.png"));
+}
+
+TEST_F(Cli, BadFramePatternIsAnError)
+{
+    const CliResult r = run(fmt::format("render {} -o '{}/f{{frame:q}}.png' --width 16 --height 16", config("default.json"),
+                                        dir.string()));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("output pattern"), std::string::npos) << r.err;
+}

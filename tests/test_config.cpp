@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <fstream>
+#include <unistd.h>
 
 using namespace penumbra;
 using nlohmann::json;
@@ -42,6 +44,196 @@ TEST(Config, DefaultConfigLoads)
     EXPECT_EQ(c.lights[0].shadow.resolution, 2048u);
     EXPECT_EQ(c.lights[0].shadow.technique, "hard");
     EXPECT_NEAR(glm::length(c.lights[0].light.direction), 1.0f, 1e-6f);
+}
+
+const fs::path kConfigs = fs::path(PENUMBRA_TEST_DATA_DIR) / "configs";
+
+std::string loadError(const fs::path& file)
+{
+    try {
+        config::loadConfig(file);
+    } catch (const ConfigError& e) {
+        return e.what();
+    }
+    ADD_FAILURE() << file << " was accepted";
+    return {};
+}
+
+TEST(Config, EveryShippedConfigLoads)
+{
+    size_t count = 0;
+    for (const auto& entry : fs::directory_iterator(fs::path(PENUMBRA_SOURCE_DIR) / "config")) {
+        if (entry.path().extension() != ".json") continue;
+        SCOPED_TRACE(entry.path().string());
+        const config::ConfigDocument doc = config::loadDocument(entry.path());
+        const std::vector<config::SweepVariant> variants = config::expandSweep(doc);
+        EXPECT_FALSE(variants.empty());
+        for (const auto& v : variants) EXPECT_NO_THROW(config::buildScene(v.config));
+        ++count;
+    }
+    EXPECT_GE(count, 4u);
+}
+
+TEST(Config, IncludeMergesWithOverrides)
+{
+    const config::RenderConfig c = config::loadConfig(kConfigs / "include/override.json");
+    EXPECT_EQ(c.width, 128u);   // overridden
+    EXPECT_EQ(c.height, 36u);   // kept from the base (objects merge key by key)
+    EXPECT_FLOAT_EQ(c.camera.position.x, 15.0f);
+    ASSERT_EQ(c.lights.size(), 1u);  // arrays are replaced whole
+    EXPECT_EQ(c.lights[0].light.type, scene::LightType::Point);
+}
+
+
+TEST(Config, ErrorInIncludingFileNamesThatFile)
+{
+    const std::string what = loadError(kConfigs / "include/bad_override.json");
+    EXPECT_NE(what.find("bad_override.json: /output/width: must be an integer in [1, 16384], got 0"), std::string::npos) << what;
+}
+
+TEST(Config, ErrorInIncludedFileNamesTheIncludedFile)
+{
+    const std::string what = loadError(kConfigs / "include/uses_bad_base.json");
+    EXPECT_NE(what.find("bad_in_base.json: /camera/fov_y_deg: must be in (0, 179], got 500"), std::string::npos) << what;
+}
+
+TEST(Config, IncludeCycleIsNamed)
+{
+    const std::string what = loadError(kConfigs / "include/cycle_a.json");
+    EXPECT_NE(what.find("include cycle: cycle_a.json -> cycle_b.json -> cycle_a.json"), std::string::npos) << what;
+}
+
+TEST(Config, MissingIncludeIsNamed)
+{
+    json doc = minimal();
+    const fs::path dir = fs::temp_directory_path() / ("penumbra_cfg_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    doc["include"] = "nowhere.json";
+    std::ofstream(dir / "a.json") << doc.dump();
+    const std::string what = loadError(dir / "a.json");
+    EXPECT_NE(what.find("a.json: /include: included file not found"), std::string::npos) << what;
+    fs::remove_all(dir);
+}
+
+TEST(Config, SweepExpandsTheCartesianProduct)
+{
+    const config::ConfigDocument doc = config::loadDocument(fs::path(PENUMBRA_SOURCE_DIR) / "config/sweep-resolution.json");
+    const std::vector<config::SweepVariant> v = config::expandSweep(doc);
+    ASSERT_EQ(v.size(), 8u);
+    EXPECT_EQ(v[0].config.lights[0].shadow.resolution, 512u);
+    EXPECT_FLOAT_EQ(v[0].config.lights[0].shadow.depthBiasSlope, 1.0f);
+    EXPECT_FLOAT_EQ(v[1].config.lights[0].shadow.depthBiasSlope, 2.0f);
+    EXPECT_EQ(v[7].config.lights[0].shadow.resolution, 4096u);
+    EXPECT_EQ(v[7].label, "/lights/0/shadow/resolution=4096, /lights/0/shadow/slope_bias=2.0");
+    // The base run ignores the sweep.
+    EXPECT_EQ(config::parseConfig(doc).lights[0].shadow.resolution, 2048u);
+}
+
+TEST(Config, BadSweepValueNamesTheSweepEntry)
+{
+    config::ConfigDocument doc;
+    doc.file = "sweep.json";
+    doc.json = minimal();
+    doc.json["sweep"] = json::array({{{"path", "/lights/0/intensity"}, {"values", {1, -5}}}});
+    try {
+        config::expandSweep(doc);
+        FAIL() << "expected ConfigError";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("sweep.json (/sweep/0/values/1): /lights/0/intensity: must be in [0,"),
+                  std::string::npos) << e.what();
+    }
+    doc.json["sweep"] = json::array({{{"path", "/nothing/here"}, {"values", {1}}}});
+    EXPECT_THROW(config::expandSweep(doc), ConfigError);
+}
+
+TEST(Config, LightTypesAndTheirKeys)
+{
+    json doc = minimal();
+    doc["lights"] = json::parse(R"([
+        {"type": "directional", "direction": [0, -1, 0], "angular_diameter_deg": 0.53, "intensity": 3},
+        {"type": "point", "position": [0, 5, 0]},
+        {"type": "rect", "position": [0, 5, 0], "target": [0, 0, 0], "size": [2, 1]},
+        {"type": "disk", "position": [0, 5, 0], "direction": [0, -1, 0], "radius": 0.5}])");
+    const config::RenderConfig c = config::parseConfig(doc, "scene.json");
+    ASSERT_EQ(c.lights.size(), 4u);
+    EXPECT_EQ(c.lights[0].light.type, scene::LightType::Directional);
+    EXPECT_FLOAT_EQ(c.lights[0].light.angularDiameterDeg, 0.53f);
+    EXPECT_FLOAT_EQ(c.lights[2].light.sizeWorld.x, 2.0f);
+    EXPECT_NEAR(glm::dot(c.lights[2].light.tangent, c.lights[2].light.direction), 0.0f, 1e-6f);
+    EXPECT_FLOAT_EQ(c.lights[3].light.radiusWorld, 0.5f);
+
+    doc["lights"] = json::parse(R"([{"type": "point", "position": [0, 5, 0], "outer_cone_deg": 30}])");
+    EXPECT_NE(errorOf(doc).find("/lights/0/outer_cone_deg: unknown key for a point light"), std::string::npos);
+    doc["lights"] = json::parse(R"([{"type": "rect", "position": [0, 5, 0], "direction": [0, -1, 0], "size": [2, 0]}])");
+    EXPECT_NE(errorOf(doc).find("/lights/0/size/1: must be in (0,"), std::string::npos);
+    doc["lights"] = json::parse(R"([{"type": "disk", "position": [0, 5, 0], "direction": [0, -1, 0]}])");
+    EXPECT_NE(errorOf(doc).find("/lights/0/radius: is required"), std::string::npos);
+    doc["lights"] = json::parse(R"([{"type": "directional", "direction": [0, 0, 0]}])");
+    EXPECT_NE(errorOf(doc).find("/lights/0/direction: must be non-zero"), std::string::npos);
+    doc["lights"] = json::parse(R"([{"type": "area", "position": [0, 5, 0]}])");
+    EXPECT_NE(errorOf(doc).find("/lights/0/type: must be one of directional, spot, point, rect, disk"), std::string::npos);
+}
+
+TEST(Config, CullingMode)
+{
+    json doc = minimal();
+    doc["culling"] = "receiver-mask";
+    EXPECT_EQ(config::parseConfig(doc, "scene.json").culling, config::CullingMode::ReceiverMask);
+    doc["culling"] = "receiver";
+    EXPECT_NE(errorOf(doc).find("/culling: must be one of none, frustum, light-occlusion, receiver-mask"), std::string::npos);
+}
+
+TEST(Config, AnimationTracksAreValidated)
+{
+    json doc = minimal();
+    doc["animation"] = json::parse(R"({"tracks": [{"target": "/camera/position", "keys": [{"t": 0, "value": [0, 5, 10]}, {"t": 0, "value": [1, 5, 10]}]}]})");
+    EXPECT_NE(errorOf(doc).find("/animation/tracks/0/keys/1/t: key times must increase strictly"), std::string::npos);
+    doc["animation"] = json::parse(R"({"tracks": [{"target": "/lights/3/position", "keys": [{"t": 0, "value": [0, 5, 10]}]}]})");
+    EXPECT_NE(errorOf(doc).find("/animation/tracks/0/target: unknown target \"/lights/3/position\""), std::string::npos);
+    doc["animation"] = json::parse(R"({"tracks": [{"target": "/camera/fov_y_deg", "keys": [{"t": 0, "value": [1, 2, 3]}]}]})");
+    EXPECT_NE(errorOf(doc).find("/animation/tracks/0/keys/0/value: must be a number"), std::string::npos);
+    doc["animation"] = json::parse(R"({"tracks": [{"target": "node:nobody/translation", "keys": [{"t": 0, "value": [1, 2, 3]}]}]})");
+    const config::RenderConfig c = config::parseConfig(doc, "scene.json");  // the node is checked with the scene
+    try {
+        config::buildScene(c);
+        FAIL() << "expected ConfigError";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("/animation/tracks/0/target: the scene has no node named \"nobody\""),
+                  std::string::npos) << e.what();
+    }
+}
+
+TEST(Animation, Interpolates)
+{
+    config::AnimationTrack track{"/camera/fov_y_deg", config::Interpolation::Linear, {{1.0f, {10.0f}}, {3.0f, {30.0f}}}};
+    EXPECT_FLOAT_EQ(config::evaluate(track, 0.0f)[0], 10.0f);  // before the first key
+    EXPECT_FLOAT_EQ(config::evaluate(track, 2.0f)[0], 20.0f);
+    EXPECT_FLOAT_EQ(config::evaluate(track, 9.0f)[0], 30.0f);  // after the last key
+    track.interpolation = config::Interpolation::Step;
+    EXPECT_FLOAT_EQ(config::evaluate(track, 2.9f)[0], 10.0f);
+    track.interpolation = config::Interpolation::Smooth;
+    track.keys.push_back({4.0f, {30.0f}});
+    // Passes through every key; between two equal keys after a rise it stays finite.
+    EXPECT_FLOAT_EQ(config::evaluate(track, 3.0f)[0], 30.0f);
+    const float mid = config::evaluate(track, 2.0f)[0];
+    EXPECT_GT(mid, 10.0f);
+    EXPECT_LT(mid, 30.0f);
+    EXPECT_TRUE(std::isfinite(config::evaluate(track, 3.5f)[0]));
+}
+
+TEST(Animation, MovesCameraLightsAndNodes)
+{
+    config::RenderConfig c = config::loadConfig(fs::path(PENUMBRA_SOURCE_DIR) / "config/animated.json");
+    scene::Scene s = config::buildScene(c);
+    const glm::vec3 before = c.lights[0].light.direction;
+    config::applyAnimation(c.animation, 1.0f, c, s);
+    EXPECT_FLOAT_EQ(c.camera.position.x, -4.0f);
+    EXPECT_FLOAT_EQ(c.lights[0].light.position.x, 0.0f);
+    EXPECT_GT(glm::length(c.lights[0].light.direction - before), 0.1f);  // still aimed at its target
+    EXPECT_NEAR(glm::length(c.lights[0].light.direction), 1.0f, 1e-5f);
+    const std::vector<uint32_t> moved = s.updateTransforms();
+    ASSERT_EQ(moved.size(), 1u);
+    EXPECT_NEAR(s.instances[moved[0]].worldBounds.center().y, 5.0f, 1e-4f);
 }
 
 TEST(Config, MinimalConfigGetsDefaults)

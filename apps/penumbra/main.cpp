@@ -78,6 +78,18 @@ void printTimings(const std::vector<penumbra::render::FrameTimings>& frames)
     fmt::print("  {:<28} {:>10.3f}\n", "frame wall clock (CPU)", median(frameCpu));
 }
 
+// "-o frames/f{frame:04}.png" writes every measured frame; a plain name, the last one.
+bool outputPerFrame(const std::string& output) { return output.find("{frame") != std::string::npos; }
+
+std::string framePath(const std::string& pattern, uint32_t frame)
+{
+    try {
+        return fmt::format(fmt::runtime(pattern), fmt::arg("frame", frame));
+    } catch (const fmt::format_error& e) {
+        throw penumbra::Error(fmt::format("output pattern '{}': {} (use {{frame}} or {{frame:04}})", pattern, e.what()));
+    }
+}
+
 int runRender(const RenderFlags& flags, const DeviceFlags& deviceFlags)
 {
     penumbra::config::RenderConfig config = penumbra::config::loadConfig(flags.config);
@@ -85,26 +97,43 @@ int runRender(const RenderFlags& flags, const DeviceFlags& deviceFlags)
     if (flags.height) config.height = *flags.height;
     if (flags.frames) config.frames = *flags.frames;
     // Fail on a bad output path before spending seconds rendering.
-    penumbra::io::checkWritable(flags.output);
+    penumbra::io::checkWritable(outputPerFrame(flags.output) ? framePath(flags.output, 0) : flags.output);
 
     penumbra::gpu::Context context(contextOptions(deviceFlags));
     spdlog::info("device: {} ({})", context.deviceInfo().name, context.deviceInfo().type);
-    const penumbra::scene::Scene scene = penumbra::config::buildScene(config);
+    penumbra::scene::Scene scene = penumbra::config::buildScene(config);
+    const penumbra::config::RenderConfig rest = config;  // the animation's starting point
     penumbra::render::FrameRenderer renderer(context, scene, config);
-    spdlog::info("scene: {} instances, {} triangles; {}x{}, {} light(s)", scene.instances.size(),
-                 scene.triangleCount(), config.width, config.height, config.lights.size());
+    spdlog::info("scene: {} instances, {} triangles; {}x{}, {} light(s), {} frame(s)", scene.instances.size(),
+                 scene.triangleCount(), config.width, config.height, config.lights.size(), config.frames);
 
     // Warm-up frames absorb one-time costs (lavapipe JIT-compiles pipelines at first use).
     const uint32_t warmup = config.frames > 1 ? flags.warmup : 0;
     std::vector<penumbra::render::FrameTimings> measured;
     for (uint32_t i = 0; i < warmup + config.frames; ++i) {
+        const uint32_t frame = i < warmup ? 0 : i - warmup;
+        if (!config.animation.empty()) {
+            // Frame f shows time f / fps; every frame starts from the config's own values.
+            config = rest;
+            penumbra::config::applyAnimation(config.animation, float(frame) / config.animation.fps, config, scene);
+            renderer.update(config, scene, scene.updateTransforms());
+        }
         penumbra::render::FrameTimings t = renderer.renderFrame();
-        if (i >= warmup) measured.push_back(std::move(t));
+        if (i < warmup) continue;
+        measured.push_back(std::move(t));
+        if (outputPerFrame(flags.output)) {
+            penumbra::io::writePng(framePath(flags.output, frame), renderer.width(), renderer.height(), renderer.readColor());
+        }
     }
     if (flags.timings) printTimings(measured);
 
-    penumbra::io::writePng(flags.output, renderer.width(), renderer.height(), renderer.readColor());
-    spdlog::info("wrote {}", flags.output);
+    if (outputPerFrame(flags.output)) {
+        spdlog::info("wrote {} frames: {} ... {}", config.frames, framePath(flags.output, 0),
+                     framePath(flags.output, config.frames - 1));
+    } else {
+        penumbra::io::writePng(flags.output, renderer.width(), renderer.height(), renderer.readColor());
+        spdlog::info("wrote {}", flags.output);
+    }
 
     if (context.validationEnabled() && context.validationMessageCount() > 0) {
         spdlog::error("the Vulkan validation layer reported {} message(s)", context.validationMessageCount());
@@ -152,7 +181,9 @@ int main(int argc, char** argv)
     RenderFlags renderFlags;
     CLI::App* render = app.add_subcommand("render", "Render a scene config to a PNG, headless");
     render->add_option("config", renderFlags.config, "Scene config (JSON)")->required();
-    render->add_option("-o,--output", renderFlags.output, "Output PNG")->required();
+    render->add_option("-o,--output", renderFlags.output,
+                       "Output PNG; a name with {frame} (e.g. f{frame:04}.png) gets every frame")
+        ->required();
     render->add_option("--frames", renderFlags.frames, "Frames to render (overrides the config)")
         ->check(CLI::Range(1u, 100000u));
     render->add_option("--warmup", renderFlags.warmup, "Untimed frames before the measured ones (with --frames > 1)")
