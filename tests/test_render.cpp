@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <glm/gtc/matrix_transform.hpp>
+
 #include <cmath>
 
 using namespace penumbra;
@@ -338,4 +340,62 @@ TEST_F(MultiLight, AnimatedLightAndNodeFollowTheirTracks)
         EXPECT_EQ(a.mismatches, 0u) << "t = " << t;
         EXPECT_GT(a.surelyShadowed, 300u) << "t = " << t;
     }
+}
+
+class Materials : public test::GpuTest {};
+
+TEST_F(Materials, AlphaMaskCutsHolesInSurfacesAndShadows)
+{
+    // A 4x4 quad at height 2 over the ground, textured half transparent (x < 0: alpha 0)
+    // and half opaque, alpha-masked; a directional light slanted by 1/2 in x per unit of
+    // height, so the opaque half's shadow falls on x in [1, 3] and light reaches
+    // x in (-1, 1) through the transparent half. The camera looks down from above.
+    scene::Scene s;
+    scene::Texture texture{"half", 4, 1, {}};
+    for (int x = 0; x < 4; ++x) texture.rgba.insert(texture.rgba.end(), {200, 200, 200, uint8_t(x < 2 ? 0 : 255)});
+    s.textures.push_back(texture);
+    s.materials.push_back({"masked", {1, 1, 1, 1}, 0, scene::AlphaMode::Mask, 0.5f, true});
+    scene::Mesh ground = scene::makePlane("ground");
+    scene::Mesh quad = scene::makePlane("quad");
+    quad.material = 1;
+    for (scene::Mesh* m : {&ground, &quad}) m->computeBounds();
+    s.meshes = {ground, quad};
+    const glm::mat4 identity(1.0f);
+    s.addInstance(0, s.graph.addNode("ground", scene::kNoParent, glm::scale(identity, glm::vec3(20, 1, 20))));
+    s.addInstance(1, s.graph.addNode("quad", scene::kNoParent,
+                                     glm::scale(glm::translate(identity, glm::vec3(0, 2, 0)), glm::vec3(4, 1, 4))));
+
+    config::RenderConfig cfg = defaultConfig();
+    cfg.camera.position = {0.0f, 12.0f, 0.5f};
+    cfg.camera.target = {0.0f, 0.0f, 0.0f};
+    cfg.lights.resize(1);
+    cfg.lights[0].light.type = scene::LightType::Directional;
+    cfg.lights[0].light.direction = glm::normalize(glm::vec3(1.0f, -2.0f, 0.0f));
+    cfg.lights[0].light.intensity = 2.0f;
+    cfg.lights[0].shadow.resolution = 1024;
+    render::FrameRenderer renderer(*context, s, cfg);
+    renderer.renderFrame();
+    const std::vector<float> positions = renderer.readPositions();
+    const std::vector<float> v = renderer.readVisibility(0);
+
+    size_t throughHole = 0, opaque = 0, inShadow = 0;
+    for (size_t i = 0; i < v.size(); ++i) {
+        const float x = positions[4 * i], y = positions[4 * i + 1], z = positions[4 * i + 2];
+        if (positions[4 * i + 3] == 0.0f || std::abs(z) > 1.5f) continue;
+        if (x > -0.8f && x < -0.2f) {
+            ASSERT_NEAR(y, 0.0f, 1e-3f) << "the camera sees the ground through the hole at x = " << x;
+            ASSERT_EQ(v[i], 1.0f) << "light passes through the hole onto x = " << x;
+            ++throughHole;
+        } else if (x > 0.3f && x < 1.7f) {
+            ASSERT_NEAR(y, 2.0f, 1e-3f) << "the opaque half is seen at x = " << x;
+            ++opaque;
+        } else if (x > 2.2f && x < 2.8f) {
+            ASSERT_NEAR(y, 0.0f, 1e-3f);
+            ASSERT_EQ(v[i], 0.0f) << "the opaque half shadows the ground at x = " << x;
+            ++inShadow;
+        }
+    }
+    EXPECT_GT(throughHole, 50u);
+    EXPECT_GT(opaque, 100u);
+    EXPECT_GT(inShadow, 100u);
 }

@@ -1,12 +1,24 @@
-// Per-instance data shared by every pass that draws scene geometry. The draw's
-// firstInstance is the instance index, so gl_InstanceIndex finds the row.
+// Per-instance and per-material data shared by every pass that draws scene geometry.
+// The draw's firstInstance is the instance index, so gl_InstanceIndex finds the row.
 #ifndef PENUMBRA_SCENE_GLSL
 #define PENUMBRA_SCENE_GLSL
 
 struct InstanceData {
     mat4 model;
     mat4 normalMatrix;  // inverse-transpose of model (w column unused)
-    vec4 baseColor;     // rgb albedo, a = alpha
+    uvec4 info;         // x: material index
+};
+
+#define ALPHA_MODE_OPAQUE 0u
+#define ALPHA_MODE_MASK 1u
+#define ALPHA_MODE_BLEND 2u
+
+struct MaterialData {
+    vec4 baseColor;     // linear rgb, a = alpha (times the texture's)
+    float alphaCutoff;  // ALPHA_MODE_MASK: alpha below it is a hole
+    uint alphaMode;
+    uint pad0;
+    uint pad1;
 };
 
 #endif

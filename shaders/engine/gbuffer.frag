@@ -1,9 +1,14 @@
 #version 460
 #include "common/gbuffer.glsl"
+#include "common/scene.glsl"
 
 layout(location = 0) in vec3 inPositionWorld;
 layout(location = 1) in vec3 inNormalWorld;
-layout(location = 2) flat in vec4 inBaseColor;
+layout(location = 2) in vec2 inUv;
+layout(location = 3) flat in uint inMaterial;
+
+layout(std430, binding = 1) readonly buffer Materials { MaterialData materials[]; };
+layout(binding = 2) uniform sampler2D baseColorTexture;  // pushed per group of draws
 
 layout(location = 0) out vec4 outPosition;
 layout(location = 1) out vec4 outNormal;
@@ -11,10 +16,15 @@ layout(location = 2) out vec4 outAlbedo;
 
 void main()
 {
+    MaterialData material = materials[inMaterial];
+    vec4 baseColor = material.baseColor * texture(baseColorTexture, inUv);
+    // MASK: below the cutoff is a hole. BLEND is drawn as an opaque surface here (the
+    // G-buffer holds one surface per pixel; translucency is the deep-shadow technique's).
+    if (material.alphaMode == ALPHA_MODE_MASK && baseColor.a < material.alphaCutoff) discard;
     vec3 n = normalize(inNormalWorld);
     // Two-sided lighting: a back face seen by the camera is lit from its visible side.
     if (!gl_FrontFacing) n = -n;
     outPosition = vec4(inPositionWorld, 1.0);
     outNormal = vec4(n, 0.0);
-    outAlbedo = inBaseColor;
+    outAlbedo = baseColor;
 }

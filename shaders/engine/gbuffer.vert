@@ -3,6 +3,7 @@
 
 layout(location = 0) in vec3 inPosition;
 layout(location = 1) in vec3 inNormal;
+layout(location = 2) in vec2 inUv;
 
 layout(std430, binding = 0) readonly buffer Instances { InstanceData instances[]; };
 
@@ -12,7 +13,8 @@ layout(push_constant) uniform Push {
 
 layout(location = 0) out vec3 outPositionWorld;
 layout(location = 1) out vec3 outNormalWorld;
-layout(location = 2) flat out vec4 outBaseColor;
+layout(location = 2) out vec2 outUv;
+layout(location = 3) flat out uint outMaterial;
 
 void main()
 {
@@ -20,6 +22,7 @@ void main()
     vec4 world = inst.model * vec4(inPosition, 1.0);
     outPositionWorld = world.xyz;
     outNormalWorld = mat3(inst.normalMatrix) * inNormal;
-    outBaseColor = inst.baseColor;
+    outUv = inUv;
+    outMaterial = inst.info.x;
     gl_Position = pc.viewProj * world;
 }

@@ -207,6 +207,32 @@ void updateBuffer(Context& context, const Buffer& buffer, std::span<const std::b
     });
 }
 
+Image uploadImage(Context& context, uint32_t width, uint32_t height, VkFormat format, std::span<const std::byte> texels,
+                  const std::string& name)
+{
+    Image image(context, {width, height, format, VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, name});
+    const VkDeviceSize size = VkDeviceSize(width) * height * texelSize(format);
+    if (texels.size() != size) {
+        throw GpuError(fmt::format("image '{}': {} bytes of texels for {}x{}, expected {}", name, texels.size(), width,
+                                   height, size));
+    }
+    Buffer staging(context, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, name + " (staging)");
+    std::memcpy(staging.mapped(), texels.data(), size);
+    const ImageAccess copyTarget{VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
+                                 VK_ACCESS_2_TRANSFER_WRITE_BIT};
+    const ImageAccess sampled{VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                              VK_ACCESS_2_SHADER_SAMPLED_READ_BIT};
+    context.submitAndWait([&](VkCommandBuffer cmd) {
+        transition(cmd, image, access::kUndefined, copyTarget);
+        VkBufferImageCopy region{};
+        region.imageSubresource = {image.aspect(), 0, 0, 1};
+        region.imageExtent = {width, height, 1};
+        vkCmdCopyBufferToImage(cmd, staging.handle(), image.handle(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
+        transition(cmd, image, copyTarget, sampled);
+    });
+    return image;
+}
+
 std::vector<std::byte> readImage(Context& context, const Image& image, VkImageLayout layout)
 {
     const ImageDesc& desc = image.desc();

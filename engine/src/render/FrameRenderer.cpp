@@ -71,11 +71,14 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
     g.name = "gbuffer";
     g.vertexShader = "engine/gbuffer.vert";
     g.fragmentShader = "engine/gbuffer.frag";
-    g.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
+    g.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                  {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                  {2, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}};
     g.pushConstantBytes = sizeof(glm::mat4);
     g.vertexLayout = {sceneGpu_.vertexStride(),
                       {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(scene::Vertex, position)},
-                       {1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(scene::Vertex, normal)}}};
+                       {1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(scene::Vertex, normal)},
+                       {2, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(scene::Vertex, uv)}}};
     g.colorFormats = {kPositionFormat, kNormalFormat, kAlbedoFormat};
     g.depthFormat = kDepthFormat;
     g.depthCompare = VK_COMPARE_OP_GREATER_OR_EQUAL;
@@ -231,9 +234,14 @@ void FrameRenderer::recordGBuffer(VkCommandBuffer cmd)
     vkCmdSetViewport(cmd, 0, 1, &viewport);
     vkCmdSetScissor(cmd, 0, 1, &scissor);
     gbufferPipeline_.bind(cmd);
-    gpu::DescriptorPush().storageBuffer(0, sceneGpu_.instanceBuffer()).push(context_, cmd, gbufferPipeline_);
     gbufferPipeline_.pushConstants(cmd, &cameraViewProj_, sizeof(glm::mat4));
-    sceneGpu_.drawAll(cmd);
+    sceneGpu_.draw(cmd, DrawFilter::All, [&](const gpu::Image& texture) {
+        gpu::DescriptorPush()
+            .storageBuffer(0, sceneGpu_.instanceBuffer())
+            .storageBuffer(1, sceneGpu_.materialBuffer())
+            .sampledImage(2, texture, sceneGpu_.textureSampler())
+            .push(context_, cmd, gbufferPipeline_);
+    });
     vkCmdEndRendering(cmd);
 
     for (const gpu::Image* image : targets) {

@@ -38,6 +38,15 @@ HardShadowPipelines::HardShadowPipelines(gpu::Context& ctx, const gpu::ShaderCom
     d.cullMode = VK_CULL_MODE_NONE;
     depth = gpu::Pipeline(ctx, compiler, d);
 
+    d.name = "hard.shadow_map.masked";
+    d.fragmentShader = "hard/shadow_masked.frag";
+    d.defines = {{"ALPHA_MASK", "1"}};
+    d.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                  {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                  {2, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}};
+    d.vertexLayout.attributes.push_back({2, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(scene::Vertex, uv)});
+    depthMasked = gpu::Pipeline(ctx, compiler, d);
+
     gpu::ComputePipelineDesc c;
     c.name = "hard.visibility";
     c.shader = "hard/visibility.comp";
@@ -102,9 +111,8 @@ void HardShadow::recordShadowMap(VkCommandBuffer cmd, const SceneGpu& scene) con
     // Reversed-Z: "away from the light" is towards smaller depth, so every bias term is
     // negated. A negative clamp bounds the bias from below (Vulkan: max(bias, clamp)).
     vkCmdSetDepthBias(cmd, -settings_.depthBiasConstant, -settings_.depthBiasClamp, -settings_.depthBiasSlope);
-    pipelines_->depth.bind(cmd);
-    gpu::DescriptorPush().storageBuffer(0, scene.instanceBuffer()).push(context_, cmd, pipelines_->depth);
     const uint32_t size = settings_.resolution;
+    const bool masked = scene.hasAlphaMasked();
     for (uint32_t face = 0; face < frusta_.size(); ++face) {
         // Each face draws into its own cell of the atlas (the scissor keeps it there).
         const int32_t x = int32_t((face % 3) * size), y = int32_t((face / 3) * size);
@@ -112,8 +120,21 @@ void HardShadow::recordShadowMap(VkCommandBuffer cmd, const SceneGpu& scene) con
         VkRect2D scissor{{x, y}, {size, size}};
         vkCmdSetViewport(cmd, 0, 1, &viewport);
         vkCmdSetScissor(cmd, 0, 1, &scissor);
+        pipelines_->depth.bind(cmd);
+        gpu::DescriptorPush().storageBuffer(0, scene.instanceBuffer()).push(context_, cmd, pipelines_->depth);
         pipelines_->depth.pushConstants(cmd, &frusta_[face].viewProj, sizeof(glm::mat4));
-        scene.drawAll(cmd);
+        scene.draw(cmd, DrawFilter::Solid);
+        if (!masked) continue;
+        const gpu::Pipeline& m = pipelines_->depthMasked;
+        m.bind(cmd);
+        m.pushConstants(cmd, &frusta_[face].viewProj, sizeof(glm::mat4));
+        scene.draw(cmd, DrawFilter::AlphaMasked, [&](const gpu::Image& texture) {
+            gpu::DescriptorPush()
+                .storageBuffer(0, scene.instanceBuffer())
+                .storageBuffer(1, scene.materialBuffer())
+                .sampledImage(2, texture, scene.textureSampler())
+                .push(context_, cmd, m);
+        });
     }
     vkCmdEndRendering(cmd);
     gpu::transition(cmd, shadowMap_, gpu::access::kDepthAttachment, gpu::access::kComputeSampledDepth);

@@ -23,7 +23,8 @@ struct HardShadowPipelines {
     HardShadowPipelines& operator=(const HardShadowPipelines&) = delete;
 
     gpu::Context& context;
-    gpu::Pipeline depth;
+    gpu::Pipeline depth;        // solid casters: no fragment shader
+    gpu::Pipeline depthMasked;  // alpha-masked casters: a fragment shader cuts the holes
     gpu::Pipeline visibility;
     VkSampler compareSampler = VK_NULL_HANDLE;
 };

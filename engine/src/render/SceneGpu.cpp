@@ -1,9 +1,14 @@
 #include "penumbra/render/SceneGpu.h"
 
 #include "penumbra/core/Error.h"
+#include "penumbra/gpu/Context.h"
+#include "penumbra/gpu/Pipeline.h"
 
 #include <glm/gtc/matrix_inverse.hpp>
 
+#include <fmt/format.h>
+
+#include <algorithm>
 #include <span>
 
 namespace penumbra::render {
@@ -12,7 +17,14 @@ namespace {
 struct InstanceData {  // matches shaders/common/scene.glsl
     glm::mat4 model;
     glm::mat4 normalMatrix;
+    glm::uvec4 info;  // x: material index
+};
+
+struct MaterialData {  // matches shaders/common/scene.glsl
     glm::vec4 baseColor;
+    float alphaCutoff;
+    uint32_t alphaMode;  // 0 opaque, 1 mask, 2 blend
+    uint32_t pad0, pad1;
 };
 
 template <class T>
@@ -27,15 +39,14 @@ std::vector<InstanceData> instanceTable(const scene::Scene& scene)
     table.reserve(scene.instances.size());
     for (const scene::Instance& inst : scene.instances) {
         const glm::mat4& model = scene.instanceTransform(inst);
-        const scene::Material& material = scene.materials.at(scene.meshes.at(inst.mesh).material);
-        table.push_back({model, glm::inverseTranspose(model), material.baseColor});
+        table.push_back({model, glm::inverseTranspose(model), glm::uvec4(scene.meshes.at(inst.mesh).material, 0, 0, 0)});
     }
     return table;
 }
 
 } // namespace
 
-SceneGpu::SceneGpu(gpu::Context& context, const scene::Scene& scene)
+SceneGpu::SceneGpu(gpu::Context& context, const scene::Scene& scene) : device_(context.device())
 {
     if (scene.instances.empty()) {
         throw Error("scene has no instances: nothing to render");
@@ -53,13 +64,35 @@ SceneGpu::SceneGpu(gpu::Context& context, const scene::Scene& scene)
         vertices.insert(vertices.end(), mesh.vertices.begin(), mesh.vertices.end());
         indices.insert(indices.end(), mesh.indices.begin(), mesh.indices.end());
     }
+    // Textures as sRGB images (glTF's base colour is sRGB-encoded: sampling returns
+    // linear values); the white default comes last.
+    for (const scene::Texture& t : scene.textures) {
+        textures_.push_back(gpu::uploadImage(context, t.width, t.height, VK_FORMAT_R8G8B8A8_SRGB,
+                                             std::as_bytes(std::span<const uint8_t>(t.rgba)), "texture " + t.name));
+    }
+    const std::vector<uint8_t> white = {255, 255, 255, 255};
+    textures_.push_back(gpu::uploadImage(context, 1, 1, VK_FORMAT_R8G8B8A8_SRGB,
+                                         std::as_bytes(std::span<const uint8_t>(white)), "texture white"));
+    const auto defaultTexture = static_cast<uint32_t>(textures_.size() - 1);
+
+    std::vector<MaterialData> materials;
+    for (const scene::Material& m : scene.materials) {
+        if (m.baseColorTexture != scene::kNoTexture && size_t(m.baseColorTexture) >= scene.textures.size()) {
+            throw Error(fmt::format("material '{}': texture {} does not exist", m.name, m.baseColorTexture));
+        }
+        materials.push_back({m.baseColor, m.alphaCutoff, static_cast<uint32_t>(m.alphaMode), 0, 0});
+    }
     for (uint32_t i = 0; i < scene.instances.size(); ++i) {
+        const scene::Mesh& mesh = scene.meshes.at(scene.instances[i].mesh);
+        const scene::Material& m = scene.materials.at(mesh.material);
         const Range& r = ranges.at(scene.instances[i].mesh);
         if (r.indexCount > 0) {
-            draws_.push_back({r.indexCount, r.firstIndex, r.vertexOffset, i});
+            const uint32_t texture = m.baseColorTexture == scene::kNoTexture ? defaultTexture : uint32_t(m.baseColorTexture);
+            draws_.push_back({r.indexCount, r.firstIndex, r.vertexOffset, i, texture, m.alphaMode == scene::AlphaMode::Mask});
             triangles_ += r.indexCount / 3;
         }
     }
+    std::stable_sort(draws_.begin(), draws_.end(), [](const Draw& a, const Draw& b) { return a.texture < b.texture; });
     if (vertices.empty() || indices.empty()) {
         throw Error("scene has no triangles: nothing to render");
     }
@@ -67,6 +100,18 @@ SceneGpu::SceneGpu(gpu::Context& context, const scene::Scene& scene)
     indices_ = gpu::uploadBuffer(context, bytesOf(indices), VK_BUFFER_USAGE_INDEX_BUFFER_BIT, "scene indices");
     instances_ = gpu::uploadBuffer(context, bytesOf(instanceTable(scene)), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                    "scene instances");
+    materials_ = gpu::uploadBuffer(context, bytesOf(materials), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "scene materials");
+    sampler_ = gpu::createSampler(context, VK_FILTER_LINEAR, VK_SAMPLER_ADDRESS_MODE_REPEAT);
+}
+
+SceneGpu::~SceneGpu()
+{
+    if (sampler_) vkDestroySampler(device_, sampler_, nullptr);
+}
+
+bool SceneGpu::hasAlphaMasked() const
+{
+    return std::any_of(draws_.begin(), draws_.end(), [](const Draw& d) { return d.alphaMasked; });
 }
 
 void SceneGpu::updateInstances(gpu::Context& context, const scene::Scene& scene)
@@ -74,13 +119,22 @@ void SceneGpu::updateInstances(gpu::Context& context, const scene::Scene& scene)
     gpu::updateBuffer(context, instances_, bytesOf(instanceTable(scene)));
 }
 
-void SceneGpu::drawAll(VkCommandBuffer cmd) const
+void SceneGpu::draw(VkCommandBuffer cmd, DrawFilter filter,
+                    const std::function<void(const gpu::Image& texture)>& bindTexture) const
 {
     const VkDeviceSize offset = 0;
     const VkBuffer vb = vertices_.handle();
     vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
     vkCmdBindIndexBuffer(cmd, indices_.handle(), 0, VK_INDEX_TYPE_UINT32);
+    uint32_t bound = UINT32_MAX;
     for (const Draw& d : draws_) {
+        if ((filter == DrawFilter::Solid && d.alphaMasked) || (filter == DrawFilter::AlphaMasked && !d.alphaMasked)) {
+            continue;
+        }
+        if (bindTexture && d.texture != bound) {
+            bindTexture(textures_[d.texture]);
+            bound = d.texture;
+        }
         vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, d.vertexOffset, d.instance);
     }
 }

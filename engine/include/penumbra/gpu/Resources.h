@@ -84,6 +84,11 @@ Buffer uploadBuffer(Context& context, std::span<const std::byte> bytes, VkBuffer
 // uploadBuffer's are) with `bytes`, through a staging copy; waits for it.
 void updateBuffer(Context& context, const Buffer& buffer, std::span<const std::byte> bytes);
 
+// Creates a sampled 2D image filled with `texels` (tightly packed rows), left in
+// SHADER_READ_ONLY_OPTIMAL.
+Image uploadImage(Context& context, uint32_t width, uint32_t height, VkFormat format, std::span<const std::byte> texels,
+                  const std::string& name);
+
 // Copies a whole 2D image (in `layout`, left in that layout) into host memory, rows
 // tightly packed. Used for PNG output and for tests.
 std::vector<std::byte> readImage(Context& context, const Image& image, VkImageLayout layout);

@@ -1,24 +1,44 @@
 #pragma once
-// The scene's geometry on the GPU: one vertex buffer, one index buffer, one instance
-// table (model matrix, normal matrix, material), and a draw per instance whose
-// firstInstance is the instance index (shaders read instances[gl_InstanceIndex]).
+// The scene on the GPU: one vertex buffer, one index buffer, an instance table (model
+// matrix, normal matrix, material index), a material table, the base-colour textures,
+// and a draw per instance whose firstInstance is the instance index (shaders read
+// instances[gl_InstanceIndex]). Draws are grouped by texture so that a pass pushes each
+// texture's descriptor once (lavapipe has no descriptor indexing: no bindless arrays).
 #include "penumbra/gpu/Resources.h"
 #include "penumbra/scene/Scene.h"
 
+#include <functional>
 #include <vector>
 
 namespace penumbra::render {
 
+// Which draws a pass wants. Alpha-masked materials need a fragment shader that samples
+// alpha; everything else can be drawn depth-only. Blended materials are drawn as opaque
+// surfaces by the G-buffer and hard shadows (their translucency is the deep-shadow
+// technique's subject).
+enum class DrawFilter { All, Solid, AlphaMasked };
+
 class SceneGpu {
 public:
     SceneGpu(gpu::Context& context, const scene::Scene& scene);
+    ~SceneGpu();
+    SceneGpu(const SceneGpu&) = delete;
+    SceneGpu& operator=(const SceneGpu&) = delete;
 
     // Re-uploads the instance table after nodes moved (Scene::updateTransforms()).
     void updateInstances(gpu::Context& context, const scene::Scene& scene);
 
     const gpu::Buffer& instanceBuffer() const { return instances_; }
-    // Binds vertex and index buffers and draws every instance.
-    void drawAll(VkCommandBuffer cmd) const;
+    const gpu::Buffer& materialBuffer() const { return materials_; }
+    VkSampler textureSampler() const { return sampler_; }
+
+    // Binds vertex and index buffers and draws the instances that pass `filter`; before
+    // each group of draws that share a base-colour texture, calls `bindTexture` (when
+    // given) with it (a 1x1 white texture for untextured materials).
+    void draw(VkCommandBuffer cmd, DrawFilter filter,
+              const std::function<void(const gpu::Image& texture)>& bindTexture = {}) const;
+    bool hasAlphaMasked() const;
+
     uint32_t vertexStride() const { return sizeof(scene::Vertex); }
     size_t triangleCount() const { return triangles_; }
 
@@ -28,11 +48,17 @@ private:
         uint32_t firstIndex;
         int32_t vertexOffset;
         uint32_t instance;
+        uint32_t texture;  // index into textures_ (the last one is the white default)
+        bool alphaMasked;
     };
+    VkDevice device_ = VK_NULL_HANDLE;
     gpu::Buffer vertices_;
     gpu::Buffer indices_;
     gpu::Buffer instances_;
-    std::vector<Draw> draws_;
+    gpu::Buffer materials_;
+    std::vector<gpu::Image> textures_;
+    VkSampler sampler_ = VK_NULL_HANDLE;
+    std::vector<Draw> draws_;  // sorted by texture
     size_t triangles_ = 0;
 };
 
