@@ -465,11 +465,27 @@ TEST(Bvh, UnplaceableBoxesAreNeverReturned)
     for (uint32_t i = 3; i < boxes.size(); i += 11) refitted[i] = box({kNaN, 1, 1}, {2, 2, 2});
     bvh.refit(refitted);
     expectQueriesMatchBruteForce(bvh, refitted, 20);
+    // Front to back: nodes without a box are passed over, and every placeable instance
+    // is in a visited leaf.
+    std::vector<uint32_t> listed;
+    bvh.traverseFrontToBack(glm::vec3(0.0f), [&](const BvhNodeVisit& v) {
+        EXPECT_FALSE(v.bounds.empty()) << "node " << v.node;
+        listed.insert(listed.end(), v.instances.begin(), v.instances.end());
+        return true;
+    });
+    for (uint32_t i = 0; i < refitted.size(); ++i) {
+        if (placeable(refitted[i])) {
+            EXPECT_EQ(std::count(listed.begin(), listed.end(), i), 1) << "instance " << i;
+        }
+    }
 
     // A tree of nothing but unplaceable boxes.
     const InstanceBvh none(unplaceable);
     none.cullFrustum(everything, found);
     EXPECT_TRUE(found.empty());
+    bool visited = false;
+    none.traverseFrontToBack(glm::vec3(0.0f), [&](const BvhNodeVisit&) { return visited = true; });
+    EXPECT_FALSE(visited);
     expectQueriesMatchBruteForce(none, unplaceable, 21);
 }
 

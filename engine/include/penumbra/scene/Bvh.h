@@ -108,7 +108,8 @@ public:
 
     // Instances whose box lies inside the frustum or cuts it. A box is dropped only when
     // it lies entirely on the outer side of one plane, so everything that touches the
-    // frustum is kept, and some boxes near its edges that miss it are kept too.
+    // frustum is kept, and some boxes near its edges that miss it are kept too. Throws
+    // Error for a planeCount above 6.
     void cullFrustum(const Frustum& frustum, std::vector<uint32_t>& visible) const;
     // Instances whose box overlaps `box` (touching counts). A box that cannot be placed
     // overlaps nothing.
@@ -119,7 +120,8 @@ public:
     // along a box face hits the box.
     std::optional<RayHit> closestHit(const Ray& ray) const;
     // The closest hit that `test` reports, asking it only about instances whose box the
-    // ray enters before the closest hit so far, nearest nodes first.
+    // ray enters before the closest hit so far, nearest nodes first. Throws Error if
+    // `test` is empty.
     std::optional<RayHit> closestHit(const Ray& ray, const InstanceRayTest& test) const;
     // Every box the ray enters, sorted by entry t (ties: by index).
     void findAllHits(const Ray& ray, std::vector<RayHit>& hits) const;
@@ -127,7 +129,7 @@ public:
     // Visits nodes in non-decreasing distance from `point` to their box (ties: by node
     // index), so every node comes after its parent. Nodes with no placeable box are not
     // visited; a leaf lists all its instances, placeable or not. A point with a NaN or
-    // infinite coordinate visits nothing.
+    // infinite coordinate visits nothing. Throws Error if `visit` is empty.
     void traverseFrontToBack(const glm::vec3& point, const BvhNodeVisitor& visit) const;
 
     size_t instanceCount() const { return order_.size(); }
