@@ -184,9 +184,10 @@ InstanceBvh::InstanceBvh(std::span<const Aabb> bounds) { build(bounds); }
 
 void InstanceBvh::build(std::span<const Aabb> bounds)
 {
-    if (bounds.size() >= kNoNode) {
-        throw Error(fmt::format("InstanceBvh: {} instance boxes; 32-bit indices hold at most {}", bounds.size(),
-                                kNoNode - 1));
+    // 2n - 1 nodes must stay below kNoNode.
+    if (bounds.size() > kMaxInstances) {
+        throw Error(fmt::format("InstanceBvh: {} instance boxes; 32-bit node indices allow at most {}", bounds.size(),
+                                kMaxInstances));
     }
     const auto n = static_cast<uint32_t>(bounds.size());
     std::vector<Aabb> boxes(n);

@@ -83,12 +83,13 @@ class InstanceBvh {
 public:
     static constexpr uint32_t kNoNode = std::numeric_limits<uint32_t>::max();
     static constexpr uint32_t kMaxLeafInstances = 4;
+    static constexpr uint32_t kMaxInstances = 1u << 31;
     // refitOrRebuild's default threshold, the ratio of refitted to built SAH cost; see
     // Bvh.cpp for why 1.5.
     static constexpr double kRebuildCostRatio = 1.5;
 
     InstanceBvh() = default;  // no instances
-    // Instance i has the box bounds[i]. Throws Error for 2^32 - 1 boxes or more.
+    // Instance i has the box bounds[i]. Throws Error for more than kMaxInstances boxes.
     explicit InstanceBvh(std::span<const Aabb> bounds);
 
     // New boxes for the same instances, same tree: O(nodes). Throws Error if the count
