@@ -3,7 +3,7 @@
 // minimal form: scene generator, camera, lights with their shadow settings, output
 // size and frame count. Every error names the file, the JSON path and what is expected:
 //   "scene.json: /lights/0/outer_cone_deg: must be in (0, 89], got 120".
-#include "penumbra/scene/Scene.h"
+#include "penumbra/scene/Generators.h"
 
 #include <nlohmann/json_fwd.hpp>
 
