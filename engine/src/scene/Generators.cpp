@@ -40,6 +40,11 @@ public:
     {
         if (!(v >= lo && v <= hi)) fail(name, fmt::format("in [{}, {}]", lo, hi), fmt::format("{}", v));
     }
+    // v >= the parameter `other`, whose value is lo.
+    void atLeast(const char* name, float v, const char* other, float lo) const
+    {
+        if (!(v >= lo && v <= kFloatMax)) fail(name, fmt::format("a finite number >= {} ({})", other, lo), fmt::format("{}", v));
+    }
     void count(const char* name, uint32_t v, uint32_t lo, uint32_t hi) const
     {
         if (v < lo || v > hi) fail(name, fmt::format("in [{}, {}]", lo, hi), fmt::format("{}", v));
@@ -308,8 +313,8 @@ void addKerbside(SceneBuilder& b, const CityParams& p, const CityMeshes& meshes,
 
 // ---- hair pieces ---------------------------------------------------------------------------
 
-constexpr float kRootLift = 1.005f;   // roots sit this factor of the radius out from the centre
-constexpr float kHeadClear = 1.02f;   // strands stay this factor of the radius out
+constexpr float kRootLift = 1.005f;   // roots sit this factor of the radius (plus half a width) out
+constexpr float kHeadClear = 1.02f;   // strands stay this factor of the radius out, or move outwards
 constexpr float kRootTilt = 0.6f;     // roots lean this much (tan) from the normal towards -y
 constexpr float kTipWidth = 1.0f / 3.0f;
 
@@ -338,15 +343,18 @@ std::vector<glm::vec3> growStrand(const HairParams& p, Random& rng, float theta,
     const glm::vec3 radial{std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi)};
     const glm::vec3 meridianDown{std::cos(theta) * std::cos(phi), -std::sin(theta), std::cos(theta) * std::sin(phi)};
     const float step = length / float(p.segments);
-    std::vector<glm::vec3> points{radial * (p.headRadius * kRootLift)};
+    // A ribbon's edge lies half a width from its point, and every point lies farther
+    // out than the root: no ribbon vertex enters the head.
+    const float halfWidth = 0.5f * p.strandWidth;
+    std::vector<glm::vec3> points{radial * (p.headRadius * kRootLift + halfWidth)};
     glm::vec3 d = glm::normalize(radial + kRootTilt * meridianDown);
     for (uint32_t k = 0; k < p.segments; ++k) {
         if (k > 0) {
             const glm::vec3 wander{rng.normal(), rng.normal(), rng.normal()};
             d = glm::normalize(d - p.gravity * step * kUp + p.waviness * wander);
         }
-        const glm::vec3& from = points.back();
-        if (glm::length(from + d * step) < p.headRadius * kHeadClear) d = tangential(d, from);
+        const glm::vec3 from = points.back();
+        if (glm::length(from + d * step) < p.headRadius * kHeadClear + halfWidth) d = tangential(d, from);
         points.push_back(from + d * step);
     }
     return points;
@@ -633,7 +641,7 @@ Scene generateBoxGrid(const BoxGridParams& p)
     check.positive("box_size", p.boxSize);
     check.positive("spacing", p.spacing);
     check.positive("min_height", p.minHeight);
-    check.range("max_height", p.maxHeight, p.minHeight, kFloatMax);
+    check.atLeast("max_height", p.maxHeight, "min_height", p.minHeight);
     check.positive("sphere_radius", p.sphereRadius);
     check.count("sphere_segments", p.sphereSegments, 3, 4096);
     check.positive("plane_size", p.planeSize);
@@ -680,7 +688,7 @@ Scene generatePenumbra(const PenumbraParams& p)
         check.fail("occluder_height", "> occluder_thickness / 2 (the occluder above the ground)",
                    fmt::format("{}", p.occluderHeight));
     }
-    check.range("ground_size", p.groundSize, p.occluderSize, kFloatMax);
+    check.atLeast("ground_size", p.groundSize, "occluder_size", p.occluderSize);
 
     SceneBuilder b("penumbra");
     addGround(b, p.groundSize);
@@ -735,6 +743,7 @@ Scene generateCity(const CityParams& p)
     check.range("sidewalk_width", p.sidewalkWidth, 1.5f, 0.25f * p.blockSize);
     check.count("lots_per_side", p.lotsPerSide, 1, 16);
     check.positive("min_height", p.minHeight);
+    check.atLeast("max_height", p.maxHeight, "min_height", p.minHeight);
     check.range("max_height", p.maxHeight, p.minHeight, 10000.0f);
     check.range("setback_chance", p.setbackChance, 0.0f, 1.0f);
     check.range("car_density", p.carDensity, 0.0f, 1.0f);

@@ -64,8 +64,9 @@ struct RectAreaLight {
 // and since light and back-projection are axis-aligned rectangles in one plane, the
 // hidden fraction is the product of the two 1D overlaps divided by the light's sides:
 //     V(p) = 1 - overlap_x overlap_z / (w_x w_z).
-// Along x this makes the penumbra w_x (H - h)/h wide for a receiver at distance H from
-// the light, as in the adaptive-soft-shadows thesis (eq. 3.7 with d_Blocker = H - h).
+// Along x the penumbra is w_x h / (H - h) wide, the adaptive-soft-shadows thesis's
+// w_Penumbra = (d_Receiver - d_Blocker) w_Light / d_Blocker (eq. 7 of section 3) with
+// d_Receiver = H and d_Blocker = H - h.
 // A zero light side counts 1 if the light's coordinate lies in the back-projected
 // interval, else 0 (a hard edge). Assumptions: the receiver lies on the ground and the
 // occluder is infinitely thin at height h; this is exact for occluder_thickness = 0. A
@@ -81,8 +82,9 @@ double penumbraVisibility(const PenumbraParams& params, const RectAreaLight& lig
 // lots_per_side^2 buildings (boxes of varied heights, some with narrower tiers set back
 // on top) inside a sidewalk ring; the kerbs carry parked cars, and the sidewalks street
 // lights, trees and bins. Every building tier, car, light, tree part and bin is an
-// instance of one of a few shared meshes. Triangles grow with blocks^2: about 5,600
-// triangles and 80 instances per block with the other defaults (README lists counts).
+// instance of one of 15 shared meshes. Triangles and instances grow with blocks^2:
+// about 6,200 triangles and 77 instances per block with the other defaults, so
+// blocks = 13 passes a million triangles (the README lists counts).
 struct CityParams {
     uint32_t blocks = 8;          // blocks per side of the square city (blocks^2 in all)
     float blockSize = 60.0f;      // edge of a square block, kerb to kerb
