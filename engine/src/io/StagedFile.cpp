@@ -47,6 +47,16 @@ StagedFile::~StagedFile()
     fs::remove(temp_, ec);
 }
 
+std::ofstream StagedFile::openTemp() const
+{
+    std::ofstream out(temp_, std::ios::binary);
+    if (!out) {
+        throw Error(fmt::format("{}: cannot create the temporary file '{}': {}", target_.string(), temp_.string(),
+                                std::strerror(errno)));
+    }
+    return out;
+}
+
 void StagedFile::commit()
 {
     std::error_code ec;

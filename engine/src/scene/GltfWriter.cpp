@@ -251,6 +251,15 @@ std::string encodeUri(const std::string& name)
     return out;
 }
 
+std::string lowercaseExtension(const fs::path& path)
+{
+    std::string extension = path.extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return extension;
+}
+
+bool isBinaryGltf(const fs::path& path) { return lowercaseExtension(path) == ".glb"; }
+
 void closeChecked(std::ofstream& out, const fs::path& target)
 {
     out.close();
@@ -260,7 +269,7 @@ void closeChecked(std::ofstream& out, const fs::path& target)
 void writeGlb(tinygltf::Model& model, const fs::path& path)
 {
     io::StagedFile file(path);
-    std::ofstream out(file.tempPath(), std::ios::binary);
+    std::ofstream out = file.openTemp();
     tinygltf::TinyGLTF gltf;
     if (!gltf.WriteGltfSceneToStream(&model, out, false, true)) {
         throw Error(fmt::format("{}: tinygltf could not serialise the scene", path.string()));
@@ -290,11 +299,11 @@ void writeGltfWithBin(tinygltf::Model& model, const fs::path& path)
     if (!bytes.empty()) {
         bin.emplace(path.parent_path() / binName);
         document["buffers"] = nlohmann::json::array({{{"byteLength", bytes.size()}, {"uri", encodeUri(binName)}}});
-        std::ofstream out(bin->tempPath(), std::ios::binary);
+        std::ofstream out = bin->openTemp();
         out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
         closeChecked(out, bin->target());
     }
-    std::ofstream out(json.tempPath(), std::ios::binary);
+    std::ofstream out = json.openTemp();
     out << document.dump(2) << '\n';
     closeChecked(out, path);
     // The .bin first: a .gltf in place always finds its buffer.
@@ -304,16 +313,20 @@ void writeGltfWithBin(tinygltf::Model& model, const fs::path& path)
 
 } // namespace
 
-void writeGltf(const Scene& scene, const fs::path& path)
+void checkGltfOutput(const fs::path& path)
 {
-    std::string extension = path.extension().string();
-    std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    if (extension != ".gltf" && extension != ".glb") {
-        throw Error(fmt::format("{}: unknown glTF extension '{}', expected .gltf or .glb", path.string(), extension));
+    if (!isBinaryGltf(path) && lowercaseExtension(path) != ".gltf") {
+        throw Error(fmt::format("{}: unknown glTF extension '{}', expected .gltf or .glb", path.string(),
+                                path.extension().string()));
     }
     io::checkWritable(path);
+}
+
+void writeGltf(const Scene& scene, const fs::path& path)
+{
+    checkGltfOutput(path);
     tinygltf::Model model = GltfBuilder(scene, path).build();
-    if (extension == ".glb") writeGlb(model, path);
+    if (isBinaryGltf(path)) writeGlb(model, path);
     else writeGltfWithBin(model, path);
 }
 

@@ -4,6 +4,7 @@
 // atomic), which replaces the target only once complete. A failed or abandoned write
 // leaves the target as it was and removes the temporary file.
 #include <filesystem>
+#include <fstream>
 
 namespace penumbra::io {
 
@@ -23,6 +24,10 @@ public:
     const std::filesystem::path& target() const { return target_; }
     // Where to write the content.
     const std::filesystem::path& tempPath() const { return temp_; }
+
+    // Opens the temporary file for binary writing. Throws Error naming the target when
+    // it cannot be created.
+    std::ofstream openTemp() const;
 
     // Renames the temporary file over the target. Throws Error naming the target.
     void commit();

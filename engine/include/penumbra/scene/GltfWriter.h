@@ -21,4 +21,9 @@ namespace penumbra::scene {
 // written (no triangles, an index past its vertices).
 void writeGltf(const Scene& scene, const std::filesystem::path& path);
 
+// Throws Error naming `path` unless it ends in .gltf or .glb and its folder is
+// writable: what writeGltf() checks first, for callers that want to fail before
+// building a scene.
+void checkGltfOutput(const std::filesystem::path& path);
+
 } // namespace penumbra::scene
