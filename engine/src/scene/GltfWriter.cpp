@@ -8,6 +8,7 @@
 #include <tiny_gltf.h>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cstddef>
 #include <cstring>
@@ -306,7 +307,8 @@ void writeGltfWithBin(tinygltf::Model& model, const fs::path& path)
     std::ofstream out = json.openTemp();
     out << document.dump(2) << '\n';
     closeChecked(out, path);
-    // The .bin first: a .gltf in place always finds its buffer.
+    // The .bin first, so that the new .gltf never appears without its buffer. (An old
+    // .gltf meets the new .bin only if this second rename in the same folder fails.)
     if (bin) bin->commit();
     json.commit();
 }
