@@ -11,16 +11,39 @@ namespace fs = std::filesystem;
 
 namespace penumbra::io {
 
+namespace {
+
+void checkSize(const std::string& name, uint32_t width, uint32_t height, const std::vector<uint8_t>& rgba)
+{
+    if (width == 0 || height == 0 || rgba.size() != size_t(width) * height * 4) {
+        throw Error(fmt::format("{}: {} bytes of pixels for a {}x{} RGBA image", name, rgba.size(), width, height));
+    }
+}
+
+} // namespace
+
 void writePng(const fs::path& path, uint32_t width, uint32_t height, const std::vector<uint8_t>& rgba)
 {
-    if (rgba.size() != size_t(width) * height * 4) {
-        throw Error(fmt::format("{}: {} bytes of pixels for a {}x{} RGBA image", path.string(), rgba.size(), width, height));
-    }
+    checkSize(path.string(), width, height, rgba);
     StagedFile file(path);
     if (!stbi_write_png(file.tempPath().c_str(), int(width), int(height), 4, rgba.data(), int(width * 4))) {
         throw Error(fmt::format("{}: cannot write PNG (disk full or permission denied?)", path.string()));
     }
     file.commit();
+}
+
+std::vector<uint8_t> encodePng(const std::string& name, uint32_t width, uint32_t height, const std::vector<uint8_t>& rgba)
+{
+    checkSize(name, width, height, rgba);
+    std::vector<uint8_t> png;
+    auto append = [](void* context, void* data, int size) {
+        auto* bytes = static_cast<const uint8_t*>(data);
+        static_cast<std::vector<uint8_t>*>(context)->insert(static_cast<std::vector<uint8_t>*>(context)->end(), bytes, bytes + size);
+    };
+    if (!stbi_write_png_to_func(append, &png, int(width), int(height), 4, rgba.data(), int(width * 4))) {
+        throw Error(fmt::format("{}: cannot encode the PNG", name));
+    }
+    return png;
 }
 
 } // namespace penumbra::io

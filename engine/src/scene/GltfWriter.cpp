@@ -1,6 +1,7 @@
 #include "penumbra/scene/GltfWriter.h"
 
 #include "penumbra/core/Error.h"
+#include "penumbra/io/Png.h"
 #include "penumbra/io/StagedFile.h"
 
 #include <fmt/format.h>
@@ -24,9 +25,6 @@ namespace {
 // One interleaved vertex buffer view per mesh, read by three accessors.
 static_assert(sizeof(Vertex) == 32 && offsetof(Vertex, position) == 0 && offsetof(Vertex, normal) == 12 &&
               offsetof(Vertex, uv) == 24);
-
-constexpr int kArrayBuffer = 34962;         // GL_ARRAY_BUFFER
-constexpr int kElementArrayBuffer = 34963;  // GL_ELEMENT_ARRAY_BUFFER
 
 // The double nearest the shortest decimal that reads back as `v`, so that the JSON
 // says 0.1 rather than 0.10000000149011612; falls back to the exact value in the rare
@@ -117,22 +115,15 @@ private:
         return int(model_.accessors.size() - 1);
     }
 
+    // The image as a PNG in the binary buffer (a data URI would be discouraged in .glb).
     void addTexture(const Texture& texture)
     {
-        if (texture.width == 0 || texture.height == 0 || texture.rgba.size() != size_t(texture.width) * texture.height * 4) {
-            fail(fmt::format("texture '{}': {} bytes for a {}x{} RGBA image", texture.name, texture.rgba.size(),
-                             texture.width, texture.height));
-        }
-        // tinygltf encodes it as an embedded PNG when it serialises the model.
+        const std::vector<uint8_t> png =
+            io::encodePng(fmt::format("{}: texture '{}'", path_.string(), texture.name), texture.width, texture.height, texture.rgba);
         tinygltf::Image image;
         image.name = texture.name;
-        image.width = int(texture.width);
-        image.height = int(texture.height);
-        image.component = 4;
-        image.bits = 8;
-        image.pixel_type = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE;
-        image.image = texture.rgba;
         image.mimeType = "image/png";
+        image.bufferView = addBufferView(png.data(), png.size(), 0, 0);
         model_.images.push_back(std::move(image));
         tinygltf::Texture gltfTexture;
         gltfTexture.name = texture.name;
@@ -172,7 +163,7 @@ private:
         if (mesh.material >= scene_.materials.size()) {
             fail(fmt::format("mesh '{}': material {} does not exist", mesh.name, mesh.material));
         }
-        const int vertexView = addBufferView(mesh.vertices.data(), mesh.vertices.size() * sizeof(Vertex), sizeof(Vertex), kArrayBuffer);
+        const int vertexView = addBufferView(mesh.vertices.data(), mesh.vertices.size() * sizeof(Vertex), sizeof(Vertex), TINYGLTF_TARGET_ARRAY_BUFFER);
         const size_t count = mesh.vertices.size();
         tinygltf::Primitive primitive;
         primitive.mode = TINYGLTF_MODE_TRIANGLES;
@@ -189,7 +180,7 @@ private:
         primitive.attributes["POSITION"] = position;
         primitive.attributes["NORMAL"] = addAccessor(vertexView, offsetof(Vertex, normal), TINYGLTF_TYPE_VEC3, TINYGLTF_COMPONENT_TYPE_FLOAT, count);
         primitive.attributes["TEXCOORD_0"] = addAccessor(vertexView, offsetof(Vertex, uv), TINYGLTF_TYPE_VEC2, TINYGLTF_COMPONENT_TYPE_FLOAT, count);
-        const int indexView = addBufferView(mesh.indices.data(), mesh.indices.size() * sizeof(uint32_t), 0, kElementArrayBuffer);
+        const int indexView = addBufferView(mesh.indices.data(), mesh.indices.size() * sizeof(uint32_t), 0, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER);
         primitive.indices = addAccessor(indexView, 0, TINYGLTF_TYPE_SCALAR, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, mesh.indices.size());
         tinygltf::Mesh gltfMesh;
         gltfMesh.name = mesh.name;

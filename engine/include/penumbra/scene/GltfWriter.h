@@ -13,7 +13,7 @@ namespace penumbra::scene {
 // matrix); one mesh with one triangle primitive per scene mesh (POSITION with min/max,
 // NORMAL, TEXCOORD_0, u32 indices), referenced by every node that instances it (a node
 // with several instances gets one child node per extra instance); the materials
-// (baseColorFactor, base colour texture as an embedded PNG, alphaMode, alphaCutoff,
+// (baseColorFactor, base colour texture as a PNG in the buffer, alphaMode, alphaCutoff,
 // doubleSided) and one scene whose roots are the graph's roots.
 // Every file is written to a temporary name beside it and renamed into place once all
 // are complete, so a failure never leaves a partial file nor clobbers an existing one.
