@@ -3,6 +3,7 @@
 #include "penumbra/core/Error.h"
 #include "penumbra/render/Projection.h"
 #include "penumbra/scene/Bvh.h"
+#include "penumbra/scene/Generators.h"
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>

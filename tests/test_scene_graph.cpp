@@ -1,4 +1,5 @@
 #include "penumbra/core/Error.h"
+#include "penumbra/scene/Generators.h"
 #include "penumbra/scene/Scene.h"
 
 #include <glm/gtc/matrix_transform.hpp>

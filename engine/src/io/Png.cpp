@@ -3,58 +3,47 @@
 #include "penumbra/core/Error.h"
 
 #include <fmt/format.h>
-#include <unistd.h>
 
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #include <stb/stb_image_write.h>
-
-#include <cerrno>
-#include <cstring>
-#include <random>
 
 namespace fs = std::filesystem;
 
 namespace penumbra::io {
 
-void checkWritable(const fs::path& path)
+namespace {
+
+void checkSize(const std::string& name, uint32_t width, uint32_t height, const std::vector<uint8_t>& rgba)
 {
-    std::error_code ec;
-    if (path.empty()) throw Error("output path is empty");
-    if (fs::is_directory(path, ec)) {
-        throw Error(fmt::format("{}: output path is a directory, expected a file name", path.string()));
-    }
-    const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
-    if (!fs::is_directory(dir, ec)) {
-        throw Error(fmt::format("{}: output folder '{}' does not exist", path.string(), dir.string()));
-    }
-    if (::access(dir.c_str(), W_OK) != 0) {
-        throw Error(fmt::format("{}: output folder '{}' is not writable: {}", path.string(), dir.string(),
-                                std::strerror(errno)));
-    }
-    if (fs::exists(path, ec) && ::access(path.c_str(), W_OK) != 0) {
-        throw Error(fmt::format("{}: output file exists and is not writable: {}", path.string(), std::strerror(errno)));
+    if (width == 0 || height == 0 || rgba.size() != size_t(width) * height * 4) {
+        throw Error(fmt::format("{}: {} bytes of pixels for a {}x{} RGBA image", name, rgba.size(), width, height));
     }
 }
 
+} // namespace
+
 void writePng(const fs::path& path, uint32_t width, uint32_t height, const std::vector<uint8_t>& rgba)
 {
-    if (rgba.size() != size_t(width) * height * 4) {
-        throw Error(fmt::format("{}: {} bytes of pixels for a {}x{} RGBA image", path.string(), rgba.size(), width, height));
-    }
-    checkWritable(path);
-    std::random_device rd;
-    const fs::path temp = fs::path(path).concat(fmt::format(".tmp{:08x}", rd()));
-    const int ok = stbi_write_png(temp.c_str(), int(width), int(height), 4, rgba.data(), int(width * 4));
-    std::error_code ec;
-    if (!ok) {
-        fs::remove(temp, ec);
+    checkSize(path.string(), width, height, rgba);
+    StagedFile file(path);
+    if (!stbi_write_png(file.tempPath().c_str(), int(width), int(height), 4, rgba.data(), int(width * 4))) {
         throw Error(fmt::format("{}: cannot write PNG (disk full or permission denied?)", path.string()));
     }
-    fs::rename(temp, path, ec);
-    if (ec) {
-        fs::remove(temp, ec);
-        throw Error(fmt::format("{}: cannot move the finished PNG into place: {}", path.string(), ec.message()));
+    file.commit();
+}
+
+std::vector<uint8_t> encodePng(const std::string& name, uint32_t width, uint32_t height, const std::vector<uint8_t>& rgba)
+{
+    checkSize(name, width, height, rgba);
+    std::vector<uint8_t> png;
+    auto append = [](void* context, void* data, int size) {
+        auto* bytes = static_cast<const uint8_t*>(data);
+        static_cast<std::vector<uint8_t>*>(context)->insert(static_cast<std::vector<uint8_t>*>(context)->end(), bytes, bytes + size);
+    };
+    if (!stbi_write_png_to_func(append, &png, int(width), int(height), 4, rgba.data(), int(width * 4))) {
+        throw Error(fmt::format("{}: cannot encode the PNG", name));
     }
+    return png;
 }
 
 } // namespace penumbra::io

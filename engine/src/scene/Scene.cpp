@@ -4,10 +4,8 @@
 
 #include <fmt/format.h>
 #include <glm/gtc/constants.hpp>
-#include <glm/gtc/matrix_transform.hpp>
 
 #include <algorithm>
-#include <random>
 
 namespace penumbra::scene {
 
@@ -153,51 +151,6 @@ Mesh makeSphere(const std::string& name, uint32_t segments)
         }
     }
     return mesh;
-}
-
-Scene generateBoxGrid(const BoxGridParams& p)
-{
-    Scene scene;
-    auto addMesh = [&](Mesh mesh, const Material& material) {
-        mesh.material = static_cast<uint32_t>(scene.materials.size());
-        mesh.computeBounds();
-        scene.materials.push_back(material);
-        scene.meshes.push_back(std::move(mesh));
-        return static_cast<uint32_t>(scene.meshes.size() - 1);
-    };
-    const uint32_t root = scene.graph.addNode("box-grid", kNoParent, glm::mat4(1.0f));
-    auto place = [&](uint32_t mesh, const std::string& name, const glm::mat4& local) {
-        scene.addInstance(mesh, scene.graph.addNode(name, static_cast<int32_t>(root), local));
-    };
-
-    Material groundMaterial{"ground", {0.75f, 0.75f, 0.72f, 1.0f}};
-    place(addMesh(makePlane("ground"), groundMaterial), "ground",
-          glm::scale(glm::mat4(1.0f), glm::vec3(p.planeSize, 1.0f, p.planeSize)));
-
-    // Each box has its own colour, hence its own mesh (a mesh is a glTF primitive, which
-    // carries its material); the sphere and the ground are single meshes.
-    std::mt19937 rng(p.seed);
-    std::uniform_real_distribution<float> height(p.minHeight, p.maxHeight);
-    std::uniform_real_distribution<float> hue(0.0f, 1.0f);
-    const float x0 = -0.5f * p.spacing * float(p.columns - 1);
-    const float z0 = -0.5f * p.spacing * float(p.rows - 1);
-    for (uint32_t row = 0; row < p.rows; ++row) {
-        for (uint32_t col = 0; col < p.columns; ++col) {
-            const float h = height(rng);
-            const glm::vec3 centre{x0 + p.spacing * float(col), 0.5f * h, z0 + p.spacing * float(row)};
-            const float t = hue(rng);
-            const std::string name = fmt::format("box_{}_{}", row, col);
-            const Material material{name, {0.55f + 0.35f * t, 0.45f + 0.2f * (1.0f - t), 0.35f + 0.3f * t, 1.0f}};
-            place(addMesh(makeBox(name), material), name,
-                  glm::scale(glm::translate(glm::mat4(1.0f), centre), glm::vec3(p.boxSize, h, p.boxSize)));
-        }
-    }
-    // The sphere floats beside the grid so that its shadow falls on the ground, apart
-    // from the boxes' shadows.
-    const glm::vec3 sphereCentre{x0 + p.spacing * float(p.columns) + p.sphereRadius, 1.5f * p.sphereRadius, 0.0f};
-    place(addMesh(makeSphere("sphere", p.sphereSegments), Material{"sphere", {0.3f, 0.45f, 0.8f, 1.0f}}), "sphere",
-          glm::scale(glm::translate(glm::mat4(1.0f), sphereCentre), glm::vec3(p.sphereRadius)));
-    return scene;
 }
 
 } // namespace penumbra::scene

@@ -9,6 +9,7 @@
 //   "scene.json: /lights/0/outer_cone_deg: must be in (0, 89], got 120".
 #include "penumbra/config/Animation.h"
 #include "penumbra/scene/Scene.h"
+#include "penumbra/scene/Generators.h"
 
 #include <nlohmann/json.hpp>
 

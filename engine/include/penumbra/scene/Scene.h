@@ -124,23 +124,7 @@ public:
     size_t triangleCount() const;
 };
 
-// The foundation's default scene: a ground plane, a grid of boxes of varied heights and
-// a sphere, deterministic for a seed.
-struct BoxGridParams {
-    uint32_t columns = 5;
-    uint32_t rows = 5;
-    float boxSize = 1.2f;         // footprint edge (world units)
-    float spacing = 3.0f;         // centre-to-centre distance
-    float minHeight = 0.8f;
-    float maxHeight = 2.6f;
-    float sphereRadius = 1.6f;
-    uint32_t sphereSegments = 96;  // around the equator; rings = segments / 2
-    float planeSize = 40.0f;
-    uint32_t seed = 1;
-};
-
-Scene generateBoxGrid(const BoxGridParams& params);
-
+// Mesh builders for the procedural scenes (Generators.h).
 Mesh makeBox(const std::string& name);                       // unit cube [-0.5, 0.5]^3
 Mesh makePlane(const std::string& name);                     // unit square in XZ, normal +Y
 Mesh makeSphere(const std::string& name, uint32_t segments);  // unit radius

@@ -1,0 +1,878 @@
+#include "penumbra/scene/Generators.h"
+
+#include "penumbra/core/Error.h"
+
+#include <fmt/format.h>
+#include <glm/gtc/constants.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <random>
+
+namespace penumbra::scene {
+namespace {
+
+constexpr float kFloatMax = std::numeric_limits<float>::max();
+
+// ---- parameter checks ------------------------------------------------------------------
+
+// Messages name the generator and the parameter as the command line spells it:
+//   "city: block_size must be in [10, 1000], got 2".
+// Every float check is written so that NaN fails it.
+class ParamCheck {
+public:
+    explicit ParamCheck(const char* generator) : generator_(generator) {}
+
+    [[noreturn]] void fail(const char* name, const std::string& requirement, const std::string& got) const
+    {
+        throw Error(fmt::format("{}: {} must be {}, got {}", generator_, name, requirement, got));
+    }
+    void positive(const char* name, float v) const
+    {
+        if (!(v > 0.0f && v <= kFloatMax)) fail(name, "a finite number > 0", fmt::format("{}", v));
+    }
+    void range(const char* name, float v, float lo, float hi) const
+    {
+        if (!(v >= lo && v <= hi)) fail(name, fmt::format("in [{}, {}]", lo, hi), fmt::format("{}", v));
+    }
+    // v >= the parameter `other`, whose value is lo.
+    void atLeast(const char* name, float v, const char* other, float lo) const
+    {
+        if (!(v >= lo && v <= kFloatMax)) fail(name, fmt::format("a finite number >= {} ({})", other, lo), fmt::format("{}", v));
+    }
+    void count(const char* name, uint32_t v, uint32_t lo, uint32_t hi) const
+    {
+        if (v < lo || v > hi) fail(name, fmt::format("in [{}, {}]", lo, hi), fmt::format("{}", v));
+    }
+
+private:
+    const char* generator_;
+};
+
+// ---- randomness ----------------------------------------------------------------------
+
+// Variates computed from mt19937's raw output, which the C++ standard fixes; the std
+// distributions are implementation-defined, so a scene built with them could differ
+// between standard libraries for one seed. (The box grid keeps its std distributions:
+// its scenes must not change.)
+class Random {
+public:
+    explicit Random(uint32_t seed) : engine_(seed) {}
+    float uniform() { return float(engine_() >> 8) * 0x1p-24f; }  // [0, 1)
+    float uniform(float lo, float hi) { return lo + (hi - lo) * uniform(); }
+    bool chance(float p) { return uniform() < p; }
+    uint32_t below(uint32_t n) { return std::min(n - 1, uint32_t(uniform() * float(n))); }
+    float normal()  // Box–Muller
+    {
+        const float u1 = 1.0f - uniform(), u2 = uniform();
+        return std::sqrt(-2.0f * std::log(u1)) * std::cos(glm::two_pi<float>() * u2);
+    }
+
+private:
+    std::mt19937 engine_;
+};
+
+// ---- transforms and mesh pieces --------------------------------------------------------
+
+const glm::vec3 kUp{0.0f, 1.0f, 0.0f};
+
+glm::mat4 translation(const glm::vec3& t) { return glm::translate(glm::mat4(1.0f), t); }
+glm::mat4 translationScale(const glm::vec3& t, const glm::vec3& s) { return glm::scale(translation(t), s); }
+
+// Places a local frame at `position` with its +x along the horizontal unit vector
+// `along` and +y up.
+glm::mat4 facing(const glm::vec3& position, const glm::vec3& along)
+{
+    glm::mat4 m(1.0f);
+    m[0] = glm::vec4(along, 0.0f);
+    m[1] = glm::vec4(kUp, 0.0f);
+    m[2] = glm::vec4(glm::cross(along, kUp), 0.0f);
+    m[3] = glm::vec4(position, 1.0f);
+    return m;
+}
+
+// Appends `part` to `mesh`, positions transformed by `m` and normals by its inverse
+// transpose, so that several primitives make one mesh (one material).
+void appendTransformed(Mesh& mesh, const Mesh& part, const glm::mat4& m)
+{
+    const glm::mat3 normalMatrix = glm::transpose(glm::inverse(glm::mat3(m)));
+    const auto base = static_cast<uint32_t>(mesh.vertices.size());
+    for (const Vertex& v : part.vertices) {
+        mesh.vertices.push_back({glm::vec3(m * glm::vec4(v.position, 1.0f)), glm::normalize(normalMatrix * v.normal), v.uv});
+    }
+    for (uint32_t i : part.indices) mesh.indices.push_back(base + i);
+}
+
+// Adds the quad p[0..3] (in order around its edge) facing `n`, with its own vertices.
+void addQuad(Mesh& mesh, const std::array<glm::vec3, 4>& p, const glm::vec3& n)
+{
+    const auto base = static_cast<uint32_t>(mesh.vertices.size());
+    const glm::vec2 uv[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    for (int i = 0; i < 4; ++i) mesh.vertices.push_back({p[i], n, uv[i]});
+    if (glm::dot(glm::cross(p[1] - p[0], p[2] - p[0]), n) > 0.0f) {
+        mesh.indices.insert(mesh.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+    } else {
+        mesh.indices.insert(mesh.indices.end(), {base, base + 2, base + 1, base, base + 3, base + 2});
+    }
+}
+
+// Unit radius, axis y, y in [-0.5, 0.5]; smooth sides, flat caps.
+Mesh makeCylinder(const std::string& name, uint32_t segments)
+{
+    Mesh mesh{name, {}, {}};
+    for (uint32_t s = 0; s <= segments; ++s) {
+        const float phi = glm::two_pi<float>() * float(s) / float(segments);
+        const glm::vec3 n{std::cos(phi), 0.0f, std::sin(phi)};
+        const float u = float(s) / float(segments);
+        mesh.vertices.push_back({n - 0.5f * kUp, n, {u, 0.0f}});
+        mesh.vertices.push_back({n + 0.5f * kUp, n, {u, 1.0f}});
+    }
+    for (uint32_t s = 0; s < segments; ++s) {
+        const uint32_t bottom = 2 * s, top = bottom + 1, nextBottom = bottom + 2, nextTop = bottom + 3;
+        // phi grows from +x towards +z, so this order faces outwards.
+        mesh.indices.insert(mesh.indices.end(), {bottom, top, nextTop, bottom, nextTop, nextBottom});
+    }
+    for (const float side : {-1.0f, 1.0f}) {
+        const auto base = static_cast<uint32_t>(mesh.vertices.size());
+        for (uint32_t s = 0; s < segments; ++s) {
+            const float phi = glm::two_pi<float>() * float(s) / float(segments);
+            const glm::vec2 c{std::cos(phi), std::sin(phi)};
+            mesh.vertices.push_back({{c.x, 0.5f * side, c.y}, side * kUp, 0.5f * (c + 1.0f)});
+        }
+        for (uint32_t s = 1; s + 1 < segments; ++s) {
+            // Seen from +y, growing phi runs clockwise: the top cap reverses it.
+            if (side > 0) mesh.indices.insert(mesh.indices.end(), {base, base + s + 1, base + s});
+            else mesh.indices.insert(mesh.indices.end(), {base, base + s, base + s + 1});
+        }
+    }
+    return mesh;
+}
+
+// Assembles a generated scene under one root node: meshes (each with its own
+// material), nodes and instances.
+class SceneBuilder {
+public:
+    explicit SceneBuilder(const std::string& rootName) : root_(scene_.graph.addNode(rootName, kNoParent, glm::mat4(1.0f))) {}
+
+    uint32_t root() const { return root_; }
+
+    uint32_t addMesh(Mesh mesh, const Material& material)
+    {
+        mesh.material = static_cast<uint32_t>(scene_.materials.size());
+        mesh.computeBounds();
+        scene_.materials.push_back(material);
+        scene_.meshes.push_back(std::move(mesh));
+        return static_cast<uint32_t>(scene_.meshes.size() - 1);
+    }
+
+    uint32_t addNode(const std::string& name, uint32_t parent, const glm::mat4& local)
+    {
+        return scene_.graph.addNode(name, static_cast<int32_t>(parent), local);
+    }
+
+    // A node under `parent` holding one instance of `mesh`.
+    uint32_t place(uint32_t mesh, const std::string& name, uint32_t parent, const glm::mat4& local)
+    {
+        const uint32_t node = addNode(name, parent, local);
+        scene_.addInstance(mesh, node);
+        return node;
+    }
+
+    Scene finish() { return std::move(scene_); }
+
+private:
+    Scene scene_;
+    uint32_t root_;
+};
+
+uint32_t addGround(SceneBuilder& b, float size)
+{
+    const uint32_t mesh = b.addMesh(makePlane("ground"), Material{"ground", {0.75f, 0.75f, 0.72f, 1.0f}});
+    return b.place(mesh, "ground", b.root(), glm::scale(glm::mat4(1.0f), glm::vec3(size, 1.0f, size)));
+}
+
+// ---- city pieces -------------------------------------------------------------------------
+
+constexpr float kParkingSlot = 6.0f;    // kerb length per parked car or sidewalk item
+constexpr uint32_t kLightEvery = 4;     // a street light in every 4th sidewalk slot
+constexpr float kBinChance = 0.25f;     // a bin in a sidewalk slot without light or tree
+constexpr float kKerbToCar = 1.3f;      // kerb to a parked car's centre line
+constexpr float kKerbToLight = 0.5f;    // kerb to a street light's pole
+
+// 4.4 m long (+x), 1.8 m wide, body, cabin and four wheels; 168 triangles.
+Mesh makeCar(const std::string& name)
+{
+    Mesh car{name, {}, {}};
+    const Mesh box = makeBox("box"), wheel = makeCylinder("wheel", 10);
+    appendTransformed(car, box, translationScale({0.0f, 0.675f, 0.0f}, {4.4f, 0.75f, 1.8f}));
+    appendTransformed(car, box, translationScale({-0.2f, 1.35f, 0.0f}, {2.4f, 0.6f, 1.6f}));
+    for (const float x : {-1.4f, 1.4f}) {
+        for (const float z : {-0.8f, 0.8f}) {
+            // The cylinder's axis (y) turned to z.
+            const glm::mat4 m = glm::rotate(translation({x, 0.32f, z}), glm::half_pi<float>(), glm::vec3(1, 0, 0));
+            appendTransformed(car, wheel, glm::scale(m, glm::vec3(0.32f, 0.22f, 0.32f)));
+        }
+    }
+    return car;
+}
+
+// A 6 m pole with an arm reaching 1.5 m over the street (+x); 52 triangles.
+Mesh makeStreetLight(const std::string& name)
+{
+    Mesh light{name, {}, {}};
+    const Mesh box = makeBox("box");
+    appendTransformed(light, makeCylinder("pole", 8), translationScale({0.0f, 3.0f, 0.0f}, {0.08f, 6.0f, 0.08f}));
+    appendTransformed(light, box, translationScale({0.75f, 5.9f, 0.0f}, {1.5f, 0.08f, 0.08f}));
+    appendTransformed(light, box, translationScale({1.4f, 5.8f, 0.0f}, {0.5f, 0.15f, 0.3f}));
+    return light;
+}
+
+struct CityMeshes {
+    std::array<uint32_t, 6> facades{};
+    std::array<uint32_t, 4> cars{};
+    uint32_t streetLight = 0, trunk = 0, canopy = 0, bin = 0;
+};
+
+CityMeshes addCityMeshes(SceneBuilder& b)
+{
+    CityMeshes m;
+    const glm::vec3 facadeColors[6] = {{0.72f, 0.68f, 0.62f}, {0.55f, 0.57f, 0.6f}, {0.78f, 0.74f, 0.66f},
+                                       {0.48f, 0.42f, 0.38f}, {0.66f, 0.7f, 0.74f},  {0.82f, 0.8f, 0.78f}};
+    for (size_t i = 0; i < m.facades.size(); ++i) {
+        const std::string name = fmt::format("facade_{}", i);
+        m.facades[i] = b.addMesh(makeBox(name), Material{name, glm::vec4(facadeColors[i], 1.0f)});
+    }
+    const glm::vec3 carColors[4] = {{0.7f, 0.1f, 0.08f}, {0.1f, 0.2f, 0.55f}, {0.85f, 0.85f, 0.82f}, {0.12f, 0.12f, 0.13f}};
+    for (size_t i = 0; i < m.cars.size(); ++i) {
+        const std::string name = fmt::format("car_{}", i);
+        m.cars[i] = b.addMesh(makeCar(name), Material{name, glm::vec4(carColors[i], 1.0f)});
+    }
+    m.streetLight = b.addMesh(makeStreetLight("street_light"), Material{"street_light", {0.3f, 0.31f, 0.33f, 1.0f}});
+    m.trunk = b.addMesh(makeCylinder("trunk", 8), Material{"bark", {0.35f, 0.25f, 0.17f, 1.0f}});
+    m.canopy = b.addMesh(makeSphere("canopy", 12), Material{"leaves", {0.22f, 0.45f, 0.18f, 1.0f}});
+    m.bin = b.addMesh(makeBox("bin"), Material{"bin", {0.2f, 0.3f, 0.22f, 1.0f}});
+    return m;
+}
+
+// Tiers of one building on a lot of side `lot` centred at the building node.
+void addBuilding(SceneBuilder& b, const CityParams& p, const CityMeshes& meshes, Random& rng, uint32_t building,
+                 float lot)
+{
+    const uint32_t facade = meshes.facades[rng.below(uint32_t(meshes.facades.size()))];
+    // Cubed: most buildings are low, a few are towers.
+    const float u = rng.uniform();
+    const float height = p.minHeight + (p.maxHeight - p.minHeight) * u * u * u;
+    glm::vec2 footprint{lot * rng.uniform(0.6f, 0.9f), lot * rng.uniform(0.6f, 0.9f)};
+    uint32_t setbacks = 0;
+    while (setbacks < 2 && rng.chance(p.setbackChance)) ++setbacks;
+    float bottom = 0.0f;
+    for (uint32_t tier = 0; tier <= setbacks; ++tier) {
+        const float remaining = height - bottom;
+        const float tierHeight = tier == setbacks ? remaining : remaining * rng.uniform(0.4f, 0.7f);
+        b.place(facade, fmt::format("tier_{}", tier), building,
+                translationScale({0.0f, bottom + 0.5f * tierHeight, 0.0f}, {footprint.x, tierHeight, footprint.y}));
+        bottom += tierHeight;
+        footprint *= glm::vec2(rng.uniform(0.55f, 0.85f), rng.uniform(0.55f, 0.85f));
+    }
+}
+
+void addTree(SceneBuilder& b, const CityMeshes& meshes, Random& rng, uint32_t parent, const glm::vec3& position)
+{
+    const uint32_t tree = b.addNode("tree", parent, glm::scale(translation(position), glm::vec3(rng.uniform(0.8f, 1.2f))));
+    b.place(meshes.trunk, "trunk", tree, translationScale({0.0f, 1.25f, 0.0f}, {0.15f, 2.5f, 0.15f}));
+    b.place(meshes.canopy, "canopy", tree, translationScale({0.0f, 3.8f, 0.0f}, {1.8f, 2.0f, 1.8f}));
+}
+
+// Parked cars along the kerb and street furniture along the sidewalk of one block edge.
+void addKerbside(SceneBuilder& b, const CityParams& p, const CityMeshes& meshes, Random& rng, uint32_t block,
+                 const glm::vec3& start, const glm::vec3& along)
+{
+    const glm::vec3 outward = glm::cross(kUp, along);  // from the block into the street
+    const uint32_t slots = std::max(1u, uint32_t(p.blockSize / kParkingSlot));
+    const float slot = p.blockSize / float(slots);
+    for (uint32_t k = 0; k < slots; ++k) {
+        const glm::vec3 kerb = start + along * ((float(k) + 0.5f) * slot);
+        if (rng.chance(p.carDensity)) {
+            const glm::vec3 at = kerb + outward * kKerbToCar + along * rng.uniform(-0.4f, 0.4f);
+            b.place(meshes.cars[rng.below(uint32_t(meshes.cars.size()))], "car", block, facing(at, along));
+        }
+        if (k % kLightEvery == kLightEvery / 2) {
+            b.place(meshes.streetLight, "street_light", block, facing(kerb - outward * kKerbToLight, outward));
+        } else if (rng.chance(p.treeChance)) {
+            addTree(b, meshes, rng, block, kerb - outward * (0.5f * p.sidewalkWidth));
+        } else if (rng.chance(kBinChance)) {
+            b.place(meshes.bin, "bin", block, translationScale(kerb - outward * 0.5f + 0.5f * kUp, {0.6f, 1.0f, 0.6f}));
+        }
+    }
+}
+
+// ---- hair pieces ---------------------------------------------------------------------------
+
+constexpr float kRootLift = 1.005f;   // roots sit this factor of the radius (plus half a width) out
+constexpr float kHeadClear = 1.02f;   // strands stay this factor of the radius out, or move outwards
+constexpr float kRootTilt = 0.6f;     // roots lean this much (tan) from the normal towards -y
+constexpr float kTipWidth = 1.0f / 3.0f;
+
+glm::vec3 anyPerpendicular(const glm::vec3& v)
+{
+    const glm::vec3 axis = std::abs(v.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 0, 1);
+    return glm::normalize(glm::cross(v, axis));
+}
+
+// `d` without its component along the head's radial direction at `p`: the step slides
+// over the head instead of entering it.
+glm::vec3 tangential(const glm::vec3& d, const glm::vec3& p)
+{
+    const glm::vec3 r = glm::normalize(p);
+    for (const glm::vec3& v : {d, -kUp}) {
+        const glm::vec3 t = v - glm::dot(v, r) * r;
+        if (glm::length(t) > 1e-3f) return glm::normalize(t);
+    }
+    return anyPerpendicular(r);
+}
+
+// The strand's points, root first, `segments` steps of equal length (never zero, so
+// ribbon triangles never degenerate) grown relative to the head's centre.
+std::vector<glm::vec3> growStrand(const HairParams& p, Random& rng, float theta, float phi, float length)
+{
+    const glm::vec3 radial{std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi)};
+    const glm::vec3 meridianDown{std::cos(theta) * std::cos(phi), -std::sin(theta), std::cos(theta) * std::sin(phi)};
+    const float step = length / float(p.segments);
+    // A ribbon's edge lies half a width from its point, and every point lies farther
+    // out than the root: no ribbon vertex enters the head.
+    const float halfWidth = 0.5f * p.strandWidth;
+    std::vector<glm::vec3> points{radial * (p.headRadius * kRootLift + halfWidth)};
+    glm::vec3 d = glm::normalize(radial + kRootTilt * meridianDown);
+    for (uint32_t k = 0; k < p.segments; ++k) {
+        if (k > 0) {
+            const glm::vec3 wander{rng.normal(), rng.normal(), rng.normal()};
+            d = glm::normalize(d - p.gravity * step * kUp + p.waviness * wander);
+        }
+        const glm::vec3 from = points.back();
+        if (glm::length(from + d * step) < p.headRadius * kHeadClear + halfWidth) d = tangential(d, from);
+        points.push_back(from + d * step);
+    }
+    return points;
+}
+
+// Appends the strand as a ribbon: two vertices per point, across `side`, two
+// triangles per segment. Even strands' ribbons lie along the head (their width along
+// the parallel of latitude through the root), odd strands' are turned 90 degrees.
+void appendRibbon(Mesh& mesh, const HairParams& p, const std::vector<glm::vec3>& points, float phi, bool turned)
+{
+    const auto base = static_cast<uint32_t>(mesh.vertices.size());
+    const size_t n = points.size() - 1;
+    glm::vec3 across{-std::sin(phi), 0.0f, std::cos(phi)};
+    for (size_t k = 0; k <= n; ++k) {
+        const glm::vec3 before = glm::normalize(points[k == 0 ? 1 : k] - points[k == 0 ? 0 : k - 1]);
+        const glm::vec3 after = glm::normalize(points[k == n ? n : k + 1] - points[k == n ? n - 1 : k]);
+        const glm::vec3 sum = before + after;
+        const glm::vec3 tangent = glm::length(sum) > 1e-6f ? glm::normalize(sum) : after;
+        // Carry the width direction along the strand, kept perpendicular to it.
+        across -= glm::dot(across, tangent) * tangent;
+        across = glm::length(across) > 1e-4f ? glm::normalize(across) : anyPerpendicular(tangent);
+        const glm::vec3 side = turned ? glm::cross(tangent, across) : across;
+        const glm::vec3 normal = glm::cross(side, tangent);
+        const float v = float(k) / float(n);
+        const float halfWidth = 0.5f * p.strandWidth * (1.0f - (1.0f - kTipWidth) * v);
+        mesh.vertices.push_back({points[k] - side * halfWidth, normal, {0.0f, v}});
+        mesh.vertices.push_back({points[k] + side * halfWidth, normal, {1.0f, v}});
+    }
+    for (uint32_t k = 0; k < n; ++k) {
+        const uint32_t a = base + 2 * k, b = a + 1, c = a + 2, d = a + 3;
+        // (b - a) x (d - a) points along cross(side, tangent), the normal.
+        mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
+    }
+}
+
+Mesh makeHair(const HairParams& p, Random& rng)
+{
+    Mesh hair{"hair", {}, {}};
+    hair.vertices.reserve(size_t(p.strands) * 2 * (p.segments + 1));
+    hair.indices.reserve(size_t(p.strands) * 6 * p.segments);
+    const float cosScalp = std::cos(glm::radians(p.scalpAngleDeg));
+    for (uint32_t s = 0; s < p.strands; ++s) {
+        // Uniform over the spherical cap: cos(theta) uniform.
+        const float theta = std::acos(rng.uniform(cosScalp, 1.0f));
+        const float phi = rng.uniform(0.0f, glm::two_pi<float>());
+        const float length = p.strandLength * rng.uniform(1.0f - p.lengthJitter, 1.0f + p.lengthJitter);
+        appendRibbon(hair, p, growStrand(p, rng, theta, phi, length), phi, s % 2 == 1);
+    }
+    return hair;
+}
+
+// ---- lattice pieces ------------------------------------------------------------------------
+
+// Both edges of every bar across one direction, centred on 0: odd intervals between
+// consecutive values are holes, even ones bars.
+std::vector<float> barEdges(uint32_t holes, float cell, float bar)
+{
+    const float extent = float(holes) * cell + bar;
+    std::vector<float> edges;
+    for (uint32_t i = 0; i <= holes; ++i) {
+        const float x = -0.5f * extent + float(i) * cell;
+        edges.push_back(x);
+        edges.push_back(x + bar);
+    }
+    return edges;
+}
+
+// The lattice in its own frame: width along x, height along y, thickness along z,
+// centred on the origin. The front and back faces are grids over all bar edges, so a
+// hole wall's edge is always a whole grid edge: no T-junctions.
+Mesh makeLattice(const FenceParams& p)
+{
+    Mesh mesh{"lattice", {}, {}};
+    const std::vector<float> xs = barEdges(p.holesX, p.cell, p.barWidth), ys = barEdges(p.holesY, p.cell, p.barWidth);
+    const auto nx = static_cast<uint32_t>(xs.size()), ny = static_cast<uint32_t>(ys.size());
+    const float hz = 0.5f * p.thickness;
+    auto isHole = [](uint32_t ix, uint32_t iy) { return ix % 2 == 1 && iy % 2 == 1; };
+    const glm::vec2 extent{xs.back() - xs.front(), ys.back() - ys.front()};
+
+    for (const float face : {1.0f, -1.0f}) {
+        const auto base = static_cast<uint32_t>(mesh.vertices.size());
+        for (uint32_t iy = 0; iy < ny; ++iy) {
+            for (uint32_t ix = 0; ix < nx; ++ix) {
+                mesh.vertices.push_back({{xs[ix], ys[iy], face * hz}, {0.0f, 0.0f, face},
+                                         glm::vec2(xs[ix], ys[iy]) / extent + 0.5f});
+            }
+        }
+        for (uint32_t iy = 0; iy + 1 < ny; ++iy) {
+            for (uint32_t ix = 0; ix + 1 < nx; ++ix) {
+                if (isHole(ix, iy)) continue;
+                const uint32_t a = base + iy * nx + ix, b = a + 1, c = a + nx + 1, d = a + nx;
+                // Counter-clockwise seen from +z; the back face reverses it.
+                if (face > 0) mesh.indices.insert(mesh.indices.end(), {a, b, c, a, c, d});
+                else mesh.indices.insert(mesh.indices.end(), {a, c, b, a, d, c});
+            }
+        }
+    }
+    // Walls of each hole, facing into it.
+    for (uint32_t iy = 1; iy + 1 < ny; iy += 2) {
+        for (uint32_t ix = 1; ix + 1 < nx; ix += 2) {
+            const float x0 = xs[ix], x1 = xs[ix + 1], y0 = ys[iy], y1 = ys[iy + 1];
+            addQuad(mesh, {{{x0, y0, -hz}, {x0, y1, -hz}, {x0, y1, hz}, {x0, y0, hz}}}, {1, 0, 0});
+            addQuad(mesh, {{{x1, y0, -hz}, {x1, y1, -hz}, {x1, y1, hz}, {x1, y0, hz}}}, {-1, 0, 0});
+            addQuad(mesh, {{{x0, y0, -hz}, {x1, y0, -hz}, {x1, y0, hz}, {x0, y0, hz}}}, {0, 1, 0});
+            addQuad(mesh, {{{x0, y1, -hz}, {x1, y1, -hz}, {x1, y1, hz}, {x0, y1, hz}}}, {0, -1, 0});
+        }
+    }
+    // The outer rim, split at every grid line like the faces it joins.
+    for (uint32_t iy = 0; iy + 1 < ny; ++iy) {
+        for (const float x : {xs.front(), xs.back()}) {
+            const float y0 = ys[iy], y1 = ys[iy + 1];
+            addQuad(mesh, {{{x, y0, -hz}, {x, y1, -hz}, {x, y1, hz}, {x, y0, hz}}}, {x > 0 ? 1.0f : -1.0f, 0, 0});
+        }
+    }
+    for (uint32_t ix = 0; ix + 1 < nx; ++ix) {
+        for (const float y : {ys.front(), ys.back()}) {
+            const float x0 = xs[ix], x1 = xs[ix + 1];
+            addQuad(mesh, {{{x0, y, -hz}, {x1, y, -hz}, {x1, y, hz}, {x0, y, hz}}}, {0, y > 0 ? 1.0f : -1.0f, 0});
+        }
+    }
+    return mesh;
+}
+
+// Fraction of the light interval [lightMin, lightMax] inside [hiddenMin, hiddenMax];
+// for a zero-length light interval (a point along this axis) 1 or 0.
+double hiddenFraction(double lightMin, double lightMax, double hiddenMin, double hiddenMax)
+{
+    if (lightMax <= lightMin) return lightMin >= hiddenMin && lightMin <= hiddenMax ? 1.0 : 0.0;
+    const double overlap = std::min(lightMax, hiddenMax) - std::max(lightMin, hiddenMin);
+    return std::clamp(overlap / (lightMax - lightMin), 0.0, 1.0);
+}
+
+// ---- generators by name ------------------------------------------------------------------
+
+// The snake_case names (command line, config) of each params struct's fields.
+template <class Visit> void visitParams(BoxGridParams& p, Visit&& visit)
+{
+    visit("columns", p.columns);
+    visit("rows", p.rows);
+    visit("box_size", p.boxSize);
+    visit("spacing", p.spacing);
+    visit("min_height", p.minHeight);
+    visit("max_height", p.maxHeight);
+    visit("sphere_radius", p.sphereRadius);
+    visit("sphere_segments", p.sphereSegments);
+    visit("plane_size", p.planeSize);
+    visit("seed", p.seed);
+}
+
+template <class Visit> void visitParams(PenumbraParams& p, Visit&& visit)
+{
+    visit("occluder_size", p.occluderSize);
+    visit("occluder_thickness", p.occluderThickness);
+    visit("occluder_height", p.occluderHeight);
+    visit("ground_size", p.groundSize);
+}
+
+template <class Visit> void visitParams(CityParams& p, Visit&& visit)
+{
+    visit("blocks", p.blocks);
+    visit("block_size", p.blockSize);
+    visit("street_width", p.streetWidth);
+    visit("sidewalk_width", p.sidewalkWidth);
+    visit("lots_per_side", p.lotsPerSide);
+    visit("min_height", p.minHeight);
+    visit("max_height", p.maxHeight);
+    visit("setback_chance", p.setbackChance);
+    visit("car_density", p.carDensity);
+    visit("tree_chance", p.treeChance);
+    visit("seed", p.seed);
+}
+
+template <class Visit> void visitParams(HairParams& p, Visit&& visit)
+{
+    visit("strands", p.strands);
+    visit("segments", p.segments);
+    visit("head_radius", p.headRadius);
+    visit("strand_length", p.strandLength);
+    visit("length_jitter", p.lengthJitter);
+    visit("strand_width", p.strandWidth);
+    visit("gravity", p.gravity);
+    visit("waviness", p.waviness);
+    visit("scalp_angle_deg", p.scalpAngleDeg);
+    visit("alpha", p.alpha);
+    visit("seed", p.seed);
+}
+
+template <class Visit> void visitParams(FenceParams& p, Visit&& visit)
+{
+    visit("holes_x", p.holesX);
+    visit("holes_y", p.holesY);
+    visit("cell", p.cell);
+    visit("bar_width", p.barWidth);
+    visit("thickness", p.thickness);
+    visit("tilt_deg", p.tiltDeg);
+    visit("elevation", p.elevation);
+    visit("ground_size", p.groundSize);
+}
+
+void parseValue(const std::string& generator, const std::string& name, const std::string& text, uint32_t& value)
+{
+    const char* end = text.data() + text.size();
+    const auto [ptr, ec] = std::from_chars(text.data(), end, value);
+    if (ec != std::errc() || ptr != end) {
+        throw Error(fmt::format("{}: {} must be a whole number in [0, {}], got '{}'", generator, name,
+                                std::numeric_limits<uint32_t>::max(), text));
+    }
+}
+
+void parseValue(const std::string& generator, const std::string& name, const std::string& text, float& value)
+{
+    const char* end = text.data() + text.size();
+    const auto [ptr, ec] = std::from_chars(text.data(), end, value);
+    if (ec != std::errc() || ptr != end) {
+        throw Error(fmt::format("{}: {} must be a number, got '{}'", generator, name, text));
+    }
+}
+
+using Settings = std::vector<std::pair<std::string, std::string>>;
+
+struct RegisteredGenerator {
+    std::string name;
+    std::function<std::vector<GeneratorParameter>()> parameters;
+    std::function<Scene(const Settings&)> generate;
+};
+
+template <class Params> RegisteredGenerator registerGenerator(std::string name, Scene (*generate)(const Params&))
+{
+    auto parameters = [] {
+        Params defaults;
+        std::vector<GeneratorParameter> out;
+        visitParams(defaults, [&](const char* key, const auto& value) { out.push_back({key, fmt::format("{}", value)}); });
+        return out;
+    };
+    auto build = [name, generate, parameters](const Settings& settings) {
+        Params params;
+        for (const auto& [key, text] : settings) {
+            bool known = false;
+            visitParams(params, [&](const char* k, auto& value) {
+                if (key != k) return;
+                parseValue(name, key, text, value);
+                known = true;
+            });
+            if (!known) {
+                std::vector<std::string> names;
+                for (const GeneratorParameter& p : parameters()) names.push_back(p.name);
+                throw Error(fmt::format("{}: unknown parameter '{}'; known: {}", name, key, fmt::join(names, ", ")));
+            }
+        }
+        return generate(params);
+    };
+    return {std::move(name), parameters, build};
+}
+
+const std::vector<RegisteredGenerator>& registry()
+{
+    static const std::vector<RegisteredGenerator> generators = {
+        registerGenerator<BoxGridParams>("box-grid", generateBoxGrid),
+        registerGenerator<PenumbraParams>("penumbra", generatePenumbra),
+        registerGenerator<CityParams>("city", generateCity),
+        registerGenerator<HairParams>("hair", generateHair),
+        registerGenerator<FenceParams>("fence", generateFence),
+    };
+    return generators;
+}
+
+const RegisteredGenerator& findGenerator(const std::string& name)
+{
+    for (const RegisteredGenerator& g : registry()) {
+        if (g.name == name) return g;
+    }
+    throw Error(fmt::format("unknown generator '{}'; known: {}", name, fmt::join(generatorNames(), ", ")));
+}
+
+} // namespace
+
+// ---- box-grid ------------------------------------------------------------------------------
+
+Scene generateBoxGrid(const BoxGridParams& p)
+{
+    const ParamCheck check("box-grid");
+    check.count("columns", p.columns, 1, 1024);
+    check.count("rows", p.rows, 1, 1024);
+    check.positive("box_size", p.boxSize);
+    check.positive("spacing", p.spacing);
+    check.positive("min_height", p.minHeight);
+    check.atLeast("max_height", p.maxHeight, "min_height", p.minHeight);
+    check.positive("sphere_radius", p.sphereRadius);
+    check.count("sphere_segments", p.sphereSegments, 3, 4096);
+    check.positive("plane_size", p.planeSize);
+
+    SceneBuilder b("box-grid");
+    b.place(b.addMesh(makePlane("ground"), Material{"ground", {0.75f, 0.75f, 0.72f, 1.0f}}), "ground", b.root(),
+            glm::scale(glm::mat4(1.0f), glm::vec3(p.planeSize, 1.0f, p.planeSize)));
+
+    // Each box has its own colour, hence its own mesh (a mesh is a glTF primitive, which
+    // carries its material); the sphere and the ground are single meshes.
+    std::mt19937 rng(p.seed);
+    std::uniform_real_distribution<float> height(p.minHeight, p.maxHeight);
+    std::uniform_real_distribution<float> hue(0.0f, 1.0f);
+    const float x0 = -0.5f * p.spacing * float(p.columns - 1);
+    const float z0 = -0.5f * p.spacing * float(p.rows - 1);
+    for (uint32_t row = 0; row < p.rows; ++row) {
+        for (uint32_t col = 0; col < p.columns; ++col) {
+            const float h = height(rng);
+            const glm::vec3 centre{x0 + p.spacing * float(col), 0.5f * h, z0 + p.spacing * float(row)};
+            const float t = hue(rng);
+            const std::string name = fmt::format("box_{}_{}", row, col);
+            const Material material{name, {0.55f + 0.35f * t, 0.45f + 0.2f * (1.0f - t), 0.35f + 0.3f * t, 1.0f}};
+            b.place(b.addMesh(makeBox(name), material), name, b.root(),
+                    glm::scale(glm::translate(glm::mat4(1.0f), centre), glm::vec3(p.boxSize, h, p.boxSize)));
+        }
+    }
+    // The sphere floats beside the grid so that its shadow falls on the ground, apart
+    // from the boxes' shadows.
+    const glm::vec3 sphereCentre{x0 + p.spacing * float(p.columns) + p.sphereRadius, 1.5f * p.sphereRadius, 0.0f};
+    b.place(b.addMesh(makeSphere("sphere", p.sphereSegments), Material{"sphere", {0.3f, 0.45f, 0.8f, 1.0f}}), "sphere",
+            b.root(), glm::scale(glm::translate(glm::mat4(1.0f), sphereCentre), glm::vec3(p.sphereRadius)));
+    return b.finish();
+}
+
+// ---- penumbra ---------------------------------------------------------------------------------
+
+Scene generatePenumbra(const PenumbraParams& p)
+{
+    const ParamCheck check("penumbra");
+    check.positive("occluder_size", p.occluderSize);
+    check.range("occluder_thickness", p.occluderThickness, 0.0f, 0.1f * p.occluderSize);
+    check.positive("occluder_height", p.occluderHeight);
+    if (!(p.occluderHeight > 0.5f * p.occluderThickness)) {
+        check.fail("occluder_height", "> occluder_thickness / 2 (the occluder above the ground)",
+                   fmt::format("{}", p.occluderHeight));
+    }
+    check.atLeast("ground_size", p.groundSize, "occluder_size", p.occluderSize);
+
+    SceneBuilder b("penumbra");
+    addGround(b, p.groundSize);
+    const glm::vec3 centre{0.0f, p.occluderHeight, 0.0f};
+    if (p.occluderThickness > 0.0f) {
+        b.place(b.addMesh(makeBox("occluder"), Material{"occluder", {0.6f, 0.3f, 0.25f, 1.0f}}), "occluder", b.root(),
+                translationScale(centre, {p.occluderSize, p.occluderThickness, p.occluderSize}));
+    } else {
+        // Zero thickness: a quad that occludes from both sides.
+        Material material{"occluder", {0.6f, 0.3f, 0.25f, 1.0f}};
+        material.doubleSided = true;
+        b.place(b.addMesh(makePlane("occluder"), material), "occluder", b.root(),
+                translationScale(centre, {p.occluderSize, 1.0f, p.occluderSize}));
+    }
+    return b.finish();
+}
+
+double penumbraVisibility(const PenumbraParams& p, const RectAreaLight& light, glm::vec2 receiverXz)
+{
+    const double h = p.occluderHeight, s = p.occluderSize;
+    const double H = light.center.y;
+    const double top = h + 0.5 * double(p.occluderThickness);
+    if (!(H > top) || !std::isfinite(H)) {
+        throw Error(fmt::format("penumbraVisibility: the light's height must be finite and above the occluder's top "
+                                "({}), got {}", top, H));
+    }
+    if (!(light.size.x >= 0.0f && light.size.y >= 0.0f && light.size.x <= kFloatMax && light.size.y <= kFloatMax)) {
+        throw Error(fmt::format("penumbraVisibility: the light's sides must be finite and >= 0, got {} x {}",
+                                light.size.x, light.size.y));
+    }
+    const double backProjection = H / h;  // the occluder's plane, seen from the receiver, on the light's plane
+    double hidden = 1.0;
+    for (int axis = 0; axis < 2; ++axis) {
+        const double receiver = receiverXz[axis];
+        const double lightCentre = axis == 0 ? light.center.x : light.center.z;
+        const double halfLight = 0.5 * double(light.size[axis]);
+        hidden *= hiddenFraction(lightCentre - halfLight, lightCentre + halfLight,
+                                 receiver + (-0.5 * s - receiver) * backProjection,
+                                 receiver + (0.5 * s - receiver) * backProjection);
+    }
+    return 1.0 - hidden;
+}
+
+// ---- city ---------------------------------------------------------------------------------------
+
+Scene generateCity(const CityParams& p)
+{
+    const ParamCheck check("city");
+    check.count("blocks", p.blocks, 1, 128);
+    check.range("block_size", p.blockSize, 10.0f, 1000.0f);
+    check.range("street_width", p.streetWidth, 5.0f, 200.0f);
+    check.range("sidewalk_width", p.sidewalkWidth, 1.5f, 0.25f * p.blockSize);
+    check.count("lots_per_side", p.lotsPerSide, 1, 16);
+    check.positive("min_height", p.minHeight);
+    check.atLeast("max_height", p.maxHeight, "min_height", p.minHeight);
+    check.range("max_height", p.maxHeight, p.minHeight, 10000.0f);
+    check.range("setback_chance", p.setbackChance, 0.0f, 1.0f);
+    check.range("car_density", p.carDensity, 0.0f, 1.0f);
+    check.range("tree_chance", p.treeChance, 0.0f, 1.0f);
+
+    Random rng(p.seed);
+    SceneBuilder b("city");
+    const float pitch = p.blockSize + p.streetWidth;
+    const float span = float(p.blocks) * pitch;  // blocks with a street ring around them
+    addGround(b, span + p.streetWidth);
+    const CityMeshes meshes = addCityMeshes(b);
+
+    const float half = 0.5f * p.blockSize;
+    const float inner = p.blockSize - 2.0f * p.sidewalkWidth;
+    const float lot = inner / float(p.lotsPerSide);
+    // The kerb of a block, edge by edge, counter-clockwise seen from above: start, direction.
+    const std::array<std::pair<glm::vec3, glm::vec3>, 4> edges = {{{{-half, 0, -half}, {1, 0, 0}},
+                                                                   {{half, 0, -half}, {0, 0, 1}},
+                                                                   {{half, 0, half}, {-1, 0, 0}},
+                                                                   {{-half, 0, half}, {0, 0, -1}}}};
+    for (uint32_t i = 0; i < p.blocks; ++i) {
+        for (uint32_t j = 0; j < p.blocks; ++j) {
+            const glm::vec3 centre{-0.5f * span + (float(i) + 0.5f) * pitch, 0.0f, -0.5f * span + (float(j) + 0.5f) * pitch};
+            const uint32_t block = b.addNode(fmt::format("block_{}_{}", i, j), b.root(), translation(centre));
+            for (uint32_t lx = 0; lx < p.lotsPerSide; ++lx) {
+                for (uint32_t lz = 0; lz < p.lotsPerSide; ++lz) {
+                    const glm::vec3 at{-0.5f * inner + (float(lx) + 0.5f) * lot, 0.0f, -0.5f * inner + (float(lz) + 0.5f) * lot};
+                    const uint32_t building = b.addNode(fmt::format("building_{}_{}", lx, lz), block, translation(at));
+                    addBuilding(b, p, meshes, rng, building, lot);
+                }
+            }
+            for (const auto& [start, along] : edges) addKerbside(b, p, meshes, rng, block, start, along);
+        }
+    }
+    return b.finish();
+}
+
+// ---- hair -----------------------------------------------------------------------------------------
+
+Scene generateHair(const HairParams& p)
+{
+    const ParamCheck check("hair");
+    check.count("strands", p.strands, 1, 100000);
+    check.count("segments", p.segments, 1, 64);
+    check.positive("head_radius", p.headRadius);
+    check.positive("strand_length", p.strandLength);
+    check.range("length_jitter", p.lengthJitter, 0.0f, 0.9f);
+    check.positive("strand_width", p.strandWidth);
+    check.range("gravity", p.gravity, 0.0f, 1e6f);
+    check.range("waviness", p.waviness, 0.0f, 1.0f);
+    check.range("scalp_angle_deg", p.scalpAngleDeg, 1.0f, 180.0f);
+    check.range("alpha", p.alpha, 0.0f, 1.0f);
+
+    Random rng(p.seed);
+    SceneBuilder b("hair");
+    // Every point of a strand lies within its length of its root, so the hair stays
+    // above the ground.
+    const float reach = p.headRadius + p.strandLength * (1.0f + p.lengthJitter);
+    addGround(b, 8.0f * reach);
+    const uint32_t head = b.addNode("head", b.root(), translation({0.0f, 1.05f * reach, 0.0f}));
+    b.place(b.addMesh(makeSphere("skull", 64), Material{"skin", {0.8f, 0.6f, 0.5f, 1.0f}}), "skull", head,
+            glm::scale(glm::mat4(1.0f), glm::vec3(p.headRadius)));
+    Material hair{"hair", {0.35f, 0.22f, 0.12f, p.alpha}};
+    hair.alphaMode = AlphaMode::Blend;
+    hair.doubleSided = true;
+    b.place(b.addMesh(makeHair(p, rng), hair), "strands", head, glm::mat4(1.0f));
+    return b.finish();
+}
+
+// ---- fence -----------------------------------------------------------------------------------------
+
+Scene generateFence(const FenceParams& p)
+{
+    const ParamCheck check("fence");
+    check.count("holes_x", p.holesX, 1, 512);
+    check.count("holes_y", p.holesY, 1, 512);
+    check.positive("cell", p.cell);
+    check.positive("bar_width", p.barWidth);
+    if (!(p.barWidth < p.cell)) check.fail("bar_width", fmt::format("< cell ({})", p.cell), fmt::format("{}", p.barWidth));
+    check.positive("thickness", p.thickness);
+    check.range("tilt_deg", p.tiltDeg, 0.0f, 90.0f);
+    check.positive("ground_size", p.groundSize);
+    const float tilt = glm::radians(p.tiltDeg);
+    const float height = float(p.holesY) * p.cell + p.barWidth;
+    const float lowest = 0.5f * height * std::sin(tilt) + 0.5f * p.thickness * std::cos(tilt);
+    if (!(p.elevation > lowest && p.elevation <= kFloatMax)) {
+        check.fail("elevation", fmt::format("> {} (the lattice above the ground)", lowest), fmt::format("{}", p.elevation));
+    }
+
+    SceneBuilder b("fence");
+    addGround(b, p.groundSize);
+    // The lattice is built upright (tilt 90): turning it about x lays it down.
+    const glm::mat4 local = glm::rotate(translation({0.0f, p.elevation, 0.0f}), tilt - glm::half_pi<float>(), glm::vec3(1, 0, 0));
+    b.place(b.addMesh(makeLattice(p), Material{"lattice", {0.25f, 0.25f, 0.27f, 1.0f}}), "lattice", b.root(), local);
+    return b.finish();
+}
+
+// ---- scale -----------------------------------------------------------------------------------------
+
+Scene& scaleScene(Scene& scene, float factor)
+{
+    if (!(factor > 0.0f && factor <= kFloatMax)) {
+        throw Error(fmt::format("scaleScene: the scale factor must be a finite number > 0, got {}", factor));
+    }
+    const glm::mat4 scale = glm::scale(glm::mat4(1.0f), glm::vec3(factor));
+    for (uint32_t n = 0; n < scene.graph.size(); ++n) {
+        if (scene.graph.node(n).parent == kNoParent) scene.graph.setLocal(n, scale * scene.graph.local(n));
+    }
+    scene.updateTransforms();
+    return scene;
+}
+
+// ---- by name ---------------------------------------------------------------------------------------
+
+std::vector<std::string> generatorNames()
+{
+    std::vector<std::string> names;
+    for (const RegisteredGenerator& g : registry()) names.push_back(g.name);
+    return names;
+}
+
+std::vector<GeneratorParameter> generatorParameters(const std::string& generator)
+{
+    return findGenerator(generator).parameters();
+}
+
+Scene generateScene(const std::string& generator, const Settings& settings)
+{
+    return findGenerator(generator).generate(settings);
+}
+
+} // namespace penumbra::scene

@@ -1,0 +1,431 @@
+// Procedural scenes: determinism, counts, well-formed meshes, parameter checks, scale,
+// and the penumbra scene's closed-form visibility against ray casting.
+#include "RayCast.h"
+#include "penumbra/core/Error.h"
+#include "penumbra/scene/Generators.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <tuple>
+
+using namespace penumbra;
+using namespace penumbra::scene;
+
+namespace {
+
+// Byte-for-byte equality of everything a generator decides.
+bool sameScene(const Scene& a, const Scene& b)
+{
+    if (a.meshes.size() != b.meshes.size() || a.materials.size() != b.materials.size() ||
+        a.graph.size() != b.graph.size() || a.instances.size() != b.instances.size()) {
+        return false;
+    }
+    for (size_t i = 0; i < a.meshes.size(); ++i) {
+        const Mesh &x = a.meshes[i], &y = b.meshes[i];
+        if (x.name != y.name || x.material != y.material || x.indices != y.indices || x.vertices.size() != y.vertices.size() ||
+            std::memcmp(x.vertices.data(), y.vertices.data(), x.vertices.size() * sizeof(Vertex)) != 0) {
+            return false;
+        }
+    }
+    for (size_t i = 0; i < a.materials.size(); ++i) {
+        if (a.materials[i].name != b.materials[i].name || a.materials[i].baseColor != b.materials[i].baseColor) return false;
+    }
+    for (uint32_t n = 0; n < a.graph.size(); ++n) {
+        const Node &x = a.graph.node(n), &y = b.graph.node(n);
+        if (x.name != y.name || x.parent != y.parent || x.local != y.local) return false;
+    }
+    for (size_t i = 0; i < a.instances.size(); ++i) {
+        if (a.instances[i].mesh != b.instances[i].mesh || a.instances[i].node != b.instances[i].node) return false;
+    }
+    return true;
+}
+
+// Every generator at its defaults, plus the variants that build different geometry.
+std::vector<std::pair<std::string, Scene>> everyGenerator()
+{
+    std::vector<std::pair<std::string, Scene>> scenes;
+    for (const std::string& name : generatorNames()) scenes.emplace_back(name, generateScene(name, {}));
+    scenes.emplace_back("penumbra thickness 0", generateScene("penumbra", {{"occluder_thickness", "0"}}));
+    scenes.emplace_back("fence tilt 0", generateScene("fence", {{"tilt_deg", "0"}, {"elevation", "0.5"}}));
+    scenes.emplace_back("fence tilt 30", generateScene("fence", {{"tilt_deg", "30"}}));
+    return scenes;
+}
+
+std::string errorOf(const std::function<void()>& f)
+{
+    try {
+        f();
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "(no error)";
+}
+
+const Mesh& meshNamed(const Scene& s, const std::string& name)
+{
+    for (const Mesh& m : s.meshes) {
+        if (m.name == name) return m;
+    }
+    throw std::runtime_error("no mesh " + name);
+}
+
+const Material& materialOf(const Scene& s, const std::string& mesh) { return s.materials.at(meshNamed(s, mesh).material); }
+
+} // namespace
+
+TEST(Generators, ListedByName)
+{
+    EXPECT_EQ(generatorNames(), (std::vector<std::string>{"box-grid", "penumbra", "city", "hair", "fence"}));
+    EXPECT_TRUE(sameScene(generateScene("box-grid", {}), generateBoxGrid({})));
+    EXPECT_TRUE(sameScene(generateScene("fence", {}), generateFence({})));
+    CityParams city;
+    city.blocks = 3;
+    EXPECT_TRUE(sameScene(generateScene("city", {{"blocks", "3"}}), generateCity(city)));
+    const std::vector<GeneratorParameter> params = generatorParameters("city");
+    ASSERT_FALSE(params.empty());
+    EXPECT_EQ(params[0].name, "blocks");
+    EXPECT_EQ(params[0].defaultValue, "8");
+}
+
+TEST(Generators, DeterministicBySeed)
+{
+    for (const char* name : {"box-grid", "city", "hair"}) {
+        SCOPED_TRACE(name);
+        const Scene a = generateScene(name, {{"seed", "7"}}), b = generateScene(name, {{"seed", "7"}});
+        const Scene c = generateScene(name, {{"seed", "8"}});
+        EXPECT_TRUE(sameScene(a, b));
+        EXPECT_FALSE(sameScene(a, c));
+    }
+}
+
+TEST(Generators, EveryMeshIsWellFormed)
+{
+    for (const auto& [name, scene] : everyGenerator()) {
+        SCOPED_TRACE(name);
+        ASSERT_FALSE(scene.instances.empty());
+        for (const Mesh& mesh : scene.meshes) {
+            SCOPED_TRACE(mesh.name);
+            ASSERT_FALSE(mesh.indices.empty());
+            ASSERT_EQ(mesh.indices.size() % 3, 0u);
+            ASSERT_LT(mesh.material, scene.materials.size());
+            for (const Vertex& v : mesh.vertices) {
+                ASSERT_TRUE(std::isfinite(v.position.x) && std::isfinite(v.position.y) && std::isfinite(v.position.z));
+                ASSERT_NEAR(glm::length(v.normal), 1.0f, 1e-4f);
+            }
+            // Non-degenerate (area well above float noise for the mesh's size), and
+            // wound counter-clockwise around the normals.
+            const float size = glm::length(mesh.bounds.extent());
+            for (size_t t = 0; t < mesh.indices.size(); t += 3) {
+                const uint32_t i0 = mesh.indices[t], i1 = mesh.indices[t + 1], i2 = mesh.indices[t + 2];
+                ASSERT_LT(std::max({i0, i1, i2}), mesh.vertices.size());
+                const Vertex &a = mesh.vertices[i0], &b = mesh.vertices[i1], &c = mesh.vertices[i2];
+                const glm::vec3 cross = glm::cross(b.position - a.position, c.position - a.position);
+                ASSERT_GT(0.5f * glm::length(cross), 1e-9f * size * size) << "triangle " << t / 3;
+                ASSERT_GT(glm::dot(cross, a.normal + b.normal + c.normal), 0.0f) << "triangle " << t / 3;
+            }
+        }
+    }
+}
+
+TEST(Generators, BadParametersAreNamed)
+{
+    const std::vector<std::tuple<std::string, std::string, std::string>> cases = {
+        {"box-grid", "max_height", "0.1"},       {"box-grid", "columns", "0"},
+        {"penumbra", "occluder_thickness", "0.5"}, {"penumbra", "occluder_size", "-1"},
+        {"penumbra", "ground_size", "0.5"},       {"city", "blocks", "0"},
+        {"city", "block_size", "-5"},            {"city", "car_density", "1.5"},
+        {"city", "min_height", "nan"},           {"hair", "strands", "0"},
+        {"hair", "alpha", "1.5"},                {"hair", "strand_length", "inf"},
+        {"fence", "bar_width", "0.2"},           {"fence", "elevation", "0.1"},
+        {"fence", "tilt_deg", "91"},
+    };
+    for (const auto& [generator, key, value] : cases) {
+        const std::string message = errorOf([&] { generateScene(generator, {{key, value}}); });
+        EXPECT_NE(message.find(generator + ": " + key + " must be"), std::string::npos) << message;
+        EXPECT_NE(message.find("got " + value), std::string::npos) << message;
+    }
+    const std::string unknown = errorOf([] { generateScene("city", {{"blokcs", "4"}}); });
+    EXPECT_NE(unknown.find("city: unknown parameter 'blokcs'; known: blocks, block_size,"), std::string::npos) << unknown;
+    const std::string unparsable = errorOf([] { generateScene("city", {{"blocks", "4x"}}); });
+    EXPECT_NE(unparsable.find("city: blocks must be a whole number"), std::string::npos) << unparsable;
+    EXPECT_NE(unparsable.find("'4x'"), std::string::npos) << unparsable;
+    const std::string generator = errorOf([] { generateScene("castle", {}); });
+    EXPECT_NE(generator.find("unknown generator 'castle'; known: box-grid, penumbra, city, hair, fence"), std::string::npos)
+        << generator;
+}
+
+TEST(ScaleScene, ScalesBoundsExactly)
+{
+    for (const auto& [name, scene] : everyGenerator()) {
+        SCOPED_TRACE(name);
+        const Aabb before = scene.bounds();
+        const float size = std::max(glm::length(before.min), glm::length(before.max));
+        for (const float factor : {8.0f, 0.25f, 1e-3f, 1e5f}) {
+            SCOPED_TRACE(factor);
+            Scene scaled = scene;
+            const Aabb after = scaleScene(scaled, factor).bounds();
+            // Powers of two scale floats exactly; the others within a few roundings.
+            const bool exact = factor == 8.0f || factor == 0.25f;
+            const float tolerance = exact ? 0.0f : 1e-6f * size * factor;
+            for (int a = 0; a < 3; ++a) {
+                EXPECT_NEAR(after.min[a], before.min[a] * factor, tolerance);
+                EXPECT_NEAR(after.max[a], before.max[a] * factor, tolerance);
+            }
+            for (size_t m = 0; m < scene.meshes.size(); ++m) {  // meshes untouched
+                EXPECT_EQ(std::memcmp(scaled.meshes[m].vertices.data(), scene.meshes[m].vertices.data(),
+                                      scene.meshes[m].vertices.size() * sizeof(Vertex)), 0);
+            }
+        }
+    }
+}
+
+TEST(ScaleScene, RejectsBadFactors)
+{
+    Scene scene = generatePenumbra({});
+    for (const float factor : {0.0f, -2.0f, NAN, INFINITY}) {
+        const std::string message = errorOf([&] { scaleScene(scene, factor); });
+        EXPECT_NE(message.find("scale factor must be a finite number > 0, got "), std::string::npos) << message;
+    }
+    EXPECT_NEAR(scene.bounds().max.x, 10.0f, 1e-6f);  // unchanged
+}
+
+TEST(City, ScalesPastAMillionTrianglesAndTenThousandInstances)
+{
+    // Counts only: the big parameter set of the README.
+    const Scene city = generateScene("city", {{"blocks", "16"}});
+    EXPECT_GE(city.triangleCount(), 1'000'000u);
+    EXPECT_GE(city.instances.size(), 10'000u);
+    // Instances share a few small meshes, so memory stays modest.
+    EXPECT_LE(city.meshes.size(), 20u);
+    size_t vertices = 0;
+    for (const Mesh& m : city.meshes) vertices += m.vertices.size();
+    EXPECT_LT(vertices, 5'000u);
+}
+
+TEST(City, BuildingsStayInTheirBlocksAndCarsOnTheStreets)
+{
+    CityParams p;
+    p.blocks = 3;
+    const Scene city = generateCity(p);
+    const float pitch = p.blockSize + p.streetWidth, span = 3 * pitch;
+    // The block under an x or z coordinate: its index, and whether it lies inside the block.
+    auto inBlock = [&](float v) {
+        const float local = std::fmod(v + 0.5f * span, pitch) - 0.5f * p.streetWidth;
+        return local > -1e-3f && local < p.blockSize + 1e-3f;
+    };
+    size_t tiers = 0, cars = 0;
+    for (const Instance& inst : city.instances) {
+        const std::string& mesh = city.meshes[inst.mesh].name;
+        const Aabb& box = inst.worldBounds;
+        if (mesh.rfind("facade_", 0) == 0) {
+            ++tiers;
+            EXPECT_TRUE(inBlock(box.min.x) && inBlock(box.max.x) && inBlock(box.min.z) && inBlock(box.max.z));
+            EXPECT_GE(box.min.y, 0.0f);
+            EXPECT_LE(box.max.y, p.maxHeight + 1e-3f);
+        } else if (mesh.rfind("car_", 0) == 0) {
+            ++cars;
+            const glm::vec3 c = box.center();
+            EXPECT_FALSE(inBlock(c.x) && inBlock(c.z)) << c.x << ", " << c.z;
+        }
+    }
+    EXPECT_GE(tiers, 9u * 9u);
+    EXPECT_GT(cars, 0u);
+}
+
+TEST(Hair, TenThousandBlendedStrandsOnAnOpaqueHead)
+{
+    const HairParams p;
+    const Scene hair = generateHair(p);
+    const Mesh& strands = meshNamed(hair, "hair");
+    EXPECT_EQ(strands.vertices.size(), size_t(p.strands) * 2 * (p.segments + 1));
+    EXPECT_EQ(strands.indices.size() / 3, size_t(p.strands) * 2 * p.segments);
+    EXPECT_GE(p.strands, 10'000u);
+    const Material& material = materialOf(hair, "hair");
+    EXPECT_EQ(material.alphaMode, AlphaMode::Blend);
+    EXPECT_FLOAT_EQ(material.baseColor.a, 0.3f);
+    EXPECT_TRUE(material.doubleSided);
+    EXPECT_EQ(materialOf(hair, "skull").alphaMode, AlphaMode::Opaque);
+    // Strands never enter the head (the mesh is relative to its centre) and hang above
+    // the ground.
+    float nearest = INFINITY;
+    for (const Vertex& v : strands.vertices) nearest = std::min(nearest, glm::length(v.position));
+    EXPECT_GE(nearest, p.headRadius);
+    for (const Instance& inst : hair.instances) {
+        if (hair.meshes[inst.mesh].name == "hair") {
+            EXPECT_GT(inst.worldBounds.min.y, 0.0f);
+        }
+    }
+}
+
+TEST(Fence, HolesLetLightThroughAndBarsBlockIt)
+{
+    FenceParams p;
+    p.holesX = 4;
+    p.holesY = 3;
+    const Scene fence = generateFence(p);
+    const test::RayCaster rays(fence);
+    // Upright and centred on x = 0 at height `elevation`, thickness along z.
+    const double width = p.holesX * p.cell + p.barWidth, height = p.holesY * p.cell + p.barWidth;
+    auto through = [&](double x, double y) {
+        return !rays.segmentBlocked({x, y, -1.0}, {x, y, 1.0});
+    };
+    const double left = -0.5 * width, bottom = p.elevation - 0.5 * height;
+    for (uint32_t i = 0; i < p.holesX; ++i) {
+        // Bar i spans [i cell, i cell + bar] from the left edge, hole i the rest of the cell.
+        const double barX = left + i * p.cell + 0.5 * p.barWidth;
+        const double holeX = left + i * p.cell + 0.5 * (p.barWidth + p.cell);
+        for (uint32_t j = 0; j < p.holesY; ++j) {
+            const double holeY = bottom + j * p.cell + 0.5 * (p.barWidth + p.cell);
+            EXPECT_TRUE(through(holeX, holeY)) << i << ", " << j;
+            EXPECT_FALSE(through(barX, holeY)) << "bar " << i << ", " << j;
+        }
+    }
+    EXPECT_TRUE(through(left - 0.01, p.elevation));  // beside the lattice
+    // Laid flat it is only as tall as it is thick.
+    p.tiltDeg = 0;
+    p.elevation = 0.5f;
+    const Scene flat = generateFence(p);
+    EXPECT_NEAR(flat.instances.back().worldBounds.extent().y, p.thickness, 1e-5f);
+}
+
+// ---- the penumbra scene's closed form ---------------------------------------------------------
+
+namespace {
+
+double visibility(const PenumbraParams& p, const RectAreaLight& light, double x, double z)
+{
+    return penumbraVisibility(p, light, glm::vec2(float(x), float(z)));
+}
+
+} // namespace
+
+TEST(PenumbraVisibility, FullyLitFarAway)
+{
+    const PenumbraParams p;
+    const RectAreaLight light;
+    EXPECT_EQ(visibility(p, light, 5.0, 0.0), 1.0);
+    EXPECT_EQ(visibility(p, light, 0.0, -5.0), 1.0);
+    EXPECT_EQ(visibility(p, light, 3.0, 3.0), 1.0);
+}
+
+TEST(PenumbraVisibility, UmbraUnderTheCentreOnlyForALightSmallerThanTheOccluder)
+{
+    const PenumbraParams p;  // 1 x 1 at height 1
+    RectAreaLight light;     // 0.5 x 0.5 at height 4
+    EXPECT_EQ(visibility(p, light, 0.0, 0.0), 0.0);
+    EXPECT_EQ(visibility(p, light, 0.1, -0.1), 0.0);
+    // A light wider than the occluder's back-projection (s H / h = 4) is never hidden.
+    light.size = {5.0f, 5.0f};
+    EXPECT_GT(visibility(p, light, 0.0, 0.0), 0.0);
+}
+
+TEST(PenumbraVisibility, Symmetric)
+{
+    const PenumbraParams p;
+    const RectAreaLight light;  // square, centred above the occluder
+    for (double x = 0.0; x < 1.5; x += 0.07) {
+        for (double z = 0.0; z < 1.5; z += 0.11) {
+            const double v = visibility(p, light, x, z);
+            EXPECT_NEAR(visibility(p, light, -x, z), v, 1e-6);
+            EXPECT_NEAR(visibility(p, light, x, -z), v, 1e-6);
+            EXPECT_NEAR(visibility(p, light, z, x), v, 1e-6);
+        }
+    }
+}
+
+TEST(PenumbraVisibility, MonotoneAlongLinesLeavingTheUmbra)
+{
+    const PenumbraParams p;
+    const RectAreaLight light;
+    for (const glm::dvec2 direction : {glm::dvec2(1, 0), glm::dvec2(0, -1), glm::normalize(glm::dvec2(1, 0.6))}) {
+        double previous = visibility(p, light, 0.0, 0.0);
+        EXPECT_EQ(previous, 0.0);
+        for (int i = 1; i <= 400; ++i) {
+            const glm::dvec2 at = direction * (i * 0.005);
+            const double v = visibility(p, light, at.x, at.y);
+            EXPECT_GE(v, previous - 1e-12) << i;
+            previous = v;
+        }
+        EXPECT_EQ(previous, 1.0);
+    }
+}
+
+TEST(PenumbraVisibility, PointLightCastsAHardEdge)
+{
+    const PenumbraParams p;
+    RectAreaLight light;
+    light.size = {0.0f, 0.0f};
+    // The shadow of the edge s/2 at height h from height H.
+    const double edge = 0.5 * p.occluderSize * light.center.y / (light.center.y - p.occluderHeight);
+    for (double x = 0.0; x < 2.0; x += 0.01) {
+        const double v = visibility(p, light, x, 0.0);
+        EXPECT_TRUE(v == 0.0 || v == 1.0) << x;
+    }
+    EXPECT_EQ(visibility(p, light, edge - 1e-4, 0.0), 0.0);
+    EXPECT_EQ(visibility(p, light, edge + 1e-4, 0.0), 1.0);
+}
+
+TEST(PenumbraVisibility, PenumbraWidthIsTheThesisFormula)
+{
+    const PenumbraParams p;
+    RectAreaLight light;
+    light.size = {0.8f, 0.01f};  // wide along x, nearly a line along z
+    const double H = light.center.y, h = p.occluderHeight, w = light.size.x;
+    // First x with any light and first x with all of it, on the line z = 0.
+    double start = -1, end = -1;
+    for (double x = 0.0; x < 3.0; x += 1e-4) {
+        const double v = visibility(p, light, x, 0.0);
+        if (start < 0 && v > 0.0) start = x;
+        if (end < 0 && v >= 1.0) end = x;
+    }
+    EXPECT_NEAR(end - start, w * h / (H - h), 2e-4);
+    // Half lit where the back-projected edge crosses the light's centre: under the
+    // point-light shadow edge.
+    EXPECT_NEAR(visibility(p, light, 0.5 * p.occluderSize * H / (H - h), 0.0), 0.5, 1e-6);
+}
+
+TEST(PenumbraVisibility, MatchesRayCastingThroughTheScene)
+{
+    // 64 x 64 light samples on a grid: along each axis the hidden fraction is off by at
+    // most one sample row, 1/64.
+    constexpr int kSamples = 64;
+    for (const float thickness : {0.0f, 0.01f}) {
+        PenumbraParams p;
+        p.occluderThickness = thickness;
+        const test::RayCaster rays(generatePenumbra(p));
+        RectAreaLight light;
+        light.center = {0.1f, 3.0f, -0.05f};  // off-centre, so that x and z differ
+        light.size = {0.6f, 0.4f};
+        // The documented O(t) error of the thin-occluder assumption for t > 0.
+        const double tolerance = 2.0 / kSamples + (thickness > 0.0f ? 0.01 : 0.0);
+        for (const glm::dvec2 at : {glm::dvec2(0, 0), glm::dvec2(0.62, 0.1), glm::dvec2(0.7, -0.2), glm::dvec2(-0.75, 0.3),
+                                    glm::dvec2(0.2, 0.68), glm::dvec2(0.66, 0.66), glm::dvec2(-0.6, -0.7), glm::dvec2(2, 0)}) {
+            int visible = 0;
+            for (int i = 0; i < kSamples; ++i) {
+                for (int j = 0; j < kSamples; ++j) {
+                    const glm::dvec3 l{light.center.x + ((i + 0.5) / kSamples - 0.5) * light.size.x, light.center.y,
+                                       light.center.z + ((j + 0.5) / kSamples - 0.5) * light.size.y};
+                    // A hair above the ground, so that the ground itself never blocks.
+                    visible += !rays.segmentBlocked({at.x, 1e-6, at.y}, l);
+                }
+            }
+            const double traced = double(visible) / (kSamples * kSamples);
+            EXPECT_NEAR(visibility(p, light, at.x, at.y), traced, tolerance) << "thickness " << thickness << " at " << at.x << ", " << at.y;
+        }
+    }
+}
+
+TEST(PenumbraVisibility, RejectsALightBelowTheOccluder)
+{
+    const PenumbraParams p;
+    RectAreaLight light;
+    light.center.y = 1.0f;
+    EXPECT_NE(errorOf([&] { visibility(p, light, 0, 0); }).find("must be finite and above the occluder's top"), std::string::npos);
+    light.center.y = 4.0f;
+    light.size.x = -1.0f;
+    EXPECT_NE(errorOf([&] { visibility(p, light, 0, 0); }).find("sides must be finite and >= 0"), std::string::npos);
+}
