@@ -236,6 +236,30 @@ TEST(Animation, MovesCameraLightsAndNodes)
     EXPECT_NEAR(s.instances[moved[0]].worldBounds.center().y, 5.0f, 1e-4f);
 }
 
+TEST(Config, GeneratorParametersAreCheckedByName)
+{
+    json doc = minimal();
+    doc["scene"] = {{"generator", "city"}, {"params", {{"blocks", 2}, {"seed", 3}}}};
+    const config::RenderConfig c = config::parseConfig(doc, "scene.json");
+    EXPECT_EQ(c.scene.generator, "city");
+    EXPECT_EQ(c.scene.params.size(), 2u);
+    EXPECT_GT(config::buildScene(c).instances.size(), 100u);
+
+    doc["scene"]["params"] = {{"block", 2}};
+    EXPECT_NE(errorOf(doc).find("/scene/params/block: unknown key for the city generator; did you mean \"blocks\"?"),
+              std::string::npos) << errorOf(doc);
+    doc["scene"]["params"] = {{"blocks", 0}};
+    try {
+        config::buildScene(config::parseConfig(doc, "scene.json"));
+        FAIL() << "expected ConfigError";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("scene.json: /scene: city: blocks must be in [1, 128], got 0"), std::string::npos)
+            << e.what();
+    }
+    doc["scene"] = {{"generator", "forest"}};
+    EXPECT_NE(errorOf(doc).find("/scene/generator: must be one of box-grid, penumbra, city, hair, fence"), std::string::npos);
+}
+
 TEST(Config, MinimalConfigGetsDefaults)
 {
     const config::RenderConfig c = config::parseConfig(minimal(), "scene.json");

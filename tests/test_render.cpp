@@ -31,8 +31,7 @@ config::RenderConfig defaultConfig()
 // depend on absolute units.
 void scaleConfig(config::RenderConfig& c, float s)
 {
-    scene::BoxGridParams& g = c.scene.boxGrid;
-    for (float* length : {&g.boxSize, &g.spacing, &g.minHeight, &g.maxHeight, &g.sphereRadius, &g.planeSize}) *length *= s;
+    c.scene.scale *= s;
     c.camera.position *= s;
     c.camera.target *= s;
     c.camera.nearWorld *= s;

@@ -198,24 +198,18 @@ SceneSource readScene(ObjectReader& parent, const fs::path& configFile)
         r.finish();
         return source;
     }
-    source.generator = r.choice("generator", source.generator, {"box-grid"});
+    source.generator = r.choice("generator", source.generator, scene::generatorNames());
     if (const json* params = r.find("params")) {
         ObjectReader p(*params, parent.locator(), "/scene/params");
-        scene::BoxGridParams& g = source.boxGrid;
-        g.columns = p.integer("columns", g.columns, 1, 64);
-        g.rows = p.integer("rows", g.rows, 1, 64);
-        g.boxSize = float(p.number("box_size", g.boxSize, 0.0, 1e6, true));
-        g.spacing = float(p.number("spacing", g.spacing, 0.0, 1e6, true));
-        g.minHeight = float(p.number("min_height", g.minHeight, 0.0, 1e6, true));
-        g.maxHeight = float(p.number("max_height", g.maxHeight, 0.0, 1e6, true));
-        if (g.maxHeight < g.minHeight) {
-            p.fail("/scene/params/max_height", fmt::format("must be >= min_height ({}), got {}", g.minHeight, g.maxHeight));
+        for (const scene::GeneratorParameter& parameter : scene::generatorParameters(source.generator)) {
+            const json* v = p.find(parameter.name);
+            if (!v) continue;
+            if (!v->is_number() && !v->is_boolean() && !v->is_string()) {
+                p.fail(p.path(parameter.name), fmt::format("must be a number, got {}", v->dump()));
+            }
+            source.params.emplace_back(parameter.name, v->is_string() ? v->get<std::string>() : v->dump());
         }
-        g.sphereRadius = float(p.number("sphere_radius", g.sphereRadius, 0.0, 1e6, true));
-        g.sphereSegments = p.integer("sphere_segments", g.sphereSegments, 3, 1024);
-        g.planeSize = float(p.number("plane_size", g.planeSize, 0.0, 1e7, true));
-        g.seed = p.integer("seed", g.seed, 0, 0xffffffffu);
-        p.finish("for the box-grid generator");
+        p.finish(fmt::format("for the {} generator", source.generator));
     }
     r.finish();
     return source;
@@ -640,21 +634,22 @@ scene::Scene buildScene(const SceneSource& source)
     if (source.kind == SceneSource::Kind::Gltf) {
         throw ConfigError(fmt::format("{}: glTF scenes need the glTF loader", source.gltf.string()));
     }
-    scene::Scene scene = scene::generateBoxGrid(source.boxGrid);
-    if (source.scale != 1.0f) {
-        // Scaling every root node scales the whole hierarchy about the origin.
-        const glm::mat4 s = glm::scale(glm::mat4(1.0f), glm::vec3(source.scale));
-        for (uint32_t n = 0; n < scene.graph.size(); ++n) {
-            if (scene.graph.node(n).parent == scene::kNoParent) scene.graph.setLocal(n, s * scene.graph.local(n));
-        }
-        scene.updateTransforms();
-    }
+    scene::Scene scene = scene::generateScene(source.generator, source.params);
+    if (source.scale != 1.0f) scene::scaleScene(scene, source.scale);
     return scene;
 }
 
 scene::Scene buildScene(const RenderConfig& config)
 {
-    scene::Scene scene = buildScene(config.scene);
+    scene::Scene scene;
+    try {
+        scene = buildScene(config.scene);
+    } catch (const ConfigError&) {
+        throw;
+    } catch (const Error& e) {
+        // A generator's parameter error names the parameter; add where it was set.
+        throw ConfigError(fmt::format("{}: /scene: {}", config.file.string(), e.what()));
+    }
     std::set<std::string> nodeNames;
     for (uint32_t n = 0; n < scene.graph.size(); ++n) nodeNames.insert(scene.graph.node(n).name);
     for (size_t i = 0; i < config.animation.tracks.size(); ++i) {

@@ -52,8 +52,10 @@ struct SceneSource {
     enum class Kind { Generator, Gltf };
     Kind kind = Kind::Generator;
     std::filesystem::path gltf;       // Kind::Gltf, resolved against the config's folder
-    std::string generator = "box-grid";
-    scene::BoxGridParams boxGrid;     // generator "box-grid"
+    std::string generator = "box-grid";  // one of scene::generatorNames()
+    // The generator's parameters that the config sets, by name, values as text (the
+    // generator parses and validates them: scene/Generators.h).
+    std::vector<std::pair<std::string, std::string>> params;
     float scale = 1.0f;               // every length times this (1e-3 ... 1e5 are tested)
 };
 
