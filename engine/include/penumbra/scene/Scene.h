@@ -78,15 +78,19 @@ struct Camera {
     float nearWorld = 0.05f;
 };
 
-enum class LightType { Spot };
+// The renderer shades spot lights; glTF files (KHR_lights_punctual) also bring
+// directional and point lights.
+enum class LightType { Spot, Directional, Point };
 
 struct Light {
     LightType type = LightType::Spot;
-    glm::vec3 position{0.0f, 10.0f, 0.0f};
-    glm::vec3 direction{0.0f, -1.0f, 0.0f};  // unit, where the spot points
-    float outerConeDeg = 40.0f;              // half-angle where the light reaches zero
-    float innerConeDeg = 32.0f;              // half-angle of full intensity
-    float intensity = 300.0f;                // radiant intensity on the axis (W/sr)
+    glm::vec3 position{0.0f, 10.0f, 0.0f};   // Spot, Point
+    glm::vec3 direction{0.0f, -1.0f, 0.0f};  // unit, where the light points: Spot, Directional
+    float outerConeDeg = 40.0f;              // Spot: half-angle where the light reaches zero
+    float innerConeDeg = 32.0f;              // Spot: half-angle of full intensity
+    // Spot: radiant intensity on the axis (W/sr); Point: in every direction (W/sr);
+    // Directional: irradiance on a surface facing the light (W/m²).
+    float intensity = 300.0f;
     glm::vec3 color{1.0f};
 };
 
