@@ -159,6 +159,7 @@ std::string describeRepair(const penumbra::scene::RepairReport& r)
     add(r.weldedVertices, "vertices welded");
     add(r.generatedNormals, "normals generated");
     add(r.replacedNormals, "NaN normals replaced");
+    add(r.renormalizedNormals, "normals normalized");
     std::string text = parts.empty() ? "nothing to repair" : fmt::format("{}", fmt::join(parts, ", "));
     if (r.topologyAnalyzed) {
         text += fmt::format("; {} boundary edges, {} non-manifold triangles", r.boundaryEdges, r.nonManifoldTriangles);

@@ -259,6 +259,17 @@ void fillNormals(Mesh& mesh, const Topology& topo, RepairReport& report)
     }
 }
 
+void normalizeNormals(Mesh& mesh, RepairReport& report)
+{
+    for (Vertex& v : mesh.vertices) {
+        if (normalState(v.normal) != NormalState::Valid) continue;
+        const float length = glm::length(v.normal);
+        if (std::abs(length - 1.0f) <= 1e-3f) continue;
+        v.normal /= length;
+        ++report.renormalizedNormals;
+    }
+}
+
 bool anyNormalInvalid(const Mesh& mesh)
 {
     return std::any_of(mesh.vertices.begin(), mesh.vertices.end(),
@@ -279,6 +290,7 @@ RepairReport repairMesh(Mesh& mesh, const RepairOptions& options)
         dropBadTriangles(mesh, options.degenerateAreaRel, report);
         removeUnusedVertices(mesh, report);
     }
+    normalizeNormals(mesh, report);
     const bool needNormals = anyNormalInvalid(mesh);
     if (needNormals || options.analyzeTopology) {
         const Topology topo = buildTopology(mesh, report);

@@ -31,6 +31,7 @@ struct RepairReport {
     uint32_t weldedVertices = 0;       // merged into an equal vertex nearby
     uint32_t generatedNormals = 0;     // had none (a zero normal means "missing"): area-weighted normal
     uint32_t replacedNormals = 0;      // NaN or ±Inf normal replaced by the area-weighted one
+    uint32_t renormalizedNormals = 0;  // finite but not unit length (off by more than 1e-3): normalized
     // Half-edge topology, when it was built (normals generated or analyzeTopology):
     bool topologyAnalyzed = false;
     uint32_t boundaryEdges = 0;         // edges with one triangle: the surface is open there
@@ -40,7 +41,9 @@ struct RepairReport {
     uint32_t droppedTriangles() const { return nonFiniteTriangles + degenerateTriangles; }
     bool changedMesh() const
     {
-        return droppedTriangles() + unusedVertices + weldedVertices + generatedNormals + replacedNormals > 0;
+        return droppedTriangles() + unusedVertices + weldedVertices + generatedNormals + replacedNormals +
+                   renormalizedNormals >
+               0;
     }
 };
 

@@ -152,7 +152,8 @@ float normalizedComponent(const unsigned char* p, int componentType)
 // accessor without a buffer view starts as zeros (glTF), then sparse values replace
 // the elements they name.
 template <class T, class Convert>
-std::vector<T> readElements(const Document& doc, int index, std::string_view element, size_t maxCount, Convert convert)
+std::vector<T> readElements(const Document& doc, int index, std::string_view element, const CountLimit& limit,
+                            Convert convert)
 {
     const tinygltf::Accessor& acc = accessorAt(doc, index, element);
     const std::string path = accessorPath(index);
@@ -171,7 +172,7 @@ std::vector<T> readElements(const Document& doc, int index, std::string_view ele
         }
         data = viewBytes(doc, acc.bufferView, acc.byteOffset, acc.count, elementBytes, stride, path);
     }
-    if (acc.count > maxCount) doc.fail(path, fmt::format("count {} exceeds the limit of {}", acc.count, maxCount));
+    if (acc.count > limit.max) doc.fail(path, fmt::format("count {} exceeds {} ({})", acc.count, limit.max, limit.what));
 
     std::vector<T> out(acc.count * components, T{});
     if (data) {
@@ -253,16 +254,16 @@ size_t accessorCount(const Document& doc, int accessor, std::string_view element
 }
 
 std::vector<float> readAttribute(const Document& doc, int accessor, std::string_view element, AttributeKind kind,
-                                 size_t maxCount)
+                                 const CountLimit& limit)
 {
     const tinygltf::Accessor& acc = accessorAt(doc, accessor, element);
     checkAttributeType(doc, acc, accessor, element, kind);
-    if (acc.normalized) return readElements<float>(doc, accessor, element, maxCount, normalizedComponent);
-    return readElements<float>(doc, accessor, element, maxCount,
+    if (acc.normalized) return readElements<float>(doc, accessor, element, limit, normalizedComponent);
+    return readElements<float>(doc, accessor, element, limit,
                                [](const unsigned char* p, int ct) { return float(rawComponent(p, ct)); });
 }
 
-std::vector<uint32_t> readIndices(const Document& doc, int accessor, std::string_view element, size_t maxCount)
+std::vector<uint32_t> readIndices(const Document& doc, int accessor, std::string_view element, const CountLimit& limit)
 {
     const tinygltf::Accessor& acc = accessorAt(doc, accessor, element);
     const int ct = acc.componentType;
@@ -273,7 +274,7 @@ std::vector<uint32_t> readIndices(const Document& doc, int accessor, std::string
                                       "UNSIGNED_INT",
                                       accessor, typeName(acc.type), componentName(ct)));
     }
-    return readElements<uint32_t>(doc, accessor, element, maxCount,
+    return readElements<uint32_t>(doc, accessor, element, limit,
                                   [](const unsigned char* p, int type) { return uint32_t(rawComponent(p, type)); });
 }
 

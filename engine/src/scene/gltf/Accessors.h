@@ -17,16 +17,22 @@ enum class AttributeKind {
     TexCoord,  // VEC2 FLOAT, or normalized UNSIGNED_BYTE / UNSIGNED_SHORT
 };
 
+// How many elements a read may allocate, and what that bound is, for the message.
+struct CountLimit {
+    size_t max = 0;
+    std::string what;  // "vertices left of the limit of 16777216 per file"
+};
+
 // The accessor's element count (checks only that the accessor exists).
 size_t accessorCount(const Document& doc, int accessor, std::string_view element);
 
 // count × components floats (3 or 2), sparse substitutions applied. Throws if the
-// count exceeds `maxCount` (the caller's budget) before allocating.
+// count exceeds `limit` before allocating.
 std::vector<float> readAttribute(const Document& doc, int accessor, std::string_view element, AttributeKind kind,
-                                 size_t maxCount);
+                                 const CountLimit& limit);
 
 // SCALAR UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT indices; not range-checked
 // against any vertex count (the caller knows it).
-std::vector<uint32_t> readIndices(const Document& doc, int accessor, std::string_view element, size_t maxCount);
+std::vector<uint32_t> readIndices(const Document& doc, int accessor, std::string_view element, const CountLimit& limit);
 
 } // namespace penumbra::scene::gltf

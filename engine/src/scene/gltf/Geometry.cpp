@@ -74,8 +74,10 @@ std::optional<Mesh> convertPrimitive(const Document& doc, int meshIndex, int pri
         return std::nullopt;
     }
 
+    const CountLimit vertexLimit{budget.vertices, fmt::format("vertices left of the limit of {} per file",
+                                                              doc.options.maxVertices)};
     const std::vector<float> positions =
-        readAttribute(doc, positionAccessor, attributes + "POSITION", AttributeKind::Position, budget.vertices);
+        readAttribute(doc, positionAccessor, attributes + "POSITION", AttributeKind::Position, vertexLimit);
     const size_t vertexCount = positions.size() / 3;
     auto readMatching = [&](const char* name, AttributeKind kind) {
         const int accessor = attribute(name);
@@ -84,16 +86,25 @@ std::optional<Mesh> convertPrimitive(const Document& doc, int meshIndex, int pri
         if (count != vertexCount) {
             doc.fail(attributes + name, fmt::format("accessor {} has {} elements, POSITION has {}", accessor, count, vertexCount));
         }
-        return readAttribute(doc, accessor, attributes + name, kind, vertexCount);
+        return readAttribute(doc, accessor, attributes + name, kind, {vertexCount, "POSITION's count"});
     };
     const std::vector<float> normals = readMatching("NORMAL", AttributeKind::Normal);
     const std::vector<float> uvs = readMatching("TEXCOORD_0", AttributeKind::TexCoord);
+    size_t zeroNormals = 0;
+    for (size_t i = 0; i + 2 < normals.size(); i += 3) {
+        zeroNormals += normals[i] == 0.0f && normals[i + 1] == 0.0f && normals[i + 2] == 0.0f;
+    }
+    if (zeroNormals > 0) {
+        doc.warn(attributes + "NORMAL", fmt::format("{} zero-length normal(s); they are generated", zeroNormals));
+    }
 
     // A list of t triangles has 3t indices, a strip or fan t + 2.
-    const uint64_t maxCorners = 3 * budget.triangles + 2;
+    const CountLimit cornerLimit{3 * budget.triangles + 2,
+                                 fmt::format("indices for the {} triangles left of the limit of {} per file", budget.triangles,
+                                             doc.options.maxTriangles)};
     std::vector<uint32_t> corners;
     if (primitive.indices >= 0) {
-        corners = readIndices(doc, primitive.indices, element + "/indices", maxCorners);
+        corners = readIndices(doc, primitive.indices, element + "/indices", cornerLimit);
         for (size_t i = 0; i < corners.size(); ++i) {
             if (corners[i] >= vertexCount) {
                 doc.fail(element + "/indices", fmt::format("index {} at position {} (accessor {}) is out of range of {} vertices",
