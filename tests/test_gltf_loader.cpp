@@ -384,18 +384,37 @@ TEST(GltfLoaderErrors, VertexAndTriangleLimits)
 TEST(GltfLoaderErrors, TextureSizeLimitBeforeDecoding)
 {
     GltfLoadOptions options;
-    options.maxTextureTexels = 3;
-    const std::string e = errorOf("textured.gltf", options);
-    EXPECT_NE(e.find("textured.gltf: /images/0: 2×2 texels exceed the limit of 3"), std::string::npos) << e;
+    options.maxImageTexels = 3;
+    std::string e = errorOf("textured.gltf", options);
+    EXPECT_NE(e.find("textured.gltf: /images/0: 2×2 texels exceed the limit of 3 per image"), std::string::npos) << e;
+    options = {};
+    options.maxTotalTexels = 3;
+    e = errorOf("textured.gltf", options);
+    EXPECT_NE(e.find("textured.gltf: /images/0: 2×2 texels exceed the 3 left of the limit for all the file's images"),
+              std::string::npos)
+        << e;
 }
 
-TEST(GltfLoaderErrors, FileSizeLimit)
+TEST(GltfLoaderErrors, BytesReadLimit)
 {
     GltfLoadOptions options;
-    options.maxFileBytes = 100;
-    const std::string e = errorOf("quad.gltf", options);
-    EXPECT_NE(e.find("quad.gltf: glTF file"), std::string::npos) << e;
-    EXPECT_NE(e.find("exceed the limit of 100"), std::string::npos) << e;
+    options.maxBytesRead = 100;
+    std::string e = errorOf("quad.gltf", options);
+    EXPECT_NE(e.find("quad.gltf: glTF file 1534 bytes exceed the 100 bytes left of the limit on bytes read"), std::string::npos)
+        << e;
+    // quad_external.gltf (1317 bytes) fits, quad.bin (140 bytes) then does not.
+    options.maxBytesRead = 1400;
+    e = errorOf("quad_external.gltf", options);
+    EXPECT_NE(e.find("quad_external.gltf: buffer file '"), std::string::npos) << e;
+    EXPECT_NE(e.find("quad.bin' cannot be read: 140 bytes exceed the 83 bytes left"), std::string::npos) << e;
+}
+
+TEST(GltfLoaderErrors, InstanceLimit)
+{
+    GltfLoadOptions options;
+    options.maxInstances = 3;
+    const std::string e = errorOf("hierarchy.gltf", options);
+    EXPECT_NE(e.find("hierarchy.gltf: /nodes/0/mesh: instances exceed the limit of 3 per file"), std::string::npos) << e;
 }
 
 TEST_F(EditedQuad, TruncatedGlb)

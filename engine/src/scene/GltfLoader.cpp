@@ -16,6 +16,7 @@
 #include <cstring>
 #include <fstream>
 #include <optional>
+#include <sstream>
 
 namespace fs = std::filesystem;
 
@@ -33,7 +34,9 @@ bool supported(const std::string& extension)
     return std::find(kSupportedExtensions.begin(), kSupportedExtensions.end(), extension) != kSupportedExtensions.end();
 }
 
-std::vector<unsigned char> readBounded(const fs::path& file, uint64_t maxBytes, std::string& error)
+// Reads a whole file of at most `budget` bytes, taking its size from the budget;
+// `error` says why not.
+std::vector<unsigned char> readWithin(const fs::path& file, uint64_t& budget, std::string& error)
 {
     std::error_code ec;
     if (!fs::exists(file, ec)) {
@@ -49,8 +52,8 @@ std::vector<unsigned char> readBounded(const fs::path& file, uint64_t maxBytes, 
         error = ec.message();
         return {};
     }
-    if (size > maxBytes) {
-        error = fmt::format("{} bytes exceed the limit of {}", size, maxBytes);
+    if (size > budget) {
+        error = fmt::format("{} bytes exceed the {} bytes left of the limit on bytes read per glTF file", size, budget);
         return {};
     }
     std::vector<unsigned char> bytes(size);
@@ -59,14 +62,15 @@ std::vector<unsigned char> readBounded(const fs::path& file, uint64_t maxBytes, 
         error = "cannot be read";
         return {};
     }
+    budget -= size;
     return bytes;
 }
 
-// tinygltf's file reader for external buffers and images, with the size limit.
-bool readExternalFile(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* maxBytes)
+// tinygltf's file reader for external buffers and images, within the budget.
+bool readExternalFile(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* budget)
 {
     std::string error;
-    *out = readBounded(path, *static_cast<const uint64_t*>(maxBytes), error);
+    *out = readWithin(path, *static_cast<uint64_t*>(budget), error);
     if (!error.empty() && err) *err += error;
     return error.empty();
 }
@@ -142,37 +146,49 @@ std::string describeParseError(const std::string& err, const fs::path& baseDir)
         const size_t end = text.find("] ");
         return "malformed JSON: " + (end == std::string::npos ? text : text.substr(end + 2));
     }
+    constexpr std::string_view kReadError = "File read error : ";
     if (text.rfind(kNotFound, 0) == 0) {
         std::string name = text.substr(kNotFound.size());
         name = name.substr(0, name.find(';'));
         return fmt::format("buffer file '{}' not found (looked in {})", name, baseDir.empty() ? "." : baseDir.string());
     }
+    if (text.rfind(kReadError, 0) == 0) {
+        const std::string rest = text.substr(kReadError.size());
+        const size_t colon = rest.find(" : ");
+        if (colon != std::string::npos) {
+            return fmt::format("buffer file '{}' cannot be read: {}", rest.substr(0, colon), rest.substr(colon + 3));
+        }
+    }
     return "cannot parse: " + text;
 }
 
-// Parses the file with tinygltf. Required extensions are checked even when tinygltf
-// fails: a Draco-compressed file fails there for want of the extension.
-tinygltf::Model parseModel(const fs::path& file, const GltfLoadOptions& options, gltf::ImageDecoder& images,
-                           std::vector<std::string>& tinygltfWarnings)
+// Parses the file with tinygltf into `model`. Required extensions are checked even
+// when tinygltf fails: a Draco-compressed file fails there for want of the extension.
+void parseModel(const fs::path& file, const GltfLoadOptions& options, gltf::ImageDecoder& images,
+                tinygltf::Model& model, std::vector<std::string>& tinygltfWarnings)
 {
     const std::string name = file.string();
+    uint64_t bytesLeft = options.maxBytesRead;
     std::string readError;
-    const std::vector<unsigned char> bytes = readBounded(file, options.maxFileBytes, readError);
+    const std::vector<unsigned char> bytes = readWithin(file, bytesLeft, readError);
     if (!readError.empty()) throw AssetError(fmt::format("{}: glTF file {}", name, readError));
+    // tinygltf takes the length as unsigned int.
+    if (bytes.size() > std::numeric_limits<unsigned int>::max()) {
+        throw AssetError(fmt::format("{}: glTF file of {} bytes; 4 GiB is the most glTF allows", name, bytes.size()));
+    }
     if (isGlb(bytes)) checkGlbHeader(name, bytes);
 
-    tinygltf::Model model;
     tinygltf::TinyGLTF loader;
-    uint64_t maxFileBytes = options.maxFileBytes;
     loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &readExternalFile, &tinygltf::WriteWholeFile,
-                           &maxFileBytes});
+                           &bytesLeft});
     images.model = &model;
-    images.maxTexels = options.maxTextureTexels;
+    images.maxImageTexels = options.maxImageTexels;
+    images.texelsLeft = options.maxTotalTexels;
     images.install(loader);
 
     const fs::path baseDir = file.parent_path();
     std::string err, warn;
-    const auto size = static_cast<unsigned int>(bytes.size());  // < maxFileBytes <= 4 GiB
+    const auto size = static_cast<unsigned int>(bytes.size());
     const bool ok = isGlb(bytes)
                         ? loader.LoadBinaryFromMemory(&model, &err, &warn, bytes.data(), size, baseDir.string())
                         : loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(bytes.data()), size,
@@ -190,7 +206,6 @@ tinygltf::Model parseModel(const fs::path& file, const GltfLoadOptions& options,
             if (!line.empty()) tinygltfWarnings.push_back("tinygltf: " + line);
         }
     }
-    return model;
 }
 
 void noteIgnoredFeatures(const Document& doc)
@@ -247,8 +262,9 @@ Scene loadGltf(const fs::path& file, GltfLoadReport& report, const GltfLoadOptio
 {
     report = {};
     gltf::ImageDecoder images;
+    tinygltf::Model model;
     std::vector<std::string> tinygltfWarnings;
-    const tinygltf::Model model = parseModel(file, options, images, tinygltfWarnings);
+    parseModel(file, options, images, model, tinygltfWarnings);
     const Document doc{model, file.string(), options, report};
     checkVersion(doc);
     for (const std::string& warning : tinygltfWarnings) doc.warn("", warning);
@@ -270,6 +286,10 @@ Scene loadGltf(const fs::path& file, GltfLoadReport& report, const GltfLoadOptio
             }
             std::optional<std::vector<uint32_t>>& meshes = meshesOf[size_t(node.mesh)];
             if (!meshes) meshes = loadMesh(doc, node.mesh, materials, budget, scene);
+            if (scene.instances.size() + meshes->size() > options.maxInstances) {
+                doc.fail(fmt::format("/nodes/{}/mesh", index),
+                         fmt::format("instances exceed the limit of {} per file", options.maxInstances));
+            }
             for (uint32_t mesh : *meshes) scene.addInstance(mesh, graphNode);
             anyMesh = true;
         }

@@ -22,20 +22,28 @@
 
 namespace penumbra::scene {
 
+// What one file can make the loader allocate is bounded by these limits, each checked
+// before the allocation it bounds.
 // 16M vertices (512 MiB as Vertex) and 16M triangles (192 MiB of indices) per file,
-// summed over the meshes loaded; an instanced mesh counts once.
+// summed over the meshes loaded (an instanced mesh counts once), and 4M instances.
 inline constexpr uint64_t kMaxGltfVertices = uint64_t(1) << 24;
 inline constexpr uint64_t kMaxGltfTriangles = uint64_t(1) << 24;
-// Per image, checked from its header before decoding: 8192² texels (256 MiB as RGBA8).
-inline constexpr uint64_t kMaxGltfTextureTexels = uint64_t(8192) * 8192;
-// The .gltf/.glb and each external buffer or image file (GLB cannot exceed 4 GiB).
-inline constexpr uint64_t kMaxGltfFileBytes = uint64_t(2) << 30;
+inline constexpr uint64_t kMaxGltfInstances = uint64_t(1) << 22;
+// Images are measured from their headers before decoding: 8192² texels each (256 MiB
+// as RGBA8), 2^28 texels (1 GiB) for all the file's images together.
+inline constexpr uint64_t kMaxGltfImageTexels = uint64_t(8192) * 8192;
+inline constexpr uint64_t kMaxGltfTotalTexels = uint64_t(1) << 28;
+// The .gltf/.glb and every external buffer and image file it reads, summed (tinygltf
+// reads each file whole).
+inline constexpr uint64_t kMaxGltfBytesRead = uint64_t(4) << 30;
 
 struct GltfLoadOptions {
     uint64_t maxVertices = kMaxGltfVertices;
     uint64_t maxTriangles = kMaxGltfTriangles;
-    uint64_t maxTextureTexels = kMaxGltfTextureTexels;
-    uint64_t maxFileBytes = kMaxGltfFileBytes;
+    uint64_t maxInstances = kMaxGltfInstances;
+    uint64_t maxImageTexels = kMaxGltfImageTexels;
+    uint64_t maxTotalTexels = kMaxGltfTotalTexels;
+    uint64_t maxBytesRead = kMaxGltfBytesRead;
     RepairOptions repair;
 };
 

@@ -52,9 +52,15 @@ bool decodeImage(tinygltf::Image* image, const int index, std::string* /*err*/, 
         return refuse(fmt::format("not an image stb_image can decode ({}){}", stbi_failure_reason(),
                                   image->mimeType.empty() ? "" : fmt::format(", mimeType {}", image->mimeType)));
     }
-    if (uint64_t(width) * uint64_t(height) > decoder.maxTexels) {
-        return refuse(fmt::format("{}×{} texels exceed the limit of {}", width, height, decoder.maxTexels));
+    const uint64_t texels = uint64_t(width) * uint64_t(height);
+    if (texels > decoder.maxImageTexels) {
+        return refuse(fmt::format("{}×{} texels exceed the limit of {} per image", width, height, decoder.maxImageTexels));
     }
+    if (texels > decoder.texelsLeft) {
+        return refuse(fmt::format("{}×{} texels exceed the {} left of the limit for all the file's images", width, height,
+                                  decoder.texelsLeft));
+    }
+    decoder.texelsLeft -= texels;
     // No option block: tinygltf's default expands every image to 4 channels.
     std::string decodeError;
     if (!tinygltf::LoadImageData(image, index, &decodeError, warn, requiredWidth, requiredHeight, bytes, size, nullptr)) {
