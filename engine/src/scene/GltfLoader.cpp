@@ -75,13 +75,6 @@ bool readExternalFile(std::vector<unsigned char>* out, std::string* err, const s
     return error.empty();
 }
 
-std::string oneLine(std::string text)
-{
-    while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
-    std::replace(text.begin(), text.end(), '\n', ';');
-    return text;
-}
-
 bool isGlb(const std::vector<unsigned char>& bytes) { return bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0; }
 
 [[noreturn]] void failVersion1(const std::string& file, std::string_view evidence)
@@ -139,7 +132,7 @@ void checkVersion(const Document& doc)
 
 std::string describeParseError(const std::string& err, const fs::path& baseDir)
 {
-    std::string text = oneLine(err);
+    std::string text = gltf::oneLine(err);
     constexpr std::string_view kJson = "[json.exception.";
     constexpr std::string_view kNotFound = "File not found : ";
     if (text.rfind(kJson, 0) == 0) {

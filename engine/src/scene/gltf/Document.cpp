@@ -15,6 +15,13 @@ std::string message(const std::string& file, std::string_view element, std::stri
 
 } // namespace
 
+std::string oneLine(std::string text)
+{
+    while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+    for (size_t at = text.find('\n'); at != std::string::npos; at = text.find('\n', at)) text.replace(at, 1, "; ");
+    return text;
+}
+
 void Document::fail(std::string_view element, std::string_view what) const
 {
     throw AssetError(message(file, element, what));

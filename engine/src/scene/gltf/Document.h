@@ -23,4 +23,7 @@ struct Document {
     void note(std::string_view element, std::string_view what) const;
 };
 
+// tinygltf's messages end in newlines and may hold several lines: one line, '; '-joined.
+std::string oneLine(std::string text);
+
 } // namespace penumbra::scene::gltf

@@ -1,5 +1,7 @@
 #include "scene/gltf/Images.h"
 
+#include "scene/gltf/Document.h"
+
 #include <fmt/format.h>
 #include <stb/stb_image.h>
 
@@ -8,12 +10,6 @@
 
 namespace penumbra::scene::gltf {
 namespace {
-
-std::string trimmed(std::string s)
-{
-    while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
-    return s;
-}
 
 // stb_image gives 16-bit PNGs 16 bits per channel; the scene keeps RGBA8.
 void narrowTo8Bits(tinygltf::Image& image)
@@ -64,7 +60,7 @@ bool decodeImage(tinygltf::Image* image, const int index, std::string* /*err*/, 
     // No option block: tinygltf's default expands every image to 4 channels.
     std::string decodeError;
     if (!tinygltf::LoadImageData(image, index, &decodeError, warn, requiredWidth, requiredHeight, bytes, size, nullptr)) {
-        return refuse(trimmed(decodeError));
+        return refuse(oneLine(decodeError));
     }
     if (image->bits == 16) narrowTo8Bits(*image);
     return true;
