@@ -159,6 +159,21 @@ TEST(MeshRepair, WeldMergesCoincidentVerticesWithEqualAttributes)
     EXPECT_EQ(closed.boundaryEdges, 4u);
 }
 
+TEST(MeshRepair, WeldFindsNeighboursAcrossGridCells)
+{
+    // The shared corner of two triangles, once just below the origin on every axis and
+    // once just above: 1.39e-6 apart, inside the weld radius 1e-6 · d (d ≈ 2.24), but
+    // in different grid cells on all three axes.
+    const float e = 4e-7f;
+    Mesh mesh = meshOf({{-e, -e, -e}, {0, 0, 1}, {1, 0, 0}, {e, e, e}, {1, 0, 0}, {0, 0, -1}}, {0, 1, 2, 3, 4, 5},
+                       {0, 1, 0});
+    RepairOptions options;
+    options.weld = true;
+    const RepairReport r = repairMesh(mesh, options);
+    EXPECT_EQ(r.weldedVertices, 2u);
+    EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3}));
+}
+
 TEST(MeshRepair, TopologyCountsOpenAndNonManifoldEdges)
 {
     RepairOptions options;

@@ -121,38 +121,40 @@ struct CellHash {
     }
 };
 
-// Greedy clustering on a grid of cells one weld radius wide: a vertex joins the first
-// earlier kept vertex within the radius (searching the 27 cells around it) whose
-// attributes agree, or is kept itself.
+// Greedy clustering on a grid of cells two weld radii wide: a vertex joins the first
+// earlier kept vertex within the radius whose attributes agree, or is kept itself.
+// Within a radius of half a cell, a match lies in the vertex's own cell or, on each
+// axis, the neighbour on the side of the cell's centre the vertex is not: 8 cells.
 void weldVertices(Mesh& mesh, double weldDistanceRel, RepairReport& report)
 {
     const double radius = weldDistanceRel * referencedDiagonal(mesh);
-    const double cellSize = radius > 0.0 ? radius : 1.0;
-    auto cellOf = [&](const glm::vec3& p) {
-        // Clamped: a tiny radius beside huge coordinates must not overflow int64.
-        auto axis = [&](float v) { return int64_t(std::clamp(std::floor(double(v) / cellSize), -4e18, 4e18)); };
-        return Cell{axis(p.x), axis(p.y), axis(p.z)};
-    };
+    const double cellSize = radius > 0.0 ? 2.0 * radius : 1.0;
     std::unordered_map<Cell, std::vector<uint32_t>, CellHash> grid;
+    grid.reserve(mesh.vertices.size());
     std::vector<uint32_t> remap(mesh.vertices.size());
     std::vector<Vertex> kept;
     kept.reserve(mesh.vertices.size());
     for (size_t i = 0; i < mesh.vertices.size(); ++i) {
         const Vertex& v = mesh.vertices[i];
-        const Cell home = cellOf(v.position);
+        int64_t cell[3], side[3];
+        for (int axis = 0; axis < 3; ++axis) {
+            // Clamped: a tiny radius beside huge coordinates must not overflow int64.
+            const double t = std::clamp(double(v.position[axis]) / cellSize, -4e18, 4e18);
+            cell[axis] = int64_t(std::floor(t));
+            side[axis] = t - std::floor(t) < 0.5 ? -1 : 1;
+        }
+        const Cell home{cell[0], cell[1], cell[2]};
         uint32_t match = ~0u;
-        for (int64_t dz = -1; dz <= 1 && match == ~0u; ++dz) {
-            for (int64_t dy = -1; dy <= 1 && match == ~0u; ++dy) {
-                for (int64_t dx = -1; dx <= 1 && match == ~0u; ++dx) {
-                    auto it = grid.find({home.x + dx, home.y + dy, home.z + dz});
-                    if (it == grid.end()) continue;
-                    for (uint32_t k : it->second) {
-                        const glm::dvec3 delta = glm::dvec3(kept[k].position) - glm::dvec3(v.position);
-                        if (glm::dot(delta, delta) <= radius * radius && sameAttributes(kept[k], v)) {
-                            match = k;
-                            break;
-                        }
-                    }
+        for (int corner = 0; corner < 8 && match == ~0u; ++corner) {
+            const Cell near{cell[0] + (corner & 1 ? side[0] : 0), cell[1] + (corner & 2 ? side[1] : 0),
+                            cell[2] + (corner & 4 ? side[2] : 0)};
+            auto it = grid.find(near);
+            if (it == grid.end()) continue;
+            for (uint32_t k : it->second) {
+                const glm::dvec3 delta = glm::dvec3(kept[k].position) - glm::dvec3(v.position);
+                if (glm::dot(delta, delta) <= radius * radius && sameAttributes(kept[k], v)) {
+                    match = k;
+                    break;
                 }
             }
         }
