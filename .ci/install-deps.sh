@@ -11,6 +11,7 @@ packages=(
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libembree-dev libimgui-dev xvfb xauth python3-jsonschema
+  assimp-testmodels
 )
 
 missing=()

@@ -265,3 +265,68 @@ TEST_F(Cli, GenerateKeepsTheExistingOutputOnFailure)
     EXPECT_EQ(run(fmt::format("generate city -o '{}' --set blocks=0", glb.string())).exitCode, 1);
     EXPECT_EQ(slurp(glb), "keep me");
 }
+
+TEST_F(Cli, ValidateReportsWhatAGltfHolds)
+{
+    const CliResult r = run(fmt::format("validate {}", data("gltf/hierarchy.gltf")));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    for (const char* text : {"2 meshes, 3 triangles (6 drawn by 4 instances), 6 nodes, 3 materials, 0 textures, 3 lights",
+                             "light 'lamp': spot at (0, 6, 0)", "light 'sun': directional", "light 'bulb': point at (1, 2, 3)",
+                             "mesh 0 'quad#0' (/meshes/0/primitives/0): 2 triangles, 4 vertices; nothing to repair",
+                             "4 boundary edges, 0 non-manifold triangles",
+                             "warning: ", "/meshes/0/primitives/1: 4 vertices (no indices) are not a multiple of 3",
+                             "ok: 1 warnings"}) {
+        EXPECT_NE(r.out.find(text), std::string::npos) << text << "\n" << r.out;
+    }
+    // The warnings are listed once, on stdout, not logged again on stderr.
+    EXPECT_EQ(r.err, "");
+}
+
+TEST_F(Cli, ValidateListsRepairs)
+{
+    const CliResult r = run(fmt::format("validate {}", data("gltf/non_finite.gltf")));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("2 non-finite triangles dropped, 3 unused vertices removed"), std::string::npos) << r.out;
+}
+
+TEST_F(Cli, ValidateGlbWithWeld)
+{
+    const CliResult r = run(fmt::format("validate --weld {}", data("gltf/quad.glb")));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("1 meshes, 2 triangles"), std::string::npos) << r.out;
+}
+
+TEST_F(Cli, ValidateRefusesABrokenGltf)
+{
+    const CliResult r = run(fmt::format("validate {}", data("gltf/huge_accessor.gltf")));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("huge_accessor.gltf: /accessors/0: count 4294967295 × 12 bytes exceeds buffer view 0 (128 bytes)"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(r.out, "");
+}
+
+TEST_F(Cli, ValidateMissingGltf)
+{
+    const CliResult r = run(fmt::format("validate '{}/nope.glb'", dir.string()));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("nope.glb: glTF file not found"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, ValidateConfig)
+{
+    CliResult r = run(fmt::format("validate {}", config("default.json")));
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("config ok"), std::string::npos) << r.out;
+    r = run(fmt::format("validate {}", data("configs/malformed.json")));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("malformed.json: malformed JSON"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, ValidateUnknownFileType)
+{
+    const CliResult r = run("validate scene.obj");
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("scene.obj: unknown file type '.obj': validate reads .gltf, .glb and .json"), std::string::npos)
+        << r.err;
+}

@@ -1,6 +1,8 @@
 // penumbra: the command-line front end. `penumbra render cfg.json -o out.png` renders a
 // config headless; `penumbra generate city -o city.glb --set blocks=16` writes a
-// procedural scene as glTF; `penumbra devices` lists the Vulkan devices the loader sees.
+// procedural scene as glTF; `penumbra validate scene.gltf` loads and repairs a glTF
+// file (or checks a config) and says what it found; `penumbra devices` lists the
+// Vulkan devices the loader sees.
 #include "penumbra/config/Config.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Context.h"
@@ -8,6 +10,7 @@
 #include "penumbra/render/FrameRenderer.h"
 #include "penumbra/scene/Generators.h"
 #include "penumbra/scene/GltfWriter.h"
+#include "penumbra/scene/GltfLoader.h"
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -17,7 +20,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cctype>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <optional>
 
@@ -45,6 +50,12 @@ struct GenerateFlags {
     std::optional<uint32_t> seed;
     float scale = 1.0f;
     std::vector<std::string> settings;  // key=value
+};
+
+struct ValidateFlags {
+    std::string file;
+    bool weld = false;
+    bool verbose = false;
 };
 
 double median(std::vector<double> v)
@@ -209,6 +220,85 @@ std::string generatorHelp()
     return text;
 }
 
+void printLight(const penumbra::scene::GltfLight& gltfLight)
+{
+    const penumbra::scene::Light& l = gltfLight.light;
+    fmt::print("light '{}': {}", gltfLight.name, penumbra::scene::lightTypeName(l.type));
+    if (l.type != penumbra::scene::LightType::Directional) {
+        fmt::print(" at ({:.3g}, {:.3g}, {:.3g})", l.position.x, l.position.y, l.position.z);
+    }
+    if (l.type != penumbra::scene::LightType::Point) {
+        fmt::print(" pointing ({:.3g}, {:.3g}, {:.3g})", l.direction.x, l.direction.y, l.direction.z);
+    }
+    if (l.type == penumbra::scene::LightType::Spot) fmt::print(", cone {:.3g}..{:.3g} deg", l.innerConeDeg, l.outerConeDeg);
+    fmt::print(", intensity {:.4g}, color ({:.3g}, {:.3g}, {:.3g})\n", l.intensity, l.color.r, l.color.g, l.color.b);
+}
+
+std::string describeRepair(const penumbra::scene::RepairReport& r)
+{
+    std::vector<std::string> parts;
+    auto add = [&](uint32_t count, const char* what) {
+        if (count > 0) parts.push_back(fmt::format("{} {}", count, what));
+    };
+    add(r.nonFiniteTriangles, "non-finite triangles dropped");
+    add(r.degenerateTriangles, "degenerate triangles dropped");
+    add(r.unusedVertices, "unused vertices removed");
+    add(r.weldedVertices, "vertices welded");
+    add(r.generatedNormals, "normals generated");
+    add(r.replacedNormals, "NaN normals replaced");
+    add(r.renormalizedNormals, "normals normalized");
+    std::string text = parts.empty() ? "nothing to repair" : fmt::format("{}", fmt::join(parts, ", "));
+    if (r.topologyAnalyzed) {
+        text += fmt::format("; {} boundary edges, {} non-manifold triangles", r.boundaryEdges, r.nonManifoldTriangles);
+    }
+    return text;
+}
+
+int runValidateGltf(const ValidateFlags& flags)
+{
+    penumbra::scene::GltfLoadOptions options;
+    options.repair.weld = flags.weld;
+    options.repair.analyzeTopology = true;
+    // The report lists every warning on stdout; logging them on stderr too would say
+    // everything twice.
+    if (!flags.verbose) spdlog::set_level(spdlog::level::err);
+    penumbra::scene::GltfLoadReport report;
+    const penumbra::scene::Scene scene = penumbra::scene::loadGltf(flags.file, report, options);
+
+    size_t meshTriangles = 0;
+    for (const auto& mesh : scene.meshes) meshTriangles += mesh.indices.size() / 3;
+    fmt::print("{}: {} meshes, {} triangles ({} drawn by {} instances), {} nodes, {} materials, {} textures, {} lights\n",
+               flags.file, scene.meshes.size(), meshTriangles, scene.triangleCount(), scene.instances.size(),
+               scene.graph.size(), scene.materials.size(), scene.textures.size(), report.lights.size());
+    for (const auto& light : report.lights) printLight(light);
+    for (size_t i = 0; i < scene.meshes.size(); ++i) {
+        const penumbra::scene::Mesh& mesh = scene.meshes[i];
+        fmt::print("mesh {} '{}' ({}): {} triangles, {} vertices; {}\n", i, mesh.name, report.meshes[i].element,
+                   mesh.indices.size() / 3, mesh.vertices.size(), describeRepair(report.meshes[i].repair));
+    }
+    for (const std::string& warning : report.warnings) fmt::print("warning: {}\n", warning);
+    for (const std::string& note : report.notes) fmt::print("note: {}\n", note);
+    fmt::print("ok: {} warnings\n", report.warnings.size());
+    return 0;
+}
+
+// Config validation is deliberately minimal for now: loadConfig's own checks.
+int runValidateConfig(const ValidateFlags& flags)
+{
+    penumbra::config::loadConfig(flags.file);
+    fmt::print("{}: config ok\n", flags.file);
+    return 0;
+}
+
+int runValidate(const ValidateFlags& flags)
+{
+    std::string extension = std::filesystem::path(flags.file).extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if (extension == ".gltf" || extension == ".glb") return runValidateGltf(flags);
+    if (extension == ".json") return runValidateConfig(flags);
+    throw penumbra::Error(fmt::format("{}: unknown file type '{}': validate reads .gltf, .glb and .json", flags.file, extension));
+}
+
 int runDevices()
 {
     const auto devices = penumbra::gpu::Context::listDevices();
@@ -273,6 +363,11 @@ int main(int argc, char** argv)
     generate->add_option("--set", generateFlags.settings, "Set a generator parameter: --set name=value (repeatable)")
         ->allow_extra_args(false);
     generate->footer(generatorHelp());
+    ValidateFlags validateFlags;
+    CLI::App* validate = app.add_subcommand("validate", "Load a glTF file (.gltf/.glb) or a config (.json) and report what "
+                                                        "was found and repaired; exit 1 with the error if it cannot be loaded");
+    validate->add_option("file", validateFlags.file, "glTF file or scene config")->required();
+    validate->add_flag("--weld", validateFlags.weld, "Also weld coincident vertices with equal attributes");
 
     CLI::App* devices = app.add_subcommand("devices", "List the Vulkan devices the loader reports");
 
@@ -282,10 +377,12 @@ int main(int argc, char** argv)
         return app.exit(e);
     }
     if (verbose) spdlog::set_level(spdlog::level::debug);
+    validateFlags.verbose = verbose;
 
     try {
         if (render->parsed()) return runRender(renderFlags, deviceFlags);
         if (generate->parsed()) return runGenerate(generateFlags);
+        if (validate->parsed()) return runValidate(validateFlags);
         if (devices->parsed()) return runDevices();
     } catch (const penumbra::Error& e) {
         fmt::print(stderr, "penumbra: error: {}\n", e.what());

@@ -2,6 +2,7 @@
 #include "penumbra/config/Config.h"
 
 #include "penumbra/core/Error.h"
+#include "penumbra/scene/GltfLoader.h"
 
 #include <fmt/format.h>
 #include <glm/gtc/matrix_transform.hpp>
@@ -631,10 +632,16 @@ std::vector<SweepVariant> expandSweep(const ConfigDocument& document)
 
 scene::Scene buildScene(const SceneSource& source)
 {
+    scene::Scene scene;
     if (source.kind == SceneSource::Kind::Gltf) {
-        throw ConfigError(fmt::format("{}: glTF scenes need the glTF loader", source.gltf.string()));
+        scene::GltfLoadReport report;
+        scene = scene::loadGltf(source.gltf, report);
+        if (scene.instances.empty()) {
+            throw ConfigError(fmt::format("{}: the glTF file has no triangles to render", source.gltf.string()));
+        }
+    } else {
+        scene = scene::generateScene(source.generator, source.params);
     }
-    scene::Scene scene = scene::generateScene(source.generator, source.params);
     if (source.scale != 1.0f) scene::scaleScene(scene, source.scale);
     return scene;
 }
@@ -690,9 +697,9 @@ void applyAnimation(const Animation& animation, float timeS, RenderConfig& confi
             const std::string field = t.substr(slash + 1);
             for (uint32_t n = 0; n < scene.graph.size(); ++n) {
                 if (scene.graph.node(n).name != name) continue;
-                glm::vec3 scale, translation, skew;
-                glm::quat rotation;
-                glm::vec4 perspective;
+                glm::vec3 scale(1.0f), translation(0.0f), skew(0.0f);
+                glm::quat rotation(1.0f, 0.0f, 0.0f, 0.0f);
+                glm::vec4 perspective(0.0f, 0.0f, 0.0f, 1.0f);
                 glm::decompose(scene.graph.local(n), scale, rotation, translation, skew, perspective);
                 if (field == "translation") translation = v3;
                 if (field == "scale") scale = v3;

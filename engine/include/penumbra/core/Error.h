@@ -31,4 +31,11 @@ public:
     using Error::Error;
 };
 
+// A scene file (glTF) is missing, malformed, or needs a feature penumbra does not
+// support; what() names the file and the element: "a.gltf: /accessors/3: ...".
+class AssetError : public Error {
+public:
+    using Error::Error;
+};
+
 } // namespace penumbra

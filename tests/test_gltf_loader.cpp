@@ -1,0 +1,495 @@
+// glTF loading against the hand-made files in data/gltf (data/gltf/README.md says what
+// each holds): what loads must come out exactly as written, and each class of bad input
+// must be refused with a message that names the file and the element.
+#include "penumbra/core/Error.h"
+#include "penumbra/scene/GltfLoader.h"
+
+#include <fmt/format.h>
+#include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <unistd.h>
+
+#include <cmath>
+#include <fstream>
+
+using namespace penumbra;
+using namespace penumbra::scene;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path gltfFile(const std::string& name) { return fs::path(PENUMBRA_TEST_DATA_DIR) / "gltf" / name; }
+
+Scene load(const std::string& name, GltfLoadReport& report, const GltfLoadOptions& options = {})
+{
+    return loadGltf(gltfFile(name), report, options);
+}
+
+// The AssetError message loading `path` gives; a test failure if it loads or throws
+// anything else.
+std::string errorOfPath(const fs::path& path, const GltfLoadOptions& options = {})
+{
+    GltfLoadReport report;
+    try {
+        loadGltf(path, report, options);
+    } catch (const AssetError& e) {
+        return e.what();
+    }
+    ADD_FAILURE() << path << " loaded";
+    return {};
+}
+
+std::string errorOf(const std::string& name, const GltfLoadOptions& options = {})
+{
+    return errorOfPath(gltfFile(name), options);
+}
+
+bool anyContains(const std::vector<std::string>& lines, const std::string& text)
+{
+    return std::any_of(lines.begin(), lines.end(), [&](const std::string& l) { return l.find(text) != std::string::npos; });
+}
+
+void expectNear(const glm::vec3& a, const glm::vec3& b, float eps = 1e-5f)
+{
+    EXPECT_NEAR(a.x, b.x, eps) << "y " << a.y << " z " << a.z;
+    EXPECT_NEAR(a.y, b.y, eps) << "x " << a.x << " z " << a.z;
+    EXPECT_NEAR(a.z, b.z, eps) << "x " << a.x << " y " << a.y;
+}
+
+// quad.gltf's JSON, edited and written to a temporary file (its buffer is a data URI,
+// so the copy stands alone).
+class EditedQuad : public ::testing::Test {
+protected:
+    void SetUp() override
+    {
+        dir = fs::temp_directory_path() / fmt::format("penumbra_gltf_{}_{}", ::getpid(),
+                                                      ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::create_directories(dir);
+        std::ifstream in(gltfFile("quad.gltf"));
+        doc = nlohmann::json::parse(in);
+    }
+    void TearDown() override { fs::remove_all(dir); }
+
+    fs::path write()
+    {
+        const fs::path path = dir / "edited.gltf";
+        std::ofstream(path) << doc.dump(1);
+        return path;
+    }
+
+    fs::path dir;
+    nlohmann::json doc;
+};
+
+} // namespace
+
+TEST(GltfLoader, QuadWithEmbeddedBuffer)
+{
+    GltfLoadReport report;
+    const Scene scene = load("quad.gltf", report);
+    ASSERT_EQ(scene.meshes.size(), 1u);
+    const Mesh& mesh = scene.meshes[0];
+    EXPECT_EQ(mesh.name, "quad");
+    ASSERT_EQ(mesh.vertices.size(), 4u);
+    EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 2, 1, 0, 3, 2}));
+    expectNear(mesh.vertices[2].position, {1, 0, 1});
+    expectNear(mesh.vertices[2].normal, {0, 1, 0});
+    EXPECT_EQ(mesh.vertices[2].uv, glm::vec2(1, 1));
+    expectNear(mesh.bounds.min, {-1, 0, -1});
+    expectNear(mesh.bounds.max, {1, 0, 1});
+
+    const Material& material = scene.materials.at(mesh.material);
+    EXPECT_EQ(material.name, "red");
+    EXPECT_EQ(material.baseColor, glm::vec4(0.8f, 0.1f, 0.1f, 1.0f));
+    EXPECT_EQ(material.alphaMode, AlphaMode::Opaque);
+    EXPECT_FALSE(material.doubleSided);
+
+    ASSERT_EQ(scene.instances.size(), 1u);
+    EXPECT_EQ(scene.triangleCount(), 2u);
+    ASSERT_EQ(report.meshes.size(), 1u);
+    EXPECT_EQ(report.meshes[0].element, "/meshes/0/primitives/0");
+    EXPECT_FALSE(report.meshes[0].repair.changedMesh());
+    EXPECT_TRUE(report.warnings.empty()) << report.warnings.front();
+}
+
+TEST(GltfLoader, ExternalBufferAndGlbLoadTheSameQuad)
+{
+    GltfLoadReport report;
+    const Scene embedded = load("quad.gltf", report);
+    for (const char* name : {"quad_external.gltf", "quad.glb"}) {
+        const Scene other = load(name, report);
+        ASSERT_EQ(other.meshes.size(), 1u) << name;
+        EXPECT_EQ(other.meshes[0].indices, embedded.meshes[0].indices) << name;
+        ASSERT_EQ(other.meshes[0].vertices.size(), embedded.meshes[0].vertices.size()) << name;
+        for (size_t i = 0; i < embedded.meshes[0].vertices.size(); ++i) {
+            EXPECT_EQ(other.meshes[0].vertices[i].position, embedded.meshes[0].vertices[i].position) << name;
+            EXPECT_EQ(other.meshes[0].vertices[i].uv, embedded.meshes[0].vertices[i].uv) << name;
+        }
+    }
+}
+
+TEST(GltfLoader, TexturedMaskedTwoSidedMaterial)
+{
+    GltfLoadReport report;
+    const Scene scene = load("textured.gltf", report);
+    ASSERT_EQ(scene.meshes.size(), 1u);
+    const Material& material = scene.materials.at(scene.meshes[0].material);
+    EXPECT_EQ(material.baseColor, glm::vec4(1.0f, 0.5f, 0.25f, 1.0f));
+    EXPECT_EQ(material.alphaMode, AlphaMode::Mask);
+    EXPECT_FLOAT_EQ(material.alphaCutoff, 0.25f);
+    EXPECT_TRUE(material.doubleSided);
+    ASSERT_EQ(material.baseColorTexture, 0);
+    ASSERT_EQ(scene.textures.size(), 1u);
+    const Texture& texture = scene.textures[0];
+    EXPECT_EQ(texture.name, "checker");
+    EXPECT_EQ(texture.width, 2u);
+    EXPECT_EQ(texture.height, 2u);
+    // Red, green / blue, half-transparent white, row by row.
+    EXPECT_EQ(texture.rgba, (std::vector<uint8_t>{255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 128}));
+}
+
+TEST(GltfLoader, HierarchyInAnyNodeOrderWithInstancingAndLights)
+{
+    GltfLoadReport report;
+    const Scene scene = load("hierarchy.gltf", report);
+    // Six nodes of the default scene; "unused" (not in it) is left out.
+    ASSERT_EQ(scene.graph.size(), 6u);
+    for (uint32_t n = 0; n < scene.graph.size(); ++n) EXPECT_LT(scene.graph.node(n).parent, int32_t(n));
+
+    // One glTF mesh with two primitives under two nodes: two scene meshes, four instances.
+    ASSERT_EQ(scene.meshes.size(), 2u);
+    ASSERT_EQ(scene.instances.size(), 4u);
+    EXPECT_EQ(scene.materials.at(scene.meshes[1].material).alphaMode, AlphaMode::Blend);
+    EXPECT_FLOAT_EQ(scene.materials.at(scene.meshes[1].material).baseColor.a, 0.5f);
+    std::vector<Aabb> quadBounds;
+    for (const Instance& instance : scene.instances) {
+        EXPECT_EQ(std::count_if(scene.instances.begin(), scene.instances.end(),
+                                [&](const Instance& other) { return other.mesh == instance.mesh; }),
+                  2);
+        if (instance.mesh == 0) quadBounds.push_back(instance.worldBounds);
+    }
+    ASSERT_EQ(quadBounds.size(), 2u);
+    // "right" (matrix: scale 2, then +3 in x) and "left" (translation -3), both under
+    // "root" (translation +1 in y); depth-first order puts "right" first.
+    expectNear(quadBounds[0].min, {1, 1, -2});
+    expectNear(quadBounds[0].max, {5, 1, 2});
+    expectNear(quadBounds[1].min, {-4, 1, -1});
+    expectNear(quadBounds[1].max, {-2, 1, 1});
+
+    ASSERT_EQ(report.lights.size(), 3u);
+    auto light = [&](const std::string& name) {
+        auto it = std::find_if(report.lights.begin(), report.lights.end(), [&](const GltfLight& l) { return l.name == name; });
+        EXPECT_NE(it, report.lights.end()) << name;
+        return it == report.lights.end() ? Light{} : it->light;
+    };
+    const Light sun = light("sun");
+    EXPECT_EQ(sun.type, LightType::Directional);
+    expectNear(sun.direction, {0, -1, 0});
+    EXPECT_FLOAT_EQ(sun.intensity, 3.0f);
+    expectNear(sun.color, {1.0f, 0.9f, 0.8f});
+    const Light lamp = light("lamp");
+    EXPECT_EQ(lamp.type, LightType::Spot);
+    expectNear(lamp.position, {0, 6, 0});
+    expectNear(lamp.direction, {0, -1, 0});
+    EXPECT_NEAR(lamp.innerConeDeg, 0.3f * 180.0f / 3.14159265f, 1e-3f);
+    EXPECT_NEAR(lamp.outerConeDeg, 0.6f * 180.0f / 3.14159265f, 1e-3f);
+    EXPECT_FLOAT_EQ(lamp.intensity, 500.0f);
+    const Light bulb = light("bulb");
+    EXPECT_EQ(bulb.type, LightType::Point);
+    expectNear(bulb.position, {1, 2, 3});
+
+    // The second primitive is non-indexed with 4 vertices: one triangle and a warning.
+    EXPECT_EQ(scene.meshes[1].indices.size(), 3u);
+    EXPECT_TRUE(anyContains(report.warnings, "/meshes/0/primitives/1: 4 vertices (no indices) are not a multiple of 3"));
+}
+
+TEST(GltfLoader, WithoutDefaultSceneEveryRootIsLoaded)
+{
+    GltfLoadReport report;
+    const Scene scene = load("no_scene.gltf", report);
+    ASSERT_EQ(scene.graph.size(), 3u);
+    EXPECT_EQ(scene.instances.size(), 2u);
+    EXPECT_EQ(scene.graph.node(2).name, "c");
+    EXPECT_EQ(scene.graph.node(scene.graph.node(2).parent).name, "b");
+}
+
+TEST(GltfLoader, StripsFansListsAndIndexTypes)
+{
+    GltfLoadReport report;
+    const Scene scene = load("modes.gltf", report);
+    // POINTS and LINES are refused per primitive, with a warning naming each.
+    EXPECT_TRUE(anyContains(report.warnings, "/meshes/0/primitives/0: mode 0 (POINTS)"));
+    EXPECT_TRUE(anyContains(report.warnings, "/meshes/0/primitives/1: mode 1 (LINES)"));
+    ASSERT_EQ(scene.meshes.size(), 4u);
+    const std::vector<uint32_t> strip{0, 1, 2, 1, 3, 2, 2, 3, 4};
+    EXPECT_EQ(scene.meshes[0].indices, strip);                                                   // strip, u8
+    EXPECT_EQ(scene.meshes[1].indices, (std::vector<uint32_t>{1, 2, 0, 2, 3, 0, 3, 4, 0}));     // fan, u16
+    EXPECT_EQ(scene.meshes[2].indices, (std::vector<uint32_t>{0, 1, 2, 2, 3, 4}));              // list, u32
+    EXPECT_EQ(scene.meshes[3].indices, strip);                                                   // strip, no indices
+    // Every triangle faces +Y, so do the generated normals.
+    for (const Mesh& mesh : scene.meshes) {
+        for (const Vertex& v : mesh.vertices) expectNear(v.normal, {0, 1, 0});
+    }
+    EXPECT_EQ(report.meshes[0].repair.generatedNormals, 5u);
+}
+
+TEST(GltfLoader, InterleavedNormalizedTexcoordsAndSparsePositions)
+{
+    GltfLoadReport report;
+    const Scene scene = load("interleaved_sparse.gltf", report);
+    ASSERT_EQ(scene.meshes.size(), 2u);
+    const std::vector<glm::vec2> uvs{{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    for (const Mesh& mesh : scene.meshes) {
+        ASSERT_EQ(mesh.vertices.size(), 4u);
+        for (size_t i = 0; i < 4; ++i) EXPECT_EQ(mesh.vertices[i].uv, uvs[i]) << mesh.name << " vertex " << i;
+    }
+    // Byte stride 16: positions read from every 16 bytes.
+    expectNear(scene.meshes[0].vertices[2].position, {1, 0, 1});
+    expectNear(scene.meshes[0].vertices[3].position, {-1, 0, 1});
+    // The sparse accessor replaces vertex 2 only.
+    expectNear(scene.meshes[1].vertices[2].position, {1, 2, 1});
+    expectNear(scene.meshes[1].vertices[3].position, {-1, 0, 1});
+}
+
+TEST(GltfLoader, UnknownOptionalExtensionIsAWarning)
+{
+    GltfLoadReport report;
+    const Scene scene = load("unknown_used_extension.gltf", report);
+    EXPECT_EQ(scene.triangleCount(), 2u);
+    EXPECT_TRUE(anyContains(report.warnings, "extension KHR_texture_transform is not supported; ignored"));
+}
+
+TEST(GltfLoader, NonFinitePositionsAreRepairedNotRefused)
+{
+    GltfLoadReport report;
+    const Scene scene = load("non_finite.gltf", report);
+    ASSERT_EQ(scene.meshes.size(), 1u);
+    EXPECT_EQ(scene.meshes[0].indices.size(), 6u);
+    EXPECT_EQ(report.meshes[0].repair.nonFiniteTriangles, 2u);
+    EXPECT_EQ(report.meshes[0].repair.unusedVertices, 3u);
+    expectNear(scene.bounds().min, {-1, 0, -1});
+    expectNear(scene.bounds().max, {1, 0, 1});
+    EXPECT_TRUE(anyContains(report.warnings, "2 triangle(s) with NaN or infinite corners dropped"));
+}
+
+// --- One test per class of bad input ---------------------------------------------
+
+TEST(GltfLoaderErrors, MissingFile)
+{
+    EXPECT_NE(errorOf("nope.gltf").find("nope.gltf: glTF file not found"), std::string::npos);
+}
+
+TEST(GltfLoaderErrors, MalformedJson)
+{
+    const std::string e = errorOf("malformed.gltf");
+    EXPECT_NE(e.find("malformed.gltf: malformed JSON: parse error at line 3, column 24"), std::string::npos) << e;
+}
+
+TEST(GltfLoaderErrors, MissingBinFile)
+{
+    const std::string e = errorOf("missing_bin.gltf");
+    EXPECT_NE(e.find("missing_bin.gltf: buffer file 'quad_missing.bin' not found"), std::string::npos) << e;
+}
+
+TEST(GltfLoaderErrors, MissingTextureFile)
+{
+    const std::string e = errorOf("missing_texture.gltf");
+    EXPECT_NE(e.find("missing_texture.gltf: /images/0: texture file 'checker_missing.png' not found"), std::string::npos) << e;
+}
+
+TEST(GltfLoaderErrors, AbsurdAccessorCountIsCheckedAgainstItsBufferView)
+{
+    const std::string e = errorOf("huge_accessor.gltf");
+    EXPECT_NE(e.find("huge_accessor.gltf: /accessors/0: count 4294967295 × 12 bytes exceeds buffer view 0 (128 bytes)"),
+              std::string::npos)
+        << e;
+}
+
+TEST(GltfLoaderErrors, BufferViewOutsideItsBuffer)
+{
+    const std::string e = errorOf("bufferview_out_of_range.gltf");
+    EXPECT_NE(e.find("bufferview_out_of_range.gltf: /bufferViews/1: byteOffset 128 + byteLength 400 exceeds buffer 0 (140 bytes)"),
+              std::string::npos)
+        << e;
+}
+
+TEST(GltfLoaderErrors, AccessorIndexOutOfRange)
+{
+    const std::string e = errorOf("missing_accessor.gltf");
+    EXPECT_NE(e.find("missing_accessor.gltf: /meshes/0/primitives/0/attributes/NORMAL: accessor 9 does not exist (4 accessors)"),
+              std::string::npos)
+        << e;
+}
+
+TEST(GltfLoaderErrors, VertexIndexOutOfRange)
+{
+    const std::string e = errorOf("index_out_of_range.gltf");
+    EXPECT_NE(e.find("index_out_of_range.gltf: /meshes/0/primitives/0/indices: index 7 at position 4 (accessor 3) is out of "
+                     "range of 4 vertices"),
+              std::string::npos)
+        << e;
+}
+
+TEST(GltfLoaderErrors, NodeCycle)
+{
+    const std::string e = errorOf("node_cycle.gltf");
+    EXPECT_NE(e.find("node_cycle.gltf: /nodes/2: nodes form a cycle, each the parent of the next: node 2 'a' -> node 3 'b' -> "
+                     "node 4 'c' -> node 2 'a'"),
+              std::string::npos)
+        << e;
+}
+
+TEST(GltfLoaderErrors, NodeWithTwoParents)
+{
+    const std::string e = errorOf("two_parents.gltf");
+    EXPECT_NE(e.find("two_parents.gltf: /nodes/2: node 2 'shared' has two parents: nodes 0 and 1"), std::string::npos) << e;
+}
+
+TEST(GltfLoaderErrors, UnsupportedRequiredExtension)
+{
+    const std::string e = errorOf("draco_required.gltf");
+    EXPECT_NE(e.find("draco_required.gltf: required extension KHR_draco_mesh_compression is not supported"), std::string::npos)
+        << e;
+}
+
+TEST(GltfLoaderErrors, Gltf1IsRefused)
+{
+    for (const char* name : {"gltf1.gltf", "gltf1.glb"}) {
+        const std::string e = errorOf(name);
+        EXPECT_NE(e.find(std::string(name) + ": glTF 1.0 is not supported"), std::string::npos) << e;
+    }
+}
+
+TEST(GltfLoaderErrors, VertexAndTriangleLimits)
+{
+    GltfLoadOptions options;
+    options.maxVertices = 3;
+    std::string e = errorOf("quad.gltf", options);
+    EXPECT_NE(e.find("quad.gltf: /accessors/0: count 4 exceeds 3 (vertices left of the limit of 3 per file)"),
+              std::string::npos)
+        << e;
+    options = {};
+    options.maxTriangles = 1;
+    e = errorOf("quad.gltf", options);
+    EXPECT_NE(e.find("quad.gltf: /accessors/3: count 6 exceeds 5 (indices for the 1 triangles left of the limit of 1 per file)"),
+              std::string::npos)
+        << e;
+    // A strip of t triangles has t + 2 indices.
+    options.maxTriangles = 0;
+    e = errorOf("modes.gltf", options);
+    EXPECT_NE(e.find("modes.gltf: /accessors/1: count 5 exceeds 2"), std::string::npos) << e;
+}
+
+TEST(GltfLoaderErrors, TextureSizeLimitBeforeDecoding)
+{
+    GltfLoadOptions options;
+    options.maxImageTexels = 3;
+    std::string e = errorOf("textured.gltf", options);
+    EXPECT_NE(e.find("textured.gltf: /images/0: 2×2 texels exceed the limit of 3 per image"), std::string::npos) << e;
+    options = {};
+    options.maxTotalTexels = 3;
+    e = errorOf("textured.gltf", options);
+    EXPECT_NE(e.find("textured.gltf: /images/0: 2×2 texels exceed the 3 left of the limit for all the file's images"),
+              std::string::npos)
+        << e;
+}
+
+TEST(GltfLoaderErrors, BytesReadLimit)
+{
+    GltfLoadOptions options;
+    options.maxBytesRead = 100;
+    std::string e = errorOf("quad.gltf", options);
+    EXPECT_NE(e.find("quad.gltf: glTF file 1534 bytes exceed the 100 bytes left of the limit on bytes read"), std::string::npos)
+        << e;
+    // quad_external.gltf (1317 bytes) fits, quad.bin (140 bytes) then does not.
+    options.maxBytesRead = 1400;
+    e = errorOf("quad_external.gltf", options);
+    EXPECT_NE(e.find("quad_external.gltf: buffer file '"), std::string::npos) << e;
+    EXPECT_NE(e.find("quad.bin' cannot be read: 140 bytes exceed the 83 bytes left"), std::string::npos) << e;
+}
+
+TEST(GltfLoaderErrors, InstanceLimit)
+{
+    GltfLoadOptions options;
+    options.maxInstances = 3;
+    const std::string e = errorOf("hierarchy.gltf", options);
+    EXPECT_NE(e.find("hierarchy.gltf: /nodes/0/mesh: instances exceed the limit of 3 per file"), std::string::npos) << e;
+}
+
+TEST_F(EditedQuad, TruncatedGlb)
+{
+    const fs::path path = dir / "short.glb";
+    std::ofstream(path, std::ios::binary) << "glTF\x02";
+    const std::string e = errorOfPath(path);
+    EXPECT_NE(e.find("short.glb: GLB header truncated (5 bytes)"), std::string::npos) << e;
+}
+
+TEST_F(EditedQuad, AttributeOfTheWrongType)
+{
+    doc["accessors"][0]["type"] = "VEC2";
+    const std::string e = errorOfPath(write());
+    EXPECT_NE(e.find("/meshes/0/primitives/0/attributes/POSITION: accessor 0 is VEC2 of FLOAT; POSITION must be VEC3 of FLOAT"),
+              std::string::npos)
+        << e;
+}
+
+TEST_F(EditedQuad, ByteStrideSmallerThanTheElement)
+{
+    doc["bufferViews"][0]["byteStride"] = 8;
+    const std::string e = errorOfPath(write());
+    EXPECT_NE(e.find("/bufferViews/0: byteStride 8 is smaller than accessor 0's 12-byte elements"), std::string::npos) << e;
+}
+
+TEST_F(EditedQuad, SparseIndexOutOfRange)
+{
+    // Sparse indices and values taken from the index buffer view (u16 0, 2, 1, ...).
+    doc["accessors"][0]["sparse"] = {{"count", 1},
+                                     {"indices", {{"bufferView", 1}, {"byteOffset", 2}, {"componentType", 5123}}},
+                                     {"values", {{"bufferView", 0}}}};
+    doc["accessors"][0]["count"] = 2;
+    doc["accessors"][1]["count"] = 2;
+    doc["accessors"][2]["count"] = 2;
+    doc["accessors"][3]["count"] = 0;
+    const std::string e = errorOfPath(write());
+    EXPECT_NE(e.find("/accessors/0/sparse/indices: index 2 at position 0 is out of range of 2 elements"), std::string::npos)
+        << e;
+}
+
+TEST_F(EditedQuad, UnknownAlphaMode)
+{
+    doc["materials"][0]["alphaMode"] = "CUTOUT";
+    const std::string e = errorOfPath(write());
+    EXPECT_NE(e.find("/materials/0/alphaMode: 'CUTOUT' is not OPAQUE, MASK or BLEND"), std::string::npos) << e;
+}
+
+TEST_F(EditedQuad, SceneRootThatIsAChild)
+{
+    doc["nodes"].push_back({{"name", "parent"}, {"children", {0}}});
+    doc["scenes"][0]["nodes"] = {1, 0};
+    const std::string e = errorOfPath(write());
+    EXPECT_NE(e.find("/scenes/0/nodes/1: node 0 'quad' is a child of node 1; a scene lists root nodes only"), std::string::npos)
+        << e;
+}
+
+TEST_F(EditedQuad, BadSpotCone)
+{
+    doc["extensions"]["KHR_lights_punctual"]["lights"] = {
+        {{"type", "spot"}, {"spot", {{"innerConeAngle", 0.8}, {"outerConeAngle", 0.4}}}}};
+    doc["nodes"][0]["extensions"]["KHR_lights_punctual"]["light"] = 0;
+    const std::string e = errorOfPath(write());
+    EXPECT_NE(e.find("/extensions/KHR_lights_punctual/lights/0/spot: innerConeAngle 0.8 and outerConeAngle 0.4 must satisfy"),
+              std::string::npos)
+        << e;
+}
+
+TEST_F(EditedQuad, UnusedMaterialsAndImagesCannotFailTheLoad)
+{
+    doc["materials"].push_back({{"name", "unused"}, {"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}});
+    doc["textures"] = {{{"source", 0}}};
+    doc["images"] = {{{"uri", "not_there.png"}}};
+    GltfLoadReport report;
+    const Scene scene = loadGltf(write(), report);
+    EXPECT_EQ(scene.triangleCount(), 2u);
+    EXPECT_TRUE(scene.textures.empty());
+}
