@@ -330,3 +330,32 @@ TEST_F(Cli, ValidateUnknownFileType)
     EXPECT_NE(r.err.find("scene.obj: unknown file type '.obj': validate reads .gltf, .glb and .json"), std::string::npos)
         << r.err;
 }
+
+TEST_F(Cli, RendersAGltfSceneFromAConfig)
+{
+    const fs::path png = dir / "gltf.png";
+    const CliResult r = run(fmt::format("render {} -o '{}' --validation", data("configs/gltf_scene.json"), png.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(fs::exists(png));
+    const CliResult v = run(fmt::format("validate {}", data("configs/gltf_scene.json")));
+    ASSERT_EQ(v.exitCode, 0) << v.err;
+    EXPECT_NE(v.out.find("hierarchy.gltf (scale 1):"), std::string::npos) << v.out;
+}
+
+TEST_F(Cli, ValidateConfigListsSweepVariants)
+{
+    const CliResult r = run(fmt::format("validate {}", config("sweep-resolution.json")));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("sweep: 8 variants"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("/lights/0/shadow/resolution=4096, /lights/0/shadow/slope_bias=2.0"), std::string::npos) << r.out;
+}
+
+TEST_F(Cli, ValidateConfigRefusesAMissingGltf)
+{
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << R"({"scene": {"gltf": "nowhere.glb"}, "camera": {"position": [0, 1, 2], "target": [0, 0, 0]},
+        "lights": [{"type": "point", "position": [0, 3, 0]}]})";
+    const CliResult r = run(fmt::format("validate '{}'", cfg.string()));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("cfg.json: /scene/gltf: file not found"), std::string::npos) << r.err;
+}

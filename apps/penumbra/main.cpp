@@ -283,10 +283,39 @@ int runValidateGltf(const ValidateFlags& flags)
 }
 
 // Config validation is deliberately minimal for now: loadConfig's own checks.
+// Checks everything a render would read: includes, every sweep variant, the scene (a
+// glTF file is loaded, a generator run) and the animation's node tracks.
 int runValidateConfig(const ValidateFlags& flags)
 {
-    penumbra::config::loadConfig(flags.file);
+    namespace config = penumbra::config;
+    const config::ConfigDocument document = config::loadDocument(flags.file);
+    const std::vector<config::SweepVariant> variants = config::expandSweep(document);
+    const config::RenderConfig base = config::parseConfig(document);
+    const penumbra::scene::Scene scene = config::buildScene(base);
+    const config::SceneSource& source = base.scene;
     fmt::print("{}: config ok\n", flags.file);
+    fmt::print("scene: {} (scale {}): {} meshes, {} instances, {} triangles, {} materials, {} textures\n",
+               source.kind == config::SceneSource::Kind::Gltf ? source.gltf.string() : "generator " + source.generator,
+               source.scale, scene.meshes.size(), scene.instances.size(), scene.triangleCount(), scene.materials.size(),
+               scene.textures.size());
+    for (const config::LightConfig& l : base.lights) {
+        fmt::print("light '{}': {}, intensity {:.4g}, shadow {} {}²\n", l.name, penumbra::scene::lightTypeName(l.light.type),
+                   l.light.intensity, l.shadow.technique, l.shadow.resolution);
+    }
+    fmt::print("output {}x{}, {} frame(s), culling {}, {} animation track(s) at {} fps\n", base.width, base.height,
+               base.frames, config::cullingModeName(base.culling), base.animation.tracks.size(), base.animation.fps);
+    if (variants.size() > 1 || !variants.front().label.empty()) {
+        fmt::print("sweep: {} variants\n", variants.size());
+        for (const config::SweepVariant& v : variants) {
+            // A swept scene source must build too.
+            if (v.config.scene.kind != source.kind || v.config.scene.generator != source.generator ||
+                v.config.scene.params != source.params || v.config.scene.scale != source.scale ||
+                v.config.scene.gltf != source.gltf) {
+                config::buildScene(v.config);
+            }
+            fmt::print("  {}\n", v.label);
+        }
+    }
     return 0;
 }
 
