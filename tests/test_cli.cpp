@@ -342,6 +342,14 @@ TEST_F(Cli, RendersAGltfSceneFromAConfig)
     EXPECT_NE(v.out.find("hierarchy.gltf (scale 1):"), std::string::npos) << v.out;
 }
 
+TEST_F(Cli, RendersAGltfSceneWithItsOwnLights)
+{
+    const fs::path png = dir / "lights.png";
+    const CliResult r = run(fmt::format("render {} -o '{}' --validation", data("configs/gltf_scene_lights.json"), png.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.err.find("3 light(s)"), std::string::npos) << r.err;
+}
+
 TEST_F(Cli, ValidateConfigListsSweepVariants)
 {
     const CliResult r = run(fmt::format("validate {}", config("sweep-resolution.json")));

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <set>
 #include <fstream>
 #include <unistd.h>
 
@@ -68,7 +69,7 @@ TEST(Config, EveryShippedConfigLoads)
         const config::ConfigDocument doc = config::loadDocument(entry.path());
         const std::vector<config::SweepVariant> variants = config::expandSweep(doc);
         EXPECT_FALSE(variants.empty());
-        for (const auto& v : variants) EXPECT_NO_THROW(config::buildScene(v.config));
+        for (auto v : variants) EXPECT_NO_THROW(config::buildScene(v.config));
         ++count;
     }
     EXPECT_GE(count, 4u);
@@ -193,7 +194,7 @@ TEST(Config, AnimationTracksAreValidated)
     doc["animation"] = json::parse(R"({"tracks": [{"target": "/camera/fov_y_deg", "keys": [{"t": 0, "value": [1, 2, 3]}]}]})");
     EXPECT_NE(errorOf(doc).find("/animation/tracks/0/keys/0/value: must be a number"), std::string::npos);
     doc["animation"] = json::parse(R"({"tracks": [{"target": "node:nobody/translation", "keys": [{"t": 0, "value": [1, 2, 3]}]}]})");
-    const config::RenderConfig c = config::parseConfig(doc, "scene.json");  // the node is checked with the scene
+    config::RenderConfig c = config::parseConfig(doc, "scene.json");  // the node is checked with the scene
     try {
         config::buildScene(c);
         FAIL() << "expected ConfigError";
@@ -240,7 +241,7 @@ TEST(Config, GeneratorParametersAreCheckedByName)
 {
     json doc = minimal();
     doc["scene"] = {{"generator", "city"}, {"params", {{"blocks", 2}, {"seed", 3}}}};
-    const config::RenderConfig c = config::parseConfig(doc, "scene.json");
+    config::RenderConfig c = config::parseConfig(doc, "scene.json");
     EXPECT_EQ(c.scene.generator, "city");
     EXPECT_EQ(c.scene.params.size(), 2u);
     EXPECT_GT(config::buildScene(c).instances.size(), 100u);
@@ -250,7 +251,8 @@ TEST(Config, GeneratorParametersAreCheckedByName)
               std::string::npos) << errorOf(doc);
     doc["scene"]["params"] = {{"blocks", 0}};
     try {
-        config::buildScene(config::parseConfig(doc, "scene.json"));
+        config::RenderConfig bad = config::parseConfig(doc, "scene.json");
+        config::buildScene(bad);
         FAIL() << "expected ConfigError";
     } catch (const ConfigError& e) {
         EXPECT_NE(std::string(e.what()).find("scene.json: /scene: city: blocks must be in [1, 128], got 0"), std::string::npos)
@@ -258,6 +260,23 @@ TEST(Config, GeneratorParametersAreCheckedByName)
     }
     doc["scene"] = {{"generator", "forest"}};
     EXPECT_NE(errorOf(doc).find("/scene/generator: must be one of box-grid, penumbra, city, hair, fence"), std::string::npos);
+}
+
+TEST(Config, LightsFromAGltfScene)
+{
+    config::RenderConfig c = config::loadConfig(kConfigs / "gltf_scene_lights.json");
+    EXPECT_TRUE(c.lightsFromScene);
+    EXPECT_TRUE(c.lights.empty());
+    const scene::Scene s = config::buildScene(c);
+    ASSERT_EQ(c.lights.size(), 3u);  // hierarchy.gltf: directional, spot, point
+    std::set<scene::LightType> types;
+    for (const auto& l : c.lights) types.insert(l.light.type);
+    EXPECT_EQ(types.size(), 3u);
+    EXPECT_FALSE(s.instances.empty());
+
+    json doc = minimal();
+    doc["lights"] = "scene";
+    EXPECT_NE(errorOf(doc).find("/lights: \"scene\" takes the lights of a glTF scene"), std::string::npos);
 }
 
 TEST(Config, MinimalConfigGetsDefaults)

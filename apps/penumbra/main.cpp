@@ -290,7 +290,7 @@ int runValidateConfig(const ValidateFlags& flags)
     namespace config = penumbra::config;
     const config::ConfigDocument document = config::loadDocument(flags.file);
     const std::vector<config::SweepVariant> variants = config::expandSweep(document);
-    const config::RenderConfig base = config::parseConfig(document);
+    config::RenderConfig base = config::parseConfig(document);
     const penumbra::scene::Scene scene = config::buildScene(base);
     const config::SceneSource& source = base.scene;
     fmt::print("{}: config ok\n", flags.file);
@@ -306,7 +306,7 @@ int runValidateConfig(const ValidateFlags& flags)
                base.frames, config::cullingModeName(base.culling), base.animation.tracks.size(), base.animation.fps);
     if (variants.size() > 1 || !variants.front().label.empty()) {
         fmt::print("sweep: {} variants\n", variants.size());
-        for (const config::SweepVariant& v : variants) {
+        for (config::SweepVariant v : variants) {
             // A swept scene source must build too.
             if (v.config.scene.kind != source.kind || v.config.scene.generator != source.generator ||
                 v.config.scene.params != source.params || v.config.scene.scale != source.scale ||

@@ -539,10 +539,19 @@ RenderConfig parseConfig(const ConfigDocument& document)
     config.scene = readScene(r, document.file);
     config.camera = readCamera(r);
     const json& lights = r.require("lights");
-    if (!lights.is_array() || lights.empty()) r.fail("/lights", "must be a non-empty array of lights");
-    if (lights.size() > kMaxLights) r.fail("/lights", fmt::format("at most {} lights, got {}", kMaxLights, lights.size()));
+    if (lights.is_string() && lights.get<std::string>() == "scene") {
+        if (config.scene.kind != SceneSource::Kind::Gltf) {
+            r.fail("/lights", "\"scene\" takes the lights of a glTF scene, but /scene is a generator");
+        }
+        config.lightsFromScene = true;
+    } else if (!lights.is_array() || lights.empty()) {
+        r.fail("/lights", "must be a non-empty array of lights, or \"scene\" for a glTF file's own lights");
+    }
+    if (lights.is_array() && lights.size() > kMaxLights) {
+        r.fail("/lights", fmt::format("at most {} lights, got {}", kMaxLights, lights.size()));
+    }
     std::set<std::string> names;
-    for (size_t i = 0; i < lights.size(); ++i) {
+    for (size_t i = 0; lights.is_array() && i < lights.size(); ++i) {
         config.lights.push_back(readLight(lights[i], locator, i));
         if (!names.insert(config.lights.back().name).second) {
             r.fail(fmt::format("/lights/{}/name", i), fmt::format("duplicate light name \"{}\"", config.lights.back().name));
@@ -630,7 +639,7 @@ std::vector<SweepVariant> expandSweep(const ConfigDocument& document)
     return variants;
 }
 
-scene::Scene buildScene(const SceneSource& source)
+scene::Scene buildScene(const SceneSource& source, std::vector<scene::Light>* fileLights)
 {
     scene::Scene scene;
     if (source.kind == SceneSource::Kind::Gltf) {
@@ -639,6 +648,15 @@ scene::Scene buildScene(const SceneSource& source)
         if (scene.instances.empty()) {
             throw ConfigError(fmt::format("{}: the glTF file has no triangles to render", source.gltf.string()));
         }
+        for (const scene::GltfLight& l : report.lights) {
+            if (!fileLights) break;
+            scene::Light light = l.light;
+            // Scaling the scene about the origin moves its lights with it; radiant
+            // intensity times s² keeps the irradiance it gives the scaled scene.
+            light.position *= source.scale;
+            if (light.type != scene::LightType::Directional) light.intensity *= source.scale * source.scale;
+            fileLights->push_back(light);
+        }
     } else {
         scene = scene::generateScene(source.generator, source.params);
     }
@@ -646,16 +664,30 @@ scene::Scene buildScene(const SceneSource& source)
     return scene;
 }
 
-scene::Scene buildScene(const RenderConfig& config)
+scene::Scene buildScene(RenderConfig& config)
 {
     scene::Scene scene;
+    std::vector<scene::Light> fileLights;
     try {
-        scene = buildScene(config.scene);
+        scene = buildScene(config.scene, &fileLights);
     } catch (const ConfigError&) {
         throw;
     } catch (const Error& e) {
         // A generator's parameter error names the parameter; add where it was set.
         throw ConfigError(fmt::format("{}: /scene: {}", config.file.string(), e.what()));
+    }
+    if (config.lightsFromScene) {
+        if (fileLights.empty() || fileLights.size() > kMaxLights) {
+            throw ConfigError(fmt::format("{}: /lights: \"scene\" needs 1 to {} KHR_lights_punctual lights in {}, found {}",
+                                          config.file.string(), kMaxLights, config.scene.gltf.string(), fileLights.size()));
+        }
+        config.lights.clear();
+        for (size_t i = 0; i < fileLights.size(); ++i) {
+            LightConfig lc;
+            lc.name = fmt::format("light{}", i);
+            lc.light = fileLights[i];
+            config.lights.push_back(lc);
+        }
     }
     std::set<std::string> nodeNames;
     for (uint32_t n = 0; n < scene.graph.size(); ++n) nodeNames.insert(scene.graph.node(n).name);

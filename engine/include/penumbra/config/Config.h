@@ -64,6 +64,9 @@ struct RenderConfig {
     SceneSource scene;
     scene::Camera camera;
     std::vector<LightConfig> lights;
+    // "lights": "scene": the lights come from the glTF file (KHR_lights_punctual), with
+    // default shadow settings; resolved by buildScene.
+    bool lightsFromScene = false;
     CullingMode culling = CullingMode::None;
     uint32_t width = 1280;
     uint32_t height = 720;
@@ -103,9 +106,12 @@ struct SweepVariant {
 std::vector<SweepVariant> expandSweep(const ConfigDocument& document);
 
 // Builds the scene that the config's scene source describes (at its scale), and checks
-// that the animation's node tracks name nodes of that scene.
-scene::Scene buildScene(const RenderConfig& config);
-scene::Scene buildScene(const SceneSource& source);
+// that the animation's node tracks name nodes of that scene. With "lights": "scene" it
+// also fills config.lights from the glTF file's lights.
+scene::Scene buildScene(RenderConfig& config);
+// `fileLights` (optional) receives a glTF file's KHR_lights_punctual lights, placed and
+// scaled with the scene.
+scene::Scene buildScene(const SceneSource& source, std::vector<scene::Light>* fileLights = nullptr);
 
 // Moves camera, lights and scene nodes to time `timeS` of the config's animation.
 // `config` holds the animated values afterwards; nodes are set in `scene`'s graph (call
