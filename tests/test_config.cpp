@@ -279,6 +279,22 @@ TEST(Config, LightsFromAGltfScene)
     EXPECT_NE(errorOf(doc).find("/lights: \"scene\" takes the lights of a glTF scene"), std::string::npos);
 }
 
+TEST(Config, CommittedAssetMatchesItsGenerator)
+{
+    // assets/penumbra.glb is `penumbra generate penumbra`: loading it gives the scene the
+    // generator makes (config/penumbra-gltf.json swaps the generator for the file).
+    config::RenderConfig fromFile = config::loadConfig(fs::path(PENUMBRA_SOURCE_DIR) / "config/penumbra-gltf.json");
+    config::RenderConfig generated = config::loadConfig(fs::path(PENUMBRA_SOURCE_DIR) / "config/penumbra-scene.json");
+    ASSERT_EQ(fromFile.scene.kind, config::SceneSource::Kind::Gltf);
+    const scene::Scene a = config::buildScene(fromFile), b = config::buildScene(generated);
+    EXPECT_EQ(a.triangleCount(), b.triangleCount());
+    EXPECT_EQ(a.instances.size(), b.instances.size());
+    for (int i = 0; i < 3; ++i) {
+        EXPECT_NEAR(a.bounds().min[i], b.bounds().min[i], 1e-5f);
+        EXPECT_NEAR(a.bounds().max[i], b.bounds().max[i], 1e-5f);
+    }
+}
+
 TEST(Config, MinimalConfigGetsDefaults)
 {
     const config::RenderConfig c = config::parseConfig(minimal(), "scene.json");
