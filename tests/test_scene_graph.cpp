@@ -90,3 +90,12 @@ TEST(Scene, BoxGridIsDeterministicBySeed)
     EXPECT_NE(a.instances[1].worldBounds.max.y, c.instances[1].worldBounds.max.y);  // box heights differ
     EXPECT_EQ(a.triangleCount(), b.triangleCount());
 }
+
+TEST(Aabb, EmptyOnAnyInvertedAxis)
+{
+    EXPECT_TRUE(Aabb{}.empty());
+    EXPECT_FALSE((Aabb{{0, 0, 0}, {0, 0, 0}}.empty()));  // a point is a box
+    EXPECT_TRUE((Aabb{{0, 1, 0}, {1, 0, 1}}.empty()));   // inverted in y only
+    EXPECT_TRUE((Aabb{{0, 0, 1}, {1, 1, 0}}.empty()));   // inverted in z only
+    EXPECT_EQ((Aabb{{0, 1, 0}, {1, 0, 1}}.radius()), 0.0f);
+}

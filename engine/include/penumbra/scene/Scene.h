@@ -25,7 +25,7 @@ struct Aabb {
     glm::vec3 max{-std::numeric_limits<float>::max()};
     void extend(const glm::vec3& p);
     void extend(const Aabb& box);
-    bool empty() const { return min.x > max.x; }
+    bool empty() const { return min.x > max.x || min.y > max.y || min.z > max.z; }
     glm::vec3 center() const { return 0.5f * (min + max); }
     glm::vec3 extent() const { return empty() ? glm::vec3(0.0f) : max - min; }
     float radius() const { return empty() ? 0.0f : 0.5f * glm::length(max - min); }
