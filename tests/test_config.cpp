@@ -191,6 +191,8 @@ TEST(Config, AnimationTracksAreValidated)
     EXPECT_NE(errorOf(doc).find("/animation/tracks/0/keys/1/t: key times must increase strictly"), std::string::npos);
     doc["animation"] = json::parse(R"({"tracks": [{"target": "/lights/3/position", "keys": [{"t": 0, "value": [0, 5, 10]}]}]})");
     EXPECT_NE(errorOf(doc).find("/animation/tracks/0/target: unknown target \"/lights/3/position\""), std::string::npos);
+    doc["animation"] = json::parse(R"({"tracks": [{"target": "/lights/99999999999999999999/color", "keys": [{"t": 0, "value": [0, 5, 10]}]}]})");
+    EXPECT_NE(errorOf(doc).find("/animation/tracks/0/target: unknown target"), std::string::npos);
     doc["animation"] = json::parse(R"({"tracks": [{"target": "/camera/fov_y_deg", "keys": [{"t": 0, "value": [1, 2, 3]}]}]})");
     EXPECT_NE(errorOf(doc).find("/animation/tracks/0/keys/0/value: must be a number"), std::string::npos);
     doc["animation"] = json::parse(R"({"tracks": [{"target": "node:nobody/translation", "keys": [{"t": 0, "value": [1, 2, 3]}]}]})");

@@ -10,6 +10,7 @@
 #include <glm/gtx/matrix_decompose.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -340,7 +341,9 @@ size_t targetSize(const std::string& target, size_t lightCount, std::string& why
         const size_t slash = target.find('/', 8);
         const std::string index = target.substr(8, slash == std::string::npos ? std::string::npos : slash - 8);
         const std::string field = slash == std::string::npos ? "" : target.substr(slash + 1);
-        if (index.empty() || !std::all_of(index.begin(), index.end(), ::isdigit) || std::stoul(index) >= lightCount) {
+        const bool digits = !index.empty() && index.size() <= 3 &&
+                            std::all_of(index.begin(), index.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
+        if (!digits || std::stoul(index) >= lightCount) {
             why = fmt::format("light index '{}' is not one of the {} configured lights", index, lightCount);
             return 0;
         }
