@@ -4,6 +4,7 @@
 #include "penumbra/core/Error.h"
 #include "penumbra/graph/RenderGraph.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -229,13 +230,14 @@ TEST(RenderGraph, AliasingOnAChainNeedsTwoSlots)
 {
     RenderGraph graph;
     constexpr int kLength = 10;
-    for (int i = 0; i < kLength; ++i) declareColor(graph, "img" + std::to_string(i));
-    graph.addPass("p0", QueueKind::Graphics).write("img0", Usage::ColorAttachment);
+    auto image = [](int i) { return fmt::format("img{}", i); };
+    for (int i = 0; i < kLength; ++i) declareColor(graph, image(i));
+    graph.addPass("p0", QueueKind::Graphics).write(image(0), Usage::ColorAttachment);
     for (int i = 1; i < kLength; ++i)
-        graph.addPass("p" + std::to_string(i), QueueKind::Graphics)
-            .read("img" + std::to_string(i - 1), Usage::Sampled)
-            .write("img" + std::to_string(i), Usage::ColorAttachment);
-    graph.markOutput("img" + std::to_string(kLength - 1));
+        graph.addPass(fmt::format("p{}", i), QueueKind::Graphics)
+            .read(image(i - 1), Usage::Sampled)
+            .write(image(i), Usage::ColorAttachment);
+    graph.markOutput(image(kLength - 1));
     const auto compiled = graph.compile();
     constexpr VkDeviceSize kImageBytes = 1024 * 1024 * 4;
     EXPECT_EQ(compiled->memorySlots.size(), 2u);
