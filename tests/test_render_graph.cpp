@@ -291,6 +291,11 @@ TEST(RenderGraph, ReadOfAResourceNobodyWrites)
     imported.addPass("taa", QueueKind::Graphics).read("history", Usage::Sampled).write("color", Usage::ColorAttachment);
     imported.markOutput("color");
     EXPECT_NO_THROW(imported.compile());
+
+    RenderGraph modifyOnly;
+    modifyOnly.declareImage({"acc", 512, 512, VK_FORMAT_R32_SFLOAT, false, {}});
+    modifyOnly.addPass("accumulate", QueueKind::Compute, true).read("acc", Usage::Storage).write("acc", Usage::Storage);
+    expectThrowContaining([&] { modifyOnly.compile(); }, {"'accumulate'", "'acc'", "no pass writes it first"});
 }
 
 TEST(RenderGraph, UnorderedWritersAreAmbiguous)

@@ -348,11 +348,15 @@ private:
         for (uint32_t r = 0; r < resources_.size(); ++r) {
             // A read-modify-write needs earlier contents too: only pure writers initialise.
             if (pureWriters[r].empty() && !imported(r)) {
-                const auto& readers = modifiers[r].empty() ? pureReaders[r] : modifiers[r];
-                if (!readers.empty())
+                if (!modifiers[r].empty())
+                    throw Error(fmt::format("render graph: pass '{}' reads and writes '{}', but no pass writes it "
+                                            "first and it is not imported; add a pass that initialises it or "
+                                            "declare it imported",
+                                            passes_[modifiers[r].front()].name, resourceName(r)));
+                if (!pureReaders[r].empty())
                     throw Error(fmt::format("render graph: pass '{}' reads '{}', which no pass writes and which "
                                             "is not imported; write it first or declare it imported",
-                                            passes_[readers.front()].name, resourceName(r)));
+                                            passes_[pureReaders[r].front()].name, resourceName(r)));
             }
             for (uint32_t w : pureWriters[r]) {
                 for (uint32_t m : modifiers[r]) addEdge(w, m);
