@@ -336,6 +336,8 @@ TEST(RenderGraph, MismatchedRedeclaration)
     expectThrowContaining([&] { graph.declareBuffer({"shadow", 64, false}); }, {"'shadow'", "image", "buffer"});
     graph.declareBuffer({"casters", 64, false});
     expectThrowContaining([&] { graph.declareBuffer({"casters", 128, false}); }, {"'casters'", "64", "128"});
+    graph.addPass("gbuffer", QueueKind::Graphics);
+    expectThrowContaining([&] { graph.addPass("gbuffer", QueueKind::Compute); }, {"'gbuffer'", "twice"});
 }
 
 TEST(RenderGraph, UndeclaredResourceAndWrongUsage)

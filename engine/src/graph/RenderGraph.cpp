@@ -165,9 +165,8 @@ PassBuilder& PassBuilder::write(std::string_view resource, Usage usage)
 
 RenderGraph::ResourceDecl* RenderGraph::findResource(std::string_view name)
 {
-    for (ResourceDecl& decl : resources_)
-        if ((decl.isImage ? decl.image.name : decl.buffer.name) == name) return &decl;
-    return nullptr;
+    const auto found = resourceIndex_.find(std::string(name));
+    return found == resourceIndex_.end() ? nullptr : &resources_[found->second];
 }
 
 void RenderGraph::declare(ResourceDecl decl, const std::string& name)
@@ -191,6 +190,7 @@ void RenderGraph::declare(ResourceDecl decl, const std::string& name)
                                     decl.buffer.size, decl.buffer.imported ? " imported" : ""));
         return;
     }
+    resourceIndex_.emplace(name, uint32_t(resources_.size()));
     resources_.push_back(std::move(decl));
     ++version_;
 }
@@ -216,8 +216,7 @@ void RenderGraph::declareBuffer(const BufferDesc& desc)
 PassBuilder RenderGraph::addPass(std::string name, QueueKind queue, bool sideEffect)
 {
     if (name.empty()) throw Error("render graph: a pass needs a name");
-    for (const PassDecl& pass : passes_)
-        if (pass.name == name) throw Error(fmt::format("render graph: pass '{}' is added twice", name));
+    if (!passNames_.insert(name).second) throw Error(fmt::format("render graph: pass '{}' is added twice", name));
     passes_.push_back(PassDecl{std::move(name), queue, sideEffect, {}});
     ++version_;
     return PassBuilder(*this, uint32_t(passes_.size() - 1));

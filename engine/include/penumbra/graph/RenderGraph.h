@@ -10,6 +10,8 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 namespace penumbra::graph {
@@ -194,6 +196,8 @@ private:
 
     std::vector<ResourceDecl> resources_;
     std::vector<PassDecl> passes_;
+    std::unordered_map<std::string, uint32_t> resourceIndex_;
+    std::unordered_set<std::string> passNames_;
     uint64_t version_ = 0;
     uint64_t compiledVersion_ = 0;
     std::shared_ptr<const CompiledGraph> compiled_;
