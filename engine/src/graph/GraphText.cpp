@@ -35,10 +35,10 @@ std::string describe(const CompiledResource& res)
 
 std::string stages(VkPipelineStageFlags2 flags)
 {
-    return vk::to_string(vk::PipelineStageFlags2(flags));
+    return flags == 0 ? "{ None }" : vk::to_string(vk::PipelineStageFlags2(flags));
 }
 
-std::string accesses(VkAccessFlags2 flags) { return vk::to_string(vk::AccessFlags2(flags)); }
+std::string accesses(VkAccessFlags2 flags) { return flags == 0 ? "{ None }" : vk::to_string(vk::AccessFlags2(flags)); }
 
 std::string layout(VkImageLayout value) { return vk::to_string(vk::ImageLayout(value)); }
 
