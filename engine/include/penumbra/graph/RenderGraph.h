@@ -1,0 +1,208 @@
+#pragma once
+// The pass scheduler's CPU core (Granite-style: declare, compile, then execute).
+// Passes declare which images and buffers they read and write, with a usage from which
+// the layout and the synchronization2 stage/access masks follow. compile() orders the
+// passes, culls those whose outputs nothing needs, computes lifetimes, aliases transient
+// memory and derives the barriers. Executing on a device is not part of this file yet.
+#include <vulkan/vulkan.h>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+namespace penumbra::graph {
+
+enum class QueueKind { Graphics, Compute, Transfer };
+
+// How a pass touches a resource. The direction (read or write) is given separately;
+// `usageAllows` says which directions a usage permits.
+enum class Usage {
+    ColorAttachment,  // image, write
+    DepthAttachment,  // image, read (depth test only) or write
+    Sampled,          // image, read (combined image sampler / sampled image)
+    Storage,          // image or buffer, read or write
+    TransferSrc,      // image or buffer, read
+    TransferDst,      // image or buffer, write
+    UniformBuffer,    // buffer, read
+    VertexBuffer,     // buffer, read
+    IndexBuffer,      // buffer, read
+    IndirectBuffer,   // buffer, read
+};
+
+enum class Access { Read, Write };
+
+struct ImageDesc {
+    std::string name;
+    uint32_t width = 0;
+    uint32_t height = 0;
+    VkFormat format = VK_FORMAT_UNDEFINED;
+    // Imported images live outside the graph (swapchain, history, a technique's
+    // persistent map): they are never aliased and may be read without a writer.
+    bool imported = false;
+    VkImageLayout initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;  // imported images only
+
+    bool operator==(const ImageDesc&) const = default;
+};
+
+struct BufferDesc {
+    std::string name;
+    VkDeviceSize size = 0;
+    bool imported = false;
+
+    bool operator==(const BufferDesc&) const = default;
+};
+
+// Layout (images) and synchronization2 scope of one access.
+struct AccessScope {
+    VkImageLayout layout = VK_IMAGE_LAYOUT_UNDEFINED;
+    VkPipelineStageFlags2 stage = VK_PIPELINE_STAGE_2_NONE;
+    VkAccessFlags2 access = VK_ACCESS_2_NONE;
+
+    bool operator==(const AccessScope&) const = default;
+};
+
+// The scope of `usage` in `direction` for a pass on `queue`. `depthFormat` picks the
+// depth read-only layout for sampled depth images. Throws on a usage/direction mismatch.
+AccessScope deriveScope(Usage usage, Access direction, QueueKind queue, bool isImage, bool depthFormat);
+
+// A barrier to record before a pass. Images: a layout transition (old may equal new);
+// buffers: a buffer memory barrier over the whole buffer.
+struct Barrier {
+    uint32_t resource = 0;  // index into CompiledGraph::resources
+    bool isImage = true;
+    VkImageLayout oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    VkImageLayout newLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    VkPipelineStageFlags2 srcStage = VK_PIPELINE_STAGE_2_NONE;
+    VkAccessFlags2 srcAccess = VK_ACCESS_2_NONE;
+    VkPipelineStageFlags2 dstStage = VK_PIPELINE_STAGE_2_NONE;
+    VkAccessFlags2 dstAccess = VK_ACCESS_2_NONE;
+};
+
+// One pass's combined accesses to one resource.
+struct ResourceUse {
+    uint32_t resource = 0;  // index into CompiledGraph::resources
+    bool reads = false;
+    bool writes = false;
+    AccessScope scope;
+};
+
+struct CompiledPass {
+    std::string name;
+    QueueKind queue = QueueKind::Graphics;
+    uint32_t declarationIndex = 0;
+    std::vector<ResourceUse> uses;
+    std::vector<Barrier> barriersBefore;
+};
+
+struct CulledPass {
+    std::string name;
+    std::string reason;
+};
+
+struct CompiledResource {
+    std::string name;
+    bool isImage = true;
+    bool imported = false;
+    bool markedOutput = false;
+    uint32_t width = 0, height = 0;
+    VkFormat format = VK_FORMAT_UNDEFINED;
+    VkDeviceSize sizeBytes = 0;  // estimate: texel blocks × block size, or buffer size
+    int firstUse = -1;           // pass index in CompiledGraph::passes; -1: unused
+    int lastUse = -1;            // marked outputs: the last pass
+    int memorySlot = -1;         // transient and used only
+};
+
+// A block of device memory shared by transient resources with disjoint lifetimes.
+struct MemorySlot {
+    VkDeviceSize sizeBytes = 0;
+    std::vector<uint32_t> resources;  // in order of first use
+};
+
+struct CompiledGraph {
+    std::vector<CompiledPass> passes;  // execution order
+    std::vector<CulledPass> culled;
+    std::vector<CompiledResource> resources;  // declaration order
+    std::vector<MemorySlot> memorySlots;
+    VkDeviceSize transientBytesUnaliased = 0;  // sum of aligned transient sizes
+    VkDeviceSize transientBytesAliased = 0;    // sum of slot sizes
+
+    std::string toText() const;
+    std::string toDot() const;
+};
+
+// Throws penumbra::Error if two resources of one slot overlap in lifetime or a slot is
+// smaller than a member. compile() runs it on its own result.
+void verifyAliasing(const CompiledGraph& graph);
+
+class RenderGraph;
+
+// A handle for declaring a pass's accesses; valid while its RenderGraph lives.
+class PassBuilder {
+public:
+    PassBuilder& read(std::string_view resource, Usage usage);
+    PassBuilder& write(std::string_view resource, Usage usage);
+
+private:
+    friend class RenderGraph;
+    PassBuilder(RenderGraph& graph, uint32_t pass) : graph_(&graph), pass_(pass) {}
+    RenderGraph* graph_;
+    uint32_t pass_;
+};
+
+class RenderGraph {
+public:
+    // Declaring a resource again with the same description is allowed (a frame may
+    // re-declare what it needs); a different description throws.
+    void declareImage(const ImageDesc& desc);
+    void declareBuffer(const BufferDesc& desc);
+    PassBuilder addPass(std::string name, QueueKind queue, bool sideEffect = false);
+    void markOutput(std::string_view resource);
+
+    // Orders, culls, computes lifetimes, aliases and derives barriers. Returns the
+    // cached result while the declaration has not changed since the last compile.
+    // Throws penumbra::Error for cycles, reads of never-written non-imported resources,
+    // unordered writers, undeclared resources and conflicting accesses in one pass.
+    std::shared_ptr<const CompiledGraph> compile();
+
+    uint64_t version() const { return version_; }
+
+private:
+    friend class PassBuilder;
+    struct ResourceDecl {
+        bool isImage = true;
+        ImageDesc image;
+        BufferDesc buffer;
+        bool markedOutput = false;
+    };
+    struct AccessDecl {
+        std::string resource;
+        Usage usage;
+        Access direction;
+    };
+    struct PassDecl {
+        std::string name;
+        QueueKind queue;
+        bool sideEffect;
+        std::vector<AccessDecl> accesses;
+    };
+
+    void addAccess(uint32_t pass, std::string_view resource, Usage usage, Access direction);
+    ResourceDecl* findResource(std::string_view name);
+    void declare(ResourceDecl decl, const std::string& name);
+
+    std::vector<ResourceDecl> resources_;
+    std::vector<PassDecl> passes_;
+    std::unordered_map<std::string, uint32_t> resourceIndex_;
+    std::unordered_set<std::string> passNames_;
+    uint64_t version_ = 0;
+    uint64_t compiledVersion_ = 0;
+    std::shared_ptr<const CompiledGraph> compiled_;
+
+    friend class GraphCompiler;
+};
+
+} // namespace penumbra::graph
