@@ -192,16 +192,20 @@ Buffer uploadBuffer(Context& context, std::span<const std::byte> bytes, VkBuffer
     return buffer;
 }
 
-void updateBuffer(Context& context, const Buffer& buffer, std::span<const std::byte> bytes)
+void updateBuffer(Context& context, const Buffer& buffer, std::span<const std::byte> bytes, Buffer* staging)
 {
     if (bytes.size() > buffer.size()) {
         throw GpuError(fmt::format("updateBuffer: {} bytes do not fit a {}-byte buffer", bytes.size(), buffer.size()));
     }
-    Buffer staging(context, bytes.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, "staging");
-    std::memcpy(staging.mapped(), bytes.data(), bytes.size());
+    Buffer local;
+    Buffer& source = staging ? *staging : local;
+    if (!source.mapped() || source.size() < bytes.size()) {
+        source = Buffer(context, bytes.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, "staging");
+    }
+    std::memcpy(source.mapped(), bytes.data(), bytes.size());
     context.submitAndWait([&](VkCommandBuffer cmd) {
         VkBufferCopy region{0, 0, bytes.size()};
-        vkCmdCopyBuffer(cmd, staging.handle(), buffer.handle(), 1, &region);
+        vkCmdCopyBuffer(cmd, source.handle(), buffer.handle(), 1, &region);
         memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT},
                       {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT});
     });

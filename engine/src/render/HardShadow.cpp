@@ -120,8 +120,11 @@ void HardShadow::recordShadowMap(VkCommandBuffer cmd, const SceneGpu& scene) con
         VkRect2D scissor{{x, y}, {size, size}};
         vkCmdSetViewport(cmd, 0, 1, &viewport);
         vkCmdSetScissor(cmd, 0, 1, &scissor);
-        pipelines_->depth.bind(cmd);
-        gpu::DescriptorPush().storageBuffer(0, scene.instanceBuffer()).push(context_, cmd, pipelines_->depth);
+        // The solid pipeline stays bound across faces unless the masked one replaced it.
+        if (face == 0 || masked) {
+            pipelines_->depth.bind(cmd);
+            gpu::DescriptorPush().storageBuffer(0, scene.instanceBuffer()).push(context_, cmd, pipelines_->depth);
+        }
         pipelines_->depth.pushConstants(cmd, &frusta_[face].viewProj, sizeof(glm::mat4));
         scene.draw(cmd, DrawFilter::Solid);
         if (!masked) continue;

@@ -116,7 +116,7 @@ bool SceneGpu::hasAlphaMasked() const
 
 void SceneGpu::updateInstances(gpu::Context& context, const scene::Scene& scene)
 {
-    gpu::updateBuffer(context, instances_, bytesOf(instanceTable(scene)));
+    gpu::updateBuffer(context, instances_, bytesOf(instanceTable(scene)), &instanceStaging_);
 }
 
 void SceneGpu::draw(VkCommandBuffer cmd, DrawFilter filter,

@@ -81,8 +81,10 @@ Buffer uploadBuffer(Context& context, std::span<const std::byte> bytes, VkBuffer
                     const std::string& name);
 
 // Overwrites the start of a device-local buffer (created with TRANSFER_DST usage, as
-// uploadBuffer's are) with `bytes`, through a staging copy; waits for it.
-void updateBuffer(Context& context, const Buffer& buffer, std::span<const std::byte> bytes);
+// uploadBuffer's are) with `bytes`, through a staging copy; waits for it. `staging`, when
+// given, is a host-visible TRANSFER_SRC buffer kept by a caller that updates every frame
+// (it is grown when too small), so that no allocation happens per update.
+void updateBuffer(Context& context, const Buffer& buffer, std::span<const std::byte> bytes, Buffer* staging = nullptr);
 
 // Creates a sampled 2D image filled with `texels` (tightly packed rows), left in
 // SHADER_READ_ONLY_OPTIMAL.

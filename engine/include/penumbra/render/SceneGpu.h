@@ -55,6 +55,7 @@ private:
     gpu::Buffer vertices_;
     gpu::Buffer indices_;
     gpu::Buffer instances_;
+    gpu::Buffer instanceStaging_;  // reused by every updateInstances (animated frames)
     gpu::Buffer materials_;
     std::vector<gpu::Image> textures_;
     VkSampler sampler_ = VK_NULL_HANDLE;
