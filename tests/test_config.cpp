@@ -42,7 +42,8 @@ TEST(Config, DefaultConfigLoads)
     EXPECT_EQ(c.width, 1280u);
     EXPECT_EQ(c.height, 720u);
     ASSERT_EQ(c.lights.size(), 1u);
-    EXPECT_EQ(c.lights[0].shadow.resolution, 2048u);
+    ASSERT_NE(c.lights[0].shadow.param("resolution"), nullptr);
+    EXPECT_EQ(*c.lights[0].shadow.param("resolution"), 2048);
     EXPECT_EQ(c.lights[0].shadow.technique, "hard");
     EXPECT_NEAR(glm::length(c.lights[0].light.direction), 1.0f, 1e-6f);
 }
@@ -121,13 +122,13 @@ TEST(Config, SweepExpandsTheCartesianProduct)
     const config::ConfigDocument doc = config::loadDocument(fs::path(PENUMBRA_SOURCE_DIR) / "config/sweep-resolution.json");
     const std::vector<config::SweepVariant> v = config::expandSweep(doc);
     ASSERT_EQ(v.size(), 8u);
-    EXPECT_EQ(v[0].config.lights[0].shadow.resolution, 512u);
-    EXPECT_FLOAT_EQ(v[0].config.lights[0].shadow.depthBiasSlope, 1.0f);
-    EXPECT_FLOAT_EQ(v[1].config.lights[0].shadow.depthBiasSlope, 2.0f);
-    EXPECT_EQ(v[7].config.lights[0].shadow.resolution, 4096u);
+    EXPECT_EQ(*v[0].config.lights[0].shadow.param("resolution"), 512);
+    EXPECT_EQ(*v[0].config.lights[0].shadow.param("slope_bias"), 1.0);
+    EXPECT_EQ(*v[1].config.lights[0].shadow.param("slope_bias"), 2.0);
+    EXPECT_EQ(*v[7].config.lights[0].shadow.param("resolution"), 4096);
     EXPECT_EQ(v[7].label, "/lights/0/shadow/resolution=4096, /lights/0/shadow/slope_bias=2.0");
     // The base run ignores the sweep.
-    EXPECT_EQ(config::parseConfig(doc).lights[0].shadow.resolution, 2048u);
+    EXPECT_EQ(*config::parseConfig(doc).lights[0].shadow.param("resolution"), 2048);
 }
 
 TEST(Config, BadSweepValueNamesTheSweepEntry)
@@ -353,9 +354,12 @@ TEST(Config, WrongTypes)
     doc["lights"] = json::object();
     EXPECT_NE(errorOf(doc).find("/lights: must be a non-empty array"), std::string::npos);
     doc = minimal();
-    doc["lights"][0]["shadow"] = {{"technique", "raytraced"}};
-    EXPECT_NE(errorOf(doc).find("/lights/0/shadow/technique: must be one of hard, got \"raytraced\""),
+    // Technique names are checked against the plugins when they load; here only the form.
+    doc["lights"][0]["shadow"] = {{"technique", "Ray Traced"}};
+    EXPECT_NE(errorOf(doc).find("/lights/0/shadow/technique: must be a plugin name ([a-z0-9_-]+), got \"Ray Traced\""),
               std::string::npos);
+    doc["lights"][0]["shadow"] = {{"technique", "hard"}, {"required", "yes"}};
+    EXPECT_NE(errorOf(doc).find("/lights/0/shadow/required: must be true or false"), std::string::npos);
 }
 
 TEST(Config, DegenerateGeometryIsRejected)

@@ -81,7 +81,8 @@ RayCastAgreement compareWithRayCast(const RenderedFrame& frame, size_t l, uint32
     const std::vector<float> visibility = frame.renderer.readVisibility(l);
     const test::RayCaster caster(frame.scene);
     const scene::Light& light = frame.config.lights[l].light;
-    const uint32_t resolution = frame.config.lights[l].shadow.resolution;
+    const nlohmann::json* resolutionParam = frame.config.lights[l].shadow.param("resolution");
+    const uint32_t resolution = resolutionParam ? resolutionParam->get<uint32_t>() : 2048u;
     const std::vector<render::LightFrustum>& frusta = frame.renderer.lightFrusta(l);
     const bool directional = light.type == scene::LightType::Directional;
     const double far = 4.0 * frame.scene.bounds().radius();  // a directional light sits this far back
@@ -256,7 +257,7 @@ TEST_F(MultiLight, EachLightHasItsOwnVisibilityImage)
     config::LightConfig second = cfg.lights[0];
     second.light.position = {12.0f, 14.0f, -8.0f};
     second.light.direction = glm::normalize(glm::vec3(0.0f) - second.light.position);
-    second.shadow.resolution = 1024;
+    second.shadow.setParam("resolution", 1024, "test");
     cfg.lights.push_back(second);
     const RenderedFrame frame(*context, cfg);
     ASSERT_EQ(frame.renderer.lightCount(), 2u);
@@ -283,7 +284,7 @@ TEST_P(LightTypes, VisibilityMatchesRayCastGeometry)
     config::RenderConfig cfg = defaultConfig();
     scene::Light& light = cfg.lights[0].light;
     light.type = GetParam();
-    cfg.lights[0].shadow.resolution = GetParam() == scene::LightType::Directional ? 2048 : 1024;
+    cfg.lights[0].shadow.setParam("resolution", GetParam() == scene::LightType::Directional ? 2048 : 1024, "test");
     switch (GetParam()) {
     case scene::LightType::Directional:
         light.direction = glm::normalize(glm::vec3(0.6f, -1.0f, -0.35f));
@@ -371,7 +372,7 @@ TEST_F(Materials, AlphaMaskCutsHolesInSurfacesAndShadows)
     cfg.lights[0].light.type = scene::LightType::Directional;
     cfg.lights[0].light.direction = glm::normalize(glm::vec3(1.0f, -2.0f, 0.0f));
     cfg.lights[0].light.intensity = 2.0f;
-    cfg.lights[0].shadow.resolution = 1024;
+    cfg.lights[0].shadow.setParam("resolution", 1024, "test");
     render::FrameRenderer renderer(*context, s, cfg);
     renderer.renderFrame();
     const std::vector<float> positions = renderer.readPositions();

@@ -299,8 +299,10 @@ int runValidateConfig(const ValidateFlags& flags)
                source.scale, scene.meshes.size(), scene.instances.size(), scene.triangleCount(), scene.materials.size(),
                scene.textures.size());
     for (const config::LightConfig& l : base.lights) {
-        fmt::print("light '{}': {}, intensity {:.4g}, shadow {} {}²\n", l.name, penumbra::scene::lightTypeName(l.light.type),
-                   l.light.intensity, l.shadow.technique, l.shadow.resolution);
+        std::string params;
+        for (const config::ShadowParam& p : l.shadow.params) params += fmt::format(" {}={}", p.name, p.value.dump());
+        fmt::print("light '{}': {}, intensity {:.4g}, shadow {}{}{}\n", l.name, penumbra::scene::lightTypeName(l.light.type),
+                   l.light.intensity, l.shadow.technique, l.shadow.required ? " (required)" : "", params);
     }
     fmt::print("output {}x{}, {} frame(s), culling {}, {} animation track(s) at {} fps\n", base.width, base.height,
                base.frames, config::cullingModeName(base.culling), base.animation.tracks.size(), base.animation.fps);

@@ -42,6 +42,8 @@ size_t editDistance(const std::string& a, const std::string& b)
 class Locator {
 public:
     explicit Locator(const ConfigDocument& document) : document_(document) {}
+    // "file: /json/pointer", for values whose checking happens later (plugin parameters).
+    std::string where(const std::string& pointer) const { return fmt::format("{}: {}", document_.fileFor(pointer), pointer); }
     [[noreturn]] void fail(const std::string& pointer, const std::string& what) const
     {
         throw ConfigError(fmt::format("{}: {}: {}", document_.fileFor(pointer), pointer.empty() ? "/" : pointer, what));
@@ -242,12 +244,21 @@ ShadowSettings readShadow(ObjectReader& light)
     const json* v = light.find("shadow");
     if (!v) return s;
     ObjectReader r(*v, light.locator(), light.path("shadow"));
-    s.technique = r.choice("technique", s.technique, {"hard"});
-    s.resolution = r.integer("resolution", s.resolution, 16, 16384);
-    s.depthBiasConstant = float(r.number("depth_bias", s.depthBiasConstant, 0.0, 1e6));
-    s.depthBiasSlope = float(r.number("slope_bias", s.depthBiasSlope, 0.0, 1e3));
-    s.depthBiasClamp = float(r.number("bias_clamp", s.depthBiasClamp, 0.0, 1.0));
-    r.finish("for the hard technique");
+    s.technique = r.string("technique", s.technique);
+    const bool nameOk = std::all_of(s.technique.begin(), s.technique.end(), [](char c) {
+        return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
+    });
+    if (!nameOk) r.fail(r.path("technique"), fmt::format("must be a plugin name ([a-z0-9_-]+), got \"{}\"", s.technique));
+    if (const json* required = r.find("required")) {
+        if (!required->is_boolean()) r.fail(r.path("required"), fmt::format("must be true or false, got {}", required->dump()));
+        s.required = required->get<bool>();
+    }
+    // Every other key is a parameter of the technique: its plugin's reflection checks
+    // name, type and range when the technique is created.
+    for (auto it = v->begin(); it != v->end(); ++it) {
+        if (it.key() == "technique" || it.key() == "required") continue;
+        s.params.push_back({it.key(), it.value(), light.locator().where(r.path(it.key()))});
+    }
     return s;
 }
 
@@ -512,6 +523,24 @@ const char* cullingModeName(CullingMode mode)
     case CullingMode::ReceiverMask: return "receiver-mask";
     }
     return "unknown";
+}
+
+const nlohmann::json* ShadowSettings::param(std::string_view name) const
+{
+    for (const ShadowParam& p : params)
+        if (p.name == name) return &p.value;
+    return nullptr;
+}
+
+void ShadowSettings::setParam(std::string name, nlohmann::json value, std::string where)
+{
+    for (ShadowParam& p : params)
+        if (p.name == name) {
+            p.value = std::move(value);
+            p.where = std::move(where);
+            return;
+        }
+    params.push_back({std::move(name), std::move(value), std::move(where)});
 }
 
 std::string ConfigDocument::fileFor(const std::string& pointer) const

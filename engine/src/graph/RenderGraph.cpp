@@ -163,6 +163,12 @@ PassBuilder& PassBuilder::write(std::string_view resource, Usage usage)
     return *this;
 }
 
+PassBuilder& PassBuilder::execute(ExecuteFn fn)
+{
+    graph_->passes_[pass_].execute = std::move(fn);
+    return *this;
+}
+
 RenderGraph::ResourceDecl* RenderGraph::findResource(std::string_view name)
 {
     const auto found = resourceIndex_.find(std::string(name));
@@ -265,6 +271,7 @@ public:
             if (live[p]) out->passes.push_back({passes_[p].name, passes_[p].queue, p, uses_[p], {}});
 
         describeResources(*out);
+        collectUsageFlags(*out, live);
         computeLifetimes(*out);
         assignMemorySlots(*out);
         verifyAliasing(*out);
@@ -307,6 +314,7 @@ private:
                                             access.resource, e.what()));
                 }
                 mergeUse(p, r, scope, access.direction);
+                resolved_.push_back({p, r, access.usage});
             }
         }
     }
@@ -499,6 +507,43 @@ private:
         }
     }
 
+    // The Vulkan usage flags a resource must be created with: the union over the passes
+    // that execute (a culled pass's usage must not force a flag on the resource).
+    void collectUsageFlags(CompiledGraph& out, const std::vector<bool>& live) const
+    {
+        for (const ResolvedAccess& access : resolved_) {
+            if (!live[access.pass]) continue;
+            CompiledResource& res = out.resources[access.resource];
+            switch (access.usage) {
+            case Usage::ColorAttachment: res.imageUsage |= VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT; break;
+            case Usage::DepthAttachment: res.imageUsage |= VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT; break;
+            case Usage::Sampled: res.imageUsage |= VK_IMAGE_USAGE_SAMPLED_BIT; break;
+            case Usage::Storage:
+                res.imageUsage |= VK_IMAGE_USAGE_STORAGE_BIT;
+                res.bufferUsage |= VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+                break;
+            case Usage::TransferSrc:
+                res.imageUsage |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+                res.bufferUsage |= VK_BUFFER_USAGE_TRANSFER_SRC_BIT;
+                break;
+            case Usage::TransferDst:
+                res.imageUsage |= VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+                res.bufferUsage |= VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+                break;
+            case Usage::UniformBuffer: res.bufferUsage |= VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT; break;
+            case Usage::VertexBuffer: res.bufferUsage |= VK_BUFFER_USAGE_VERTEX_BUFFER_BIT; break;
+            case Usage::IndexBuffer: res.bufferUsage |= VK_BUFFER_USAGE_INDEX_BUFFER_BIT; break;
+            case Usage::IndirectBuffer: res.bufferUsage |= VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT; break;
+            }
+        }
+        // Marked outputs are read after the frame (PNG, metrics, tests): a copy reads them.
+        for (CompiledResource& res : out.resources)
+            if (res.markedOutput) {
+                if (res.isImage) res.imageUsage |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+                else res.bufferUsage |= VK_BUFFER_USAGE_TRANSFER_SRC_BIT;
+            }
+    }
+
     void computeLifetimes(CompiledGraph& out) const
     {
         for (uint32_t i = 0; i < out.passes.size(); ++i)
@@ -627,6 +672,12 @@ private:
     std::vector<std::vector<uint32_t>> preds_;
     std::vector<std::vector<uint32_t>> succs_;
     std::vector<std::vector<uint32_t>> writers_;
+    struct ResolvedAccess {
+        uint32_t pass;
+        uint32_t resource;
+        Usage usage;
+    };
+    std::vector<ResolvedAccess> resolved_;
 };
 
 std::shared_ptr<const CompiledGraph> RenderGraph::compile()

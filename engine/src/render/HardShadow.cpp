@@ -14,6 +14,13 @@ struct VisibilityPush {  // matches shaders/hard/visibility.comp
     float faceTexels;
 };
 
+template <class T>
+T paramOr(const config::ShadowSettings& s, const char* name, T fallback)
+{
+    const nlohmann::json* v = s.param(name);
+    return v ? v->get<T>() : fallback;
+}
+
 uint32_t faceCount(const scene::Light& light)
 {
     return light.type == scene::LightType::Spot || light.type == scene::LightType::Directional ? 1u : 6u;
@@ -69,7 +76,8 @@ HardShadow::HardShadow(gpu::Context& context, std::shared_ptr<HardShadowPipeline
                        uint32_t height, size_t lightIndex)
     : context_(context),
       pipelines_(std::move(pipelines)),
-      settings_(light.shadow),
+      settings_{paramOr<uint32_t>(light.shadow, "resolution", 2048u), paramOr<float>(light.shadow, "depth_bias", 4.0f),
+                paramOr<float>(light.shadow, "slope_bias", 2.0f), paramOr<float>(light.shadow, "bias_clamp", 0.0f)},
       faceCount_(faceCount(light.light)),
       // Six faces share one atlas, 3 x 2 faces of resolution² each.
       shadowMap_(context, {settings_.resolution * (faceCount_ == 6 ? 3u : 1u),

@@ -49,7 +49,12 @@ private:
 
     gpu::Context& context_;
     std::shared_ptr<HardShadowPipelines> pipelines_;
-    config::ShadowSettings settings_;
+    struct Settings {
+        uint32_t resolution = 2048;
+        float depthBiasConstant = 4.0f;
+        float depthBiasSlope = 2.0f;
+        float depthBiasClamp = 0.0f;
+    } settings_;
     uint32_t faceCount_ = 1;
     glm::vec3 lightPosition_{0.0f};
     std::vector<LightFrustum> frusta_;

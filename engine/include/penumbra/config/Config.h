@@ -21,20 +21,27 @@
 
 namespace penumbra::config {
 
+// One technique parameter as the config (or --set) gives it; the plugin's reflection
+// (plugin/Params.h) checks it when the technique is created.
+struct ShadowParam {
+    std::string name;
+    nlohmann::json value;
+    std::string where;  // "scene.json: /lights/0/shadow/pcf_kernel" or "--set hard.pcf_kernel"
+};
+
+// "shadow": {"technique": "hard", "required": true, "pcf_kernel": 5, ...}: the technique
+// plugin, whether a failure to load it ends the run, and every other key as a parameter.
 struct ShadowSettings {
     std::string technique = "hard";
-    uint32_t resolution = 2048;  // shadow-map texels per side (per cube face for point lights)
-    // Depth bias in Vulkan's units: constant in multiples of the depth format's minimum
-    // resolvable difference at the primitive's depth, slope as a factor of the
-    // primitive's maximum depth slope, clamp as a depth difference (0: no clamp). The
-    // engine applies them away from the light whatever the depth convention (reversed-Z).
-    // Slope 2: a receiver is up to half a texel from the centre of the texel it samples
-    // in each axis (one max slope), and near texel borders the sampler's fixed-point
-    // coordinates may pick the neighbour (one more); 1.5 left isolated acne pixels on
-    // surfaces at ~78 degrees from the light in tests/test_render.cpp.
-    float depthBiasConstant = 4.0f;
-    float depthBiasSlope = 2.0f;
-    float depthBiasClamp = 0.0f;
+    // A required technique that fails to load or register stops the run (exit != 0);
+    // otherwise the light is rendered unshadowed (V = 1) with a warning.
+    bool required = false;
+    std::vector<ShadowParam> params;
+
+    // The parameter's value as given, or null when the config leaves it at the default.
+    const nlohmann::json* param(std::string_view name) const;
+    // Sets (or replaces) a parameter.
+    void setParam(std::string name, nlohmann::json value, std::string where);
 };
 
 struct LightConfig {

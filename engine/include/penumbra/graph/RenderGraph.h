@@ -3,10 +3,13 @@
 // Passes declare which images and buffers they read and write, with a usage from which
 // the layout and the synchronization2 stage/access masks follow. compile() orders the
 // passes, culls those whose outputs nothing needs, computes lifetimes, aliases transient
-// memory and derives the barriers. Executing on a device is not part of this file yet.
+// memory and derives the barriers. graph/GraphExecutor.h records a compiled graph into a
+// command buffer: it allocates the transient resources, inserts the barriers and runs
+// each pass's execute callback between a debug label and two GPU timestamps.
 #include <vulkan/vulkan.h>
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -114,6 +117,9 @@ struct CompiledResource {
     int firstUse = -1;           // pass index in CompiledGraph::passes; -1: unused
     int lastUse = -1;            // marked outputs: the last pass
     int memorySlot = -1;         // transient and used only
+    // Every usage that any executed pass declares, for creating the resource.
+    VkImageUsageFlags imageUsage = 0;
+    VkBufferUsageFlags bufferUsage = 0;
 };
 
 // A block of device memory shared by transient resources with disjoint lifetimes.
@@ -139,12 +145,20 @@ struct CompiledGraph {
 void verifyAliasing(const CompiledGraph& graph);
 
 class RenderGraph;
+class PassContext;  // graph/GraphExecutor.h
+
+// Records a pass's commands. Called once per executed frame, only for passes that
+// survived culling, with the resources the pass declared bound in `PassContext`.
+using ExecuteFn = std::function<void(PassContext&)>;
 
 // A handle for declaring a pass's accesses; valid while its RenderGraph lives.
 class PassBuilder {
 public:
     PassBuilder& read(std::string_view resource, Usage usage);
     PassBuilder& write(std::string_view resource, Usage usage);
+    // The pass's command recording. Setting it does not change the graph's structure
+    // (the compiled graph stays cached).
+    PassBuilder& execute(ExecuteFn fn);
 
 private:
     friend class RenderGraph;
@@ -170,6 +184,10 @@ public:
 
     uint64_t version() const { return version_; }
 
+    // The execute callback of the pass declared `declarationIndex`-th (see
+    // CompiledPass::declarationIndex); empty when none was set.
+    const ExecuteFn& executeFn(uint32_t declarationIndex) const { return passes_.at(declarationIndex).execute; }
+
 private:
     friend class PassBuilder;
     struct ResourceDecl {
@@ -188,6 +206,7 @@ private:
         QueueKind queue;
         bool sideEffect;
         std::vector<AccessDecl> accesses;
+        ExecuteFn execute;
     };
 
     void addAccess(uint32_t pass, std::string_view resource, Usage usage, Access direction);

@@ -1,0 +1,70 @@
+#pragma once
+// The plugin ABI: what a shadow-technique shared library exports. One C symbol,
+// `penumbra_plugin_entry`, returns a static PenumbraPluginInfo whose first member is the
+// ABI version the plugin was built against; the engine reads that member before it
+// touches anything else and refuses the plugin when it differs from its own. The rest
+// (name, version, summary, reflected parameters, factory) is read only after the check.
+//
+// Plugins are C++ and share the engine's C++ types (they are built against these headers
+// with the same compiler), so the ABI version is raised whenever any public engine header
+// changes a type that crosses the boundary. A minimal plugin (docs/plugins.md):
+//
+//   PENUMBRA_PLUGIN_EXPORT const PenumbraPluginInfo* penumbra_plugin_entry()
+//   {
+//       static const PenumbraPluginInfo info{PENUMBRA_PLUGIN_ABI_VERSION, "mine", "1.0",
+//           "what it does", kParams, std::size(kParams), &createMine, PENUMBRA_PLUGIN_SHADER_DIR};
+//       return &info;
+//   }
+#include <cstdint>
+
+#define PENUMBRA_PLUGIN_ABI_VERSION 1u
+#define PENUMBRA_PLUGIN_ENTRY_SYMBOL "penumbra_plugin_entry"
+#define PENUMBRA_PLUGIN_EXPORT extern "C" __attribute__((visibility("default")))
+
+namespace penumbra::plugin {
+
+class Technique;
+struct TechniqueSetup;
+
+enum class ParamType : uint32_t { Bool, Int, Float, Enum };
+
+// One reflected parameter. Plain data with static storage in the plugin, so that the
+// engine can list parameters (`penumbra plugins`) without creating a technique.
+struct ParamSpec {
+    const char* name;       // snake_case, unique in the plugin: "pcf_kernel"
+    ParamType type;
+    double defaultValue;    // Bool: 0/1; Enum: index into choices
+    double minValue;        // Int/Float: inclusive range; ignored for Bool/Enum
+    double maxValue;
+    const char* unit;       // "texels", "world", "" when unitless
+    const char* doc;        // one line
+    const char* const* choices = nullptr;  // Enum only
+    uint32_t choiceCount = 0;
+};
+
+// Creates a technique for one light. May throw penumbra::Error (bad parameters, a
+// shader that does not compile): the engine reports it as an exception during
+// registration, naming the plugin and the light.
+using CreateTechniqueFn = Technique* (*)(const TechniqueSetup& setup);
+
+} // namespace penumbra::plugin
+
+extern "C" {
+
+struct PenumbraPluginInfo {
+    uint32_t abiVersion;  // first, and never moved: PENUMBRA_PLUGIN_ABI_VERSION
+    const char* name;     // the technique name configs use: "hard"
+    const char* version;  // the plugin's own version: "1.2.0"
+    const char* summary;  // one line
+    const penumbra::plugin::ParamSpec* params;
+    uint32_t paramCount;
+    penumbra::plugin::CreateTechniqueFn create;
+    // Where the plugin's GLSL lives when built (absolute; the CMake helper
+    // penumbra_add_plugin defines PENUMBRA_PLUGIN_SHADER_DIR). When that folder does not
+    // exist (an installed plugin), the engine looks in <plugin file's folder>/<name>/.
+    const char* shaderDir;
+};
+
+using PenumbraPluginEntryFn = const PenumbraPluginInfo* (*)();
+
+} // extern "C"

@@ -1,0 +1,71 @@
+#pragma once
+// A shadow technique instance: one per light that uses it. It registers its passes into
+// the frame's render graph and writes that light's visibility image V_l (DESIGN.md: the
+// one contract between the engine and a technique), drawing casters only through the
+// engine's caster interface (render/Casters.h).
+#include "penumbra/config/Config.h"
+#include "penumbra/gpu/ShaderCompiler.h"
+#include "penumbra/graph/RenderGraph.h"
+#include "penumbra/plugin/Params.h"
+#include "penumbra/render/Casters.h"
+#include "penumbra/scene/Scene.h"
+
+#include <string>
+
+namespace penumbra::gpu {
+class Context;
+}
+
+namespace penumbra::plugin {
+
+// Everything a technique needs when it is created; references stay valid for the
+// technique's lifetime.
+struct TechniqueSetup {
+    gpu::Context& context;
+    // Searches the plugin's shader folder first, then the engine's shaders/ (for
+    // common/*.glsl).
+    const gpu::ShaderCompiler& shaders;
+    const render::Casters& casters;
+    const ParamValues& params;
+    const scene::Light& light;      // as configured (the first frame's state)
+    scene::Aabb sceneBounds;
+    uint32_t lightIndex = 0;
+    uint32_t width = 0;             // the visibility image's size (the output's)
+    uint32_t height = 0;
+};
+
+// Names of the engine's images a technique may use, as declared in the graph, and the
+// one it must write.
+struct LightPassIo {
+    // Prefix for the technique's own pass and resource names, so that two lights using
+    // one technique never collide: "light0.hard.".
+    std::string prefix;
+    // G-buffer (screen size): world position (RGBA32F, w = 0 where no geometry), world
+    // normal (RGBA16F), reversed-Z depth (D32). Read as Usage::Storage (position, normal)
+    // or Usage::Sampled.
+    std::string gPosition = "gbuffer.position";
+    std::string gNormal = "gbuffer.normal";
+    std::string gDepth = "gbuffer.depth";
+    // V_l: R32F, screen size, values in [0, 1] (shaders/common/visibility.glsl). The
+    // technique must write every pixel of it in one of its passes (Usage::Storage or
+    // Usage::ColorAttachment / TransferDst).
+    std::string visibility;
+
+    std::string local(std::string_view name) const { return prefix + std::string(name); }
+};
+
+class Technique {
+public:
+    virtual ~Technique() = default;
+
+    // The light or the scene moved (an animated frame): refit frusta, update buffers.
+    // Called before the frame's graph executes; the graph itself is not rebuilt.
+    virtual void update(const scene::Light& light, const scene::Aabb& sceneBounds) = 0;
+
+    // Declares the technique's resources and passes (with their execute callbacks) into
+    // the frame's graph. Called once per graph build; the callbacks run every frame and
+    // read the state that update() left.
+    virtual void registerPasses(graph::RenderGraph& graph, const LightPassIo& io) = 0;
+};
+
+} // namespace penumbra::plugin
