@@ -44,7 +44,7 @@ void scaleConfig(config::RenderConfig& c, float s)
 // One rendered frame and what the tests read back from it.
 struct RenderedFrame {
     RenderedFrame(gpu::Context& context, const config::RenderConfig& cfg)
-        : config(cfg), scene(config::buildScene(cfg.scene)), renderer(context, scene, cfg)
+        : config(cfg), scene(config::buildScene(cfg.scene)), renderer(context, scene, cfg, test::plugins())
     {
         renderer.renderFrame();
         positions = renderer.readPositions();
@@ -83,7 +83,7 @@ RayCastAgreement compareWithRayCast(const RenderedFrame& frame, size_t l, uint32
     const scene::Light& light = frame.config.lights[l].light;
     const nlohmann::json* resolutionParam = frame.config.lights[l].shadow.param("resolution");
     const uint32_t resolution = resolutionParam ? resolutionParam->get<uint32_t>() : 2048u;
-    const std::vector<render::LightFrustum>& frusta = frame.renderer.lightFrusta(l);
+    const std::vector<render::LightFrustum> frusta = render::shadowFrusta(light, frame.scene.bounds());
     const bool directional = light.type == scene::LightType::Directional;
     const double far = 4.0 * frame.scene.bounds().radius();  // a directional light sits this far back
     const uint32_t w = frame.config.width, h = frame.config.height;
@@ -219,7 +219,8 @@ TEST_P(DefaultRender, ColorImageHasShadowsDarkerThanLitGround)
     // Mean luminance of ground pixels (y ~ 0) in and out of shadow, inside the spot.
     double lit = 0.0, shadow = 0.0;
     size_t nLit = 0, nShadow = 0;
-    const glm::mat4 lightViewProj = frame->renderer.lightFrustum(0).viewProj;
+    const glm::mat4 lightViewProj =
+        render::shadowFrusta(frame->config.lights[0].light, frame->scene.bounds()).front().viewProj;
     const float groundTolerance = 1e-4f * frame->scene.bounds().radius();
     for (size_t i = 0; i < visibility.size(); ++i) {
         const float* p = &frame->positions[4 * i];
@@ -302,7 +303,8 @@ TEST_P(LightTypes, VisibilityMatchesRayCastGeometry)
         light.intensity = 300.0f;
     }
     const RenderedFrame frame(*context, cfg);
-    EXPECT_EQ(frame.renderer.lightFrusta(0).size(), GetParam() == scene::LightType::Directional ? 1u : 6u);
+    EXPECT_EQ(render::shadowFrusta(frame.config.lights[0].light, frame.scene.bounds()).size(),
+              GetParam() == scene::LightType::Directional ? 1u : 6u);
     const RayCastAgreement a = compareWithRayCast(frame, 0);
     EXPECT_EQ(a.mismatches, 0u);
     EXPECT_GT(a.surelyShadowed, 300u);
@@ -373,7 +375,7 @@ TEST_F(Materials, AlphaMaskCutsHolesInSurfacesAndShadows)
     cfg.lights[0].light.direction = glm::normalize(glm::vec3(1.0f, -2.0f, 0.0f));
     cfg.lights[0].light.intensity = 2.0f;
     cfg.lights[0].shadow.setParam("resolution", 1024, "test");
-    render::FrameRenderer renderer(*context, s, cfg);
+    render::FrameRenderer renderer(*context, s, cfg, test::plugins());
     renderer.renderFrame();
     const std::vector<float> positions = renderer.readPositions();
     const std::vector<float> v = renderer.readVisibility(0);

@@ -3,10 +3,12 @@
 // procedural scene as glTF; `penumbra validate scene.gltf` loads and repairs a glTF
 // file (or checks a config) and says what it found; `penumbra devices` lists the
 // Vulkan devices the loader sees.
+#include "GraphCommand.h"
 #include "penumbra/config/Config.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/io/Png.h"
+#include "penumbra/plugin/PluginRegistry.h"
 #include "penumbra/render/FrameRenderer.h"
 #include "penumbra/scene/Generators.h"
 #include "penumbra/scene/GltfWriter.h"
@@ -127,7 +129,9 @@ int runRender(const RenderFlags& flags, const DeviceFlags& deviceFlags)
     spdlog::info("device: {} ({})", context.deviceInfo().name, context.deviceInfo().type);
     penumbra::scene::Scene scene = penumbra::config::buildScene(config);
     const penumbra::config::RenderConfig rest = config;  // the animation's starting point
-    penumbra::render::FrameRenderer renderer(context, scene, config);
+    penumbra::plugin::PluginRegistry plugins;
+    penumbra::render::FrameRenderer renderer(context, scene, config, plugins);
+    for (const std::string& warning : renderer.warnings()) spdlog::warn("{}", warning);
     spdlog::info("scene: {} instances, {} triangles; {}x{}, {} light(s), {} frame(s)", scene.instances.size(),
                  scene.triangleCount(), config.width, config.height, config.lights.size(), config.frames);
 
@@ -402,6 +406,18 @@ int main(int argc, char** argv)
 
     CLI::App* devices = app.add_subcommand("devices", "List the Vulkan devices the loader reports");
 
+    penumbra::app::GraphFlags graphFlags;
+    CLI::App* graph = app.add_subcommand("graph", "Print the frame's compiled render graph: passes in order with their "
+                                                  "barriers, culled passes and why, resources with size and aliasing");
+    graph->add_option("config", graphFlags.config, "Scene config (JSON)")->required();
+    graph->add_option("--format", graphFlags.format, "text, or dot (Graphviz)")
+        ->check(CLI::IsMember({"text", "dot"}))
+        ->capture_default_str();
+    graph->add_option("-o,--output", graphFlags.output, "Write to this file instead of stdout");
+    graph->add_option("--width", graphFlags.width, "Output width (overrides the config)")->check(CLI::Range(1u, 16384u));
+    graph->add_option("--height", graphFlags.height, "Output height (overrides the config)")->check(CLI::Range(1u, 16384u));
+    addDeviceFlags(graph);
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -415,6 +431,7 @@ int main(int argc, char** argv)
         if (generate->parsed()) return runGenerate(generateFlags);
         if (validate->parsed()) return runValidate(validateFlags);
         if (devices->parsed()) return runDevices();
+        if (graph->parsed()) return penumbra::app::runGraph(graphFlags, contextOptions(deviceFlags));
     } catch (const penumbra::Error& e) {
         fmt::print(stderr, "penumbra: error: {}\n", e.what());
         return 1;

@@ -18,4 +18,10 @@ void expectNoValidationMessages(const gpu::Context& context)
     }
 }
 
+plugin::PluginRegistry& plugins()
+{
+    static plugin::PluginRegistry registry;
+    return registry;
+}
+
 } // namespace penumbra::test

@@ -163,6 +163,15 @@ PassBuilder& PassBuilder::write(std::string_view resource, Usage usage)
     return *this;
 }
 
+bool RenderGraph::isWritten(std::string_view resource) const
+{
+    return std::any_of(passes_.begin(), passes_.end(), [&](const PassDecl& pass) {
+        return std::any_of(pass.accesses.begin(), pass.accesses.end(), [&](const AccessDecl& a) {
+            return a.direction == Access::Write && a.resource == resource;
+        });
+    });
+}
+
 PassBuilder& PassBuilder::execute(ExecuteFn fn)
 {
     graph_->passes_[pass_].execute = std::move(fn);

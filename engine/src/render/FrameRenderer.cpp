@@ -1,6 +1,5 @@
 #include "penumbra/render/FrameRenderer.h"
 
-#include "HardShadow.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
 #include "penumbra/gpu/Check.h"
@@ -18,6 +17,7 @@ constexpr VkFormat kNormalFormat = VK_FORMAT_R16G16B16A16_SFLOAT;
 constexpr VkFormat kAlbedoFormat = VK_FORMAT_R8G8B8A8_UNORM;
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
 constexpr VkFormat kColorFormat = VK_FORMAT_R8G8B8A8_UNORM;
+constexpr VkFormat kVisibilityFormat = VK_FORMAT_R32_SFLOAT;  // shaders/common/visibility.glsl
 
 struct LightData {  // matches shaders/common/light.glsl
     glm::vec4 positionWorld;
@@ -35,30 +35,26 @@ double msSince(std::chrono::steady_clock::time_point start)
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
-gpu::Image gbufferImage(gpu::Context& context, uint32_t w, uint32_t h, VkFormat format, const char* name)
-{
-    return gpu::Image(context, {w, h, format,
-                                VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
-                                    VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                                name});
-}
+// Graph names of the engine's images (plugin::LightPassIo refers to the G-buffer ones).
+constexpr const char* kGPosition = "gbuffer.position";
+constexpr const char* kGNormal = "gbuffer.normal";
+constexpr const char* kGAlbedo = "gbuffer.albedo";
+constexpr const char* kGDepth = "gbuffer.depth";
+constexpr const char* kColor = "color";
 
 } // namespace
 
-FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, const config::RenderConfig& config)
+FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, const config::RenderConfig& config,
+                             plugin::PluginRegistry& plugins)
     : context_(context),
+      plugins_(plugins),
       compiler_({gpu::engineShaderDir()}),
       width_(config.width),
       height_(config.height),
       sceneGpu_(context, scene),
-      gPosition_(gbufferImage(context, width_, height_, kPositionFormat, "gbuffer.position")),
-      gNormal_(gbufferImage(context, width_, height_, kNormalFormat, "gbuffer.normal")),
-      gAlbedo_(gbufferImage(context, width_, height_, kAlbedoFormat, "gbuffer.albedo")),
-      gDepth_(context, {width_, height_, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, "gbuffer.depth"}),
-      color_(context, {width_, height_, kColorFormat, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                       "color"}),
+      casters_(sceneGpu_),
       lightBuffer_(context, sizeof(LightData) * config::kMaxLights, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "lights"),
-      timer_(context, 2 + 2 * config::kMaxLights)
+      executor_(context)
 {
     if (config.lights.empty() || config.lights.size() > config::kMaxLights) {
         throw Error(fmt::format("{} lights: expected 1 to {}", config.lights.size(), config::kMaxLights));
@@ -101,12 +97,9 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
     shadingPipeline_ = gpu::Pipeline(context, compiler_, s);
     nearestSampler_ = gpu::createSampler(context, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
 
-    const scene::Aabb bounds = scene.bounds();
-    auto pipelines = std::make_shared<HardShadowPipelines>(context, compiler_, sceneGpu_.vertexStride());
-    for (size_t i = 0; i < config.lights.size(); ++i) {
-        shadows_.push_back(std::make_unique<HardShadow>(context, pipelines, config.lights[i], bounds, width_, height_, i));
-    }
-    updateLights(config, bounds);
+    createTechniques(config, scene);
+    updateLights(config, scene.bounds());
+    buildGraph();
 
     VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
     alloc.commandPool = context.commandPool();
@@ -118,22 +111,154 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
 FrameRenderer::~FrameRenderer()
 {
     vkDeviceWaitIdle(context_.device());
-    vkFreeCommandBuffers(context_.device(), context_.commandPool(), 1, &cmd_);
+    if (cmd_) vkFreeCommandBuffers(context_.device(), context_.commandPool(), 1, &cmd_);
     vkDestroySampler(context_.device(), nearestSampler_, nullptr);
+    // Techniques are plugin code: destroy them (and the graph, whose callbacks they own)
+    // while the registry still holds their libraries.
+    graph_.reset();
+    lights_.clear();
 }
 
-size_t FrameRenderer::lightCount() const { return shadows_.size(); }
+void FrameRenderer::createTechniques(const config::RenderConfig& config, const scene::Scene& scene)
+{
+    lights_.resize(config.lights.size());
+    for (size_t i = 0; i < config.lights.size(); ++i) {
+        const config::LightConfig& lc = config.lights[i];
+        LightSlot& slot = lights_[i];
+        slot.visibility = fmt::format("light{}.visibility", i);
+        slot.required = lc.shadow.required;
+        slot.light = lc.light;
+        const std::string who = fmt::format("light {} ('{}')", i, lc.name);
+        try {
+            slot.plugin = &plugins_.load(lc.shadow.technique);
+        } catch (const plugin::PluginError& e) {
+            if (slot.required) throw plugin::PluginError(e.kind(), fmt::format("{}: {}", who, e.what()));
+            dropTechnique(i, e.what());
+            continue;
+        }
+        // Bad parameter values are the config's fault, not the plugin's: always an error.
+        slot.params = std::make_unique<plugin::ParamValues>(slot.plugin->defaultParams());
+        for (const config::ShadowParam& p : lc.shadow.params) slot.params->set(p.name, p.value, p.where);
 
-const LightFrustum& FrameRenderer::lightFrustum(size_t light) const { return shadows_.at(light)->frusta().front(); }
+        auto& shaders = pluginShaders_[lc.shadow.technique];
+        if (!shaders) {
+            shaders = std::make_unique<gpu::ShaderCompiler>(
+                std::vector<std::filesystem::path>{slot.plugin->shaderDir, gpu::engineShaderDir()});
+        }
+        const plugin::TechniqueSetup setup{context_, *shaders,   casters_, *slot.params, slot.light,
+                                           scene.bounds(), uint32_t(i), width_, height_};
+        try {
+            slot.instance = plugins_.create(*slot.plugin, setup, who);
+            slot.technique = lc.shadow.technique;
+        } catch (const plugin::PluginError& e) {
+            if (slot.required) throw;
+            dropTechnique(i, e.what());
+        }
+    }
+}
 
-const std::vector<LightFrustum>& FrameRenderer::lightFrusta(size_t light) const { return shadows_.at(light)->frusta(); }
+void FrameRenderer::dropTechnique(size_t light, const std::string& why)
+{
+    LightSlot& slot = lights_[light];
+    slot.instance.reset();
+    slot.technique.clear();
+    warnings_.push_back(fmt::format("light {}: rendered without shadows: {}", light, why));
+}
+
+// Declares the frame: engine resources and passes, every technique's passes, shading.
+// A technique that throws while registering is dropped (unless required) and the graph
+// is declared again without it, so that no half-registered pass stays behind.
+void FrameRenderer::buildGraph()
+{
+    for (;;) {
+        graph_ = std::make_unique<graph::RenderGraph>();
+        graph::RenderGraph& g = *graph_;
+        g.declareImage({kGPosition, width_, height_, kPositionFormat});
+        g.declareImage({kGNormal, width_, height_, kNormalFormat});
+        g.declareImage({kGAlbedo, width_, height_, kAlbedoFormat});
+        g.declareImage({kGDepth, width_, height_, kDepthFormat});
+        g.declareImage({kColor, width_, height_, kColorFormat});
+        g.addPass("gbuffer", graph::QueueKind::Graphics)
+            .write(kGPosition, graph::Usage::ColorAttachment)
+            .write(kGNormal, graph::Usage::ColorAttachment)
+            .write(kGAlbedo, graph::Usage::ColorAttachment)
+            .write(kGDepth, graph::Usage::DepthAttachment)
+            .execute([this](graph::PassContext& pass) { recordGBuffer(pass); });
+
+        bool restart = false;
+        for (size_t i = 0; i < lights_.size() && !restart; ++i) {
+            g.declareImage({lights_[i].visibility, width_, height_, kVisibilityFormat});
+            restart = !registerTechnique(i);
+        }
+        if (restart) continue;
+
+        graph::PassBuilder shading = g.addPass("shading", graph::QueueKind::Compute);
+        shading.read(kGPosition, graph::Usage::Storage)
+            .read(kGNormal, graph::Usage::Storage)
+            .read(kGAlbedo, graph::Usage::Storage)
+            .write(kColor, graph::Usage::Storage)
+            .execute([this](graph::PassContext& pass) { recordShading(pass); });
+        for (const LightSlot& slot : lights_) shading.read(slot.visibility, graph::Usage::Sampled);
+        // The colour image is the frame's result; V_l and the G-buffer surfaces are read
+        // back by metrics and tests.
+        g.markOutput(kColor);
+        g.markOutput(kGPosition);
+        g.markOutput(kGNormal);
+        for (const LightSlot& slot : lights_) g.markOutput(slot.visibility);
+        g.compile();
+        return;
+    }
+}
+
+// Registers light `light`'s technique passes, or the unshadowed fallback. Returns false
+// when the technique failed and was dropped: the graph must be declared again.
+bool FrameRenderer::registerTechnique(size_t light)
+{
+    LightSlot& slot = lights_[light];
+    graph::RenderGraph& g = *graph_;
+    if (slot.instance) {
+        plugin::LightPassIo io;
+        io.prefix = fmt::format("light{}.{}.", light, slot.technique);
+        io.gPosition = kGPosition;
+        io.gNormal = kGNormal;
+        io.gDepth = kGDepth;
+        io.visibility = slot.visibility;
+        std::string failure;
+        try {
+            slot.instance->registerPasses(g, io);
+            if (!g.isWritten(slot.visibility)) {
+                failure = fmt::format("registered no pass that writes '{}' (the light's visibility image)",
+                                      slot.visibility);
+            }
+        } catch (const std::exception& e) {
+            failure = fmt::format("exception during registration: {}", e.what());
+        }
+        if (failure.empty()) return true;
+        const std::string message = fmt::format("plugin '{}' (light {}): {}", slot.technique, light, failure);
+        if (slot.required) throw plugin::PluginError(plugin::PluginErrorKind::RegistrationFailed, message);
+        dropTechnique(light, message);
+        return false;
+    }
+    // No technique: the light is unshadowed, V = 1 (the contract's neutral value).
+    const std::string name = slot.visibility;
+    g.addPass(fmt::format("light{}.unshadowed", light), graph::QueueKind::Graphics)
+        .write(name, graph::Usage::TransferDst)
+        .execute([name](graph::PassContext& pass) {
+            const VkClearColorValue one{{1.0f, 1.0f, 1.0f, 1.0f}};
+            VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+            vkCmdClearColorImage(pass.cmd(), pass.image(name).handle(), pass.layout(name), &one, 1, &range);
+        });
+    return true;
+}
+
+const graph::CompiledGraph& FrameRenderer::compiledGraph() { return *graph_->compile(); }
 
 void FrameRenderer::update(const config::RenderConfig& config, const scene::Scene& scene,
                            const std::vector<uint32_t>& movedInstances)
 {
-    if (config.lights.size() != shadows_.size()) {
+    if (config.lights.size() != lights_.size()) {
         throw Error(fmt::format("FrameRenderer::update: {} lights, the renderer was built for {}", config.lights.size(),
-                                shadows_.size()));
+                                lights_.size()));
     }
     cameraViewProj_ = render::cameraViewProj(config.camera, float(width_) / float(height_));
     if (!movedInstances.empty()) sceneGpu_.updateInstances(context_, scene);
@@ -152,20 +277,8 @@ void FrameRenderer::updateLights(const config::RenderConfig& config, const scene
         lights[i].positionWorld = glm::vec4(l.position, float(int(l.type)));
         lights[i].direction = glm::vec4(glm::normalize(l.direction), std::cos(glm::radians(l.outerConeDeg)));
         lights[i].radiance = glm::vec4(l.color * l.intensity, std::cos(glm::radians(l.innerConeDeg)));
-        shadows_[i]->update(l, sceneBounds);
+        if (lights_[i].instance) lights_[i].instance->update(l, sceneBounds);
     }
-}
-
-template <class F>
-void FrameRenderer::timedPass(VkCommandBuffer cmd, const std::string& name, FrameTimings& timings, F&& record)
-{
-    const auto start = std::chrono::steady_clock::now();
-    context_.beginLabel(cmd, name);
-    const uint32_t scope = timer_.beginScope(cmd, name);
-    record();
-    timer_.endScope(cmd, scope);
-    context_.endLabel(cmd);
-    timings.passes.push_back({name, 0.0, msSince(start)});
 }
 
 FrameTimings FrameRenderer::renderFrame()
@@ -176,51 +289,33 @@ FrameTimings FrameRenderer::renderFrame()
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     gpu::check(vkBeginCommandBuffer(cmd_, &begin), "vkBeginCommandBuffer (frame)");
-    timer_.beginFrame(cmd_);
-
-    timedPass(cmd_, "gbuffer", timings, [&] { recordGBuffer(cmd_); });
-    for (size_t i = 0; i < shadows_.size(); ++i) {
-        const HardShadow& shadow = *shadows_[i];
-        timedPass(cmd_, fmt::format("light{}.hard.shadow_map", i), timings,
-                  [&] { shadow.recordShadowMap(cmd_, sceneGpu_); });
-        timedPass(cmd_, fmt::format("light{}.hard.visibility", i), timings,
-                  [&] { shadow.recordVisibility(cmd_, gPosition_); });
-    }
-    timedPass(cmd_, "shading", timings, [&] { recordShading(cmd_); });
+    executor_.record(cmd_, *graph_);
     gpu::check(vkEndCommandBuffer(cmd_), "vkEndCommandBuffer (frame)");
-
     context_.submitAndWait(cmd_);
-
-    const std::vector<gpu::ScopeTime> gpuTimes = timer_.collect();
-    for (size_t i = 0; i < gpuTimes.size() && i < timings.passes.size(); ++i) {
-        timings.passes[i].gpuMs = gpuTimes[i].gpuMs;
-    }
+    timings.passes = executor_.collectTimings();
     timings.frameCpuMs = msSince(frameStart);
     return timings;
 }
 
-void FrameRenderer::recordGBuffer(VkCommandBuffer cmd)
+void FrameRenderer::recordGBuffer(graph::PassContext& pass)
 {
-    for (const gpu::Image* image : {&gPosition_, &gNormal_, &gAlbedo_}) {
-        gpu::transition(cmd, *image, gpu::access::kUndefined, gpu::access::kColorAttachment);
-    }
-    gpu::transition(cmd, gDepth_, gpu::access::kUndefined, gpu::access::kDepthAttachment);
-
+    const VkCommandBuffer cmd = pass.cmd();
     VkRenderingAttachmentInfo colors[3];
-    const gpu::Image* targets[3] = {&gPosition_, &gNormal_, &gAlbedo_};
+    const char* targets[3] = {kGPosition, kGNormal, kGAlbedo};
     for (int i = 0; i < 3; ++i) {
         colors[i] = {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-        colors[i].imageView = targets[i]->view();
+        colors[i].imageView = pass.image(targets[i]).view();
         colors[i].imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
         colors[i].loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
         colors[i].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
         colors[i].clearValue.color = {{0.0f, 0.0f, 0.0f, 0.0f}};  // w = 0: no geometry
     }
     VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-    depth.imageView = gDepth_.view();
+    depth.imageView = pass.image(kGDepth).view();
     depth.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
     depth.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-    depth.storeOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+    // Kept: a technique (or the visibility service) may read the camera depth.
+    depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
     depth.clearValue.depthStencil = {0.0f, 0};
     VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
     info.renderArea = {{0, 0}, {width_, height_}};
@@ -243,53 +338,44 @@ void FrameRenderer::recordGBuffer(VkCommandBuffer cmd)
             .push(context_, cmd, gbufferPipeline_);
     });
     vkCmdEndRendering(cmd);
-
-    for (const gpu::Image* image : targets) {
-        gpu::transition(cmd, *image, gpu::access::kColorAttachment, gpu::access::kComputeRead);
-    }
 }
 
-void FrameRenderer::recordShading(VkCommandBuffer cmd)
+void FrameRenderer::recordShading(graph::PassContext& pass)
 {
-    gpu::transition(cmd, color_, gpu::access::kUndefined, gpu::access::kComputeWrite);
+    const VkCommandBuffer cmd = pass.cmd();
     std::vector<const gpu::Image*> visibility;
-    for (const auto& shadow : shadows_) visibility.push_back(&shadow->visibility());
+    for (const LightSlot& slot : lights_) visibility.push_back(&pass.image(slot.visibility));
     shadingPipeline_.bind(cmd);
     gpu::DescriptorPush()
-        .storageImage(0, gPosition_)
-        .storageImage(1, gNormal_)
-        .storageImage(2, gAlbedo_)
+        .storageImage(0, pass.image(kGPosition))
+        .storageImage(1, pass.image(kGNormal))
+        .storageImage(2, pass.image(kGAlbedo))
         .sampledImages(3, visibility, nearestSampler_)
         .storageBuffer(4, lightBuffer_)
-        .storageImage(5, color_)
+        .storageImage(5, pass.image(kColor))
         .push(context_, cmd, shadingPipeline_);
     const ShadingPush push{ambient_, background_};
     shadingPipeline_.pushConstants(cmd, &push, sizeof(push));
     vkCmdDispatch(cmd, (width_ + 7) / 8, (height_ + 7) / 8, 1);
-    gpu::transition(cmd, color_, gpu::access::kComputeWrite, gpu::access::kComputeRead);
 }
 
 std::vector<uint8_t> FrameRenderer::readColor() const
 {
-    const std::vector<std::byte> bytes = gpu::readImage(context_, color_, VK_IMAGE_LAYOUT_GENERAL);
+    const std::vector<std::byte> bytes = gpu::readImage(context_, executor_.image(kColor), executor_.finalLayout(kColor));
     std::vector<uint8_t> out(bytes.size());
     std::memcpy(out.data(), bytes.data(), bytes.size());
     return out;
 }
 
-std::vector<float> FrameRenderer::readVisibility(size_t light) const
+std::vector<float> FrameRenderer::readFloats(const std::string& name) const
 {
-    return gpu::readImageFloats(context_, shadows_.at(light)->visibility(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    return gpu::readImageFloats(context_, executor_.image(name), executor_.finalLayout(name));
 }
 
-std::vector<float> FrameRenderer::readPositions() const
-{
-    return gpu::readImageFloats(context_, gPosition_, VK_IMAGE_LAYOUT_GENERAL);
-}
+std::vector<float> FrameRenderer::readVisibility(size_t light) const { return readFloats(lights_.at(light).visibility); }
 
-std::vector<float> FrameRenderer::readNormals() const
-{
-    return gpu::readImageFloats(context_, gNormal_, VK_IMAGE_LAYOUT_GENERAL);
-}
+std::vector<float> FrameRenderer::readPositions() const { return readFloats(kGPosition); }
+
+std::vector<float> FrameRenderer::readNormals() const { return readFloats(kGNormal); }
 
 } // namespace penumbra::render

@@ -184,6 +184,9 @@ public:
 
     uint64_t version() const { return version_; }
 
+    // Whether any declared pass writes `resource` (before culling).
+    bool isWritten(std::string_view resource) const;
+
     // The execute callback of the pass declared `declarationIndex`-th (see
     // CompiledPass::declarationIndex); empty when none was set.
     const ExecuteFn& executeFn(uint32_t declarationIndex) const { return passes_.at(declarationIndex).execute; }

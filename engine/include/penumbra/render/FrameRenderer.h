@@ -1,38 +1,43 @@
 #pragma once
-// One frame, end to end (DESIGN.md): G-buffer -> per light: shadow technique passes ->
-// visibility image V_l -> shading -> colour image. The foundation's fixed pipeline; the
-// pass scheduler and technique plugins of later issues take over its middle part.
+// One frame, end to end (DESIGN.md), as a render graph: the engine's G-buffer pass ->
+// per light, the passes its technique plugin registers, which write the light's
+// visibility image V_l -> the engine's shading pass (reads every V_l) -> colour image.
+// The engine itself contains no shadow technique: a light whose plugin could not be
+// loaded or registered (and is not required) gets V_l = 1 from a clear, with a warning.
 #include "penumbra/config/Config.h"
 #include "penumbra/gpu/Context.h"
-#include "penumbra/gpu/GpuTimer.h"
 #include "penumbra/gpu/Pipeline.h"
 #include "penumbra/gpu/Resources.h"
 #include "penumbra/gpu/ShaderCompiler.h"
+#include "penumbra/graph/GraphExecutor.h"
+#include "penumbra/graph/RenderGraph.h"
+#include "penumbra/plugin/PluginRegistry.h"
+#include "penumbra/render/Casters.h"
 #include "penumbra/render/Projection.h"
 #include "penumbra/render/SceneGpu.h"
 
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
 namespace penumbra::render {
 
-struct PassTiming {
-    std::string name;
-    double gpuMs = 0.0;
-    double cpuMs = 0.0;  // recording time on the CPU
-};
+using PassTiming = graph::PassTiming;
 
 struct FrameTimings {
-    std::vector<PassTiming> passes;
-    double frameCpuMs = 0.0;  // record + submit + wait, wall clock
+    std::vector<PassTiming> passes;  // the executed passes, in execution order
+    double frameCpuMs = 0.0;         // record + submit + wait, wall clock
 };
-
-class HardShadow;
 
 class FrameRenderer {
 public:
-    FrameRenderer(gpu::Context& context, const scene::Scene& scene, const config::RenderConfig& config);
+    // Loads the technique plugin of every light from `plugins` (which must outlive the
+    // renderer), creates one technique per light and builds the frame's graph. Throws
+    // plugin::PluginError when a required technique fails, penumbra::Error (naming the
+    // pass) when the graph does not compile.
+    FrameRenderer(gpu::Context& context, const scene::Scene& scene, const config::RenderConfig& config,
+                  plugin::PluginRegistry& plugins);
     ~FrameRenderer();
     FrameRenderer(const FrameRenderer&) = delete;
     FrameRenderer& operator=(const FrameRenderer&) = delete;
@@ -48,11 +53,19 @@ public:
 
     uint32_t width() const { return width_; }
     uint32_t height() const { return height_; }
-    size_t lightCount() const;
-    // The light's first shadow frustum (its only one, except for cube-mapped lights).
-    const LightFrustum& lightFrustum(size_t light) const;
-    const std::vector<LightFrustum>& lightFrusta(size_t light) const;
+    size_t lightCount() const { return lights_.size(); }
     const glm::mat4& cameraViewProj() const { return cameraViewProj_; }
+
+    // Lights rendered without their technique (plugin failed, not required): one line
+    // each, naming light, plugin and the error.
+    const std::vector<std::string>& warnings() const { return warnings_; }
+    // The technique a light uses ("hard"), empty when it fell back to unshadowed.
+    const std::string& techniqueName(size_t light) const { return lights_.at(light).technique; }
+
+    // The frame's graph as compiled (passes in order, culled passes and why, resources
+    // with sizes and aliasing), and the executor that allocated its memory.
+    const graph::CompiledGraph& compiledGraph();
+    const graph::GraphExecutor& executor() const { return executor_; }
 
     // Read-back after renderFrame(): sRGB RGBA8 rows, top row first.
     std::vector<uint8_t> readColor() const;
@@ -64,13 +77,27 @@ public:
     std::vector<float> readNormals() const;
 
 private:
+    struct LightSlot {
+        std::string technique;  // empty: unshadowed fallback
+        const plugin::LoadedPlugin* plugin = nullptr;
+        std::unique_ptr<plugin::ParamValues> params;
+        std::unique_ptr<plugin::Technique> instance;
+        bool required = false;
+        std::string visibility;  // "light<i>.visibility"
+        scene::Light light;      // the state the technique was created with (its setup refers to it)
+    };
+
+    void createTechniques(const config::RenderConfig& config, const scene::Scene& scene);
+    void buildGraph();
+    bool registerTechnique(size_t light);
+    void dropTechnique(size_t light, const std::string& why);
     void updateLights(const config::RenderConfig& config, const scene::Aabb& sceneBounds);
-    void recordGBuffer(VkCommandBuffer cmd);
-    void recordShading(VkCommandBuffer cmd);
-    template <class F>
-    void timedPass(VkCommandBuffer cmd, const std::string& name, FrameTimings& timings, F&& record);
+    void recordGBuffer(graph::PassContext& pass);
+    void recordShading(graph::PassContext& pass);
+    std::vector<float> readFloats(const std::string& name) const;
 
     gpu::Context& context_;
+    plugin::PluginRegistry& plugins_;
     gpu::ShaderCompiler compiler_;
     uint32_t width_ = 0;
     uint32_t height_ = 0;
@@ -79,17 +106,17 @@ private:
     glm::vec4 background_{0.0f};
 
     SceneGpu sceneGpu_;
-    gpu::Image gPosition_;
-    gpu::Image gNormal_;
-    gpu::Image gAlbedo_;
-    gpu::Image gDepth_;
-    gpu::Image color_;
+    Casters casters_;
     gpu::Buffer lightBuffer_;
     gpu::Pipeline gbufferPipeline_;
     gpu::Pipeline shadingPipeline_;
     VkSampler nearestSampler_ = VK_NULL_HANDLE;
-    std::vector<std::unique_ptr<HardShadow>> shadows_;
-    gpu::GpuTimer timer_;
+    // One shader compiler per plugin: its folder first, then the engine's shaders/.
+    std::map<std::string, std::unique_ptr<gpu::ShaderCompiler>> pluginShaders_;
+    std::vector<LightSlot> lights_;
+    std::vector<std::string> warnings_;
+    std::unique_ptr<graph::RenderGraph> graph_;
+    graph::GraphExecutor executor_;
     VkCommandBuffer cmd_ = VK_NULL_HANDLE;
 };
 

@@ -1,0 +1,23 @@
+#pragma once
+// `penumbra graph cfg.json`: the frame's compiled render graph as text or Graphviz.
+#include "penumbra/gpu/Context.h"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace penumbra::app {
+
+struct GraphFlags {
+    std::string config;
+    std::string format = "text";  // "text" or "dot"
+    std::string output;           // empty: stdout
+    std::optional<uint32_t> width;
+    std::optional<uint32_t> height;
+};
+
+// Builds the config's frame (plugins, techniques, graph), executes it once so that the
+// memory figures are the device's own, and prints the compiled graph.
+int runGraph(const GraphFlags& flags, const gpu::ContextOptions& device);
+
+} // namespace penumbra::app
