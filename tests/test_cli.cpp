@@ -367,3 +367,42 @@ TEST_F(Cli, ValidateConfigRefusesAMissingGltf)
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_NE(r.err.find("cfg.json: /scene/gltf: file not found"), std::string::npos) << r.err;
 }
+
+TEST_F(Cli, GraphPrintsPassesInOrderResourcesAndMemory)
+{
+    const CliResult r = run(fmt::format("graph {} --width 160 --height 90 --validation", config("two-spots.json")));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    // The engine's passes frame each light's technique passes.
+    const size_t gbuffer = r.out.find("gbuffer (graphics)");
+    const size_t light0 = r.out.find("light0.hard.");
+    const size_t light1 = r.out.find("light1.hard.");
+    const size_t shading = r.out.find("shading (compute)");
+    ASSERT_NE(gbuffer, std::string::npos) << r.out;
+    ASSERT_NE(light0, std::string::npos) << r.out;
+    ASSERT_NE(light1, std::string::npos) << r.out;
+    ASSERT_NE(shading, std::string::npos) << r.out;
+    EXPECT_LT(gbuffer, light0);
+    EXPECT_LT(light1, shading);
+    EXPECT_NE(r.out.find("barrier 'light0.visibility'"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("light0.visibility: image 160x90 R32Sfloat"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("device memory for transient resources:"), std::string::npos) << r.out;
+}
+
+TEST_F(Cli, GraphWritesGraphvizToAFile)
+{
+    const fs::path dot = dir / "frame.dot";
+    const CliResult r = run(fmt::format("graph {} --format dot -o '{}' --width 160 --height 90", config("default.json"),
+                                        dot.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const std::string text = slurp(dot);
+    EXPECT_EQ(text.rfind("digraph render_graph {", 0), 0u) << text;
+    EXPECT_NE(text.find("\"pass:shading\""), std::string::npos);
+    EXPECT_NE(text.find("\"res:light0.visibility\" -> \"pass:shading\""), std::string::npos) << text;
+}
+
+TEST_F(Cli, GraphRejectsABadFormat)
+{
+    const CliResult r = run(fmt::format("graph {} --format svg", config("default.json")));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.err.find("svg"), std::string::npos) << r.err;
+}
