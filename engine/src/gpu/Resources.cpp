@@ -199,7 +199,14 @@ void Image::bindMemory(VkDeviceMemory memory, VkDeviceSize offset)
 {
     check(vkBindImageMemory(device_, image_, memory, offset), "vkBindImageMemory " + desc_.name);
     memorySize_ = memoryRequirements().size;
-    createView();
+    // A view needs a usage that views serve (VUID-VkImageViewCreateInfo-image-04441): a
+    // render graph transient used only by copies and clears has none, and no view.
+    constexpr VkImageUsageFlags kViewUsages = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
+                                              VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT |
+                                              VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT |
+                                              VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT |
+                                              VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT;
+    if (desc_.usage & kViewUsages) createView();
 }
 
 Image::~Image() { release(); }

@@ -69,7 +69,7 @@ public:
     // bindMemory() before use. The memory stays its caller's, as for Buffer.
     static Image createUnbound(Context& context, const ImageDesc& desc);
     VkMemoryRequirements memoryRequirements() const;
-    // Binds and creates the view.
+    // Binds and creates the view (none when the usage allows no view: transfer only).
     void bindMemory(VkDeviceMemory memory, VkDeviceSize offset);
 
     VkImage handle() const { return image_; }
