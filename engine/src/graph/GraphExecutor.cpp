@@ -18,7 +18,10 @@ namespace penumbra::graph {
 
 namespace {
 
-VkDeviceSize alignUp(VkDeviceSize value, VkDeviceSize alignment) { return (value + alignment - 1) / alignment * alignment; }
+VkDeviceSize alignUp(VkDeviceSize value, VkDeviceSize alignment)
+{
+    return (value + alignment - 1) / alignment * alignment;
+}
 
 // A layout transition of a combined depth/stencil image must name both aspects (the
 // engine does not use separateDepthStencilLayouts).
@@ -116,7 +119,8 @@ void GraphExecutor::State::createTransients(const CompiledGraph& graph)
 {
     // The previous frame's command buffer may still read the resources being replaced.
     // This happens only when the graph's declaration changed, so a full wait is cheap.
-    if (!memory.empty()) gpu::check(vkDeviceWaitIdle(context.device()), "vkDeviceWaitIdle (render graph: replacing transients)");
+    if (!memory.empty())
+        gpu::check(vkDeviceWaitIdle(context.device()), "vkDeviceWaitIdle (render graph: replacing transients)");
     releaseTransients();
     const size_t count = graph.resources.size();
     transientImages.resize(count);
@@ -234,10 +238,11 @@ void GraphExecutor::State::resolveImports(const CompiledGraph& graph)
                                         res.name, res.width, res.height, vk::to_string(vk::Format(res.format)),
                                         desc.name, desc.width, desc.height, vk::to_string(vk::Format(desc.format))));
             if ((desc.usage & res.imageUsage) != res.imageUsage)
-                throw Error(fmt::format("render graph: imported image '{}': the bound image lacks usage {} that "
-                                        "the passes {} need",
+                throw Error(fmt::format("render graph: imported image '{}': the bound image lacks usage {} (needed "
+                                        "by the passes {}{})",
                                         res.name, vk::to_string(vk::ImageUsageFlags(res.imageUsage & ~desc.usage)),
-                                        passesUsing(graph, r)));
+                                        passesUsing(graph, r),
+                                        res.markedOutput ? " and for reading the marked output back" : ""));
             images[r] = found->second;
         } else {
             const auto found = boundBuffers.find(res.name);
@@ -300,7 +305,8 @@ const gpu::Image& PassContext::image(std::string_view name) const
 {
     const ResourceUse& use = declaredUse(*executor_->compiled_, *pass_, name);
     const gpu::Image* object = executor_->state_->images[use.resource];
-    if (!object) throw Error(fmt::format("render graph: pass '{}' asks for image '{}', which is a buffer", *passName_, name));
+    if (!object)
+        throw Error(fmt::format("render graph: pass '{}' asks for image '{}', which is a buffer", *passName_, name));
     return *object;
 }
 
@@ -308,7 +314,8 @@ const gpu::Buffer& PassContext::buffer(std::string_view name) const
 {
     const ResourceUse& use = declaredUse(*executor_->compiled_, *pass_, name);
     const gpu::Buffer* object = executor_->state_->buffers[use.resource];
-    if (!object) throw Error(fmt::format("render graph: pass '{}' asks for buffer '{}', which is an image", *passName_, name));
+    if (!object)
+        throw Error(fmt::format("render graph: pass '{}' asks for buffer '{}', which is an image", *passName_, name));
     return *object;
 }
 
@@ -316,7 +323,8 @@ VkImageLayout PassContext::layout(std::string_view name) const
 {
     const ResourceUse& use = declaredUse(*executor_->compiled_, *pass_, name);
     if (!executor_->compiled_->resources[use.resource].isImage)
-        throw Error(fmt::format("render graph: pass '{}' asks for the layout of '{}', which is a buffer", *passName_, name));
+        throw Error(
+            fmt::format("render graph: pass '{}' asks for the layout of '{}', which is a buffer", *passName_, name));
     return use.scope.layout;
 }
 
@@ -427,7 +435,8 @@ uint32_t lookUp(const std::shared_ptr<const CompiledGraph>& compiled,
 const gpu::Image& GraphExecutor::image(std::string_view name) const
 {
     const uint32_t r = lookUp(compiled_, state_->resourceIndex, name);
-    if (!compiled_->resources[r].isImage) throw Error(fmt::format("render graph: '{}' is a buffer, not an image", name));
+    if (!compiled_->resources[r].isImage)
+        throw Error(fmt::format("render graph: '{}' is a buffer, not an image", name));
     if (!state_->images[r])
         throw Error(fmt::format("render graph: image '{}' has no object: no executed pass uses it", name));
     return *state_->images[r];
@@ -445,7 +454,8 @@ const gpu::Buffer& GraphExecutor::buffer(std::string_view name) const
 VkImageLayout GraphExecutor::finalLayout(std::string_view name) const
 {
     const uint32_t r = lookUp(compiled_, state_->resourceIndex, name);
-    if (!compiled_->resources[r].isImage) throw Error(fmt::format("render graph: '{}' is a buffer: it has no layout", name));
+    if (!compiled_->resources[r].isImage)
+        throw Error(fmt::format("render graph: '{}' is a buffer: it has no layout", name));
     return compiled_->resources[r].finalLayout;
 }
 
