@@ -513,6 +513,43 @@ TEST(RenderGraph, BufferBarriers)
     EXPECT_EQ(vertex->dstAccess, VK_ACCESS_2_VERTEX_ATTRIBUTE_READ_BIT);
 }
 
+TEST(RenderGraph, ImportedImagesReturnToTheirInitialLayoutAfterTheFrame)
+{
+    RenderGraph graph;
+    graph.declareImage({"history", 64, 64, VK_FORMAT_R32_SFLOAT, true, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL});
+    graph.declareImage({"scratch", 64, 64, VK_FORMAT_R32_SFLOAT, true, VK_IMAGE_LAYOUT_UNDEFINED});
+    graph.declareImage({"unused", 64, 64, VK_FORMAT_R32_SFLOAT, true, VK_IMAGE_LAYOUT_GENERAL});
+    declareColor(graph, "color");
+    graph.addPass("update", QueueKind::Compute).write("history", Usage::Storage).write("scratch", Usage::Storage);
+    graph.addPass("shade", QueueKind::Graphics)
+        .read("history", Usage::Sampled)
+        .read("scratch", Usage::Sampled)
+        .write("color", Usage::ColorAttachment);
+    graph.markOutput("color");
+    const auto compiled = graph.compile();
+    // Ends in its initial layout: no barrier. A declared-UNDEFINED import has no state
+    // to return to; an untouched import stays where it was.
+    ASSERT_EQ(compiled->barriersAfter.size(), 0u);
+    EXPECT_EQ(compiled->resources[0].finalLayout, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    EXPECT_EQ(compiled->resources[1].finalLayout, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    EXPECT_EQ(compiled->resources[2].finalLayout, VK_IMAGE_LAYOUT_GENERAL);
+    EXPECT_EQ(compiled->resources[3].finalLayout, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
+
+    RenderGraph written;
+    written.declareImage({"history", 64, 64, VK_FORMAT_R32_SFLOAT, true, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL});
+    written.addPass("update", QueueKind::Compute, true).write("history", Usage::Storage);
+    const auto after = written.compile();
+    ASSERT_EQ(after->barriersAfter.size(), 1u);
+    const Barrier& restore = after->barriersAfter[0];
+    EXPECT_EQ(restore.oldLayout, VK_IMAGE_LAYOUT_GENERAL);
+    EXPECT_EQ(restore.newLayout, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    EXPECT_EQ(restore.srcStage, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT);
+    EXPECT_EQ(restore.srcAccess, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+    EXPECT_EQ(restore.dstStage, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT);
+    EXPECT_EQ(after->resources[0].finalLayout, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    EXPECT_NE(after->toText().find("after the last pass:"), std::string::npos);
+}
+
 // ---------------------------------------------------------------------------------------
 // Printing
 

@@ -9,8 +9,9 @@ namespace penumbra::graphtest {
 
 using namespace penumbra::graph;
 
-void buildRandomGraph(RandomGraph& out, uint32_t passCount, uint32_t seed)
+void buildRandomGraph(RandomGraph& out, uint32_t passCount, uint32_t seed, const RandomGraphOptions& options)
 {
+    const bool transfer = options.smallTransferBuffers;
     std::mt19937 rng(seed);
     auto chance = [&](int percent) { return std::uniform_int_distribution<int>(0, 99)(rng) < percent; };
     auto pick = [&](size_t count) { return std::uniform_int_distribution<size_t>(0, count - 1)(rng); };
@@ -23,8 +24,13 @@ void buildRandomGraph(RandomGraph& out, uint32_t passCount, uint32_t seed)
     std::vector<Produced> produced;
     for (int i = 0; i < 3; ++i) {
         const std::string name = fmt::format("imported{}", i);
-        out.graph.declareImage({name, 1920, 1080, VK_FORMAT_R16G16B16A16_SFLOAT, true,
-                                VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL});
+        if (transfer) {
+            out.graph.declareBuffer({name, 256, true});
+            out.bufferBytes[name] = 256;
+        } else {
+            out.graph.declareImage({name, 1920, 1080, VK_FORMAT_R16G16B16A16_SFLOAT, true,
+                                    VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL});
+        }
         out.imported.push_back(name);
     }
 
@@ -33,9 +39,11 @@ void buildRandomGraph(RandomGraph& out, uint32_t passCount, uint32_t seed)
                                      VK_FORMAT_R16G16B16A16_SFLOAT};
     for (uint32_t p = 0; p < passCount; ++p) {
         const std::string passName = fmt::format("pass{}", p);
-        const QueueKind queue = chance(50) ? QueueKind::Graphics : QueueKind::Compute;
+        const bool graphics = chance(50);
+        const QueueKind queue = transfer ? QueueKind::Transfer : graphics ? QueueKind::Graphics : QueueKind::Compute;
         const bool sideEffect = chance(5);
         PassBuilder pass = out.graph.addPass(passName, queue, sideEffect);
+        out.passes.push_back(pass);
         out.passNames.push_back(passName);
         out.sideEffect.push_back(sideEffect);
         out.reads.emplace_back();
@@ -47,7 +55,7 @@ void buildRandomGraph(RandomGraph& out, uint32_t passCount, uint32_t seed)
                 const std::string& name = out.imported[pick(out.imported.size())];
                 if (std::find(out.reads.back().begin(), out.reads.back().end(), name) != out.reads.back().end())
                     continue;
-                pass.read(name, Usage::Sampled);
+                pass.read(name, transfer ? Usage::TransferSrc : Usage::Sampled);
                 out.reads.back().push_back(name);
                 continue;
             }
@@ -57,14 +65,14 @@ void buildRandomGraph(RandomGraph& out, uint32_t passCount, uint32_t seed)
             const Produced& source = produced[produced.size() - 1 - back];
             if (std::find(out.reads.back().begin(), out.reads.back().end(), source.name) != out.reads.back().end())
                 continue;
-            pass.read(source.name, source.isImage ? Usage::Sampled : Usage::Storage);
+            pass.read(source.name, transfer ? Usage::TransferSrc : source.isImage ? Usage::Sampled : Usage::Storage);
             out.reads.back().push_back(source.name);
         }
 
         const int writeCount = chance(70) ? 1 : 2;
         for (int k = 0; k < writeCount; ++k) {
             const std::string name = fmt::format("r{}_{}", p, k);
-            const bool isImage = chance(75);
+            const bool isImage = !transfer && chance(75);
             bool depth = false;
             if (isImage) {
                 depth = queue == QueueKind::Graphics && chance(20);
@@ -76,8 +84,10 @@ void buildRandomGraph(RandomGraph& out, uint32_t passCount, uint32_t seed)
                                                                 : Usage::ColorAttachment;
                 pass.write(name, usage);
             } else {
-                out.graph.declareBuffer({name, VkDeviceSize(1024) << pick(12), false});
-                pass.write(name, Usage::Storage);
+                const VkDeviceSize bytes = transfer ? VkDeviceSize(64) << pick(7) : VkDeviceSize(1024) << pick(12);
+                out.graph.declareBuffer({name, bytes, false});
+                out.bufferBytes[name] = bytes;
+                pass.write(name, transfer ? Usage::TransferDst : Usage::Storage);
             }
             out.writes.back().push_back(name);
             produced.push_back({name, isImage, depth});

@@ -17,18 +17,8 @@ Buffer::Buffer(Context& context, VkDeviceSize size, VkBufferUsageFlags usage, bo
                const std::string& name)
     : device_(context.device()), size_(size)
 {
-    if (size == 0) {
-        throw GpuError(fmt::format("buffer '{}': size 0", name));
-    }
-    VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
-    info.size = size;
-    info.usage = usage;
-    info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-    check(vkCreateBuffer(device_, &info, nullptr, &buffer_), "vkCreateBuffer " + name);
-    context.setName(VK_OBJECT_TYPE_BUFFER, reinterpret_cast<uint64_t>(buffer_), name);
-
-    VkMemoryRequirements req{};
-    vkGetBufferMemoryRequirements(device_, buffer_, &req);
+    createHandle(context, usage, name);
+    const VkMemoryRequirements req = memoryRequirements();
     VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     alloc.allocationSize = req.size;
     alloc.memoryTypeIndex = hostVisible
@@ -46,6 +36,40 @@ Buffer::Buffer(Context& context, VkDeviceSize size, VkBufferUsageFlags usage, bo
         release();
         throw;
     }
+}
+
+Buffer Buffer::createUnbound(Context& context, VkDeviceSize size, VkBufferUsageFlags usage, const std::string& name)
+{
+    Buffer buffer;
+    buffer.device_ = context.device();
+    buffer.size_ = size;
+    buffer.createHandle(context, usage, name);
+    return buffer;
+}
+
+void Buffer::createHandle(Context& context, VkBufferUsageFlags usage, const std::string& name)
+{
+    if (size_ == 0) {
+        throw GpuError(fmt::format("buffer '{}': size 0", name));
+    }
+    VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+    info.size = size_;
+    info.usage = usage;
+    info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+    check(vkCreateBuffer(device_, &info, nullptr, &buffer_), "vkCreateBuffer " + name);
+    context.setName(VK_OBJECT_TYPE_BUFFER, reinterpret_cast<uint64_t>(buffer_), name);
+}
+
+VkMemoryRequirements Buffer::memoryRequirements() const
+{
+    VkMemoryRequirements req{};
+    vkGetBufferMemoryRequirements(device_, buffer_, &req);
+    return req;
+}
+
+void Buffer::bindMemory(VkDeviceMemory memory, VkDeviceSize offset)
+{
+    check(vkBindBufferMemory(device_, buffer_, memory, offset), "vkBindBufferMemory");
 }
 
 Buffer::~Buffer() { release(); }
@@ -104,47 +128,85 @@ uint32_t texelSize(VkFormat format)
 
 Image::Image(Context& context, const ImageDesc& desc) : device_(context.device()), desc_(desc)
 {
-    if (desc.width == 0 || desc.height == 0) {
-        throw GpuError(fmt::format("image '{}': size {}x{} is empty", desc.name, desc.width, desc.height));
-    }
-    const uint32_t maxDim = context.properties().limits.maxImageDimension2D;
-    if (desc.width > maxDim || desc.height > maxDim) {
-        throw GpuError(fmt::format("image '{}': size {}x{} exceeds the device limit {}", desc.name,
-                                   desc.width, desc.height, maxDim));
-    }
-    VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
-    info.imageType = VK_IMAGE_TYPE_2D;
-    info.format = desc.format;
-    info.extent = {desc.width, desc.height, 1};
-    info.mipLevels = 1;
-    info.arrayLayers = 1;
-    info.samples = VK_SAMPLE_COUNT_1_BIT;
-    info.tiling = VK_IMAGE_TILING_OPTIMAL;
-    info.usage = desc.usage;
-    info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-    info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-    check(vkCreateImage(device_, &info, nullptr, &image_), "vkCreateImage " + desc.name);
-    context.setName(VK_OBJECT_TYPE_IMAGE, reinterpret_cast<uint64_t>(image_), desc.name);
+    createHandle(context);
     try {
-        VkMemoryRequirements req{};
-        vkGetImageMemoryRequirements(device_, image_, &req);
+        const VkMemoryRequirements req = memoryRequirements();
         VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
         alloc.allocationSize = req.size;
         alloc.memoryTypeIndex = context.findMemoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
         check(vkAllocateMemory(device_, &alloc, nullptr, &memory_), "vkAllocateMemory image " + desc.name);
         memorySize_ = req.size;
         check(vkBindImageMemory(device_, image_, memory_, 0), "vkBindImageMemory " + desc.name);
-
-        VkImageViewCreateInfo viewInfo{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-        viewInfo.image = image_;
-        viewInfo.viewType = VK_IMAGE_VIEW_TYPE_2D;
-        viewInfo.format = desc.format;
-        viewInfo.subresourceRange = {aspect(), 0, 1, 0, 1};
-        check(vkCreateImageView(device_, &viewInfo, nullptr, &view_), "vkCreateImageView " + desc.name);
+        createView();
     } catch (...) {
         release();
         throw;
     }
+}
+
+Image Image::createUnbound(Context& context, const ImageDesc& desc)
+{
+    Image image;
+    image.device_ = context.device();
+    image.desc_ = desc;
+    image.createHandle(context);
+    return image;
+}
+
+void Image::createHandle(Context& context)
+{
+    if (desc_.width == 0 || desc_.height == 0) {
+        throw GpuError(fmt::format("image '{}': size {}x{} is empty", desc_.name, desc_.width, desc_.height));
+    }
+    const uint32_t maxDim = context.properties().limits.maxImageDimension2D;
+    if (desc_.width > maxDim || desc_.height > maxDim) {
+        throw GpuError(fmt::format("image '{}': size {}x{} exceeds the device limit {}", desc_.name, desc_.width,
+                                   desc_.height, maxDim));
+    }
+    VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+    info.imageType = VK_IMAGE_TYPE_2D;
+    info.format = desc_.format;
+    info.extent = {desc_.width, desc_.height, 1};
+    info.mipLevels = 1;
+    info.arrayLayers = 1;
+    info.samples = VK_SAMPLE_COUNT_1_BIT;
+    info.tiling = VK_IMAGE_TILING_OPTIMAL;
+    info.usage = desc_.usage;
+    info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+    info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    check(vkCreateImage(device_, &info, nullptr, &image_), "vkCreateImage " + desc_.name);
+    context.setName(VK_OBJECT_TYPE_IMAGE, reinterpret_cast<uint64_t>(image_), desc_.name);
+}
+
+void Image::createView()
+{
+    VkImageViewCreateInfo viewInfo{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+    viewInfo.image = image_;
+    viewInfo.viewType = VK_IMAGE_VIEW_TYPE_2D;
+    viewInfo.format = desc_.format;
+    viewInfo.subresourceRange = {aspect(), 0, 1, 0, 1};
+    check(vkCreateImageView(device_, &viewInfo, nullptr, &view_), "vkCreateImageView " + desc_.name);
+}
+
+VkMemoryRequirements Image::memoryRequirements() const
+{
+    VkMemoryRequirements req{};
+    vkGetImageMemoryRequirements(device_, image_, &req);
+    return req;
+}
+
+void Image::bindMemory(VkDeviceMemory memory, VkDeviceSize offset)
+{
+    check(vkBindImageMemory(device_, image_, memory, offset), "vkBindImageMemory " + desc_.name);
+    memorySize_ = memoryRequirements().size;
+    // A view needs a usage that views serve (VUID-VkImageViewCreateInfo-image-04441): a
+    // render graph transient used only by copies and clears has none, and no view.
+    constexpr VkImageUsageFlags kViewUsages = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
+                                              VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT |
+                                              VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT |
+                                              VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT |
+                                              VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT;
+    if (desc_.usage & kViewUsages) createView();
 }
 
 Image::~Image() { release(); }

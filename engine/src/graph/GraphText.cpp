@@ -42,6 +42,14 @@ std::string accesses(VkAccessFlags2 flags) { return flags == 0 ? "{ None }" : vk
 
 std::string layout(VkImageLayout value) { return vk::to_string(vk::ImageLayout(value)); }
 
+std::string describe(const Barrier& b, const std::vector<CompiledResource>& resources)
+{
+    std::string text = fmt::format("      barrier '{}'", resources[b.resource].name);
+    if (b.isImage) text += fmt::format(" {} -> {}", layout(b.oldLayout), layout(b.newLayout));
+    return text + fmt::format(": {} {} -> {} {}\n", stages(b.srcStage), accesses(b.srcAccess), stages(b.dstStage),
+                              accesses(b.dstAccess));
+}
+
 std::string dotEscape(const std::string& text)
 {
     std::string out;
@@ -63,12 +71,11 @@ std::string CompiledGraph::toText() const
     text += "passes in order:\n";
     for (size_t i = 0; i < passes.size(); ++i) {
         text += fmt::format("  {} {} ({})\n", i, passes[i].name, queueName(passes[i].queue));
-        for (const Barrier& b : passes[i].barriersBefore) {
-            text += fmt::format("      barrier '{}'", resources[b.resource].name);
-            if (b.isImage) text += fmt::format(" {} -> {}", layout(b.oldLayout), layout(b.newLayout));
-            text += fmt::format(": {} {} -> {} {}\n", stages(b.srcStage), accesses(b.srcAccess), stages(b.dstStage),
-                                accesses(b.dstAccess));
-        }
+        for (const Barrier& b : passes[i].barriersBefore) text += describe(b, resources);
+    }
+    if (!barriersAfter.empty()) {
+        text += "after the last pass:\n";
+        for (const Barrier& b : barriersAfter) text += describe(b, resources);
     }
     text += "culled:\n";
     for (const CulledPass& pass : culled) text += fmt::format("  {}: {}\n", pass.name, pass.reason);

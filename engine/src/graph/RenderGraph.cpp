@@ -639,6 +639,23 @@ private:
                 st.touched = true;
                 if (auto barrier = nextBarrier(st, use)) pass.barriersBefore.push_back(*barrier);
             }
+        restoreImportedLayouts(out, state);
+    }
+
+    void restoreImportedLayouts(CompiledGraph& out, std::vector<ResourceState>& state) const
+    {
+        for (uint32_t r = 0; r < resources_.size(); ++r) {
+            if (!decl(r).isImage) continue;
+            ResourceState& st = state[r];
+            const VkImageLayout initial = decl(r).image.initialLayout;
+            if (imported(r) && initial != VK_IMAGE_LAYOUT_UNDEFINED && st.layout != initial) {
+                out.barriersAfter.push_back(Barrier{r, true, st.layout, initial, st.writeStage | st.readStages,
+                                                    st.writeAccess, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                                                    VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT});
+                st.layout = initial;
+            }
+            out.resources[r].finalLayout = st.layout;
+        }
     }
 
     std::optional<Barrier> nextBarrier(ResourceState& st, const ResourceUse& use) const

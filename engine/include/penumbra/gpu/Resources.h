@@ -1,6 +1,7 @@
 #pragma once
-// GPU buffers and images with their memory. One allocation per resource for now; the
-// pass scheduler (graph module) is where transient memory gets aliased.
+// GPU buffers and images with their memory: one allocation per resource, or (created
+// unbound) placed by their caller in memory it owns — the pass scheduler (graph module)
+// aliases transient resources that way.
 #include <vulkan/vulkan.h>
 
 #include <cstddef>
@@ -25,11 +26,19 @@ public:
     Buffer(const Buffer&) = delete;
     Buffer& operator=(const Buffer&) = delete;
 
+    // A buffer without memory: bind it with bindMemory() before use. The memory stays its
+    // caller's (it may hold other resources at other times); the buffer never maps it.
+    static Buffer createUnbound(Context& context, VkDeviceSize size, VkBufferUsageFlags usage,
+                                const std::string& name);
+    VkMemoryRequirements memoryRequirements() const;
+    void bindMemory(VkDeviceMemory memory, VkDeviceSize offset);
+
     VkBuffer handle() const { return buffer_; }
     VkDeviceSize size() const { return size_; }
     void* mapped() const { return mapped_; }
 
 private:
+    void createHandle(Context& context, VkBufferUsageFlags usage, const std::string& name);
     void release();
     VkDevice device_ = VK_NULL_HANDLE;
     VkBuffer buffer_ = VK_NULL_HANDLE;
@@ -56,6 +65,13 @@ public:
     Image(const Image&) = delete;
     Image& operator=(const Image&) = delete;
 
+    // An image without memory (and without a view until bound): bind it with
+    // bindMemory() before use. The memory stays its caller's, as for Buffer.
+    static Image createUnbound(Context& context, const ImageDesc& desc);
+    VkMemoryRequirements memoryRequirements() const;
+    // Binds and creates the view (none when the usage allows no view: transfer only).
+    void bindMemory(VkDeviceMemory memory, VkDeviceSize offset);
+
     VkImage handle() const { return image_; }
     VkImageView view() const { return view_; }
     const ImageDesc& desc() const { return desc_; }
@@ -63,6 +79,8 @@ public:
     VkDeviceSize memorySize() const { return memorySize_; }
 
 private:
+    void createHandle(Context& context);
+    void createView();
     void release();
     VkDevice device_ = VK_NULL_HANDLE;
     VkImage image_ = VK_NULL_HANDLE;

@@ -46,13 +46,22 @@ private:
 
 struct PassTiming {
     std::string name;
-    double gpuMs = 0.0;
+    double gpuMs = 0.0;  // 0 when GPU timestamps are off
     double cpuMs = 0.0;  // time the execute callback took to record
+};
+
+struct ExecutorOptions {
+    // Timestamps around every pass. gpu::GpuTimer follows each start timestamp with an
+    // execution barrier over all commands (lavapipe reads late without it), which also
+    // orders every pass after all earlier ones: tests that check the graph's own barriers
+    // with synchronization validation turn timestamps off so that nothing hides a missing
+    // dependency.
+    bool gpuTimestamps = true;
 };
 
 class GraphExecutor {
 public:
-    explicit GraphExecutor(gpu::Context& context);
+    explicit GraphExecutor(gpu::Context& context, ExecutorOptions options = {});
     ~GraphExecutor();
     GraphExecutor(const GraphExecutor&) = delete;
     GraphExecutor& operator=(const GraphExecutor&) = delete;
@@ -63,11 +72,13 @@ public:
     void bindBuffer(std::string_view name, const gpu::Buffer& buffer);
 
     // Compiles `graph` (cached while unchanged), (re)creates the transient resources when
-    // the compiled graph changed, and records every executed pass into `cmd` (which must
+    // the compiled graph changed (after waiting for the device to go idle: the previous
+    // frame may still use the old ones), and records every executed pass into `cmd` (which must
     // be recording, outside a render pass). Imported images whose declared initialLayout
     // is not UNDEFINED are returned to it after the last pass, so each frame starts from
     // the declared state. Throws penumbra::Error naming the pass or resource on misuse
-    // (an unbound import, a callback that throws).
+    // (an unbound or mismatched import, an executed pass without a callback, a callback
+    // that throws); `cmd` is then left partly recorded and must not be submitted.
     void record(VkCommandBuffer cmd, RenderGraph& graph);
 
     // After the recorded command buffer finished: GPU and CPU time per executed pass, in
@@ -78,7 +89,8 @@ public:
     const std::shared_ptr<const CompiledGraph>& compiled() const { return compiled_; }
 
     // A resource of the last recorded graph (transient or imported) and the layout it is
-    // in after the frame: for reading marked outputs back. Throws for unknown names.
+    // in after the frame: for reading marked outputs back. Throws for unknown names and
+    // for resources that no executed pass uses (they have no object).
     const gpu::Image& image(std::string_view name) const;
     const gpu::Buffer& buffer(std::string_view name) const;
     VkImageLayout finalLayout(std::string_view name) const;

@@ -120,6 +120,9 @@ struct CompiledResource {
     // Every usage that any executed pass declares, for creating the resource.
     VkImageUsageFlags imageUsage = 0;
     VkBufferUsageFlags bufferUsage = 0;
+    // Images: the layout after the frame, including CompiledGraph::barriersAfter (an
+    // untouched imported image stays in its initial layout). UNDEFINED for buffers.
+    VkImageLayout finalLayout = VK_IMAGE_LAYOUT_UNDEFINED;
 };
 
 // A block of device memory shared by transient resources with disjoint lifetimes.
@@ -133,6 +136,10 @@ struct CompiledGraph {
     std::vector<CulledPass> culled;
     std::vector<CompiledResource> resources;  // declaration order
     std::vector<MemorySlot> memorySlots;
+    // After the last pass: imported images whose declared initialLayout is not UNDEFINED
+    // go back to it, so that every frame (and the owner outside the graph) starts from
+    // the declared state. The destination scope is all commands: whatever comes next.
+    std::vector<Barrier> barriersAfter;
     VkDeviceSize transientBytesUnaliased = 0;  // sum of aligned transient sizes
     VkDeviceSize transientBytesAliased = 0;    // sum of slot sizes
 
