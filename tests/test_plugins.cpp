@@ -566,6 +566,20 @@ TEST_F(Configs, BadValuesNameTheFileAndJsonPath)
                          file + ": /lights/1/shadow/enabled: must be true or false"));
 }
 
+TEST_F(Configs, ResolveParamsCanCollectEveryBadValue)
+{
+    const config::RenderConfig cfg = writeAndLoad(dir / "bad.json", R"({"camera": {"position": [0, 5, 10], "target": [0, 0, 0]},
+        "lights": [{"type": "point", "position": [0, 4, 0],
+                    "shadow": {"technique": "testgood", "kernel": 0, "fill": 0.75, "mode": 1}}]})");
+    std::vector<std::string> errors;
+    const ParamValues values = plugin::resolveParams(registry.load("testgood"), cfg.lights[0].shadow, &errors);
+    ASSERT_EQ(errors.size(), 2u);
+    EXPECT_TRUE(contains(errors[0], "/lights/0/shadow/kernel: must be an integer in [1, 15]"));
+    EXPECT_TRUE(contains(errors[1], "/lights/0/shadow/mode: must be one of"));
+    EXPECT_EQ(values.getInt("kernel"), 5) << "a bad value keeps its default";
+    EXPECT_FLOAT_EQ(values.getFloat("fill"), 0.75f) << "good values still apply";
+}
+
 TEST_F(Configs, BadValuesInAnIncludedFileNameThatFile)
 {
     std::ofstream(dir / "base.json") << R"({"camera": {"position": [0, 5, 10], "target": [0, 0, 0]}, "lights": [{"type": "point", "position": [0, 4, 0],

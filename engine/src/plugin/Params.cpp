@@ -178,14 +178,21 @@ json specToJson(const ParamSpec& spec)
     return out;
 }
 
-ParamValues resolveParams(const LoadedPlugin& plugin, const config::ShadowSettings& shadow)
+ParamValues resolveParams(const LoadedPlugin& plugin, const config::ShadowSettings& shadow, std::vector<std::string>* errors)
 {
     if (shadow.technique != plugin.name()) {
         throw Error(fmt::format("resolveParams: the light's technique is '{}', the plugin is '{}'", shadow.technique,
                                 plugin.name()));
     }
     ParamValues values = plugin.defaultParams();
-    for (const config::ShadowParam& p : shadow.params) values.set(p.name, p.value, p.where);
+    for (const config::ShadowParam& p : shadow.params) {
+        try {
+            values.set(p.name, p.value, p.where);
+        } catch (const ConfigError& e) {
+            if (!errors) throw;
+            errors->push_back(e.what());
+        }
+    }
     return values;
 }
 

@@ -58,7 +58,10 @@ const char* paramTypeName(ParamType type);
 
 // The values one light's technique gets: the plugin's defaults, then every parameter the
 // light's "shadow" object (or --set) gives, in order. Each error names the value's
-// `where` (config/Config.h ShadowParam). Throws penumbra::ConfigError.
-ParamValues resolveParams(const LoadedPlugin& plugin, const config::ShadowSettings& shadow);
+// `where` (config/Config.h ShadowParam). Throws penumbra::ConfigError at the first bad
+// value; with `errors`, appends every bad value's message there instead (a bad value
+// keeps its default) and throws nothing, so that a check can report them all.
+ParamValues resolveParams(const LoadedPlugin& plugin, const config::ShadowSettings& shadow,
+                          std::vector<std::string>* errors = nullptr);
 
 } // namespace penumbra::plugin
