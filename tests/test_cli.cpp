@@ -2,12 +2,14 @@
 // and no partial or clobbered output file on failure.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -405,4 +407,228 @@ TEST_F(Cli, GraphRejectsABadFormat)
     const CliResult r = run(fmt::format("graph {} --format svg", config("default.json")));
     EXPECT_NE(r.exitCode, 0);
     EXPECT_NE(r.err.find("svg"), std::string::npos) << r.err;
+}
+
+// --- plugins ---------------------------------------------------------------------------
+
+namespace {
+
+const std::string kTestPlugins = PENUMBRA_TEST_PLUGIN_DIR;
+const std::string kShadowedPlugins = PENUMBRA_TEST_SHADOWED_PLUGIN_DIR;
+
+// The test plugins (tests/plugins/) on the search path, the shadowed folder second.
+std::string pluginPath() { return fmt::format("PENUMBRA_PLUGIN_PATH='{}:{}'", kTestPlugins, kShadowedPlugins); }
+
+bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// A light using testgood with `shadow`'s extra keys, and one whose plugin exists nowhere.
+std::string testGoodConfig(const std::string& shadow, const std::string& extra = "")
+{
+    return fmt::format(R"({{"camera": {{"position": [0, 5, 10], "target": [0, 0, 0]}},
+        "scene": {{"generator": "box-grid", "params": {{"rows": 1, "columns": 1}}}},
+        "lights": [{{"name": "key", "type": "point", "position": [0, 4, 0], "shadow": {{"technique": "testgood"{}}}}},
+                   {{"name": "fill", "type": "point", "position": [2, 4, 0], "shadow": {{"technique": "nosuch"}}}}]{}}})",
+                       shadow, extra);
+}
+
+} // namespace
+
+TEST_F(Cli, PluginsListsEveryPluginWithItsParametersAndEveryFailure)
+{
+    const CliResult r = run("plugins", pluginPath());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(has(r.out, fmt::format("plugin search path: {}:{}", kTestPlugins, kShadowedPlugins))) << r.out;
+    EXPECT_TRUE(has(r.out, "testgood 1.2.0: test plugin: clears V_l to a constant")) << r.out;
+    EXPECT_TRUE(has(r.out, fmt::format("  file:    {}/penumbra-testgood.so", kTestPlugins))) << r.out;
+    for (const char* line : {"enabled  bool   true", "kernel   int    5 in [1, 15] texels", "a kernel width, unused",
+                             "fill     float  0.5 in [0.0, 1.0]", "bias     float  0.01 in [-1.0, 1.0] world",
+                             "mode     enum   clear of clear|unshadowed", "clear to fill, or to 1 (unshadowed)"}) {
+        EXPECT_TRUE(has(r.out, line)) << line << "\n" << r.out;
+    }
+    EXPECT_TRUE(has(r.out, "3 plugin(s), 7 file(s) failed to load")) << r.out;
+    EXPECT_TRUE(has(r.out, "error [abi-mismatch]: plugin 'abi'")) << r.out;
+    EXPECT_TRUE(has(r.out, "built for plugin ABI 9999, this engine has ABI 1")) << r.out;
+    EXPECT_TRUE(has(r.out, "error [dependency-missing]: plugin 'nodep'")) << r.out;
+    EXPECT_TRUE(has(r.out, "libpenumbra_test_absent.so: cannot open shared object file")) << r.out;
+    EXPECT_TRUE(has(r.out, "error [not-a-library]: plugin 'garbage'")) << r.out;
+    EXPECT_TRUE(has(r.out, "error [duplicate-name]: plugin 'dup' (" + kShadowedPlugins)) << r.out;
+}
+
+TEST_F(Cli, PluginsStrictFailsWhenAFileFailsToLoad)
+{
+    EXPECT_EQ(run("plugins --strict", pluginPath()).exitCode, 1);
+    EXPECT_EQ(run("plugins", pluginPath()).exitCode, 0);
+}
+
+TEST_F(Cli, PluginsJsonDescribesSpecsAndErrors)
+{
+    const CliResult r = run("plugins --json", pluginPath());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const nlohmann::json doc = nlohmann::json::parse(r.out);
+    EXPECT_EQ(doc["abi"], 1);
+    EXPECT_EQ(doc["search_path"][0], kTestPlugins);
+    EXPECT_EQ(doc["search_path"][1], kShadowedPlugins);
+    std::map<std::string, nlohmann::json> plugins;
+    for (const nlohmann::json& p : doc["plugins"]) plugins[p["name"].get<std::string>()] = p;
+    ASSERT_TRUE(plugins.count("testgood")) << r.out;
+    const nlohmann::json& good = plugins["testgood"];
+    EXPECT_EQ(good["version"], "1.2.0");
+    EXPECT_EQ(good["abi"], 1);
+    EXPECT_EQ(good["file"], kTestPlugins + "/penumbra-testgood.so");
+    EXPECT_EQ(good["summary"], "test plugin: clears V_l to a constant");
+    EXPECT_EQ(good["params"], nlohmann::json::parse(R"json([
+        {"name": "enabled", "type": "bool", "default": true, "unit": "", "doc": "register the clear pass at all"},
+        {"name": "kernel", "type": "int", "default": 5, "min": 1, "max": 15, "unit": "texels", "doc": "a kernel width, unused"},
+        {"name": "fill", "type": "float", "default": 0.5, "min": 0.0, "max": 1.0, "unit": "", "doc": "the value V_l is cleared to"},
+        {"name": "bias", "type": "float", "default": 0.01, "min": -1.0, "max": 1.0, "unit": "world", "doc": "a signed offset, unused"},
+        {"name": "mode", "type": "enum", "default": "clear", "choices": ["clear", "unshadowed"], "unit": "",
+         "doc": "clear to fill, or to 1 (unshadowed)"}])json"));
+    EXPECT_EQ(plugins["dup"]["version"], "1.0") << "the first folder on the path wins";
+
+    std::map<std::string, std::string> kinds;
+    for (const nlohmann::json& e : doc["errors"]) {
+        EXPECT_TRUE(has(e["message"].get<std::string>(), e["file"].get<std::string>())) << e.dump();
+        kinds[e["file"].get<std::string>()] = e["kind"].get<std::string>();
+    }
+    EXPECT_EQ(kinds, (std::map<std::string, std::string>{
+                         {kTestPlugins + "/penumbra-abi.so", "abi-mismatch"},
+                         {kTestPlugins + "/penumbra-badinfo.so", "invalid-info"},
+                         {kTestPlugins + "/penumbra-garbage.so", "not-a-library"},
+                         {kTestPlugins + "/penumbra-mismatch.so", "name-mismatch"},
+                         {kTestPlugins + "/penumbra-nodep.so", "dependency-missing"},
+                         {kTestPlugins + "/penumbra-noentry.so", "entry-missing"},
+                         {kShadowedPlugins + "/penumbra-dup.so", "duplicate-name"},
+                     }));
+}
+
+TEST_F(Cli, PluginsPathFlagIsSearchedFirst)
+{
+    const CliResult r = run(fmt::format("plugins --json --path '{}'", kShadowedPlugins),
+                            fmt::format("PENUMBRA_PLUGIN_PATH='{}'", kTestPlugins));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const nlohmann::json doc = nlohmann::json::parse(r.out);
+    for (const nlohmann::json& p : doc["plugins"]) {
+        if (p["name"] == "dup") {
+            EXPECT_EQ(p["version"], "2.0") << "--path is searched first";
+        }
+    }
+    bool shadowedFirst = false;
+    for (const nlohmann::json& e : doc["errors"])
+        shadowedFirst |= e["kind"] == "duplicate-name" && e["file"] == kTestPlugins + "/penumbra-dup.so";
+    EXPECT_TRUE(shadowedFirst) << r.out;
+
+    const CliResult missing = run(fmt::format("plugins --path '{}/nowhere'", dir.string()));
+    EXPECT_NE(missing.exitCode, 0);
+    EXPECT_TRUE(has(missing.err, "nowhere")) << missing.err;
+}
+
+TEST_F(Cli, ValidateLoadsEachLightsPluginWithTheSameDefaultsAsPluginsJson)
+{
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << testGoodConfig(R"(, "kernel": 9)");
+    const CliResult r = run(fmt::format("validate '{}'", cfg.string()), pluginPath());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    // Every value but the one the config sets is the default `plugins --json` lists.
+    const nlohmann::json doc = nlohmann::json::parse(run("plugins --json", pluginPath()).out);
+    std::string values;
+    for (const nlohmann::json& p : doc["plugins"]) {
+        if (p["name"] != "testgood") continue;
+        for (const nlohmann::json& spec : p["params"]) {
+            const std::string name = spec["name"];
+            values += fmt::format(" {}={}", name, name == "kernel" ? "9" : spec["default"].dump());
+        }
+    }
+    EXPECT_TRUE(has(r.out, fmt::format("light 0 ('key'): plugin testgood 1.2.0 ({}/penumbra-testgood.so):{}", kTestPlugins,
+                                       values)))
+        << values << "\n" << r.out;
+    EXPECT_TRUE(has(r.out, "warning: light 1 ('fill') would render without shadows: plugin 'nosuch': no file "
+                           "penumbra-nosuch.so on the plugin search path"))
+        << r.out;
+    EXPECT_TRUE(has(r.out, "config ok")) << r.out;
+}
+
+TEST_F(Cli, ValidateReportsEveryBadParameterWithFileAndJsonPath)
+{
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << testGoodConfig(R"(, "kernel": 4.5, "mode": "soft", "kernal": 3)");
+    const CliResult r = run(fmt::format("validate '{}'", cfg.string()), pluginPath());
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(has(r.err, cfg.string() + ": /lights/0/shadow/kernel: must be an integer in [1, 15] (plugin testgood, "
+                                          "parameter kernel: a kernel width, unused), got 4.5"))
+        << r.err;
+    EXPECT_TRUE(has(r.err, cfg.string() + ": /lights/0/shadow/mode: must be one of \"clear\", \"unshadowed\"")) << r.err;
+    EXPECT_TRUE(has(r.err, cfg.string() + ": /lights/0/shadow/kernal: plugin 'testgood' has no parameter 'kernal'; did "
+                                          "you mean 'kernel'?"))
+        << r.err;
+    EXPECT_FALSE(has(r.out, "config ok")) << r.out;
+}
+
+TEST_F(Cli, ValidateChecksTheParametersOfEverySweepVariant)
+{
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << testGoodConfig("", R"(, "sweep": [{"path": "/lights/0/shadow/kernel", "values": [3, 40]}])");
+    const CliResult r = run(fmt::format("validate '{}'", cfg.string()), pluginPath());
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(has(r.out, "sweep: 2 variants")) << r.out;
+    // The swept value's own place in the file, then the path it sets.
+    EXPECT_TRUE(has(r.err, cfg.string() + " (/sweep/0/values/1): /lights/0/shadow/kernel: must be an integer in [1, 15] "
+                                          "(plugin testgood, parameter kernel: a kernel width, unused), got 40"))
+        << r.err;
+}
+
+TEST_F(Cli, ValidateRequiredPluginThatCannotLoadIsAnError)
+{
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << R"({"camera": {"position": [0, 5, 10], "target": [0, 0, 0]},
+        "lights": [{"name": "key", "type": "point", "position": [0, 4, 0], "shadow": {"technique": "nodep", "required": true}}]})";
+    const CliResult r = run(fmt::format("validate '{}'", cfg.string()), pluginPath());
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(has(r.err, "light 0 ('key'): required technique 'nodep' cannot be used: plugin 'nodep' (")) << r.err;
+    EXPECT_TRUE(has(r.err, "libpenumbra_test_absent.so: cannot open shared object file")) << r.err;
+}
+
+TEST_F(Cli, SetOverridesTheConfigsParameters)
+{
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << testGoodConfig(R"(, "kernel": 9)");
+    const CliResult r = run(fmt::format("validate '{}' --set testgood.kernel=11 --set testgood.mode=unshadowed "
+                                        "--set 'testgood.fill=0.25'",
+                                        cfg.string()),
+                            pluginPath());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(has(r.out, "enabled=true kernel=11 fill=0.25 bias=0.01 mode=\"unshadowed\"")) << r.out;
+}
+
+TEST_F(Cli, SetWithABadValueNamesTheFlag)
+{
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << testGoodConfig("");
+    const CliResult r = run(fmt::format("validate '{}' --set testgood.kernel=99", cfg.string()), pluginPath());
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(has(r.err, "--set testgood.kernel: must be an integer in [1, 15] (plugin testgood, parameter kernel: a "
+                           "kernel width, unused), got 99"))
+        << r.err;
+    const CliResult unknown = run(fmt::format("validate '{}' --set testgood.kernl=3", cfg.string()), pluginPath());
+    EXPECT_EQ(unknown.exitCode, 1);
+    EXPECT_TRUE(has(unknown.err, "--set testgood.kernl: plugin 'testgood' has no parameter 'kernl'; did you mean 'kernel'?"))
+        << unknown.err;
+}
+
+TEST_F(Cli, SetForATechniqueNoLightUsesOrWithBadSyntaxFailsBeforeRendering)
+{
+    CliResult r = run(fmt::format("render {} -o '{}/out.png' --set nosuch.size=1", config("default.json"), dir.string()),
+                      pluginPath());
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(has(r.err, "--set nosuch.size: no light of ")) << r.err;
+    EXPECT_TRUE(has(r.err, "default.json uses technique 'nosuch' (its lights use: hard")) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out.png"));
+
+    r = run(fmt::format("render {} -o '{}/out.png' --set hard.size", config("default.json"), dir.string()));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(has(r.err, "--set 'hard.size': expected technique.parameter=value, e.g. --set hard.pcf_kernel=5")) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out.png"));
+
+    r = run(fmt::format("validate {} --set hard.size=1", data("gltf/quad.glb")));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(has(r.err, "quad.glb: --set sets technique parameters of a config (.json), not of a glTF file")) << r.err;
 }

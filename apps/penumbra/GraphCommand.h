@@ -14,6 +14,7 @@ struct GraphFlags {
     std::string output;           // empty: stdout
     std::optional<uint32_t> width;
     std::optional<uint32_t> height;
+    std::vector<std::string> settings;  // --set technique.param=value
 };
 
 // Builds the config's frame (plugins, techniques, graph), executes it once so that the

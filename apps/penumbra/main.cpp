@@ -1,10 +1,14 @@
 // penumbra: the command-line front end. `penumbra render cfg.json -o out.png` renders a
 // config headless; `penumbra generate city -o city.glb --set blocks=16` writes a
 // procedural scene as glTF; `penumbra validate scene.gltf` loads and repairs a glTF
-// file (or checks a config) and says what it found; `penumbra devices` lists the
-// Vulkan devices the loader sees.
+// file (or checks a config and its plugins) and says what it found; `penumbra plugins`
+// lists the technique plugins and their parameters; `penumbra graph cfg.json` prints the
+// frame's compiled render graph; `penumbra devices` lists the Vulkan devices the loader
+// sees.
 #include "GraphCommand.h"
+#include "PluginsCommand.h"
 #include "penumbra/config/Config.h"
+#include "penumbra/config/Overrides.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/io/Png.h"
@@ -44,6 +48,7 @@ struct RenderFlags {
     bool timings = false;
     std::optional<uint32_t> width;
     std::optional<uint32_t> height;
+    std::vector<std::string> settings;  // technique.param=value
 };
 
 struct GenerateFlags {
@@ -58,6 +63,7 @@ struct ValidateFlags {
     std::string file;
     bool weld = false;
     bool verbose = false;
+    std::vector<std::string> settings;  // technique.param=value
 };
 
 double median(std::vector<double> v)
@@ -119,6 +125,7 @@ std::string framePath(const std::string& pattern, uint32_t frame)
 int runRender(const RenderFlags& flags, const DeviceFlags& deviceFlags)
 {
     penumbra::config::RenderConfig config = penumbra::config::loadConfig(flags.config);
+    const std::vector<penumbra::config::ParamOverride> overrides = penumbra::config::parseParamOverrides(flags.settings);
     if (flags.width) config.width = *flags.width;
     if (flags.height) config.height = *flags.height;
     if (flags.frames) config.frames = *flags.frames;
@@ -128,6 +135,8 @@ int runRender(const RenderFlags& flags, const DeviceFlags& deviceFlags)
     penumbra::gpu::Context context(contextOptions(deviceFlags));
     spdlog::info("device: {} ({})", context.deviceInfo().name, context.deviceInfo().type);
     penumbra::scene::Scene scene = penumbra::config::buildScene(config);
+    // After buildScene: "lights": "scene" configs have their lights only then.
+    penumbra::config::applyParamOverrides(config, overrides);
     const penumbra::config::RenderConfig rest = config;  // the animation's starting point
     penumbra::plugin::PluginRegistry plugins;
     penumbra::render::FrameRenderer renderer(context, scene, config, plugins);
@@ -286,18 +295,20 @@ int runValidateGltf(const ValidateFlags& flags)
     return 0;
 }
 
-// Config validation is deliberately minimal for now: loadConfig's own checks.
 // Checks everything a render would read: includes, every sweep variant, the scene (a
-// glTF file is loaded, a generator run) and the animation's node tracks.
+// glTF file is loaded, a generator run), the animation's node tracks, and each light's
+// technique plugin with its parameters (--set overrides applied).
 int runValidateConfig(const ValidateFlags& flags)
 {
     namespace config = penumbra::config;
+    const std::vector<config::ParamOverride> overrides = config::parseParamOverrides(flags.settings);
     const config::ConfigDocument document = config::loadDocument(flags.file);
     const std::vector<config::SweepVariant> variants = config::expandSweep(document);
     config::RenderConfig base = config::parseConfig(document);
     const penumbra::scene::Scene scene = config::buildScene(base);
+    const std::vector<config::LightConfig> sceneLights = base.lights;
+    config::applyParamOverrides(base, overrides);
     const config::SceneSource& source = base.scene;
-    fmt::print("{}: config ok\n", flags.file);
     fmt::print("scene: {} (scale {}): {} meshes, {} instances, {} triangles, {} materials, {} textures\n",
                source.kind == config::SceneSource::Kind::Gltf ? source.gltf.string() : "generator " + source.generator,
                source.scale, scene.meshes.size(), scene.instances.size(), scene.triangleCount(), scene.materials.size(),
@@ -308,6 +319,9 @@ int runValidateConfig(const ValidateFlags& flags)
         fmt::print("light '{}': {}, intensity {:.4g}, shadow {}{}{}\n", l.name, penumbra::scene::lightTypeName(l.light.type),
                    l.light.intensity, l.shadow.technique, l.shadow.required ? " (required)" : "", params);
     }
+    penumbra::plugin::PluginRegistry plugins;
+    penumbra::app::PluginCheck pluginCheck;
+    pluginCheck.check(base, plugins, true);
     fmt::print("output {}x{}, {} frame(s), culling {}, {} animation track(s) at {} fps\n", base.width, base.height,
                base.frames, config::cullingModeName(base.culling), base.animation.tracks.size(), base.animation.fps);
     if (variants.size() > 1 || !variants.front().label.empty()) {
@@ -318,10 +332,18 @@ int runValidateConfig(const ValidateFlags& flags)
                 v.config.scene.params != source.params || v.config.scene.scale != source.scale ||
                 v.config.scene.gltf != source.gltf) {
                 config::buildScene(v.config);
+            } else if (v.config.lightsFromScene) {
+                v.config.lights = sceneLights;
             }
+            config::applyParamOverrides(v.config, overrides);
+            pluginCheck.check(v.config, plugins, false);
             fmt::print("  {}\n", v.label);
         }
     }
+    for (const std::string& warning : pluginCheck.warnings()) fmt::print("warning: {}\n", warning);
+    for (const std::string& error : pluginCheck.errors()) fmt::print(stderr, "penumbra: error: {}\n", error);
+    if (!pluginCheck.errors().empty()) return 1;
+    fmt::print("{}: config ok\n", flags.file);
     return 0;
 }
 
@@ -329,6 +351,10 @@ int runValidate(const ValidateFlags& flags)
 {
     std::string extension = std::filesystem::path(flags.file).extension().string();
     std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if ((extension == ".gltf" || extension == ".glb") && !flags.settings.empty()) {
+        throw penumbra::Error(fmt::format("{}: --set sets technique parameters of a config (.json), not of a glTF file",
+                                          flags.file));
+    }
     if (extension == ".gltf" || extension == ".glb") return runValidateGltf(flags);
     if (extension == ".json") return runValidateConfig(flags);
     throw penumbra::Error(fmt::format("{}: unknown file type '{}': validate reads .gltf, .glb and .json", flags.file, extension));
@@ -360,6 +386,13 @@ int main(int argc, char** argv)
     bool verbose = false;
     app.add_flag("-v,--verbose", verbose, "Log debug detail");
 
+    auto addParamOverrideFlag = [](CLI::App* cmd, std::vector<std::string>& settings) {
+        cmd->add_option("--set", settings,
+                        "Set a technique parameter for every light that uses the technique: --set hard.pcf_kernel=5 "
+                        "(repeatable; the value is JSON, or plain text for enum choices; `penumbra plugins` lists them)")
+            ->allow_extra_args(false);
+    };
+
     DeviceFlags deviceFlags;
     auto addDeviceFlags = [&](CLI::App* cmd) {
         cmd->add_option("--device", deviceFlags.name,
@@ -383,6 +416,7 @@ int main(int argc, char** argv)
     render->add_flag("--timings", renderFlags.timings, "Print the median GPU and CPU ms of every pass");
     render->add_option("--width", renderFlags.width, "Output width (overrides the config)")->check(CLI::Range(1u, 16384u));
     render->add_option("--height", renderFlags.height, "Output height (overrides the config)")->check(CLI::Range(1u, 16384u));
+    addParamOverrideFlag(render, renderFlags.settings);
     addDeviceFlags(render);
 
     GenerateFlags generateFlags;
@@ -403,6 +437,17 @@ int main(int argc, char** argv)
                                                         "was found and repaired; exit 1 with the error if it cannot be loaded");
     validate->add_option("file", validateFlags.file, "glTF file or scene config")->required();
     validate->add_flag("--weld", validateFlags.weld, "Also weld coincident vertices with equal attributes");
+    addParamOverrideFlag(validate, validateFlags.settings);
+
+    penumbra::app::PluginsFlags pluginsFlags;
+    CLI::App* plugins = app.add_subcommand("plugins", "List the technique plugins on the search path with their parameters, "
+                                                      "and every plugin file that fails to load with the reason");
+    plugins->add_flag("--json", pluginsFlags.json, "Print a JSON document: {abi, search_path, plugins, errors}");
+    plugins->add_option("--path", pluginsFlags.path,
+                        "Also search this folder, before $PENUMBRA_PLUGIN_PATH and the build and install trees (repeatable)")
+        ->check(CLI::ExistingDirectory)
+        ->allow_extra_args(false);
+    plugins->add_flag("--strict", pluginsFlags.strict, "Exit 1 when any plugin file fails to load (default: list it, exit 0)");
 
     CLI::App* devices = app.add_subcommand("devices", "List the Vulkan devices the loader reports");
 
@@ -416,6 +461,7 @@ int main(int argc, char** argv)
     graph->add_option("-o,--output", graphFlags.output, "Write to this file instead of stdout");
     graph->add_option("--width", graphFlags.width, "Output width (overrides the config)")->check(CLI::Range(1u, 16384u));
     graph->add_option("--height", graphFlags.height, "Output height (overrides the config)")->check(CLI::Range(1u, 16384u));
+    addParamOverrideFlag(graph, graphFlags.settings);
     addDeviceFlags(graph);
 
     try {
@@ -432,6 +478,7 @@ int main(int argc, char** argv)
         if (validate->parsed()) return runValidate(validateFlags);
         if (devices->parsed()) return runDevices();
         if (graph->parsed()) return penumbra::app::runGraph(graphFlags, contextOptions(deviceFlags));
+        if (plugins->parsed()) return penumbra::app::runPlugins(pluginsFlags);
     } catch (const penumbra::Error& e) {
         fmt::print(stderr, "penumbra: error: {}\n", e.what());
         return 1;

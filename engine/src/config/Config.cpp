@@ -1,6 +1,7 @@
 #define GLM_ENABLE_EXPERIMENTAL  // glm/gtx: euler angles and matrix decomposition for node tracks
 #include "penumbra/config/Config.h"
 
+#include "core/Text.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/scene/GltfLoader.h"
 
@@ -21,22 +22,6 @@ namespace fs = std::filesystem;
 
 namespace penumbra::config {
 namespace {
-
-size_t editDistance(const std::string& a, const std::string& b)
-{
-    std::vector<size_t> row(b.size() + 1);
-    for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
-    for (size_t i = 1; i <= a.size(); ++i) {
-        size_t diagonal = row[0];
-        row[0] = i;
-        for (size_t j = 1; j <= b.size(); ++j) {
-            const size_t up = row[j];
-            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
-            diagonal = up;
-        }
-    }
-    return row[b.size()];
-}
 
 // Where messages point: the file a JSON path's value came from.
 class Locator {
@@ -159,17 +144,9 @@ public:
     {
         for (auto it = value_.begin(); it != value_.end(); ++it) {
             if (known_.count(it.key())) continue;
-            std::string best;
-            size_t bestDistance = 3;
-            for (const std::string& k : known_) {
-                const size_t d = editDistance(it.key(), k);
-                if (d < bestDistance) {
-                    bestDistance = d;
-                    best = k;
-                }
-            }
+            const std::vector<std::string> keys(known_.begin(), known_.end());
+            const std::string best = core::closestMatch(it.key(), keys);
             const std::string unknown = context.empty() ? "unknown key" : "unknown key " + context;
-            std::vector<std::string> keys(known_.begin(), known_.end());
             fail(path(it.key()), best.empty() ? fmt::format("{} (expected one of: {})", unknown, fmt::join(keys, ", "))
                                               : fmt::format("{}; did you mean \"{}\"?", unknown, best));
         }

@@ -1,7 +1,8 @@
 #include "SanitizerSupport.h"
 
-#if defined(__SANITIZE_ADDRESS__)
 #include <dlfcn.h>
+
+#if defined(__SANITIZE_ADDRESS__)
 #include <link.h>
 #endif
 
@@ -19,6 +20,15 @@ void pinLoadedLibrariesForLeakReports()
             return 0;
         },
         nullptr);
+#endif
+}
+
+int noUnloadDlopenFlag()
+{
+#if defined(__SANITIZE_ADDRESS__)
+    return RTLD_NODELETE;
+#else
+    return 0;
 #endif
 }
 

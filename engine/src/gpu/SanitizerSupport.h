@@ -10,4 +10,9 @@ namespace penumbra::gpu {
 // A no-op in other builds.
 void pinLoadedLibrariesForLeakReports();
 
+// Extra dlopen flags for libraries the engine loads itself (technique plugins): in
+// AddressSanitizer builds RTLD_NODELETE, for the same reason (the plugin registry
+// dlcloses its plugins before LeakSanitizer reports at exit); 0 in other builds.
+int noUnloadDlopenFlag();
+
 } // namespace penumbra::gpu

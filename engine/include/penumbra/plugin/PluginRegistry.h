@@ -17,23 +17,32 @@
 namespace penumbra::plugin {
 
 enum class PluginErrorKind {
-    FileMissing,         // no penumbra-<name>.so on the search path
-    DependencyMissing,   // dlopen failed (a library it needs is missing): dlerror text
+    FileMissing,         // no penumbra-<name>.so on the search path: the folders searched
+    NotALibrary,         // the file is not an ELF shared library (garbage, a script, an executable)
+    DependencyMissing,   // dlopen failed (a library or symbol it needs is missing): dlerror text
     EntryMissing,        // no penumbra_plugin_entry symbol (not a Penumbra plugin)
     AbiMismatch,         // built for another ABI version: both numbers
-    DuplicateName,       // two files declare one plugin name
+    InvalidInfo,         // the entry's PenumbraPluginInfo is malformed (null fields, bad specs)
+    DuplicateName,       // two files declare one plugin name (the first on the path wins)
     NameMismatch,        // penumbra-<a>.so declares name <b>
     RegistrationFailed,  // an exception while creating the technique or registering passes
 };
+// "file-missing", "dependency-missing", ...: for messages and `penumbra plugins --json`.
 const char* pluginErrorKindName(PluginErrorKind kind);
 
 class PluginError : public Error {
 public:
-    PluginError(PluginErrorKind kind, const std::string& message) : Error(message), kind_(kind) {}
+    PluginError(PluginErrorKind kind, const std::string& message, std::filesystem::path file = {})
+        : Error(message), kind_(kind), file_(std::move(file))
+    {
+    }
     PluginErrorKind kind() const { return kind_; }
+    // The plugin file the error is about; empty when there is none (FileMissing).
+    const std::filesystem::path& file() const { return file_; }
 
 private:
     PluginErrorKind kind_;
+    std::filesystem::path file_;
 };
 
 // A loaded plugin: its library stays loaded while the registry lives.
@@ -46,8 +55,16 @@ struct LoadedPlugin {
     ParamValues defaultParams() const { return ParamValues(info->name, info->params, info->paramCount); }
 };
 
-// The default search path (see the file comment), existing folders only.
+// The default search path (see the file comment), existing folders only, each once.
 std::vector<std::filesystem::path> defaultPluginSearchPath();
+
+// Checks what a plugin's entry returned, after its ABI version matched: name, version,
+// summary and factory present, the name a plugin name ([a-z0-9_-]+), every parameter
+// spec sane (unique snake_case names, a known type, unit and doc present, Int/Float
+// ranges finite with min <= default <= max, Int values integral and within int, Bool
+// default 0 or 1, Enum choices present and unique with the default among them). Throws
+// PluginError InvalidInfo naming `file` and the field.
+void checkPluginInfo(const PenumbraPluginInfo& info, const std::filesystem::path& file);
 
 class PluginRegistry {
 public:
@@ -60,11 +77,13 @@ public:
     const std::vector<std::filesystem::path>& searchPath() const { return searchPath_; }
 
     // Loads penumbra-<name>.so (the first on the search path), or returns the plugin
-    // loaded before. Throws PluginError.
+    // loaded before. Throws PluginError; the registry stays usable after a failure.
     const LoadedPlugin& load(std::string_view name);
 
-    // Every plugin file on the search path, loaded, in search-path order; a file that
-    // fails is reported in `errors` and skipped (for `penumbra plugins`).
+    // Every plugin file (penumbra-*.so) on the search path, loaded, in search-path order
+    // (by file name within a folder); a file that fails is reported in `errors` and
+    // skipped (for `penumbra plugins`). A second file declaring a name already loaded is a
+    // DuplicateName error: the first on the path wins, as for load().
     struct Discovery {
         std::vector<const LoadedPlugin*> plugins;
         std::vector<PluginError> errors;
@@ -81,6 +100,8 @@ private:
 
     std::vector<std::filesystem::path> searchPath_;
     std::vector<std::unique_ptr<LoadedPlugin>> loaded_;
+    // Every library dlopen'd, refused ones too: nothing is unloaded while the registry
+    // lives, so no pointer into a library (info, specs, vtables) can dangle.
     std::vector<void*> handles_;
 };
 

@@ -1,0 +1,137 @@
+#include "PluginsCommand.h"
+
+#include "penumbra/core/Error.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+namespace penumbra::app {
+namespace {
+
+// "5 in [1, 15] texels", "true", "clear of clear|unshadowed": a spec's default and what
+// it may be, from its JSON form so that text and --json agree.
+std::string describeValues(const plugin::ParamSpec& spec)
+{
+    const json j = plugin::specToJson(spec);
+    const auto text = [](const json& v) { return v.is_string() ? v.get<std::string>() : v.dump(); };
+    std::string out = text(j["default"]);
+    if (j.contains("min")) out += fmt::format(" in [{}, {}]", j["min"].dump(), j["max"].dump());
+    if (j.contains("choices")) out += fmt::format(" of {}", fmt::join(j["choices"].get<std::vector<std::string>>(), "|"));
+    if (spec.unit[0]) out += fmt::format(" {}", spec.unit);
+    return out;
+}
+
+json pluginToJson(const plugin::LoadedPlugin& p)
+{
+    json params = json::array();
+    for (uint32_t i = 0; i < p.info->paramCount; ++i) params.push_back(plugin::specToJson(p.info->params[i]));
+    return {{"name", p.info->name},        {"version", p.info->version}, {"summary", p.info->summary},
+            {"file", p.file.string()},     {"abi", p.info->abiVersion},  {"shader_dir", p.shaderDir.string()},
+            {"params", std::move(params)}};
+}
+
+void printPlugin(const plugin::LoadedPlugin& p)
+{
+    fmt::print("{} {}: {}\n", p.info->name, p.info->version, p.info->summary);
+    fmt::print("  file:    {}\n", p.file.string());
+    fmt::print("  shaders: {}\n", p.shaderDir.string());
+    if (p.info->paramCount == 0) {
+        fmt::print("  no parameters\n");
+        return;
+    }
+    size_t nameWidth = 0, valuesWidth = 0;
+    for (uint32_t i = 0; i < p.info->paramCount; ++i) {
+        nameWidth = std::max(nameWidth, std::string_view(p.info->params[i].name).size());
+        valuesWidth = std::max(valuesWidth, describeValues(p.info->params[i]).size());
+    }
+    fmt::print("  parameters:\n");
+    for (uint32_t i = 0; i < p.info->paramCount; ++i) {
+        const plugin::ParamSpec& spec = p.info->params[i];
+        fmt::print("    {:<{}}  {:<5}  {:<{}}  {}\n", spec.name, nameWidth, plugin::paramTypeName(spec.type),
+                   describeValues(spec), valuesWidth, spec.doc);
+    }
+}
+
+} // namespace
+
+int runPlugins(const PluginsFlags& flags)
+{
+    std::vector<fs::path> searchPath(flags.path.begin(), flags.path.end());
+    for (fs::path& dir : plugin::defaultPluginSearchPath()) searchPath.push_back(std::move(dir));
+    plugin::PluginRegistry registry(searchPath);
+    const plugin::PluginRegistry::Discovery found = registry.discoverAll();
+
+    if (flags.json) {
+        json doc = {{"abi", PENUMBRA_PLUGIN_ABI_VERSION}, {"search_path", json::array()}, {"plugins", json::array()},
+                    {"errors", json::array()}};
+        for (const fs::path& dir : registry.searchPath()) doc["search_path"].push_back(dir.string());
+        for (const plugin::LoadedPlugin* p : found.plugins) doc["plugins"].push_back(pluginToJson(*p));
+        for (const plugin::PluginError& e : found.errors) {
+            doc["errors"].push_back(
+                {{"file", e.file().string()}, {"kind", plugin::pluginErrorKindName(e.kind())}, {"message", e.what()}});
+        }
+        fmt::print("{}\n", doc.dump(2));
+    } else {
+        std::vector<std::string> folders;
+        for (const fs::path& dir : registry.searchPath()) folders.push_back(dir.string());
+        fmt::print("plugin search path: {} (plugin ABI {})\n", folders.empty() ? "empty" : fmt::format("{}", fmt::join(folders, ":")),
+                   PENUMBRA_PLUGIN_ABI_VERSION);
+        for (const plugin::LoadedPlugin* p : found.plugins) {
+            fmt::print("\n");
+            printPlugin(*p);
+        }
+        fmt::print("\n{} plugin(s), {} file(s) failed to load\n", found.plugins.size(), found.errors.size());
+        for (const plugin::PluginError& e : found.errors) {
+            fmt::print("error [{}]: {}\n", plugin::pluginErrorKindName(e.kind()), e.what());
+        }
+        if (found.plugins.empty() && found.errors.empty()) {
+            fmt::print("no penumbra-<name>.so files there: build the plugins, or add their folder to "
+                       "PENUMBRA_PLUGIN_PATH or --path\n");
+        }
+    }
+    return flags.strict && !found.errors.empty() ? 1 : 0;
+}
+
+void PluginCheck::addOnce(std::vector<std::string>& list, std::string message)
+{
+    if (std::find(list.begin(), list.end(), message) == list.end()) list.push_back(std::move(message));
+}
+
+void PluginCheck::check(const config::RenderConfig& config, plugin::PluginRegistry& registry, bool print)
+{
+    for (size_t i = 0; i < config.lights.size(); ++i) {
+        const config::LightConfig& light = config.lights[i];
+        const std::string who = fmt::format("light {} ('{}')", i, light.name);
+        const plugin::LoadedPlugin* loaded = nullptr;
+        try {
+            loaded = &registry.load(light.shadow.technique);
+        } catch (const plugin::PluginError& e) {
+            if (light.shadow.required) {
+                addOnce(errors_, fmt::format("{}: required technique '{}' cannot be used: {}", who,
+                                             light.shadow.technique, e.what()));
+            } else {
+                addOnce(warnings_, fmt::format("{} would render without shadows: {}", who, e.what()));
+            }
+            continue;
+        }
+        std::vector<std::string> badValues;
+        const plugin::ParamValues values = plugin::resolveParams(*loaded, light.shadow, &badValues);
+        for (std::string& message : badValues) addOnce(errors_, std::move(message));
+        if (print && badValues.empty()) {
+            const json current = values.toJson();
+            std::vector<std::string> settings;
+            for (const plugin::ParamSpec& spec : values.specs()) {
+                settings.push_back(fmt::format("{}={}", spec.name, current[spec.name].dump()));
+            }
+            fmt::print("{}: plugin {} {} ({}): {}\n", who, loaded->name(), loaded->info->version, loaded->file.string(),
+                       settings.empty() ? "no parameters" : fmt::format("{}", fmt::join(settings, " ")));
+        }
+    }
+}
+
+} // namespace penumbra::app

@@ -1,0 +1,408 @@
+#include "penumbra/plugin/PluginRegistry.h"
+
+#include "core/Text.h"
+#include "gpu/SanitizerSupport.h"
+
+#include <fmt/format.h>
+
+#include <dlfcn.h>
+#include <link.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <climits>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <set>
+
+namespace fs = std::filesystem;
+
+namespace penumbra::plugin {
+namespace {
+
+constexpr const char* kPathVariable = "PENUMBRA_PLUGIN_PATH";
+constexpr std::string_view kFilePrefix = "penumbra-";
+constexpr std::string_view kFileSuffix = ".so";
+
+std::string pluginFileName(std::string_view name) { return fmt::format("{}{}{}", kFilePrefix, name, kFileSuffix); }
+
+// The names configs use: lower case, digits, '_' and '-' (config/Config.cpp checks the
+// same for "technique").
+bool isPluginName(std::string_view name)
+{
+    return !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
+        return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
+    });
+}
+
+bool isParamName(std::string_view name)
+{
+    return !name.empty() && name[0] >= 'a' && name[0] <= 'z' && std::all_of(name.begin(), name.end(), [](char c) {
+        return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
+    });
+}
+
+// "hard" for ".../penumbra-hard.so"; empty when the file name has another shape.
+std::string nameFromFile(const fs::path& file)
+{
+    const std::string base = file.filename().string();
+    if (base.size() <= kFilePrefix.size() + kFileSuffix.size() || !base.starts_with(kFilePrefix) || !base.ends_with(kFileSuffix)) {
+        return {};
+    }
+    return base.substr(kFilePrefix.size(), base.size() - kFilePrefix.size() - kFileSuffix.size());
+}
+
+// The plugin files of one folder, by file name; none when the folder cannot be read.
+std::vector<fs::path> pluginFiles(const fs::path& dir)
+{
+    std::vector<fs::path> files;
+    std::error_code ec;
+    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+        std::error_code typeError;
+        if (!nameFromFile(it->path()).empty() && fs::is_regular_file(it->path(), typeError)) files.push_back(it->path());
+    }
+    std::sort(files.begin(), files.end());
+    return files;
+}
+
+fs::path canonicalOrSelf(const fs::path& p)
+{
+    std::error_code ec;
+    fs::path canonical = fs::weakly_canonical(p, ec);
+    return ec ? p : canonical;
+}
+
+// Each folder once (by canonical path), in order.
+std::vector<fs::path> uniqueFolders(std::vector<fs::path> folders)
+{
+    std::vector<fs::path> out;
+    std::set<fs::path> seen;
+    for (fs::path& f : folders)
+        if (seen.insert(canonicalOrSelf(f)).second) out.push_back(std::move(f));
+    return out;
+}
+
+// <libdir>/penumbra/plugins beside the engine library that holds this code: where an
+// installed tree keeps its plugins, wherever it was installed to.
+fs::path installedPluginDir()
+{
+    static const int anchor = 0;
+    Dl_info info{};
+    if (dladdr(&anchor, &info) == 0 || !info.dli_fname) return {};
+    return fs::path(info.dli_fname).parent_path() / "penumbra" / "plugins";
+}
+
+std::string searchPathHint()
+{
+    const char* env = std::getenv(kPathVariable);
+    return env ? fmt::format("{}={}", kPathVariable, env) : fmt::format("{} is not set", kPathVariable);
+}
+
+// A file that dlopen would refuse for its shape, said plainly instead of with the
+// loader's "invalid ELF header": garbage, a text file, a 32-bit build, an executable.
+void checkSharedLibraryFile(const fs::path& file, const std::string& who)
+{
+    auto fail = [&](const std::string& what) {
+        throw PluginError(PluginErrorKind::NotALibrary,
+                          fmt::format("{}: not a shared library: {}; rebuild the plugin (a CMake MODULE library) or "
+                                      "remove the file from the plugin search path",
+                                      who, what),
+                          file);
+    };
+    std::ifstream in(file, std::ios::binary);
+    if (!in) fail(fmt::format("cannot read the file ({})", std::strerror(errno)));
+    ElfW(Ehdr) header{};
+    in.read(reinterpret_cast<char*>(&header), sizeof header);
+    const auto got = size_t(in.gcount());
+    if (got < SELFMAG || std::memcmp(header.e_ident, ELFMAG, SELFMAG) != 0) fail("it is not an ELF file");
+    if (got < sizeof header) fail(fmt::format("the ELF header is truncated ({} bytes)", got));
+    constexpr unsigned char nativeClass = sizeof(void*) == 8 ? ELFCLASS64 : ELFCLASS32;
+    if (header.e_ident[EI_CLASS] != nativeClass) {
+        fail(fmt::format("it is a {}-bit ELF file, this engine is {}-bit", header.e_ident[EI_CLASS] == ELFCLASS64 ? 64 : 32,
+                         sizeof(void*) * 8));
+    }
+    if (header.e_type != ET_DYN) fail("it is an ELF executable or object file, not a shared object");
+}
+
+void checkParamSpec(const penumbra::plugin::ParamSpec& spec, const std::string& at, const std::function<void(std::string)>& fail)
+{
+    if (!spec.unit) fail(at + ": unit is null (use \"\" when unitless)");
+    if (!spec.doc) fail(at + ": doc is null");
+    auto finite = [&](double v, const char* what) {
+        if (!std::isfinite(v)) fail(fmt::format("{}: {} is not finite", at, what));
+    };
+    switch (spec.type) {
+    case ParamType::Bool:
+        if (spec.defaultValue != 0.0 && spec.defaultValue != 1.0) {
+            fail(fmt::format("{}: a bool's default must be 0 or 1, got {}", at, spec.defaultValue));
+        }
+        return;
+    case ParamType::Int:
+    case ParamType::Float:
+        finite(spec.defaultValue, "the default");
+        finite(spec.minValue, "min");
+        finite(spec.maxValue, "max");
+        if (!(spec.minValue <= spec.defaultValue && spec.defaultValue <= spec.maxValue)) {
+            fail(fmt::format("{}: needs min <= default <= max, got min {}, default {}, max {}", at, spec.minValue,
+                             spec.defaultValue, spec.maxValue));
+        }
+        if (spec.type == ParamType::Int) {
+            for (double v : {spec.minValue, spec.defaultValue, spec.maxValue}) {
+                if (v != std::floor(v) || v < double(INT_MIN) || v > double(INT_MAX)) {
+                    fail(fmt::format("{}: an int's min, default and max must be integers within int, got {}", at, v));
+                }
+            }
+        }
+        return;
+    case ParamType::Enum: {
+        if (!spec.choices || spec.choiceCount == 0) fail(at + ": an enum needs choices (choices/choiceCount)");
+        std::set<std::string_view> seen;
+        for (uint32_t c = 0; c < spec.choiceCount; ++c) {
+            if (!spec.choices[c] || !spec.choices[c][0]) fail(fmt::format("{}: choice {} is null or empty", at, c));
+            if (!seen.insert(spec.choices[c]).second) fail(fmt::format("{}: choice '{}' is listed twice", at, spec.choices[c]));
+        }
+        if (spec.defaultValue != std::floor(spec.defaultValue) || spec.defaultValue < 0.0 ||
+            spec.defaultValue >= double(spec.choiceCount)) {
+            fail(fmt::format("{}: an enum's default is a choice index in [0, {}), got {}", at, spec.choiceCount,
+                             spec.defaultValue));
+        }
+        return;
+    }
+    }
+    fail(fmt::format("{}: unknown type {}", at, uint32_t(spec.type)));
+}
+
+} // namespace
+
+const char* pluginErrorKindName(PluginErrorKind kind)
+{
+    switch (kind) {
+    case PluginErrorKind::FileMissing: return "file-missing";
+    case PluginErrorKind::NotALibrary: return "not-a-library";
+    case PluginErrorKind::DependencyMissing: return "dependency-missing";
+    case PluginErrorKind::EntryMissing: return "entry-missing";
+    case PluginErrorKind::AbiMismatch: return "abi-mismatch";
+    case PluginErrorKind::InvalidInfo: return "invalid-info";
+    case PluginErrorKind::DuplicateName: return "duplicate-name";
+    case PluginErrorKind::NameMismatch: return "name-mismatch";
+    case PluginErrorKind::RegistrationFailed: return "registration-failed";
+    }
+    return "unknown";
+}
+
+std::vector<fs::path> defaultPluginSearchPath()
+{
+    std::vector<fs::path> candidates;
+    if (const char* env = std::getenv(kPathVariable)) {
+        std::string_view rest = env;
+        while (!rest.empty()) {
+            const size_t colon = rest.find(':');
+            const std::string_view entry = rest.substr(0, colon);
+            if (!entry.empty()) candidates.emplace_back(entry);
+            rest = colon == std::string_view::npos ? std::string_view{} : rest.substr(colon + 1);
+        }
+    }
+#ifdef PENUMBRA_BUILD_PLUGIN_DIR
+    candidates.emplace_back(PENUMBRA_BUILD_PLUGIN_DIR);
+#endif
+    if (fs::path installed = installedPluginDir(); !installed.empty()) candidates.push_back(std::move(installed));
+
+    std::vector<fs::path> existing;
+    for (fs::path& dir : candidates) {
+        std::error_code ec;
+        if (fs::is_directory(dir, ec)) existing.push_back(std::move(dir));
+    }
+    return uniqueFolders(std::move(existing));
+}
+
+void checkPluginInfo(const PenumbraPluginInfo& info, const fs::path& file)
+{
+    const std::string who = info.name ? fmt::format("plugin '{}' ({})", info.name, file.string()) : file.string();
+    const std::function<void(std::string)> fail = [&](const std::string& what) {
+        throw PluginError(PluginErrorKind::InvalidInfo,
+                          fmt::format("{}: malformed plugin info: {}; fix what the plugin's penumbra_plugin_entry returns "
+                                      "(penumbra/plugin/Plugin.h)",
+                                      who, what),
+                          file);
+    };
+    if (!info.name) fail("name is null");
+    if (!isPluginName(info.name)) fail(fmt::format("name '{}' is not a plugin name ([a-z0-9_-]+)", info.name));
+    if (!info.version) fail("version is null");
+    if (!info.summary) fail("summary is null");
+    if (!info.create) fail("create (the technique factory) is null");
+    if (info.paramCount > 0 && !info.params) fail(fmt::format("params is null but paramCount is {}", info.paramCount));
+
+    std::set<std::string_view> names;
+    for (uint32_t i = 0; i < info.paramCount; ++i) {
+        const ParamSpec& spec = info.params[i];
+        if (!spec.name) fail(fmt::format("params[{}]: name is null", i));
+        const std::string at = fmt::format("params[{}] '{}'", i, spec.name);
+        if (!isParamName(spec.name)) fail(at + ": not a snake_case name ([a-z][a-z0-9_]*)");
+        // The config's "shadow" object uses these keys itself (config/Config.h).
+        if (std::string_view(spec.name) == "technique" || std::string_view(spec.name) == "required") {
+            fail(at + ": the name is reserved by the config's \"shadow\" object");
+        }
+        if (!names.insert(spec.name).second) fail(at + ": the name is declared twice");
+        checkParamSpec(spec, at, fail);
+    }
+}
+
+PluginRegistry::PluginRegistry(std::vector<fs::path> searchPath) : searchPath_(uniqueFolders(std::move(searchPath))) {}
+
+PluginRegistry::~PluginRegistry()
+{
+    loaded_.clear();
+    for (auto it = handles_.rbegin(); it != handles_.rend(); ++it) dlclose(*it);
+}
+
+const LoadedPlugin& PluginRegistry::load(std::string_view name)
+{
+    for (const auto& plugin : loaded_)
+        if (plugin->name() == name) return *plugin;
+    if (!isPluginName(name)) {
+        throw PluginError(PluginErrorKind::FileMissing,
+                          fmt::format("'{}' is not a plugin name: plugin names use a-z, 0-9, '_' and '-'", name));
+    }
+    for (const fs::path& dir : searchPath_) {
+        const fs::path file = dir / pluginFileName(name);
+        std::error_code ec;
+        if (fs::exists(file, ec)) return loadFile(file, name);
+    }
+
+    std::vector<std::string> folders, available;
+    for (const fs::path& dir : searchPath_) {
+        folders.push_back(dir.string());
+        for (const fs::path& file : pluginFiles(dir)) available.push_back(nameFromFile(file));
+    }
+    std::string found = available.empty() ? "no plugin files there"
+                                          : fmt::format("plugins there: {}", fmt::join(available, ", "));
+    if (const std::string best = core::closestMatch(name, available); !best.empty()) {
+        found += fmt::format("; did you mean '{}'?", best);
+    }
+    throw PluginError(PluginErrorKind::FileMissing,
+                      fmt::format("plugin '{}': no file {} on the plugin search path (searched: {}; {}). Build the "
+                                  "plugin, or add the folder that holds it to {} (colon-separated; {})",
+                                  name, pluginFileName(name), folders.empty() ? "no folder exists" : fmt::format("{}", fmt::join(folders, ", ")),
+                                  found, kPathVariable, searchPathHint()));
+}
+
+const LoadedPlugin& PluginRegistry::loadFile(const fs::path& file, std::string_view expectedName)
+{
+    const fs::path canonical = canonicalOrSelf(file);
+    for (const auto& plugin : loaded_)
+        if (canonicalOrSelf(plugin->file) == canonical) return *plugin;
+    const std::string who = fmt::format("plugin '{}' ({})", expectedName, file.string());
+    // First on the search path wins: a later file for a loaded name is never opened.
+    for (const auto& plugin : loaded_) {
+        if (plugin->name() != expectedName) continue;
+        throw PluginError(PluginErrorKind::DuplicateName,
+                          fmt::format("{}: duplicate plugin name: {} was loaded first for the name '{}' and wins; remove "
+                                      "one of the two files or reorder the search path ({})",
+                                      who, plugin->file.string(), expectedName, searchPathHint()),
+                          file);
+    }
+
+    checkSharedLibraryFile(file, who);
+    dlerror();
+    void* handle = dlopen(file.c_str(), RTLD_NOW | RTLD_LOCAL | gpu::noUnloadDlopenFlag());
+    if (!handle) {
+        const char* why = dlerror();
+        throw PluginError(PluginErrorKind::DependencyMissing,
+                          fmt::format("{}: cannot be loaded: {}. A library it links is missing or incompatible, or it "
+                                      "needs a symbol this engine lacks: check `ldd -r {}`, install the library or add "
+                                      "its folder to LD_LIBRARY_PATH, or rebuild the plugin against this engine",
+                                      who, why ? why : "unknown dlopen error", file.string()),
+                          file);
+    }
+    handles_.push_back(handle);
+
+    dlerror();
+    void* symbol = dlsym(handle, PENUMBRA_PLUGIN_ENTRY_SYMBOL);
+    if (!symbol) {
+        throw PluginError(PluginErrorKind::EntryMissing,
+                          fmt::format("{}: not a Penumbra plugin: no {} symbol; a plugin exports it with "
+                                      "PENUMBRA_PLUGIN_EXPORT (penumbra/plugin/Plugin.h)",
+                                      who, PENUMBRA_PLUGIN_ENTRY_SYMBOL),
+                          file);
+    }
+    const auto entry = reinterpret_cast<PenumbraPluginEntryFn>(symbol);
+    const PenumbraPluginInfo* info = nullptr;
+    auto invalid = [&](const std::string& what) {
+        return PluginError(PluginErrorKind::InvalidInfo, fmt::format("{}: {}: fix the plugin", who, what), file);
+    };
+    try {
+        info = entry();
+    } catch (const std::exception& e) {
+        throw invalid(fmt::format("{} threw: {}", PENUMBRA_PLUGIN_ENTRY_SYMBOL, e.what()));
+    } catch (...) {
+        throw invalid(fmt::format("{} threw an exception", PENUMBRA_PLUGIN_ENTRY_SYMBOL));
+    }
+    if (!info) throw invalid(fmt::format("{} returned null", PENUMBRA_PLUGIN_ENTRY_SYMBOL));
+    // The one member read before the check: every other member's layout may differ.
+    if (info->abiVersion != PENUMBRA_PLUGIN_ABI_VERSION) {
+        throw PluginError(PluginErrorKind::AbiMismatch,
+                          fmt::format("{}: built for plugin ABI {}, this engine has ABI {}: rebuild the plugin against "
+                                      "this engine",
+                                      who, info->abiVersion, PENUMBRA_PLUGIN_ABI_VERSION),
+                          file);
+    }
+    checkPluginInfo(*info, file);
+    if (info->name != expectedName) {
+        throw PluginError(PluginErrorKind::NameMismatch,
+                          fmt::format("plugin file {} declares the name '{}', not '{}': rename the file to {} or fix the "
+                                      "name in the plugin",
+                                      file.string(), info->name, expectedName, pluginFileName(info->name)),
+                          file);
+    }
+
+    auto plugin = std::make_unique<LoadedPlugin>();
+    plugin->file = file;
+    plugin->info = info;
+    std::error_code ec;
+    if (info->shaderDir && fs::is_directory(info->shaderDir, ec)) plugin->shaderDir = info->shaderDir;
+    else plugin->shaderDir = file.parent_path() / info->name;
+    loaded_.push_back(std::move(plugin));
+    return *loaded_.back();
+}
+
+PluginRegistry::Discovery PluginRegistry::discoverAll()
+{
+    Discovery discovery;
+    for (const fs::path& dir : searchPath_) {
+        for (const fs::path& file : pluginFiles(dir)) {
+            try {
+                const LoadedPlugin& plugin = loadFile(file, nameFromFile(file));
+                if (std::find(discovery.plugins.begin(), discovery.plugins.end(), &plugin) == discovery.plugins.end()) {
+                    discovery.plugins.push_back(&plugin);
+                }
+            } catch (const PluginError& e) {
+                discovery.errors.push_back(e);
+            }
+        }
+    }
+    return discovery;
+}
+
+std::unique_ptr<Technique> PluginRegistry::create(const LoadedPlugin& plugin, const TechniqueSetup& setup,
+                                                  const std::string& context) const
+{
+    const std::string who = fmt::format("plugin '{}' ({})", plugin.name(), context);
+    auto failed = [&](const std::string& what) {
+        return PluginError(PluginErrorKind::RegistrationFailed, fmt::format("{}: {}", who, what), plugin.file);
+    };
+    Technique* technique = nullptr;
+    try {
+        technique = plugin.info->create(setup);
+    } catch (const std::exception& e) {
+        throw failed(fmt::format("exception during registration: {}", e.what()));
+    } catch (...) {
+        throw failed("exception during registration (not a std::exception)");
+    }
+    if (!technique) throw failed("the plugin's factory returned no technique: a bug in the plugin, report it to its author");
+    return std::unique_ptr<Technique>(technique);
+}
+
+} // namespace penumbra::plugin
