@@ -1,6 +1,6 @@
 // The first frame, end to end: configs rendered headless, each light's visibility image
 // checked against the scene's geometry by an independent CPU ray caster.
-#include "RayCast.h"
+#include "RayCastAgreement.h"
 #include "TestContext.h"
 
 #include "penumbra/config/Config.h"
@@ -59,98 +59,17 @@ struct RenderedFrame {
     std::vector<float> normals;
 };
 
-struct RayCastAgreement {
-    size_t surelyShadowed = 0;
-    size_t surelyLit = 0;
-    size_t mismatches = 0;
-};
-
-// Checks V_l against rays from the light, with the same semantics as a shadow map: a
-// pixel's surface point p is lit when the first surface the light's ray towards p meets
-// is p itself, shadowed when something nearer blocks it. A shadow map answers from
-// texels, so near any edge in the light's view its answer may come from the
-// neighbouring surface: rays aimed at p shifted sideways by up to two shadow-map texels
-// must all meet p's own surface (its tangent plane, within two texels of depth) for the
-// pixel to count; pixels that fail this are near a shadow or silhouette edge as seen from
-// the light and are left out. So are surfaces facing away from the light or within ~6
-// degrees of grazing (N.L < 0.1): shading weights the light by max(N.L, 0), so V does
-// not reach the image there, and a hard shadow map with the slope bias that prevents
-// acne may leak behind casters seen at grazing angles.
-RayCastAgreement compareWithRayCast(const RenderedFrame& frame, size_t l, uint32_t stride = 2)
+// V_l of light `l` against rays from the light (support/RayCastAgreement.h), pixels
+// within two shadow-map texels of an edge in the light's view left out.
+test::RayCastAgreement compareWithRayCast(const RenderedFrame& frame, size_t l, uint32_t stride = 2)
 {
     const std::vector<float> visibility = frame.renderer.readVisibility(l);
-    const test::RayCaster caster(frame.scene);
-    const scene::Light& light = frame.config.lights[l].light;
     const nlohmann::json* resolutionParam = frame.config.lights[l].shadow.param("resolution");
     const uint32_t resolution = resolutionParam ? resolutionParam->get<uint32_t>() : 2048u;
-    const std::vector<render::LightFrustum>& frusta = frame.renderer.lightFrusta(l);
-    const bool directional = light.type == scene::LightType::Directional;
-    const double far = 4.0 * frame.scene.bounds().radius();  // a directional light sits this far back
-    const uint32_t w = frame.config.width, h = frame.config.height;
-
-    RayCastAgreement result;
-    for (uint32_t y = 0; y < h; y += stride) {
-        for (uint32_t x = 0; x < w; x += stride) {
-            const size_t i = size_t(y) * w + x;
-            if (!frame.hasGeometry(i)) continue;
-            const float* pos = &frame.positions[4 * i];
-            const glm::dvec3 p(pos[0], pos[1], pos[2]);
-            const glm::dvec3 n = glm::normalize(glm::dvec3(frame.normals[4 * i], frame.normals[4 * i + 1], frame.normals[4 * i + 2]));
-            const glm::dvec3 lightPos = directional ? p - far * glm::dvec3(glm::normalize(light.direction))
-                                                    : glm::dvec3(light.position);
-            const glm::dvec3 toLight = glm::normalize(lightPos - p);
-            if (glm::dot(n, toLight) < 0.1) continue;
-
-            // The frustum that maps p (the spot's only one, or p's cube face).
-            size_t face = 0;
-            if (frusta.size() == 6) {
-                const glm::dvec3 d = p - glm::dvec3(light.position), a = glm::abs(d);
-                face = a.x >= a.y && a.x >= a.z ? (d.x > 0 ? 0 : 1) : a.y >= a.z ? (d.y > 0 ? 2 : 3) : (d.z > 0 ? 4 : 5);
-            }
-            const render::LightFrustum& f = frusta[face];
-            const glm::vec4 clip = f.viewProj * glm::vec4(glm::vec3(p), 1.0f);
-            if (clip.w <= 0.0f) continue;
-            const glm::vec2 uv = glm::vec2(clip) / clip.w * 0.5f + 0.5f;
-            // Outside the map V is 1 by contract; stay clear of its border.
-            if (glm::any(glm::lessThan(uv, glm::vec2(0.01f))) || glm::any(glm::greaterThan(uv, glm::vec2(0.99f)))) continue;
-            // World size of one texel at p: 2 / (proj[0][0] · R) per unit of view depth
-            // for a perspective frustum, per world unit for an orthographic one.
-            const double viewDepth = directional ? 1.0 : -double((f.view * glm::vec4(glm::vec3(p), 1.0f)).z);
-            const double texel = 2.0 * viewDepth / (double(f.proj[0][0]) * resolution);
-
-            const double dist = glm::length(lightPos - p);
-            const glm::dvec3 dirToP = (p - lightPos) / dist;
-            const double firstHit = caster.closestHit(lightPos, dirToP);
-            const double tolerance = 2.0 * texel;
-            // Sideways shifts of the aim point, across the light's ray.
-            const glm::dvec3 s1 = glm::normalize(glm::cross(dirToP, std::abs(dirToP.y) < 0.9 ? glm::dvec3(0, 1, 0) : glm::dvec3(1, 0, 0)));
-            const glm::dvec3 s2 = glm::cross(dirToP, s1);
-            bool clearOfEdges = true;
-            for (const glm::dvec3& shift : {s1, -s1, s2, -s2}) {
-                const glm::dvec3 aim = glm::normalize(p + 2.0 * texel * shift - lightPos);
-                const double hit = caster.closestHit(lightPos, aim);
-                // Where the shifted ray meets p's tangent plane (the surface p lies on).
-                const double denom = glm::dot(aim, n);
-                const double onPlane = std::abs(denom) > 1e-12 ? glm::dot(p - lightPos, n) / denom : 1e300;
-                const bool samePlane = std::abs(hit - onPlane) <= tolerance;
-                const bool sameAnswerAsP = firstHit >= dist - tolerance ? samePlane : hit < onPlane - tolerance;
-                if (!sameAnswerAsP) {
-                    clearOfEdges = false;
-                    break;
-                }
-            }
-            if (!clearOfEdges) continue;
-            const bool shadowed = firstHit < dist - tolerance;
-            (shadowed ? result.surelyShadowed : result.surelyLit)++;
-            const float expected = shadowed ? 0.0f : 1.0f;
-            if (visibility[i] != expected && ++result.mismatches <= 10) {
-                ADD_FAILURE() << "light " << l << ", pixel (" << x << ", " << y << ") at (" << p.x << ", " << p.y << ", "
-                              << p.z << "): rays from the light say " << (shadowed ? "shadowed" : "lit")
-                              << " but V = " << visibility[i];
-            }
-        }
-    }
-    return result;
+    const test::LightRayClassifier classifier(frame.scene, frame.config.lights[l].light, frame.renderer.lightFrusta(l),
+                                              resolution);
+    const test::FrameImages images{frame.positions, frame.normals, visibility, frame.config.width, frame.config.height};
+    return test::compareWithRayCast(classifier, images, {stride, 2.0, 0.0f, "light " + std::to_string(l)});
 }
 
 // config/default.json at a scene scale (the test parameter).
@@ -205,7 +124,7 @@ TEST_P(DefaultRender, BackgroundIsLit)
 
 TEST_P(DefaultRender, VisibilityMatchesRayCastGeometry)
 {
-    const RayCastAgreement a = compareWithRayCast(*frame, 0);
+    const test::RayCastAgreement a = compareWithRayCast(*frame, 0);
     EXPECT_EQ(a.mismatches, 0u);
     // Enough of both classes that the comparison means something.
     EXPECT_GT(a.surelyShadowed, 500u);
@@ -263,7 +182,7 @@ TEST_F(MultiLight, EachLightHasItsOwnVisibilityImage)
     ASSERT_EQ(frame.renderer.lightCount(), 2u);
 
     for (size_t l = 0; l < 2; ++l) {
-        const RayCastAgreement a = compareWithRayCast(frame, l);
+        const test::RayCastAgreement a = compareWithRayCast(frame, l);
         EXPECT_EQ(a.mismatches, 0u) << "light " << l;
         EXPECT_GT(a.surelyShadowed, 300u) << "light " << l;
         EXPECT_GT(a.surelyLit, 3000u) << "light " << l;
@@ -303,7 +222,7 @@ TEST_P(LightTypes, VisibilityMatchesRayCastGeometry)
     }
     const RenderedFrame frame(*context, cfg);
     EXPECT_EQ(frame.renderer.lightFrusta(0).size(), GetParam() == scene::LightType::Directional ? 1u : 6u);
-    const RayCastAgreement a = compareWithRayCast(frame, 0);
+    const test::RayCastAgreement a = compareWithRayCast(frame, 0);
     EXPECT_EQ(a.mismatches, 0u);
     EXPECT_GT(a.surelyShadowed, 300u);
     EXPECT_GT(a.surelyLit, 3000u);
@@ -336,7 +255,7 @@ TEST_F(MultiLight, AnimatedLightAndNodeFollowTheirTracks)
         frame.renderer.renderFrame();
         frame.positions = frame.renderer.readPositions();
         frame.normals = frame.renderer.readNormals();
-        const RayCastAgreement a = compareWithRayCast(frame, 0);
+        const test::RayCastAgreement a = compareWithRayCast(frame, 0);
         EXPECT_EQ(a.mismatches, 0u) << "t = " << t;
         EXPECT_GT(a.surelyShadowed, 300u) << "t = " << t;
     }
