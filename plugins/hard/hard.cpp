@@ -39,14 +39,15 @@ const plugin::ParamSpec kParams[] = {
     {"depth_bias", ParamType::Float, 4, 0, 1e6, "r",
      "constant depth bias in Vulkan's minimum resolvable depth differences r; applied in every bias_mode"},
     {"slope_bias", ParamType::Float, 2, 0, 1000, "",
-     "slope-scaled depth bias factor (rasterizer); applied in bias_mode slope only"},
+     "slope-scaled depth bias factor (rasterizer), per texel of the filter's width; bias_mode slope only"},
     {"bias_clamp", ParamType::Float, 0, 0, 1, "depth", "largest rasterizer bias, in NDC depth; 0: no clamp"},
     {"bias_mode", ParamType::Enum, double(BiasMode::Slope), 0, 0, "",
      "constant: depth_bias only; slope: plus slope_bias; normal_offset: receiver moved along its normal; "
      "receiver_plane: per-tap depth from the receiver's plane",
      kBiasModeNames, uint32_t(std::size(kBiasModeNames))},
     {"normal_offset", ParamType::Float, 1.0, 0, 64, "texels",
-     "bias_mode normal_offset: offset along the normal, in shadow-map texels at the receiver, times sin(angle to the light)"},
+     "bias_mode normal_offset: offset along the normal in shadow-map texels at the receiver, per texel of the "
+     "filter's width, times sin(angle to the light)"},
     {"filter", ParamType::Enum, double(Filter::None), 0, 0, "",
      "none: one compare; pcf: pcf_kernel^2 box; poisson: poisson_samples on a disk of filter_radius; "
      "bilinear: 2 x 2 compare with bilinear weights",
@@ -89,6 +90,22 @@ Settings readSettings(const plugin::ParamValues& params)
     s.variant.pcfKernel = uint32_t(kernel);
     s.variant.poissonSamples = uint32_t(params.getInt("poisson_samples"));
     return s;
+}
+
+// How many texels wide the compares of one lookup reach, per axis. Every tap compares
+// the receiver's own depth with the map up to that far away, so the slope-scaled bias
+// and the normal offset that keep a receiver free of self-shadowing grow with it:
+// slope_bias and normal_offset are given for one compare (width 1) and scaled by this.
+// Receiver plane bias compares each tap against the plane's depth there and needs none.
+float footprintWidthTexels(const Settings& s)
+{
+    switch (s.variant.filter) {
+    case Filter::None: return 1.0f;
+    case Filter::Pcf: return float(s.variant.pcfKernel);
+    case Filter::Poisson: return 2.0f * s.filterRadiusTexels + 1.0f;
+    case Filter::Bilinear: return 2.0f;
+    }
+    return 1.0f;
 }
 
 uint32_t faceCountFor(scene::LightType type)
@@ -253,7 +270,8 @@ void HardShadow::recordShadowMap(const graph::PassContext& pass, const std::stri
     // negated; a negative clamp bounds the bias from below (Vulkan: max(bias, clamp)).
     // Only bias_mode slope scales with the caster's slope; normal_offset and
     // receiver_plane bias the receiver instead (visibility.comp).
-    const float slope = settings_.variant.bias == BiasMode::Slope ? settings_.slopeBias : 0.0f;
+    const float slope =
+        settings_.variant.bias == BiasMode::Slope ? settings_.slopeBias * footprintWidthTexels(settings_) : 0.0f;
     vkCmdSetDepthBias(cmd, -settings_.depthBias, -settings_.biasClamp, -slope);
 
     const uint32_t size = settings_.resolution;
@@ -300,7 +318,8 @@ void HardShadow::recordVisibility(const graph::PassContext& pass, const plugin::
         .storageBuffer(kBindingFaces, faces_);
     if (settings_.variant.readsNormals()) descriptors.storageImage(kBindingNormal, pass.image(io.gNormal));
     descriptors.push(context_, cmd, visibility_);
-    const VisibilityPush push{light_, faceCount_, float(settings_.resolution), settings_.normalOffsetTexels,
+    const VisibilityPush push{light_, faceCount_, float(settings_.resolution),
+                              settings_.normalOffsetTexels * footprintWidthTexels(settings_),
                               settings_.filterRadiusTexels};
     visibility_.pushConstants(cmd, &push, sizeof(push));
     vkCmdDispatch(cmd, (out.desc().width + 7) / 8, (out.desc().height + 7) / 8, 1);

@@ -187,21 +187,51 @@ float filteredVisibility(Receiver r, ivec2 pixel)
 #endif
 }
 
+// Left-over error once a receiver-side bias has done its work (fp32 positions, the
+// rasterizer's depth interpolation, texel-centre rounding), in texels so that it scales
+// with the map.
+const float kRoundingTexels = 1.0 / 16.0;
+// Beyond 88 degrees between a receiver and the map's iso-depth surface the bias a
+// receiver would need grows without bound; shading weights such receivers by N.L ~ 0.
+const float kMaxTan = 28.6;  // tan(88 degrees)
+
 #if RECEIVER_BIAS == RECEIVER_BIAS_NORMAL_OFFSET
-// Normal offset (Holbert, "Normal Offset Shadows", GDC 2011): the map is read for a
-// point moved off the surface along its normal by k texels (the texel's world size at
-// the receiver) times sin θ, θ the angle between normal and light. Moving d along n
-// raises the point d / cos θ above its surface along the light ray, while the depth
-// error of reading the map up to ~0.7 texel to the side is 0.7 texel · tan θ: with
-// d = k · texel · sin θ the margin is k · texel · tan θ, so k >= 0.7 (plus the filter's
-// radius for wide filters) is free of acne at every angle, and a surface facing the
-// light is not moved at all. The price: the lookup point moves sideways, so shadows
-// shift by up to k texels on steep receivers.
-vec3 offsetAlongNormal(vec3 p, vec3 n, float texelWorld)
+// The direction in which the map's depth grows fastest at p (towards the light): the
+// normal of its iso-depth surface. Orthographic: the light's direction; perspective
+// (depth = near / w): the face's backward axis, not the ray to the light.
+vec3 depthGradientDirection(uint face, vec3 p)
 {
-    float cosTheta = min(abs(dot(n, towardsLight(p))), 1.0);
+    mat4 m = faces[face].viewProj;
+    vec4 clip = m * vec4(p, 1.0);
+    // w^2 grad(z / w) = w grad z - z grad w, with w > 0 here.
+    vec3 g = clip.w * vec3(m[0][2], m[1][2], m[2][2]) - clip.z * vec3(m[0][3], m[1][3], m[2][3]);
+    float len = length(g);
+    return len > 0.0 ? g / len : vec3(0.0);
+}
+
+// Normal offset (Holbert, "Normal Offset Shadows", GDC 2011): the map is read for a
+// point moved off the surface along its normal n. A nearest lookup compares with the
+// map up to e = 0.7 texel beside the receiver, on another ray from the light. Across
+// such an offset v (perpendicular to the ray) the receiver's plane moves by up to
+// |v| tan(theta) along the ray (theta: n to the ray l) and the map's depth, which is
+// constant on planes perpendicular to D (the iso-depth normal, at alpha to the ray),
+// changes by up to |v| (tan(theta) cos(alpha) + sin(alpha)) in units along D. Moving d
+// along n raises the receiver d cos(alpha) / cos(theta) above its plane in the same
+// units. So d = k · texel · (sin(theta) + tan(alpha) cos(theta)) leaves a margin of k / e
+// times the worst error, for any angle: k >= 0.7 (times the filter's width, which
+// hard.cpp applies) is free of self-shadowing. Orthographic maps (alpha = 0) give
+// Holbert's sin(theta); a perspective map also needs an offset where a surface faces
+// the light off the map's axis. The price: the lookup point moves sideways, so shadows
+// shift by up to d on steep receivers.
+vec3 offsetAlongNormal(uint face, vec3 p, vec3 n, float texelWorld)
+{
+    vec3 l = towardsLight(p);
+    float cosTheta = min(abs(dot(n, l)), 1.0);
+    float cosAlpha = min(abs(dot(l, depthGradientDirection(face, p))), 1.0);
     float sinTheta = sqrt(1.0 - cosTheta * cosTheta);
-    return p + n * (pc.normalOffsetTexels * texelWorld * sinTheta);
+    float tanAlpha = sqrt(1.0 - cosAlpha * cosAlpha) / max(cosAlpha, 1.0 / kMaxTan);
+    float factor = min(sinTheta + tanAlpha * cosTheta, kMaxTan);
+    return p + n * (texelWorld * (pc.normalOffsetTexels * factor + kRoundingTexels));
 }
 #endif
 
@@ -213,17 +243,17 @@ vec3 offsetAlongNormal(vec3 p, vec3 n, float texelWorld)
 // texel's centre instead of the receiver's own depth. Self-shadowing of planar receivers disappears for
 // any filter radius without pushing shadows away from their casters.
 
-// Receivers steeper than this against the light (N.L < 0.035) get a clamped gradient:
-// it grows without bound towards 90 degrees, and shading weights them by N.L anyway.
-const float kMaxTanTheta = 28.6;  // tan(88 degrees)
-// Left-over error once the plane is used: fp32 positions, the rasterizer's depth
-// interpolation and texel-centre rounding. Expressed in texels so that it scales with
-// the map: 1/16 texel along the plane's slope plus 1/20 texel of depth along the light.
-const float kSlopeEpsilonTexels = 1.0 / 16.0;
-const float kDepthEpsilonTexels = 0.05;
-// A neighbour further than this from the receiver's tangent plane (sine of the angle,
-// about 14 degrees) is on another surface.
-const float kCoplanarSine = 0.25;
+// Neighbours give the plane of the triangle the map holds, where the receiver is flat
+// at the scale of a pixel: each must lie within 0.6 degrees of the receiver's tangent
+// plane (the G-buffer normal), the plane through the three must agree with the normal
+// within 3 degrees (a neighbour just across an edge can pass the first test), and they
+// must be within 4 texels in the map. On a curved receiver they would give a secant
+// plane, which a convex surface rises above between the points (self-shadowing): there
+// the tangent plane of the G-buffer normal is used instead, which a convex surface
+// stays below.
+const float kCoplanarSine = 0.01;
+const float kPlaneAgreesCosine = 0.9986;
+const float kMaxNeighbourTexels = 4.0;
 
 // Of the two neighbours along `axis`, the one that lies on the receiver's surface; at a
 // silhouette neither may.
@@ -252,24 +282,34 @@ bool surfaceNeighbour(ivec2 pixel, ivec2 axis, vec3 p, vec3 n, out vec3 q)
 
 // dDepth/dUv of the plane through the receiver and two more points of it, given as
 // (uv, depth) differences a and b: solves [a.xy; b.xy] g = [a.z; b.z]. False when the
-// two differences are too short to resolve (below 1/64 texel: fp32 noise) or nearly
-// parallel in uv (the plane is seen edge-on from the light).
-bool solveGradient(vec3 a, vec3 b, out vec2 g)
+// two differences are too short to resolve (below 1/64 texel: fp32 noise), longer than
+// `maxTexels`, or nearly parallel in uv (the plane is seen edge-on from the light).
+bool solveGradient(vec3 a, vec3 b, float maxTexels, out vec2 g)
 {
     g = vec2(0.0);
     float la = length(a.xy), lb = length(b.xy);
     float det = a.x * b.y - a.y * b.x;
-    if (!(min(la, lb) * pc.faceTexels > 1.0 / 64.0) || !(abs(det) > 1e-3 * la * lb)) return false;
+    if (!(min(la, lb) * pc.faceTexels > 1.0 / 64.0) || !(max(la, lb) * pc.faceTexels <= maxTexels) ||
+        !(abs(det) > 1e-3 * la * lb))
+        return false;
     g = vec2(a.z * b.y - a.y * b.z, a.x * b.z - a.z * b.x) / det;
     return !any(isinf(g)) && !any(isnan(g));
 }
 
-bool gradientThrough(uint face, vec3 uvDepth, vec3 q1, vec3 q2, out vec2 g)
+bool planeAgreesWithNormal(vec3 p, vec3 q1, vec3 q2, vec3 n)
+{
+    vec3 c = cross(q1 - p, q2 - p);
+    float len = length(c);
+    return len > 0.0 && abs(dot(c, n)) > kPlaneAgreesCosine * len;
+}
+
+bool gradientThrough(uint face, vec3 uvDepth, vec3 q1, vec3 q2, float maxTexels, out vec2 g)
 {
     g = vec2(0.0);
     vec3 a, b;
     float wa, wb;
-    return project(face, q1, a, wa) && project(face, q2, b, wb) && solveGradient(a - uvDepth, b - uvDepth, g);
+    return project(face, q1, a, wa) && project(face, q2, b, wb) &&
+           solveGradient(a - uvDepth, b - uvDepth, maxTexels, g);
 }
 
 void receiverPlane(ivec2 pixel, vec3 p, vec3 n, float texelWorld, inout Receiver r)
@@ -281,27 +321,30 @@ void receiverPlane(ivec2 pixel, vec3 p, vec3 n, float texelWorld, inout Receiver
     float w;
     if (project(r.face, p + towardsLight(p) * texelWorld, stepped, w)) zStep = max(stepped.z - r.depth, 0.0);
 
-    // The plane through the receiver and its neighbours on the same surface (the
-    // triangles the map holds); failing that, the tangent plane of the G-buffer normal
-    // through two points a texel away.
+    // The plane through the receiver and its neighbours on the same flat surface;
+    // failing that, the tangent plane of the G-buffer normal through two points a texel
+    // away.
     vec2 g = vec2(0.0);
     vec3 q1, q2;
     bool fromNeighbours = surfaceNeighbour(pixel, ivec2(1, 0), p, n, q1) &&
-                          surfaceNeighbour(pixel, ivec2(0, 1), p, n, q2) && gradientThrough(r.face, uvDepth, q1, q2, g);
+                          surfaceNeighbour(pixel, ivec2(0, 1), p, n, q2) && planeAgreesWithNormal(p, q1, q2, n) &&
+                          gradientThrough(r.face, uvDepth, q1, q2, kMaxNeighbourTexels, g);
     if (!fromNeighbours && dot(n, n) > 0.0) {
         vec3 t1 = normalize(cross(n, abs(n.y) < 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
         vec3 t2 = cross(n, t1);
-        gradientThrough(r.face, uvDepth, p + t1 * texelWorld, p + t2 * texelWorld, g);
+        gradientThrough(r.face, uvDepth, p + t1 * texelWorld, p + t2 * texelWorld, kMaxTan, g);
     }
-    // |g| per texel is tan θ · zStep for a plane at θ to the light.
+    // |g| per texel is tan(beta) / cos(alpha) · zStep for a plane at beta to the map's
+    // iso-depth surface (alpha: the ray to the iso-depth normal; see offsetAlongNormal).
     float perTexel = length(g) / pc.faceTexels;
-    float maxPerTexel = kMaxTanTheta * zStep;
+    float maxPerTexel = kMaxTan * zStep;
     if (perTexel > maxPerTexel) {
         g *= maxPerTexel / perTexel;  // perTexel > maxPerTexel >= 0: no division by zero
         perTexel = maxPerTexel;
     }
     r.dDepthDUv = g;
-    r.epsilon = kDepthEpsilonTexels * zStep + kSlopeEpsilonTexels * perTexel;
+    // The rounding margin: along the light, and along the plane's slope.
+    r.epsilon = kRoundingTexels * (zStep + perTexel);
 }
 #endif
 
@@ -321,7 +364,7 @@ bool makeReceiver(ivec2 pixel, vec3 p, out Receiver r)
     float w;
 #if RECEIVER_BIAS == RECEIVER_BIAS_NORMAL_OFFSET
     uint ownFace = faceOf(p);
-    if (project(ownFace, p, uvDepth, w)) p = offsetAlongNormal(p, n, w * faces[ownFace].texel.x);
+    if (project(ownFace, p, uvDepth, w)) p = offsetAlongNormal(ownFace, p, n, w * faces[ownFace].texel.x);
 #endif
     r.face = faceOf(p);
     if (!project(r.face, p, uvDepth, w)) return false;
