@@ -13,6 +13,7 @@
 // FrameRenderer runs technique plugins through the render graph.
 // ---------------------------------------------------------------------------------
 #include "RayCastAgreement.h"
+#include "TestConfigs.h"
 #include "TestContext.h"
 
 #include "penumbra/config/Config.h"
@@ -32,6 +33,7 @@
 #include <cmath>
 #include <memory>
 #include <string>
+#include <tuple>
 
 using namespace penumbra;
 
@@ -80,33 +82,26 @@ double footprintTexels(const HardSettings& s)
     return nearest;
 }
 
-config::RenderConfig defaultConfig()
+// The filter's width in texels, by which the plugin scales slope_bias and normal_offset
+// (plugins/hard/README.md).
+double filterWidthTexels(const HardSettings& s)
 {
-    config::RenderConfig c = config::loadConfig(std::filesystem::path(PENUMBRA_SOURCE_DIR) / "config/default.json");
-    // Small image, full-size shadow map: the tests check the technique, not the output
-    // resolution.
-    c.width = 320;
-    c.height = 180;
-    return c;
+    if (s.filter == "pcf") return s.pcfKernel;
+    if (s.filter == "poisson") return 2.0 * s.filterRadius + 1.0;
+    if (s.filter == "bilinear") return 2.0;
+    return 1.0;
 }
 
-// The light types of test_render.cpp's LightTypes test, in the default scene.
-void setLightType(config::LightConfig& lightConfig, scene::LightType type)
+// How far a variant's bias may move a shadow edge, in texels. A slope-scaled bias of
+// S = slope_bias × width pushes a caster back by as much depth as S texels of its own
+// slope: the shadow of a wall starts up to S texels from its foot (peter-panning). The
+// normal offset moves the lookup point by up to normal_offset × width texels. Receiver
+// plane bias moves nothing. (Constant bias: see its variant.)
+double edgeShiftTexels(const HardSettings& s)
 {
-    scene::Light& light = lightConfig.light;
-    light.type = type;
-    switch (type) {
-    case scene::LightType::Directional:
-        light.direction = glm::normalize(glm::vec3(0.6f, -1.0f, -0.35f));
-        light.intensity = 3.0f;
-        break;
-    case scene::LightType::Point:
-        light.position = {-2.0f, 7.0f, 3.0f};  // inside the scene box: all six faces see casters
-        light.intensity = 150.0f;
-        break;
-    default:
-        break;  // the default config's spot light
-    }
+    if (s.biasMode == "slope") return 2.0 * filterWidthTexels(s);  // the default slope_bias, 2
+    if (s.biasMode == "normal_offset") return s.normalOffset * filterWidthTexels(s);
+    return 0.0;
 }
 
 // One frame rendered with plugins and what the tests read back from it. Not movable:
@@ -174,6 +169,15 @@ struct Variant {
     const char* name;
     scene::LightType light;
     HardSettings settings;
+    double extraEdgeShiftTexels = 0.0;  // beyond edgeShiftTexels(settings)
+
+    // Pixels this far from an edge in the light's view are left out of the ray-cast
+    // comparison: what the taps reach, how far the bias moves edges, and the two texels
+    // test_render.cpp allows the hard shadow.
+    double edgeBandTexels() const
+    {
+        return footprintTexels(settings) + edgeShiftTexels(settings) + extraEdgeShiftTexels + 2.0;
+    }
 };
 
 std::ostream& operator<<(std::ostream& os, const Variant& v) { return os << v.name; }
@@ -190,12 +194,24 @@ HardSettings with(std::string biasMode, std::string filter)
     return s;
 }
 
+// Constant bias alone must cover the steepest lit receiver (N.L = 0.1, 84 degrees: about
+// 0.7 · tan 84° ≈ 7 texels of depth along the light) and then detaches every shadow from
+// its caster. In the directional light's orthographic map (depth linear in distance,
+// r = 2^-25 .. 2^-24 for depths 0.25 .. 1) 5e4 r is 3 to 6 texels of depth; edges on the
+// ground move by up to ~15 texels.
+HardSettings constantBiasForSteepReceivers()
+{
+    HardSettings s = with("constant", "none");
+    s.depthBias = 5e4;
+    return s;
+}
+
 const Variant kVariants[] = {
     {"slope_none", scene::LightType::Spot, with("slope", "none")},
     {"slope_pcf", scene::LightType::Spot, with("slope", "pcf")},
     {"slope_poisson", scene::LightType::Spot, with("slope", "poisson")},
     {"slope_bilinear", scene::LightType::Spot, with("slope", "bilinear")},
-    {"constant_none", scene::LightType::Spot, with("constant", "none")},
+    {"constant_none", scene::LightType::Directional, constantBiasForSteepReceivers(), 15.0},
     {"normal_offset_none", scene::LightType::Spot, with("normal_offset", "none")},
     {"receiver_plane_none", scene::LightType::Spot, with("receiver_plane", "none")},
     {"receiver_plane_pcf", scene::LightType::Spot, with("receiver_plane", "pcf")},
@@ -214,8 +230,8 @@ protected:
     void SetUp() override
     {
         PluginGpuTest::SetUp();
-        config::RenderConfig cfg = defaultConfig();
-        setLightType(cfg.lights[0], GetParam().light);
+        config::RenderConfig cfg = test::defaultTestConfig();
+        test::setLightType(cfg.lights[0], GetParam().light);
         applySettings(cfg.lights[0], GetParam().settings);
         render(cfg, config::buildScene(cfg.scene));
         visibility = frame->renderer.readVisibility(0);
@@ -244,24 +260,25 @@ TEST_P(HardVariants, VisibilityIsFiniteInUnitRangeAndLitWithoutGeometry)
 TEST_P(HardVariants, MatchesRayCastAwayFromShadowEdges)
 {
     // As test_render.cpp requires of the hard shadow: no pixel wrong that is clear of
-    // edges in the light's view, here by the variant's footprint plus two texels.
-    const HardSettings& s = GetParam().settings;
+    // edges in the light's view (Variant::edgeBandTexels).
     const test::FrameImages images{frame->positions, frame->normals, visibility, frame->config.width,
                                    frame->config.height};
     const test::RayCastAgreement a = test::compareWithRayCast(
-        frame->classifier(0), images, {2, footprintTexels(s) + 2.0, kBinaryTolerance, GetParam().name});
+        frame->classifier(0), images, {2, GetParam().edgeBandTexels(), kBinaryTolerance, GetParam().name});
     EXPECT_EQ(a.mismatches, 0u);
-    EXPECT_GT(a.surelyShadowed, 300u);
-    EXPECT_GT(a.surelyLit, 3000u);
+    // Enough of both classes that the comparison means something (wide bands leave
+    // fewer shadowed pixels than test_render.cpp's 500).
+    EXPECT_GT(a.surelyShadowed, 150u);
+    EXPECT_GT(a.surelyLit, 2000u);
 }
 
 TEST_P(HardVariants, FractionalVisibilityOnlyNearShadowEdges)
 {
     // Filters make penumbrae a footprint wide; anywhere else V stays 0 or 1. The band a
-    // fractional pixel must lie in: two footprints and two texels from an edge as seen
-    // from the light (bias shifts the edge by up to a texel or so).
+    // fractional pixel must lie in: two footprints from an edge as seen from the light,
+    // plus what the bias moves edges by and two texels.
     const HardSettings& s = GetParam().settings;
-    const double band = 2.0 * footprintTexels(s) + 2.0;
+    const double band = GetParam().edgeBandTexels() + footprintTexels(s);
     const test::LightRayClassifier classifier = frame->classifier(0);
     size_t fractionalPixels = 0, farFromEdges = 0;
     for (size_t i = 0; i < visibility.size(); ++i) {
@@ -288,6 +305,44 @@ INSTANTIATE_TEST_SUITE_P(Hard, HardVariants, ::testing::ValuesIn(kVariants),
                          [](const ::testing::TestParamInfo<Variant>& info) { return std::string(info.param.name); });
 
 // ---------------------------------------------------------------------------------
+// Scene scale: the receiver-side biases work in texels and the map's own depth, so the
+// default scene at a thousandth and at 10^5 of its size must agree with the rays as
+// well as at 1 (test_render.cpp's scale extremes).
+
+class HardScales : public PluginGpuTest, public ::testing::WithParamInterface<std::tuple<float, Variant>> {};
+
+TEST_P(HardScales, MatchesRayCastAwayFromShadowEdges)
+{
+    const auto& [scale, variant] = GetParam();
+    config::RenderConfig cfg = test::defaultTestConfig();
+    test::setLightType(cfg.lights[0], variant.light);
+    applySettings(cfg.lights[0], variant.settings);
+    test::scaleConfig(cfg, scale);
+    render(cfg, config::buildScene(cfg.scene));
+    const std::vector<float> visibility = frame->renderer.readVisibility(0);
+    for (float v : visibility) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f && v <= 1.0f) << v;
+    const test::FrameImages images{frame->positions, frame->normals, visibility, cfg.width, cfg.height};
+    const test::RayCastAgreement a = test::compareWithRayCast(
+        frame->classifier(0), images, {2, variant.edgeBandTexels(), kBinaryTolerance, variant.name});
+    EXPECT_EQ(a.mismatches, 0u);
+    EXPECT_GT(a.surelyShadowed, 150u);
+    EXPECT_GT(a.surelyLit, 2000u);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Hard, HardScales,
+    ::testing::Combine(::testing::Values(1e-3f, 1e5f),
+                       ::testing::Values(Variant{"normal_offset_poisson", scene::LightType::Spot,
+                                                 with("normal_offset", "poisson")},
+                                         Variant{"receiver_plane_pcf", scene::LightType::Spot,
+                                                 with("receiver_plane", "pcf")},
+                                         Variant{"point_receiver_plane_bilinear", scene::LightType::Point,
+                                                 with("receiver_plane", "bilinear")})),
+    [](const ::testing::TestParamInfo<std::tuple<float, Variant>>& info) {
+        return std::string(std::get<0>(info.param) < 1.0f ? "milli_" : "e5_") + std::get<1>(info.param).name;
+    });
+
+// ---------------------------------------------------------------------------------
 // Filter width.
 
 class HardPcf : public PluginGpuTest {};
@@ -296,7 +351,7 @@ TEST_F(HardPcf, FractionalPixelsGrowWithTheKernel)
 {
     size_t previous = 0;
     for (int kernel : {1, 3, 7, 15}) {
-        config::RenderConfig cfg = defaultConfig();
+        config::RenderConfig cfg = test::defaultTestConfig();
         HardSettings s;
         s.filter = "pcf";
         s.pcfKernel = kernel;
@@ -328,7 +383,7 @@ protected:
     // degrees from its normal. Every pixel that sees the plane is lit.
     config::RenderConfig grazingConfig(const HardSettings& s) const
     {
-        config::RenderConfig cfg = defaultConfig();
+        config::RenderConfig cfg = test::defaultTestConfig();
         cfg.camera.position = {0.0f, 12.0f, 0.5f};
         cfg.camera.target = {0.0f, 0.0f, 0.0f};
         cfg.lights.resize(1);
@@ -383,9 +438,25 @@ TEST_P(HardAcne, ConstantBiasOfZeroShowsAcne)
     EXPECT_GT(unlitFraction(withoutDepthBias("constant")), 0.10);
 }
 
+TEST_P(HardAcne, SlopeScaledBiasRemovesAcne)
+{
+    // The rasterizer's slope term, scaled by the filter's width for wider filters.
+    EXPECT_LT(unlitFraction(withoutDepthBias("slope")), 0.005);
+    HardSettings pcf = withoutDepthBias("slope", "pcf");
+    pcf.pcfKernel = 7;
+    EXPECT_LT(unlitFraction(pcf), 0.005) << "pcf 7";
+}
+
 TEST_P(HardAcne, NormalOffsetRemovesAcne)
 {
     EXPECT_LT(unlitFraction(withoutDepthBias("normal_offset")), 0.005);
+    // The offset grows with the filter's width.
+    HardSettings pcf = withoutDepthBias("normal_offset", "pcf");
+    pcf.pcfKernel = 7;
+    EXPECT_LT(unlitFraction(pcf), 0.005) << "pcf 7";
+    HardSettings poisson = withoutDepthBias("normal_offset", "poisson");
+    poisson.filterRadius = 4.0;
+    EXPECT_LT(unlitFraction(poisson), 0.005) << "poisson, radius 4";
 }
 
 TEST_P(HardAcne, ReceiverPlaneRemovesAcne)
@@ -493,7 +564,7 @@ TEST_F(HardPluginErrors, EvenPcfKernelIsRejectedNamingTheParameter)
     plugin::ParamValues params = registry->load("hard").defaultParams();
     params.set("filter", "pcf", "test");
     params.set("pcf_kernel", 4, "test");  // in range 1..15, but has no centre texel
-    const std::string what = creationError(params, defaultConfig());
+    const std::string what = creationError(params, test::defaultTestConfig());
     EXPECT_NE(what.find("pcf_kernel"), std::string::npos) << what;
     EXPECT_NE(what.find("odd"), std::string::npos) << what;
     EXPECT_NE(what.find("light 0"), std::string::npos) << what;
@@ -501,7 +572,7 @@ TEST_F(HardPluginErrors, EvenPcfKernelIsRejectedNamingTheParameter)
 
 TEST_F(HardPluginErrors, EvenPcfKernelInAConfigStopsTheRender)
 {
-    config::RenderConfig cfg = defaultConfig();
+    config::RenderConfig cfg = test::defaultTestConfig();
     HardSettings s;
     s.filter = "pcf";
     s.pcfKernel = 6;
@@ -520,8 +591,8 @@ TEST_F(HardPluginErrors, CubeAtlasWiderThanTheDeviceAllowsNamesResolution)
     const uint32_t maxDimension = context->properties().limits.maxImageDimension2D;
     const uint32_t resolution = maxDimension / 3 + 1;
     if (resolution > 16384) GTEST_SKIP() << "this device allows a 3 x 16384 atlas";
-    config::RenderConfig cfg = defaultConfig();
-    setLightType(cfg.lights[0], scene::LightType::Point);
+    config::RenderConfig cfg = test::defaultTestConfig();
+    test::setLightType(cfg.lights[0], scene::LightType::Point);
     plugin::ParamValues params = registry->load("hard").defaultParams();
     params.set("resolution", resolution, "test");
     const std::string what = creationError(params, cfg);

@@ -1,6 +1,7 @@
 // The first frame, end to end: configs rendered headless, each light's visibility image
 // checked against the scene's geometry by an independent CPU ray caster.
 #include "RayCastAgreement.h"
+#include "TestConfigs.h"
 #include "TestContext.h"
 
 #include "penumbra/config/Config.h"
@@ -15,31 +16,6 @@
 using namespace penumbra;
 
 namespace {
-
-config::RenderConfig defaultConfig()
-{
-    config::RenderConfig c = config::loadConfig(std::filesystem::path(PENUMBRA_SOURCE_DIR) / "config/default.json");
-    // Small image, full-size shadow map: the tests check the technique, not the output
-    // resolution.
-    c.width = 320;
-    c.height = 180;
-    return c;
-}
-
-// The same scene and view at another scale: every length times s, intensities times s²
-// so that irradiance (I / d²) and the image stay the same. Nothing in the engine may
-// depend on absolute units.
-void scaleConfig(config::RenderConfig& c, float s)
-{
-    c.scene.scale *= s;
-    c.camera.position *= s;
-    c.camera.target *= s;
-    c.camera.nearWorld *= s;
-    for (config::LightConfig& l : c.lights) {
-        l.light.position *= s;
-        l.light.intensity *= s * s;
-    }
-}
 
 // One rendered frame and what the tests read back from it.
 struct RenderedFrame {
@@ -78,8 +54,8 @@ protected:
     void SetUp() override
     {
         test::GpuTest::SetUp();
-        config::RenderConfig cfg = defaultConfig();
-        scaleConfig(cfg, GetParam());
+        config::RenderConfig cfg = test::defaultTestConfig();
+        test::scaleConfig(cfg, GetParam());
         frame = std::make_unique<RenderedFrame>(*context, cfg);
         visibility = frame->renderer.readVisibility(0);
     }
@@ -172,7 +148,7 @@ TEST_F(MultiLight, EachLightHasItsOwnVisibilityImage)
 {
     // A second spot light from the opposite side: its shadows fall the other way, so the
     // two visibility images must differ, and each must match its own light's geometry.
-    config::RenderConfig cfg = defaultConfig();
+    config::RenderConfig cfg = test::defaultTestConfig();
     config::LightConfig second = cfg.lights[0];
     second.light.position = {12.0f, 14.0f, -8.0f};
     second.light.direction = glm::normalize(glm::vec3(0.0f) - second.light.position);
@@ -200,26 +176,9 @@ class LightTypes : public test::GpuTest, public ::testing::WithParamInterface<sc
 
 TEST_P(LightTypes, VisibilityMatchesRayCastGeometry)
 {
-    config::RenderConfig cfg = defaultConfig();
-    scene::Light& light = cfg.lights[0].light;
-    light.type = GetParam();
+    config::RenderConfig cfg = test::defaultTestConfig();
+    test::setLightType(cfg.lights[0], GetParam());
     cfg.lights[0].shadow.setParam("resolution", GetParam() == scene::LightType::Directional ? 2048 : 1024, "test");
-    switch (GetParam()) {
-    case scene::LightType::Directional:
-        light.direction = glm::normalize(glm::vec3(0.6f, -1.0f, -0.35f));
-        light.intensity = 3.0f;
-        break;
-    case scene::LightType::Point:
-        light.position = {-2.0f, 7.0f, 3.0f};  // inside the scene box: all six faces see casters
-        light.intensity = 150.0f;
-        break;
-    default:  // rect and disk emit downwards from above the grid
-        light.position = {-3.0f, 9.0f, 4.0f};
-        light.direction = {0.0f, -1.0f, 0.0f};
-        light.sizeWorld = {1.0f, 0.5f};
-        light.radiusWorld = 0.5f;
-        light.intensity = 300.0f;
-    }
     const RenderedFrame frame(*context, cfg);
     EXPECT_EQ(frame.renderer.lightFrusta(0).size(), GetParam() == scene::LightType::Directional ? 1u : 6u);
     const test::RayCastAgreement a = compareWithRayCast(frame, 0);
@@ -239,7 +198,7 @@ TEST_F(MultiLight, AnimatedLightAndNodeFollowTheirTracks)
 {
     // A script moves the light and one box; every frame's visibility must match the ray
     // cast of that frame's geometry (the renderer must pick up both moves).
-    config::RenderConfig cfg = defaultConfig();
+    config::RenderConfig cfg = test::defaultTestConfig();
     config::AnimationTrack light{"/lights/0/position", config::Interpolation::Linear,
                                  {{0.0f, {-9.0f, 16.0f, 7.0f}}, {1.0f, {9.0f, 14.0f, -6.0f}}}};
     config::AnimationTrack box{"node:box_2_2/translation", config::Interpolation::Smooth,
@@ -284,7 +243,7 @@ TEST_F(Materials, AlphaMaskCutsHolesInSurfacesAndShadows)
     s.addInstance(1, s.graph.addNode("quad", scene::kNoParent,
                                      glm::scale(glm::translate(identity, glm::vec3(0, 2, 0)), glm::vec3(4, 1, 4))));
 
-    config::RenderConfig cfg = defaultConfig();
+    config::RenderConfig cfg = test::defaultTestConfig();
     cfg.camera.position = {0.0f, 12.0f, 0.5f};
     cfg.camera.target = {0.0f, 0.0f, 0.0f};
     cfg.lights.resize(1);
