@@ -251,7 +251,9 @@ TEST_P(HardVariants, VisibilityIsFiniteInUnitRangeAndLitWithoutGeometry)
         ASSERT_TRUE(std::isfinite(v)) << "pixel " << i;
         ASSERT_GE(v, 0.0f) << "pixel " << i;
         ASSERT_LE(v, 1.0f) << "pixel " << i;
-        if (!frame->hasGeometry(i)) ASSERT_EQ(v, 1.0f) << "background pixel " << i;
+        if (!frame->hasGeometry(i)) {
+            ASSERT_EQ(v, 1.0f) << "background pixel " << i;
+        }
         shadowed += v < 0.5f;
     }
     EXPECT_GT(shadowed, visibility.size() / 50);

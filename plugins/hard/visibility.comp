@@ -240,8 +240,9 @@ vec3 offsetAlongNormal(uint face, vec3 p, vec3 n, float texelWorld)
 // GDC 2006): the receiver's depth is an affine function of light uv over its plane
 // (exact for planes, perspective or orthographic: NDC depth is affine in NDC xy over a
 // plane), so each tap compares the texel's caster depth with the plane's depth at that
-// texel's centre instead of the receiver's own depth. Self-shadowing of planar receivers disappears for
-// any filter radius without pushing shadows away from their casters.
+// texel's centre instead of the receiver's own depth. Self-shadowing of planar
+// receivers disappears for any filter radius without pushing shadows away from their
+// casters.
 
 // Neighbours give the plane of the triangle the map holds, where the receiver is flat
 // at the scale of a pixel: each must lie within 0.6 degrees of the receiver's tangent
@@ -334,8 +335,9 @@ void receiverPlane(ivec2 pixel, vec3 p, vec3 n, float texelWorld, inout Receiver
         vec3 t2 = cross(n, t1);
         gradientThrough(r.face, uvDepth, p + t1 * texelWorld, p + t2 * texelWorld, kMaxTan, g);
     }
-    // |g| per texel is tan(beta) / cos(alpha) · zStep for a plane at beta to the map's
-    // iso-depth surface (alpha: the ray to the iso-depth normal; see offsetAlongNormal).
+    // |g| per texel is at most (tan(theta) + tan(alpha)) · zStep (theta: the plane's
+    // normal to the ray, alpha: the ray to the map's iso-depth normal; see
+    // offsetAlongNormal): clamped where that passes tan(88 degrees).
     float perTexel = length(g) / pc.faceTexels;
     float maxPerTexel = kMaxTan * zStep;
     if (perTexel > maxPerTexel) {
