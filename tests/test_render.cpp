@@ -224,33 +224,10 @@ class Materials : public test::GpuTest {};
 
 TEST_F(Materials, AlphaMaskCutsHolesInSurfacesAndShadows)
 {
-    // A 4x4 quad at height 2 over the ground, textured half transparent (x < 0: alpha 0)
-    // and half opaque, alpha-masked; a directional light slanted by 1/2 in x per unit of
-    // height, so the opaque half's shadow falls on x in [1, 3] and light reaches
-    // x in (-1, 1) through the transparent half. The camera looks down from above.
-    scene::Scene s;
-    scene::Texture texture{"half", 4, 1, {}};
-    for (int x = 0; x < 4; ++x) texture.rgba.insert(texture.rgba.end(), {200, 200, 200, uint8_t(x < 2 ? 0 : 255)});
-    s.textures.push_back(texture);
-    s.materials.push_back({"masked", {1, 1, 1, 1}, 0, scene::AlphaMode::Mask, 0.5f, true});
-    scene::Mesh ground = scene::makePlane("ground");
-    scene::Mesh quad = scene::makePlane("quad");
-    quad.material = 1;
-    for (scene::Mesh* m : {&ground, &quad}) m->computeBounds();
-    s.meshes = {ground, quad};
-    const glm::mat4 identity(1.0f);
-    s.addInstance(0, s.graph.addNode("ground", scene::kNoParent, glm::scale(identity, glm::vec3(20, 1, 20))));
-    s.addInstance(1, s.graph.addNode("quad", scene::kNoParent,
-                                     glm::scale(glm::translate(identity, glm::vec3(0, 2, 0)), glm::vec3(4, 1, 4))));
-
-    config::RenderConfig cfg = test::defaultTestConfig();
-    cfg.camera.position = {0.0f, 12.0f, 0.5f};
-    cfg.camera.target = {0.0f, 0.0f, 0.0f};
-    cfg.lights.resize(1);
-    cfg.lights[0].light.type = scene::LightType::Directional;
-    cfg.lights[0].light.direction = glm::normalize(glm::vec3(1.0f, -2.0f, 0.0f));
-    cfg.lights[0].light.intensity = 2.0f;
-    cfg.lights[0].shadow.setParam("resolution", 1024, "test");
+    // test::halfMaskedQuadScene: light reaches x in (-1, 1) through the quad's
+    // transparent half, its opaque half shadows x in [1, 3].
+    const scene::Scene s = test::halfMaskedQuadScene();
+    const config::RenderConfig cfg = test::halfMaskedQuadConfig();
     render::FrameRenderer renderer(*context, s, cfg);
     renderer.renderFrame();
     const std::vector<float> positions = renderer.readPositions();
