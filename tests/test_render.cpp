@@ -1,6 +1,7 @@
 // The first frame, end to end: configs rendered headless, each light's visibility image
 // checked against the scene's geometry by an independent CPU ray caster.
-#include "RayCast.h"
+#include "RayCastAgreement.h"
+#include "TestConfigs.h"
 #include "TestContext.h"
 
 #include "penumbra/config/Config.h"
@@ -15,31 +16,6 @@
 using namespace penumbra;
 
 namespace {
-
-config::RenderConfig defaultConfig()
-{
-    config::RenderConfig c = config::loadConfig(std::filesystem::path(PENUMBRA_SOURCE_DIR) / "config/default.json");
-    // Small image, full-size shadow map: the tests check the technique, not the output
-    // resolution.
-    c.width = 320;
-    c.height = 180;
-    return c;
-}
-
-// The same scene and view at another scale: every length times s, intensities times s²
-// so that irradiance (I / d²) and the image stay the same. Nothing in the engine may
-// depend on absolute units.
-void scaleConfig(config::RenderConfig& c, float s)
-{
-    c.scene.scale *= s;
-    c.camera.position *= s;
-    c.camera.target *= s;
-    c.camera.nearWorld *= s;
-    for (config::LightConfig& l : c.lights) {
-        l.light.position *= s;
-        l.light.intensity *= s * s;
-    }
-}
 
 // One rendered frame and what the tests read back from it.
 struct RenderedFrame {
@@ -59,98 +35,17 @@ struct RenderedFrame {
     std::vector<float> normals;
 };
 
-struct RayCastAgreement {
-    size_t surelyShadowed = 0;
-    size_t surelyLit = 0;
-    size_t mismatches = 0;
-};
-
-// Checks V_l against rays from the light, with the same semantics as a shadow map: a
-// pixel's surface point p is lit when the first surface the light's ray towards p meets
-// is p itself, shadowed when something nearer blocks it. A shadow map answers from
-// texels, so near any edge in the light's view its answer may come from the
-// neighbouring surface: rays aimed at p shifted sideways by up to two shadow-map texels
-// must all meet p's own surface (its tangent plane, within two texels of depth) for the
-// pixel to count; pixels that fail this are near a shadow or silhouette edge as seen from
-// the light and are left out. So are surfaces facing away from the light or within ~6
-// degrees of grazing (N.L < 0.1): shading weights the light by max(N.L, 0), so V does
-// not reach the image there, and a hard shadow map with the slope bias that prevents
-// acne may leak behind casters seen at grazing angles.
-RayCastAgreement compareWithRayCast(const RenderedFrame& frame, size_t l, uint32_t stride = 2)
+// V_l of light `l` against rays from the light (support/RayCastAgreement.h), pixels
+// within two shadow-map texels of an edge in the light's view left out.
+test::RayCastAgreement compareWithRayCast(const RenderedFrame& frame, size_t l, uint32_t stride = 2)
 {
     const std::vector<float> visibility = frame.renderer.readVisibility(l);
-    const test::RayCaster caster(frame.scene);
-    const scene::Light& light = frame.config.lights[l].light;
     const nlohmann::json* resolutionParam = frame.config.lights[l].shadow.param("resolution");
     const uint32_t resolution = resolutionParam ? resolutionParam->get<uint32_t>() : 2048u;
-    const std::vector<render::LightFrustum> frusta = render::shadowFrusta(light, frame.scene.bounds());
-    const bool directional = light.type == scene::LightType::Directional;
-    const double far = 4.0 * frame.scene.bounds().radius();  // a directional light sits this far back
-    const uint32_t w = frame.config.width, h = frame.config.height;
-
-    RayCastAgreement result;
-    for (uint32_t y = 0; y < h; y += stride) {
-        for (uint32_t x = 0; x < w; x += stride) {
-            const size_t i = size_t(y) * w + x;
-            if (!frame.hasGeometry(i)) continue;
-            const float* pos = &frame.positions[4 * i];
-            const glm::dvec3 p(pos[0], pos[1], pos[2]);
-            const glm::dvec3 n = glm::normalize(glm::dvec3(frame.normals[4 * i], frame.normals[4 * i + 1], frame.normals[4 * i + 2]));
-            const glm::dvec3 lightPos = directional ? p - far * glm::dvec3(glm::normalize(light.direction))
-                                                    : glm::dvec3(light.position);
-            const glm::dvec3 toLight = glm::normalize(lightPos - p);
-            if (glm::dot(n, toLight) < 0.1) continue;
-
-            // The frustum that maps p (the spot's only one, or p's cube face).
-            size_t face = 0;
-            if (frusta.size() == 6) {
-                const glm::dvec3 d = p - glm::dvec3(light.position), a = glm::abs(d);
-                face = a.x >= a.y && a.x >= a.z ? (d.x > 0 ? 0 : 1) : a.y >= a.z ? (d.y > 0 ? 2 : 3) : (d.z > 0 ? 4 : 5);
-            }
-            const render::LightFrustum& f = frusta[face];
-            const glm::vec4 clip = f.viewProj * glm::vec4(glm::vec3(p), 1.0f);
-            if (clip.w <= 0.0f) continue;
-            const glm::vec2 uv = glm::vec2(clip) / clip.w * 0.5f + 0.5f;
-            // Outside the map V is 1 by contract; stay clear of its border.
-            if (glm::any(glm::lessThan(uv, glm::vec2(0.01f))) || glm::any(glm::greaterThan(uv, glm::vec2(0.99f)))) continue;
-            // World size of one texel at p: 2 / (proj[0][0] · R) per unit of view depth
-            // for a perspective frustum, per world unit for an orthographic one.
-            const double viewDepth = directional ? 1.0 : -double((f.view * glm::vec4(glm::vec3(p), 1.0f)).z);
-            const double texel = 2.0 * viewDepth / (double(f.proj[0][0]) * resolution);
-
-            const double dist = glm::length(lightPos - p);
-            const glm::dvec3 dirToP = (p - lightPos) / dist;
-            const double firstHit = caster.closestHit(lightPos, dirToP);
-            const double tolerance = 2.0 * texel;
-            // Sideways shifts of the aim point, across the light's ray.
-            const glm::dvec3 s1 = glm::normalize(glm::cross(dirToP, std::abs(dirToP.y) < 0.9 ? glm::dvec3(0, 1, 0) : glm::dvec3(1, 0, 0)));
-            const glm::dvec3 s2 = glm::cross(dirToP, s1);
-            bool clearOfEdges = true;
-            for (const glm::dvec3& shift : {s1, -s1, s2, -s2}) {
-                const glm::dvec3 aim = glm::normalize(p + 2.0 * texel * shift - lightPos);
-                const double hit = caster.closestHit(lightPos, aim);
-                // Where the shifted ray meets p's tangent plane (the surface p lies on).
-                const double denom = glm::dot(aim, n);
-                const double onPlane = std::abs(denom) > 1e-12 ? glm::dot(p - lightPos, n) / denom : 1e300;
-                const bool samePlane = std::abs(hit - onPlane) <= tolerance;
-                const bool sameAnswerAsP = firstHit >= dist - tolerance ? samePlane : hit < onPlane - tolerance;
-                if (!sameAnswerAsP) {
-                    clearOfEdges = false;
-                    break;
-                }
-            }
-            if (!clearOfEdges) continue;
-            const bool shadowed = firstHit < dist - tolerance;
-            (shadowed ? result.surelyShadowed : result.surelyLit)++;
-            const float expected = shadowed ? 0.0f : 1.0f;
-            if (visibility[i] != expected && ++result.mismatches <= 10) {
-                ADD_FAILURE() << "light " << l << ", pixel (" << x << ", " << y << ") at (" << p.x << ", " << p.y << ", "
-                              << p.z << "): rays from the light say " << (shadowed ? "shadowed" : "lit")
-                              << " but V = " << visibility[i];
-            }
-        }
-    }
-    return result;
+    const test::LightRayClassifier classifier(frame.scene, frame.config.lights[l].light, render::shadowFrusta(frame.config.lights[l].light, frame.scene.bounds()),
+                                              resolution);
+    const test::FrameImages images{frame.positions, frame.normals, visibility, frame.config.width, frame.config.height};
+    return test::compareWithRayCast(classifier, images, {stride, 2.0, 0.0f, "light " + std::to_string(l)});
 }
 
 // config/default.json at a scene scale (the test parameter).
@@ -159,8 +54,8 @@ protected:
     void SetUp() override
     {
         test::GpuTest::SetUp();
-        config::RenderConfig cfg = defaultConfig();
-        scaleConfig(cfg, GetParam());
+        config::RenderConfig cfg = test::defaultTestConfig();
+        test::scaleConfig(cfg, GetParam());
         frame = std::make_unique<RenderedFrame>(*context, cfg);
         visibility = frame->renderer.readVisibility(0);
     }
@@ -205,7 +100,7 @@ TEST_P(DefaultRender, BackgroundIsLit)
 
 TEST_P(DefaultRender, VisibilityMatchesRayCastGeometry)
 {
-    const RayCastAgreement a = compareWithRayCast(*frame, 0);
+    const test::RayCastAgreement a = compareWithRayCast(*frame, 0);
     EXPECT_EQ(a.mismatches, 0u);
     // Enough of both classes that the comparison means something.
     EXPECT_GT(a.surelyShadowed, 500u);
@@ -254,7 +149,7 @@ TEST_F(MultiLight, EachLightHasItsOwnVisibilityImage)
 {
     // A second spot light from the opposite side: its shadows fall the other way, so the
     // two visibility images must differ, and each must match its own light's geometry.
-    config::RenderConfig cfg = defaultConfig();
+    config::RenderConfig cfg = test::defaultTestConfig();
     config::LightConfig second = cfg.lights[0];
     second.light.position = {12.0f, 14.0f, -8.0f};
     second.light.direction = glm::normalize(glm::vec3(0.0f) - second.light.position);
@@ -264,7 +159,7 @@ TEST_F(MultiLight, EachLightHasItsOwnVisibilityImage)
     ASSERT_EQ(frame.renderer.lightCount(), 2u);
 
     for (size_t l = 0; l < 2; ++l) {
-        const RayCastAgreement a = compareWithRayCast(frame, l);
+        const test::RayCastAgreement a = compareWithRayCast(frame, l);
         EXPECT_EQ(a.mismatches, 0u) << "light " << l;
         EXPECT_GT(a.surelyShadowed, 300u) << "light " << l;
         EXPECT_GT(a.surelyLit, 3000u) << "light " << l;
@@ -282,30 +177,13 @@ class LightTypes : public test::GpuTest, public ::testing::WithParamInterface<sc
 
 TEST_P(LightTypes, VisibilityMatchesRayCastGeometry)
 {
-    config::RenderConfig cfg = defaultConfig();
-    scene::Light& light = cfg.lights[0].light;
-    light.type = GetParam();
+    config::RenderConfig cfg = test::defaultTestConfig();
+    test::setLightType(cfg.lights[0], GetParam());
     cfg.lights[0].shadow.setParam("resolution", GetParam() == scene::LightType::Directional ? 2048 : 1024, "test");
-    switch (GetParam()) {
-    case scene::LightType::Directional:
-        light.direction = glm::normalize(glm::vec3(0.6f, -1.0f, -0.35f));
-        light.intensity = 3.0f;
-        break;
-    case scene::LightType::Point:
-        light.position = {-2.0f, 7.0f, 3.0f};  // inside the scene box: all six faces see casters
-        light.intensity = 150.0f;
-        break;
-    default:  // rect and disk emit downwards from above the grid
-        light.position = {-3.0f, 9.0f, 4.0f};
-        light.direction = {0.0f, -1.0f, 0.0f};
-        light.sizeWorld = {1.0f, 0.5f};
-        light.radiusWorld = 0.5f;
-        light.intensity = 300.0f;
-    }
     const RenderedFrame frame(*context, cfg);
     EXPECT_EQ(render::shadowFrusta(frame.config.lights[0].light, frame.scene.bounds()).size(),
               GetParam() == scene::LightType::Directional ? 1u : 6u);
-    const RayCastAgreement a = compareWithRayCast(frame, 0);
+    const test::RayCastAgreement a = compareWithRayCast(frame, 0);
     EXPECT_EQ(a.mismatches, 0u);
     EXPECT_GT(a.surelyShadowed, 300u);
     EXPECT_GT(a.surelyLit, 3000u);
@@ -322,7 +200,7 @@ TEST_F(MultiLight, AnimatedLightAndNodeFollowTheirTracks)
 {
     // A script moves the light and one box; every frame's visibility must match the ray
     // cast of that frame's geometry (the renderer must pick up both moves).
-    config::RenderConfig cfg = defaultConfig();
+    config::RenderConfig cfg = test::defaultTestConfig();
     config::AnimationTrack light{"/lights/0/position", config::Interpolation::Linear,
                                  {{0.0f, {-9.0f, 16.0f, 7.0f}}, {1.0f, {9.0f, 14.0f, -6.0f}}}};
     config::AnimationTrack box{"node:box_2_2/translation", config::Interpolation::Smooth,
@@ -338,7 +216,7 @@ TEST_F(MultiLight, AnimatedLightAndNodeFollowTheirTracks)
         frame.renderer.renderFrame();
         frame.positions = frame.renderer.readPositions();
         frame.normals = frame.renderer.readNormals();
-        const RayCastAgreement a = compareWithRayCast(frame, 0);
+        const test::RayCastAgreement a = compareWithRayCast(frame, 0);
         EXPECT_EQ(a.mismatches, 0u) << "t = " << t;
         EXPECT_GT(a.surelyShadowed, 300u) << "t = " << t;
     }
@@ -348,33 +226,10 @@ class Materials : public test::GpuTest {};
 
 TEST_F(Materials, AlphaMaskCutsHolesInSurfacesAndShadows)
 {
-    // A 4x4 quad at height 2 over the ground, textured half transparent (x < 0: alpha 0)
-    // and half opaque, alpha-masked; a directional light slanted by 1/2 in x per unit of
-    // height, so the opaque half's shadow falls on x in [1, 3] and light reaches
-    // x in (-1, 1) through the transparent half. The camera looks down from above.
-    scene::Scene s;
-    scene::Texture texture{"half", 4, 1, {}};
-    for (int x = 0; x < 4; ++x) texture.rgba.insert(texture.rgba.end(), {200, 200, 200, uint8_t(x < 2 ? 0 : 255)});
-    s.textures.push_back(texture);
-    s.materials.push_back({"masked", {1, 1, 1, 1}, 0, scene::AlphaMode::Mask, 0.5f, true});
-    scene::Mesh ground = scene::makePlane("ground");
-    scene::Mesh quad = scene::makePlane("quad");
-    quad.material = 1;
-    for (scene::Mesh* m : {&ground, &quad}) m->computeBounds();
-    s.meshes = {ground, quad};
-    const glm::mat4 identity(1.0f);
-    s.addInstance(0, s.graph.addNode("ground", scene::kNoParent, glm::scale(identity, glm::vec3(20, 1, 20))));
-    s.addInstance(1, s.graph.addNode("quad", scene::kNoParent,
-                                     glm::scale(glm::translate(identity, glm::vec3(0, 2, 0)), glm::vec3(4, 1, 4))));
-
-    config::RenderConfig cfg = defaultConfig();
-    cfg.camera.position = {0.0f, 12.0f, 0.5f};
-    cfg.camera.target = {0.0f, 0.0f, 0.0f};
-    cfg.lights.resize(1);
-    cfg.lights[0].light.type = scene::LightType::Directional;
-    cfg.lights[0].light.direction = glm::normalize(glm::vec3(1.0f, -2.0f, 0.0f));
-    cfg.lights[0].light.intensity = 2.0f;
-    cfg.lights[0].shadow.setParam("resolution", 1024, "test");
+    // test::halfMaskedQuadScene: light reaches x in (-1, 1) through the quad's
+    // transparent half, its opaque half shadows x in [1, 3].
+    const scene::Scene s = test::halfMaskedQuadScene();
+    const config::RenderConfig cfg = test::halfMaskedQuadConfig();
     render::FrameRenderer renderer(*context, s, cfg, test::plugins());
     renderer.renderFrame();
     const std::vector<float> positions = renderer.readPositions();

@@ -44,7 +44,7 @@ TEST(ShaderCompiler, CompilesEveryEngineShader)
         EXPECT_NO_THROW(compiler().compile(entry.path(), {{"LIGHT_COUNT", "8"}}));
         ++count;
     }
-    EXPECT_GE(count, 5u);
+    EXPECT_GE(count, 3u);  // gbuffer.vert, gbuffer.frag, shading.comp; plugins test their own
 }
 
 TEST(ShaderCompiler, ErrorNamesFileAndLine)

@@ -112,7 +112,7 @@ std::vector<LightFrustum> shadowFrusta(const scene::Light& light, const scene::A
     case scene::LightType::Rect:
     case scene::LightType::Disk: {
         // Six 90° faces around the centre, in the order +X -X +Y -Y +Z -Z that
-        // shaders/hard/visibility.comp selects by the dominant axis.
+        // plugins/hard/visibility.comp selects by the dominant axis.
         static const glm::vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
         static const glm::vec3 ups[6] = {{0, 1, 0}, {0, 1, 0}, {0, 0, 1}, {0, 0, 1}, {0, 1, 0}, {0, 1, 0}};
         std::vector<LightFrustum> faces;

@@ -1,0 +1,99 @@
+#pragma once
+// The C++ side of visibility.comp: which shader variant a parameter set compiles (the
+// filter and the receiver-side bias are chosen by defines, not by branches on uniforms:
+// each variant is straight-line code with its tap count known to the compiler), the
+// bindings, the push constants and the per-face data. hard.cpp and the shader tests
+// include it, so that the tests compile exactly the variants the plugin can ask for.
+#include "penumbra/gpu/Pipeline.h"
+#include "penumbra/gpu/ShaderCompiler.h"
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace penumbra::hard {
+
+// Parameter `bias_mode`, in ParamSpec choice order.
+enum class BiasMode : uint32_t { Constant, Slope, NormalOffset, ReceiverPlane };
+inline constexpr const char* kBiasModeNames[] = {"constant", "slope", "normal_offset", "receiver_plane"};
+
+// Parameter `filter`, in ParamSpec choice order.
+enum class Filter : uint32_t { None, Pcf, Poisson, Bilinear };
+inline constexpr const char* kFilterNames[] = {"none", "pcf", "poisson", "bilinear"};
+
+inline constexpr int kPcfKernelMin = 1, kPcfKernelMax = 15;
+inline constexpr int kPoissonSamplesMin = 4, kPoissonSamplesMax = 64;  // poisson_disk.glsl has 64
+inline constexpr uint32_t kMaxFaces = 6;
+
+struct VisibilityVariant {
+    Filter filter = Filter::None;
+    BiasMode bias = BiasMode::Slope;
+    uint32_t pcfKernel = 3;       // Filter::Pcf only
+    uint32_t poissonSamples = 16;  // Filter::Poisson only
+
+    // Constant and slope-scaled bias live in the rasterizer (depth pass); the shader
+    // only sees the two receiver-side modes.
+    bool offsetsAlongNormal() const { return bias == BiasMode::NormalOffset; }
+    bool usesReceiverPlane() const { return bias == BiasMode::ReceiverPlane; }
+    // Normal offset moves the receiver along its normal; receiver plane uses the normal
+    // to tell neighbours on the receiver's surface from those across a silhouette.
+    bool readsNormals() const { return offsetsAlongNormal() || usesReceiverPlane(); }
+    // Bilinear compares in the sampler (hardware 2 x 2 PCF), except with receiver plane
+    // bias, which needs each of the four texels compared against its own reference
+    // depth: those four taps are done by hand with a nearest sampler.
+    bool hardwareBilinear() const { return filter == Filter::Bilinear && !usesReceiverPlane(); }
+    VkFilter samplerFilter() const { return hardwareBilinear() ? VK_FILTER_LINEAR : VK_FILTER_NEAREST; }
+};
+
+// The defines that select `variant` in visibility.comp. Only the defines a variant
+// reads are set, so two parameter sets that compile the same code give equal lists.
+inline std::vector<gpu::ShaderDefine> visibilityDefines(const VisibilityVariant& variant)
+{
+    const uint32_t receiverBias = variant.offsetsAlongNormal() ? 1u : variant.usesReceiverPlane() ? 2u : 0u;
+    std::vector<gpu::ShaderDefine> defines = {{"FILTER", std::to_string(uint32_t(variant.filter))},
+                                              {"RECEIVER_BIAS", std::to_string(receiverBias)}};
+    if (variant.filter == Filter::Pcf) defines.push_back({"PCF_KERNEL", std::to_string(variant.pcfKernel)});
+    if (variant.filter == Filter::Poisson) defines.push_back({"POISSON_SAMPLES", std::to_string(variant.poissonSamples)});
+    return defines;
+}
+
+// Bindings of visibility.comp.
+enum VisibilityBinding : uint32_t {
+    kBindingPosition = 0,    // G-buffer world position (storage, rgba32f)
+    kBindingShadowMap = 1,   // the depth atlas (sampler2DShadow)
+    kBindingVisibility = 2,  // V_l (storage, r32f)
+    kBindingFaces = 3,       // FaceData[faceCount] (storage buffer)
+    kBindingNormal = 4,      // G-buffer world normal (storage, rgba16f), readsNormals() only
+};
+
+inline std::vector<gpu::Binding> visibilityBindings(const VisibilityVariant& variant)
+{
+    std::vector<gpu::Binding> b = {{kBindingPosition, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                   {kBindingShadowMap, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+                                   {kBindingVisibility, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                                   {kBindingFaces, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
+    if (variant.readsNormals()) b.push_back({kBindingNormal, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE});
+    return b;
+}
+
+// One light-view frustum (a spot or directional map, or a cube face), std430.
+struct FaceData {
+    glm::mat4 viewProj{1.0f};  // world -> clip (reversed-Z)
+    // x: world size of one shadow-map texel per unit of clip w at the receiver
+    // (perspective: w is the view depth, so texels grow with distance; orthographic:
+    // w = 1, one size everywhere). The larger of the two axes'. yzw unused.
+    glm::vec4 texel{0.0f};
+};
+
+struct VisibilityPush {
+    glm::vec4 light{0.0f};           // xyz position (w = 1), or unit direction towards the light (w = 0)
+    uint32_t faceCount = 1;          // 1, or 6 cube faces packed 3 x 2
+    float faceTexels = 0.0f;         // texels per face side
+    float normalOffsetTexels = 0.0f; // RECEIVER_BIAS 1
+    float filterRadiusTexels = 0.0f; // FILTER 2 (poisson)
+};
+static_assert(sizeof(VisibilityPush) == 32);
+
+} // namespace penumbra::hard

@@ -1,0 +1,88 @@
+#include "TestConfigs.h"
+
+#include "penumbra/scene/Generators.h"
+
+#include <glm/glm.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+
+namespace penumbra::test {
+
+config::RenderConfig defaultTestConfig()
+{
+    config::RenderConfig c = config::loadConfig(std::filesystem::path(PENUMBRA_SOURCE_DIR) / "config/default.json");
+    c.width = 320;
+    c.height = 180;
+    return c;
+}
+
+void scaleConfig(config::RenderConfig& c, float s)
+{
+    c.scene.scale *= s;
+    c.camera.position *= s;
+    c.camera.target *= s;
+    c.camera.nearWorld *= s;
+    for (config::LightConfig& l : c.lights) {
+        l.light.position *= s;
+        l.light.intensity *= s * s;
+    }
+}
+
+void setLightType(config::LightConfig& lightConfig, scene::LightType type)
+{
+    scene::Light& light = lightConfig.light;
+    light.type = type;
+    switch (type) {
+    case scene::LightType::Spot:
+        break;
+    case scene::LightType::Directional:
+        light.direction = glm::normalize(glm::vec3(0.6f, -1.0f, -0.35f));
+        light.intensity = 3.0f;
+        break;
+    case scene::LightType::Point:
+        light.position = {-2.0f, 7.0f, 3.0f};
+        light.intensity = 150.0f;
+        break;
+    case scene::LightType::Rect:
+    case scene::LightType::Disk:
+        light.position = {-3.0f, 9.0f, 4.0f};
+        light.direction = {0.0f, -1.0f, 0.0f};
+        light.sizeWorld = {1.0f, 0.5f};
+        light.radiusWorld = 0.5f;
+        light.intensity = 300.0f;
+        break;
+    }
+}
+
+scene::Scene halfMaskedQuadScene()
+{
+    scene::Scene s;
+    scene::Texture texture{"half", 4, 1, std::vector<uint8_t>(4 * 4, 200)};
+    for (int x = 0; x < 4; ++x) texture.rgba[4 * x + 3] = x < 2 ? 0 : 255;  // alpha
+    s.textures.push_back(texture);
+    s.materials.push_back({"masked", {1, 1, 1, 1}, 0, scene::AlphaMode::Mask, 0.5f, true});
+    scene::Mesh ground = scene::makePlane("ground");
+    scene::Mesh quad = scene::makePlane("quad");
+    quad.material = 1;
+    for (scene::Mesh* m : {&ground, &quad}) m->computeBounds();
+    s.meshes = {ground, quad};
+    const glm::mat4 identity(1.0f);
+    s.addInstance(0, s.graph.addNode("ground", scene::kNoParent, glm::scale(identity, glm::vec3(20, 1, 20))));
+    s.addInstance(1, s.graph.addNode("quad", scene::kNoParent,
+                                     glm::scale(glm::translate(identity, glm::vec3(0, 2, 0)), glm::vec3(4, 1, 4))));
+    return s;
+}
+
+config::RenderConfig halfMaskedQuadConfig()
+{
+    config::RenderConfig cfg = defaultTestConfig();
+    cfg.camera.position = {0.0f, 12.0f, 0.5f};
+    cfg.camera.target = {0.0f, 0.0f, 0.0f};
+    cfg.lights.resize(1);
+    cfg.lights[0].light.type = scene::LightType::Directional;
+    cfg.lights[0].light.direction = glm::normalize(glm::vec3(1.0f, -2.0f, 0.0f));
+    cfg.lights[0].light.intensity = 2.0f;
+    cfg.lights[0].shadow.setParam("resolution", 1024, "test");
+    return cfg;
+}
+
+} // namespace penumbra::test

@@ -1,0 +1,32 @@
+#pragma once
+// Configs the rendering tests share: config/default.json at a small output size, the
+// same at another scale, and its light turned into another type.
+#include "penumbra/config/Config.h"
+#include "penumbra/scene/Scene.h"
+
+namespace penumbra::test {
+
+// config/default.json at 320 x 180. Small image, full-size shadow map: the tests check
+// the technique, not the output resolution.
+config::RenderConfig defaultTestConfig();
+
+// The same scene and view at another scale: every length times s, intensities times s²
+// so that irradiance (I / d²) and the image stay the same. Nothing in the engine may
+// depend on absolute units.
+void scaleConfig(config::RenderConfig& c, float s);
+
+// Makes `light` (the default config's spot light) a light of `type`, placed so that it
+// casts shadows in the default scene: a slanted directional light, a point light inside
+// the scene box (all six cube faces see casters), rect and disk lights above the grid
+// emitting downwards. Spot: unchanged.
+void setLightType(config::LightConfig& light, scene::LightType type);
+
+// Alpha-masked casters: a 4 x 4 quad at height 2 over a 20 x 20 ground, textured half
+// transparent (x < 0: alpha 0) and half opaque, alpha-masked.
+scene::Scene halfMaskedQuadScene();
+// Its view and light: the camera looks down from above; a directional light slanted by
+// 1/2 in x per unit of height, so the opaque half's shadow falls on x in [1, 3] and light
+// reaches x in (-1, 1) through the transparent half.
+config::RenderConfig halfMaskedQuadConfig();
+
+} // namespace penumbra::test
