@@ -72,12 +72,15 @@ mv "$work/shading.comp" "$prefix/share/penumbra/shaders/engine/shading.comp"
 check_loadable=0
 if ((check_loadable)); then
   step "the installed penumbra loads the example from PENUMBRA_PLUGIN_PATH"
+  # Only the out-of-tree build may declare "example" (DuplicateName otherwise). The build
+  # tree's copy must not be on an installed engine's search path either: the registry
+  # searches the build tree's plugins/ only when the engine library is the build tree's.
+  rm -r "$prefix/lib/penumbra/plugins/penumbra-example.so" "$prefix/lib/penumbra/plugins/example"
   PENUMBRA_PLUGIN_PATH="$example/plugins" "$prefix/bin/penumbra" plugins --json >"$work/plugins.json" 2>"$work/plugins.log" \
     || { cat "$work/plugins.log"; fail "penumbra plugins --json"; }
   grep -Eq '"name"[[:space:]]*:[[:space:]]*"example"' "$work/plugins.json" \
     || { cat "$work/plugins.json" "$work/plugins.log"; fail "penumbra plugins --json does not list \"example\""; }
-  # The in-tree example is on the search path too (build tree, install prefix): the
-  # listing must show the file loaded from PENUMBRA_PLUGIN_PATH (LoadedPlugin::file).
+  # The listing names the file it loaded (LoadedPlugin::file): the out-of-tree build.
   grep -qF "$plugin" "$work/plugins.json" \
     || { cat "$work/plugins.json"; fail "penumbra plugins --json does not list $plugin"; }
 fi
