@@ -47,6 +47,27 @@ TEST(ShaderCompiler, CompilesEveryEngineShader)
     EXPECT_GE(count, 3u);  // gbuffer.vert, gbuffer.frag, shading.comp; plugins test their own
 }
 
+TEST(ShaderCompiler, CompilesEveryPluginShader)
+{
+    // Every plugin's GLSL compiles with the search path a technique gets
+    // (TechniqueSetup::shaders: the plugin's folder, then the engine's shaders/).
+    size_t count = 0;
+    for (const auto& plugin : fs::directory_iterator(fs::path(PENUMBRA_SOURCE_DIR) / "plugins")) {
+        if (!plugin.is_directory()) continue;
+        const gpu::ShaderCompiler pluginCompiler({plugin.path(), gpu::engineShaderDir()});
+        for (const auto& entry : fs::recursive_directory_iterator(plugin.path())) {
+            const std::string ext = entry.path().extension().string();
+            if (!entry.is_regular_file() || ext == ".glsl") continue;
+            if (ext != ".vert" && ext != ".frag" && ext != ".comp" && ext != ".geom" && ext != ".tesc" && ext != ".tese")
+                continue;
+            SCOPED_TRACE(entry.path().string());
+            EXPECT_NO_THROW(pluginCompiler.compile(entry.path()));
+            ++count;
+        }
+    }
+    EXPECT_GE(count, 2u);  // at least plugins/example's two
+}
+
 TEST(ShaderCompiler, ErrorNamesFileAndLine)
 {
     const std::string what = compileError(kData / "syntax_error.comp");

@@ -7,6 +7,8 @@
 #include <glslang/Public/ShaderLang.h>
 #include <fmt/format.h>
 
+#include <dlfcn.h>
+
 #include <cstdlib>
 #include <fstream>
 #include <memory>
@@ -136,6 +138,18 @@ std::string formatLog(const std::string& log, const std::string& mainName)
     return out.str();
 }
 
+// An installed engine's GLSL: <folder of this library>/PENUMBRA_SHADER_DIR_FROM_LIBRARY
+// (../share/penumbra/shaders), found at run time so that the install prefix can move.
+// Empty when that folder does not exist (a build-tree library).
+fs::path installedShaderDir()
+{
+    Dl_info self{};
+    if (dladdr(reinterpret_cast<const void*>(&engineShaderDir), &self) == 0 || self.dli_fname == nullptr) return {};
+    std::error_code ec;
+    const fs::path dir = fs::weakly_canonical(fs::path(self.dli_fname).parent_path() / PENUMBRA_SHADER_DIR_FROM_LIBRARY, ec);
+    return !ec && fs::is_directory(dir, ec) ? dir : fs::path();
+}
+
 } // namespace
 
 VkShaderStageFlagBits stageFromExtension(const fs::path& file)
@@ -156,6 +170,11 @@ fs::path engineShaderDir()
 {
     if (const char* env = std::getenv("PENUMBRA_SHADER_DIR"); env && *env) {
         return env;
+    }
+    // An installed engine reads the shaders installed with it, never a source tree that
+    // may still exist on the build machine (and may be newer or older than the library).
+    if (fs::path installed = installedShaderDir(); !installed.empty()) {
+        return installed;
     }
     return PENUMBRA_DEFAULT_SHADER_DIR;
 }

@@ -39,7 +39,9 @@ private:
     std::vector<std::filesystem::path> searchPath_;
 };
 
-// The engine's shader folder: $PENUMBRA_SHADER_DIR, else the source tree's shaders/.
+// The engine's shader folder: $PENUMBRA_SHADER_DIR; else, for an installed engine,
+// share/penumbra/shaders found relative to the engine library at run time; else the
+// source tree's shaders/ (build-tree runs: edits take effect without reinstalling).
 std::filesystem::path engineShaderDir();
 
 VkShaderStageFlagBits stageFromExtension(const std::filesystem::path& file);
