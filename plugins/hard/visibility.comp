@@ -29,8 +29,13 @@
 #define RECEIVER_BIAS_NORMAL_OFFSET 1
 #define RECEIVER_BIAS_PLANE 2
 
-#if !defined(FILTER) || !defined(RECEIVER_BIAS)
-#error FILTER and RECEIVER_BIAS must be defined (plugins/hard/visibility_pass.h)
+// The plugin always defines both (plugins/hard/visibility_pass.h); compiled on its own
+// (a shader tool, the engine's every-shader test) this is the default variant.
+#ifndef FILTER
+#define FILTER FILTER_NONE
+#endif
+#ifndef RECEIVER_BIAS
+#define RECEIVER_BIAS RECEIVER_BIAS_NONE
 #endif
 #if FILTER == FILTER_PCF && !defined(PCF_KERNEL)
 #error FILTER 1 (pcf) needs PCF_KERNEL
