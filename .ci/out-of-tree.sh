@@ -66,23 +66,30 @@ fi
 grep -qF "$prefix/share/penumbra/shaders" "$work/render.log" || { cat "$work/render.log"; fail "the shader error does not name the installed folder"; }
 mv "$work/shading.comp" "$prefix/share/penumbra/shaders/engine/shading.comp"
 
-# MERGE (issue 4): set check_loadable=1 once `penumbra plugins --json` and the plugin
-# registry are merged. It proves that the engine loads the out-of-tree build (ABI check,
-# entry point, name) from PENUMBRA_PLUGIN_PATH.
-check_loadable=0
-if ((check_loadable)); then
-  step "the installed penumbra loads the example from PENUMBRA_PLUGIN_PATH"
-  # Only the out-of-tree build may declare "example" (DuplicateName otherwise). The build
-  # tree's copy must not be on an installed engine's search path either: the registry
-  # searches the build tree's plugins/ only when the engine library is the build tree's.
-  rm -r "$prefix/lib/penumbra/plugins/penumbra-example.so" "$prefix/lib/penumbra/plugins/example"
-  PENUMBRA_PLUGIN_PATH="$example/plugins" "$prefix/bin/penumbra" plugins --json >"$work/plugins.json" 2>"$work/plugins.log" \
-    || { cat "$work/plugins.log"; fail "penumbra plugins --json"; }
-  grep -Eq '"name"[[:space:]]*:[[:space:]]*"example"' "$work/plugins.json" \
-    || { cat "$work/plugins.json" "$work/plugins.log"; fail "penumbra plugins --json does not list \"example\""; }
-  # The listing names the file it loaded (LoadedPlugin::file): the out-of-tree build.
-  grep -qF "$plugin" "$work/plugins.json" \
-    || { cat "$work/plugins.json"; fail "penumbra plugins --json does not list $plugin"; }
-fi
+# The installed engine loads the out-of-tree build (ABI check, entry point, name) from
+# PENUMBRA_PLUGIN_PATH.
+step "the installed penumbra loads the example from PENUMBRA_PLUGIN_PATH"
+# Only the out-of-tree build may declare "example" (DuplicateName otherwise). The build
+# tree's copy must not be on an installed engine's search path either: the registry
+# searches the build tree's plugins/ only when the engine library is the build tree's.
+rm -r "$prefix/lib/penumbra/plugins/penumbra-example.so" "$prefix/lib/penumbra/plugins/example"
+PENUMBRA_PLUGIN_PATH="$example/plugins" "$prefix/bin/penumbra" plugins --json >"$work/plugins.json" 2>"$work/plugins.log" \
+  || { cat "$work/plugins.log"; fail "penumbra plugins --json"; }
+grep -Eq '"name"[[:space:]]*:[[:space:]]*"example"' "$work/plugins.json" \
+  || { cat "$work/plugins.json" "$work/plugins.log"; fail "penumbra plugins --json does not list \"example\""; }
+# The listing names the file it loaded (LoadedPlugin::file): the out-of-tree build.
+grep -qF "$plugin" "$work/plugins.json" \
+  || { cat "$work/plugins.json"; fail "penumbra plugins --json does not list $plugin"; }
+
+step "render a frame with the example, installed in a prefix of its own, as a required technique"
+cat >"$work/example.json" <<EOF
+{"include": "$root/config/default.json",
+ "lights": [{"type": "spot", "position": [-9, 16, 7], "target": [1.5, 0, 0], "outer_cone_deg": 42,
+             "shadow": {"technique": "example", "required": true}}]}
+EOF
+(cd "$work" && PENUMBRA_PLUGIN_PATH="$work/plugin-prefix/lib/penumbra/plugins" "$prefix/bin/penumbra" render \
+   "$work/example.json" -o "$work/example.png" --width 64 --height 48 >"$work/render.log" 2>&1) \
+  || { cat "$work/render.log"; fail "the installed penumbra does not render with the out-of-tree example"; }
+[[ -s "$work/example.png" ]] || fail "no $work/example.png"
 
 step "ok"

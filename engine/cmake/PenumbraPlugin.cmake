@@ -72,6 +72,9 @@ function(penumbra_add_plugin name)
   target_link_libraries(${target} PRIVATE Penumbra::engine)
   target_compile_features(${target} PRIVATE cxx_std_20)
   target_compile_definitions(${target} PRIVATE PENUMBRA_PLUGIN_SHADER_DIR="${shader_dir}")
+  # A symbol the plugin uses but nothing defines is a link error here, not a
+  # dependency-missing error when the engine loads the plugin.
+  target_link_options(${target} PRIVATE "LINKER:--no-undefined")
   # Every symbol is hidden except what PENUMBRA_PLUGIN_EXPORT marks (the entry point):
   # two plugins that both define a helper `blur()` must never bind to each other's copy.
   # The generator expression in the output folder keeps multi-config generators from

@@ -69,8 +69,6 @@ public:
         update(setup.light, setup.sceneBounds);
     }
 
-    ~ExampleShadow() override { vkDestroySampler(context_.device(), compareSampler_, nullptr); }
-
     void update(const scene::Light& light, const scene::Aabb& sceneBounds) override
     {
         // Spot: a perspective frustum over the outer cone; directional: an orthographic
@@ -149,7 +147,7 @@ private:
     float depthBias_;
     gpu::Pipeline depthPipeline_;
     gpu::Pipeline visibilityPipeline_;
-    VkSampler compareSampler_ = VK_NULL_HANDLE;
+    gpu::Sampler compareSampler_;
     glm::mat4 lightViewProj_{1.0f};
 };
 

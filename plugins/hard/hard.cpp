@@ -126,7 +126,6 @@ float worldTexelPerW(const glm::mat4& proj, uint32_t resolution)
 class HardShadow final : public plugin::Technique {
 public:
     explicit HardShadow(const plugin::TechniqueSetup& setup);
-    ~HardShadow() override;
     HardShadow(const HardShadow&) = delete;
     HardShadow& operator=(const HardShadow&) = delete;
 
@@ -148,7 +147,7 @@ private:
     gpu::Buffer faces_;  // FaceData[faceCount_], host-visible, written by update()
     std::vector<render::LightFrustum> frusta_;
     glm::vec4 light_{0.0f};  // VisibilityPush::light
-    VkSampler compareSampler_ = VK_NULL_HANDLE;
+    gpu::Sampler compareSampler_;
 };
 
 HardShadow::HardShadow(const plugin::TechniqueSetup& setup)
@@ -202,14 +201,11 @@ HardShadow::HardShadow(const plugin::TechniqueSetup& setup)
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
 
     update(setup.light, setup.sceneBounds);
-    // Last: nothing after it throws, so the destructor always runs once it exists.
     // Nearest (one texel per compare) unless the hardware bilinear compare is wanted;
     // points outside the map never reach the sampler (the shader calls them lit).
     compareSampler_ = gpu::createSampler(context_, settings_.variant.samplerFilter(),
                                          VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, VK_COMPARE_OP_GREATER_OR_EQUAL);
 }
-
-HardShadow::~HardShadow() { vkDestroySampler(context_.device(), compareSampler_, nullptr); }
 
 void HardShadow::update(const scene::Light& light, const scene::Aabb& sceneBounds)
 {

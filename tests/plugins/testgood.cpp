@@ -12,11 +12,6 @@
 #include <iterator>
 #include <string>
 
-// PassContext::image is defined by graph/GraphExecutor.cpp, which is merged from another
-// branch: a weak reference lets this plugin load (RTLD_NOW) in a build without the
-// executor, where no pass callback can run. Remove once the executor is merged.
-__asm__(".weak _ZNK8penumbra5graph11PassContext5imageESt17basic_string_viewIcSt11char_traitsIcEE");
-
 namespace {
 
 using namespace penumbra;

@@ -24,9 +24,16 @@ void expectNoValidationMessages(const gpu::Context& context);
 class GpuTest : public ::testing::Test {
 protected:
     void SetUp() override { context = makeValidatedContext(); }
+    // Also destroys the context here, so that objects a test left alive (reported by the
+    // layer at vkDestroyDevice) fail the test that leaked them.
     void TearDown() override
     {
-        if (context) expectNoValidationMessages(*context);
+        if (!context) return;
+        expectNoValidationMessages(*context);
+        const uint64_t before = gpu::validationMessagesInProcess();
+        context.reset();
+        EXPECT_EQ(gpu::validationMessagesInProcess(), before)
+            << "the validation layer reported objects still alive at vkDestroyDevice (see the log above)";
     }
     std::unique_ptr<gpu::Context> context;
 };

@@ -512,6 +512,12 @@ void Context::endLabel(VkCommandBuffer cmd) const
     }
 }
 
+namespace {
+std::atomic<uint64_t> gValidationMessagesInProcess{0};
+}
+
+uint64_t validationMessagesInProcess() { return gValidationMessagesInProcess.load(); }
+
 VKAPI_ATTR VkBool32 VKAPI_CALL Context::onDebugMessage(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                                        VkDebugUtilsMessageTypeFlagsEXT,
                                                        const VkDebugUtilsMessengerCallbackDataEXT* data,
@@ -520,6 +526,7 @@ VKAPI_ATTR VkBool32 VKAPI_CALL Context::onDebugMessage(VkDebugUtilsMessageSeveri
     auto* context = static_cast<Context*>(self);
     const char* text = data && data->pMessage ? data->pMessage : "(no message)";
     context->validationMessages_.fetch_add(1);
+    gValidationMessagesInProcess.fetch_add(1);
     {
         std::lock_guard lock(context->messagesMutex_);
         if (context->firstMessages_.size() < kKeptMessages) {

@@ -264,8 +264,8 @@ void DescriptorPush::push(const Context& context, VkCommandBuffer cmd, const Pip
     entries_.clear();
 }
 
-VkSampler createSampler(Context& context, VkFilter filter, VkSamplerAddressMode address,
-                        std::optional<VkCompareOp> compare)
+Sampler createSampler(Context& context, VkFilter filter, VkSamplerAddressMode address,
+                      std::optional<VkCompareOp> compare)
 {
     VkSamplerCreateInfo info{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
     info.magFilter = filter;
@@ -282,7 +282,7 @@ VkSampler createSampler(Context& context, VkFilter filter, VkSamplerAddressMode 
     }
     VkSampler sampler = VK_NULL_HANDLE;
     check(vkCreateSampler(context.device(), &info, nullptr, &sampler), "vkCreateSampler");
-    return sampler;
+    return Sampler(context.device(), sampler);
 }
 
 } // namespace penumbra::gpu

@@ -3,6 +3,7 @@
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
 #include "penumbra/gpu/Check.h"
+#include "penumbra/plugin/Params.h"
 
 #include <fmt/format.h>
 
@@ -112,7 +113,6 @@ FrameRenderer::~FrameRenderer()
 {
     vkDeviceWaitIdle(context_.device());
     if (cmd_) vkFreeCommandBuffers(context_.device(), context_.commandPool(), 1, &cmd_);
-    vkDestroySampler(context_.device(), nearestSampler_, nullptr);
     // Techniques are plugin code: destroy them (and the graph, whose callbacks they own)
     // while the registry still holds their libraries.
     graph_.reset();
@@ -137,8 +137,7 @@ void FrameRenderer::createTechniques(const config::RenderConfig& config, const s
             continue;
         }
         // Bad parameter values are the config's fault, not the plugin's: always an error.
-        slot.params = std::make_unique<plugin::ParamValues>(slot.plugin->defaultParams());
-        for (const config::ShadowParam& p : lc.shadow.params) slot.params->set(p.name, p.value, p.where);
+        slot.params = std::make_unique<plugin::ParamValues>(plugin::resolveParams(*slot.plugin, lc.shadow));
 
         auto& shaders = pluginShaders_[lc.shadow.technique];
         if (!shaders) {

@@ -46,7 +46,7 @@ std::vector<InstanceData> instanceTable(const scene::Scene& scene)
 
 } // namespace
 
-SceneGpu::SceneGpu(gpu::Context& context, const scene::Scene& scene) : device_(context.device())
+SceneGpu::SceneGpu(gpu::Context& context, const scene::Scene& scene)
 {
     if (scene.instances.empty()) {
         throw Error("scene has no instances: nothing to render");
@@ -102,11 +102,6 @@ SceneGpu::SceneGpu(gpu::Context& context, const scene::Scene& scene) : device_(c
                                    "scene instances");
     materials_ = gpu::uploadBuffer(context, bytesOf(materials), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "scene materials");
     sampler_ = gpu::createSampler(context, VK_FILTER_LINEAR, VK_SAMPLER_ADDRESS_MODE_REPEAT);
-}
-
-SceneGpu::~SceneGpu()
-{
-    if (sampler_) vkDestroySampler(device_, sampler_, nullptr);
 }
 
 bool SceneGpu::hasAlphaMasked() const

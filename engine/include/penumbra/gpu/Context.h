@@ -33,6 +33,11 @@ struct ContextOptions {
 // flag is not the only way to pick a device; explicit fields in `base` win.
 ContextOptions contextOptionsFromEnvironment(ContextOptions base);
 
+// Validation messages reported to every Context of this process, including those during
+// a Context's destruction (objects still alive at vkDestroyDevice), which no Context
+// outlives to count.
+uint64_t validationMessagesInProcess();
+
 struct DeviceInfo {
     std::string name;
     std::string type;  // "discrete", "integrated", "virtual", "cpu", "other"

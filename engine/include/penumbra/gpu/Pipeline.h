@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace penumbra::gpu {
@@ -106,8 +107,44 @@ private:
     std::vector<Entry> entries_;
 };
 
-// A sampler owned by the caller; compare = true makes a depth-comparison sampler.
-VkSampler createSampler(Context& context, VkFilter filter, VkSamplerAddressMode address,
-                        std::optional<VkCompareOp> compare = std::nullopt);
+// An owned VkSampler, destroyed with its owner: a constructor that throws after creating
+// one (a technique whose pipeline fails to compile) leaks nothing.
+class Sampler {
+public:
+    Sampler() = default;
+    Sampler(VkDevice device, VkSampler sampler) : device_(device), sampler_(sampler) {}
+    ~Sampler() { reset(); }
+    Sampler(Sampler&& other) noexcept { *this = std::move(other); }
+    Sampler& operator=(Sampler&& other) noexcept
+    {
+        if (this != &other) {
+            reset();
+            device_ = std::exchange(other.device_, VK_NULL_HANDLE);
+            sampler_ = std::exchange(other.sampler_, VK_NULL_HANDLE);
+        }
+        return *this;
+    }
+    Sampler(const Sampler&) = delete;
+    Sampler& operator=(const Sampler&) = delete;
+
+    VkSampler handle() const { return sampler_; }
+    // Converts where a VkSampler is expected; never from a temporary, whose sampler is
+    // destroyed at once.
+    operator VkSampler() const& { return sampler_; }
+    operator VkSampler() const&& = delete;
+
+private:
+    void reset()
+    {
+        if (sampler_) vkDestroySampler(device_, sampler_, nullptr);
+        sampler_ = VK_NULL_HANDLE;
+    }
+    VkDevice device_ = VK_NULL_HANDLE;
+    VkSampler sampler_ = VK_NULL_HANDLE;
+};
+
+// compare = a comparison op makes a depth-comparison sampler.
+Sampler createSampler(Context& context, VkFilter filter, VkSamplerAddressMode address,
+                      std::optional<VkCompareOp> compare = std::nullopt);
 
 } // namespace penumbra::gpu

@@ -110,7 +110,7 @@ private:
     gpu::Buffer lightBuffer_;
     gpu::Pipeline gbufferPipeline_;
     gpu::Pipeline shadingPipeline_;
-    VkSampler nearestSampler_ = VK_NULL_HANDLE;
+    gpu::Sampler nearestSampler_;
     // One shader compiler per plugin: its folder first, then the engine's shaders/.
     std::map<std::string, std::unique_ptr<gpu::ShaderCompiler>> pluginShaders_;
     std::vector<LightSlot> lights_;

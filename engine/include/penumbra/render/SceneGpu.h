@@ -4,6 +4,7 @@
 // and a draw per instance whose firstInstance is the instance index (shaders read
 // instances[gl_InstanceIndex]). Draws are grouped by texture so that a pass pushes each
 // texture's descriptor once (lavapipe has no descriptor indexing: no bindless arrays).
+#include "penumbra/gpu/Pipeline.h"
 #include "penumbra/gpu/Resources.h"
 #include "penumbra/scene/Scene.h"
 
@@ -21,7 +22,7 @@ enum class DrawFilter { All, Solid, AlphaMasked };
 class SceneGpu {
 public:
     SceneGpu(gpu::Context& context, const scene::Scene& scene);
-    ~SceneGpu();
+    ~SceneGpu() = default;
     SceneGpu(const SceneGpu&) = delete;
     SceneGpu& operator=(const SceneGpu&) = delete;
 
@@ -51,14 +52,13 @@ private:
         uint32_t texture;  // index into textures_ (the last one is the white default)
         bool alphaMasked;
     };
-    VkDevice device_ = VK_NULL_HANDLE;
     gpu::Buffer vertices_;
     gpu::Buffer indices_;
     gpu::Buffer instances_;
     gpu::Buffer instanceStaging_;  // reused by every updateInstances (animated frames)
     gpu::Buffer materials_;
     std::vector<gpu::Image> textures_;
-    VkSampler sampler_ = VK_NULL_HANDLE;
+    gpu::Sampler sampler_;
     std::vector<Draw> draws_;  // sorted by texture
     size_t triangles_ = 0;
 };

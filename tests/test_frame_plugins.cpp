@@ -1,0 +1,149 @@
+// Plugins inside a rendered frame: what a technique's pass writes is what the engine
+// reads back as V_l, and a technique that fails (to load, to create, to register) leaves
+// its light unshadowed with a warning - or stops the frame when the config requires it -
+// while the other lights keep their techniques.
+#include "TestConfigs.h"
+#include "TestContext.h"
+
+#include "penumbra/config/Config.h"
+#include "penumbra/plugin/PluginRegistry.h"
+#include "penumbra/render/FrameRenderer.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+
+using namespace penumbra;
+
+namespace {
+
+// The test plugins first, then the build tree's (hard).
+std::vector<std::filesystem::path> searchPath()
+{
+    std::vector<std::filesystem::path> path{PENUMBRA_TEST_PLUGIN_DIR};
+    for (const auto& dir : plugin::defaultPluginSearchPath()) path.push_back(dir);
+    return path;
+}
+
+::testing::AssertionResult allEqual(const std::vector<float>& values, float expected)
+{
+    const auto bad = std::find_if(values.begin(), values.end(), [&](float v) { return v != expected; });
+    if (values.empty()) return ::testing::AssertionFailure() << "no values";
+    if (bad == values.end()) return ::testing::AssertionSuccess();
+    return ::testing::AssertionFailure() << "pixel " << (bad - values.begin()) << " is " << *bad << ", expected "
+                                         << expected;
+}
+
+bool hasPass(const graph::CompiledGraph& compiled, const std::string& name)
+{
+    return std::any_of(compiled.passes.begin(), compiled.passes.end(), [&](const auto& p) { return p.name == name; });
+}
+
+class FramePlugins : public test::GpuTest {
+protected:
+    FramePlugins() : registry(searchPath()) {}
+
+    // The default scene at 64 x 36 with two lights: light 0 uses `technique` with
+    // `params`, light 1 the test plugin's clear to 0.25.
+    config::RenderConfig twoLights(const std::string& technique, const nlohmann::json& params, bool required = false)
+    {
+        config::RenderConfig cfg = test::defaultTestConfig();
+        cfg.width = 64;
+        cfg.height = 36;
+        cfg.lights.push_back(cfg.lights[0]);
+        cfg.lights[0].shadow = {};
+        cfg.lights[0].shadow.technique = technique;
+        cfg.lights[0].shadow.required = required;
+        for (const auto& [name, value] : params.items()) cfg.lights[0].shadow.setParam(name, value, "test");
+        cfg.lights[1].shadow = {};
+        cfg.lights[1].shadow.technique = "testgood";
+        cfg.lights[1].shadow.setParam("fill", 0.25, "test");
+        return cfg;
+    }
+
+    plugin::PluginRegistry registry;
+};
+
+TEST_F(FramePlugins, WhatTheTechniquesPassWritesIsTheLightsVisibility)
+{
+    const config::RenderConfig cfg = twoLights("testgood", {{"fill", 0.75}});
+    const scene::Scene scene = config::buildScene(cfg.scene);
+    render::FrameRenderer renderer(*context, scene, cfg, registry);
+    renderer.renderFrame();
+    EXPECT_TRUE(renderer.warnings().empty());
+    EXPECT_EQ(renderer.techniqueName(0), "testgood");
+    EXPECT_TRUE(allEqual(renderer.readVisibility(0), 0.75f));
+    EXPECT_TRUE(allEqual(renderer.readVisibility(1), 0.25f));
+    const graph::CompiledGraph& compiled = renderer.compiledGraph();
+    EXPECT_TRUE(hasPass(compiled, "light0.testgood.fill"));
+    EXPECT_TRUE(hasPass(compiled, "light1.testgood.fill"));
+}
+
+TEST_F(FramePlugins, AnEnumParameterChangesWhatThePassWrites)
+{
+    const config::RenderConfig cfg = twoLights("testgood", {{"fill", 0.75}, {"mode", "unshadowed"}});
+    const scene::Scene scene = config::buildScene(cfg.scene);
+    render::FrameRenderer renderer(*context, scene, cfg, registry);
+    renderer.renderFrame();
+    EXPECT_TRUE(allEqual(renderer.readVisibility(0), 1.0f));
+}
+
+// Each way a light's technique can fail: the light is unshadowed (V = 1, the contract's
+// neutral value) and a warning names light, plugin and cause; the other light is intact.
+TEST_F(FramePlugins, AFailingTechniqueLeavesItsLightUnshadowedAndTheOthersIntact)
+{
+    struct Case {
+        std::string technique;
+        nlohmann::json params;
+        std::string warning;
+    };
+    const std::vector<Case> cases = {
+        {"nosuch", nlohmann::json::object(), "plugin 'nosuch': no file penumbra-nosuch.so on the plugin search path"},
+        {"nodep", nlohmann::json::object(), "libpenumbra_test_absent.so: cannot open shared object file"},
+        {"throws", nlohmann::json::object(), "exception during registration: shader throws/visibility.comp: not found"},
+        {"throws", {{"behaviour", "return_null"}}, "the plugin's factory returned no technique"},
+        {"testgood", {{"enabled", false}}, "registered no pass that writes 'light0.visibility'"},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.technique + " " + c.params.dump());
+        const config::RenderConfig cfg = twoLights(c.technique, c.params);
+        const scene::Scene scene = config::buildScene(cfg.scene);
+        render::FrameRenderer renderer(*context, scene, cfg, registry);
+        renderer.renderFrame();
+        ASSERT_EQ(renderer.warnings().size(), 1u);
+        const std::string& warning = renderer.warnings()[0];
+        EXPECT_EQ(warning.rfind("light 0: rendered without shadows: ", 0), 0u) << warning;
+        EXPECT_NE(warning.find(c.warning), std::string::npos) << warning;
+        EXPECT_EQ(renderer.techniqueName(0), "");
+        EXPECT_TRUE(allEqual(renderer.readVisibility(0), 1.0f));
+        EXPECT_TRUE(allEqual(renderer.readVisibility(1), 0.25f));
+        EXPECT_TRUE(hasPass(renderer.compiledGraph(), "light0.unshadowed"));
+        EXPECT_FALSE(hasPass(renderer.compiledGraph(), "light0.testgood.fill"));
+    }
+}
+
+TEST_F(FramePlugins, ARequiredTechniqueThatFailsStopsTheFrame)
+{
+    const std::vector<std::pair<std::string, nlohmann::json>> cases = {
+        {"nodep", nlohmann::json::object()}, {"throws", nlohmann::json::object()}, {"testgood", {{"enabled", false}}}};
+    for (const auto& [technique, params] : cases) {
+        SCOPED_TRACE(technique);
+        const config::RenderConfig cfg = twoLights(technique, params, true);
+        const scene::Scene scene = config::buildScene(cfg.scene);
+        try {
+            render::FrameRenderer renderer(*context, scene, cfg, registry);
+            ADD_FAILURE() << "the frame was built";
+        } catch (const plugin::PluginError& e) {
+            EXPECT_NE(std::string(e.what()).find(technique), std::string::npos) << e.what();
+        }
+    }
+    // The registry survives: the next frame loads and renders.
+    const config::RenderConfig cfg = twoLights("testgood", {{"fill", 0.5}}, true);
+    const scene::Scene scene = config::buildScene(cfg.scene);
+    render::FrameRenderer renderer(*context, scene, cfg, registry);
+    renderer.renderFrame();
+    EXPECT_TRUE(allEqual(renderer.readVisibility(0), 0.5f));
+}
+
+} // namespace
