@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#define STB_IMAGE_IMPLEMENTATION
+#include <stb/stb_image.h>
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -10,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -634,4 +637,210 @@ TEST_F(Cli, SetForATechniqueNoLightUsesOrWithBadSyntaxFailsBeforeRendering)
     r = run(fmt::format("validate {} --set hard.size=1", data("gltf/quad.glb")));
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_TRUE(has(r.err, "quad.glb: --set sets technique parameters of a config (.json), not of a glTF file")) << r.err;
+}
+
+// --- compare -----------------------------------------------------------------------------
+
+namespace {
+
+struct Png {
+    int width = 0, height = 0;
+    std::vector<uint8_t> rgba;
+    std::vector<int> at(int x, int y) const
+    {
+        const size_t i = 4 * (size_t(y) * size_t(width) + size_t(x));
+        return {rgba[i], rgba[i + 1], rgba[i + 2], rgba[i + 3]};
+    }
+};
+
+Png readPng(const fs::path& file)
+{
+    Png png;
+    int channels = 0;
+    unsigned char* data = stbi_load(file.c_str(), &png.width, &png.height, &channels, 4);
+    if (!data) return png;
+    png.rgba.assign(data, data + size_t(png.width) * size_t(png.height) * 4);
+    stbi_image_free(data);
+    return png;
+}
+
+// testGoodConfig at 64 x 48: light 'key' clears V to `fill` (testgood), light 'fill'
+// names a plugin that exists nowhere and renders unshadowed (V = 1).
+std::string compareConfig(const std::string& fill)
+{
+    return testGoodConfig(fmt::format(R"(, "fill": {})", fill), R"(, "output": {"width": 64, "height": 48})");
+}
+
+// The reference for compareConfig: testgood clearing V to 0.75.
+const std::string kTestGoodReference = "--reference testgood --reference-set fill=0.75";
+
+} // namespace
+
+TEST_F(Cli, CompareGivesExactFiguresForConstantVisibility)
+{
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << compareConfig("0.25");
+    const CliResult r = run(fmt::format("compare '{}' {} --json --validation", cfg.string(), kTestGoodReference), pluginPath());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const nlohmann::json doc = nlohmann::json::parse(r.out);
+    EXPECT_EQ(doc["width"], 64);
+    EXPECT_EQ(doc["height"], 48);
+    EXPECT_EQ(doc["reference"]["technique"], "testgood");
+    EXPECT_EQ(doc["reference"]["params"]["fill"], 0.75);
+    ASSERT_EQ(doc["lights"].size(), 2u);
+
+    // |0.25 - 0.75| = 0.5 on every pixel of geometry, all of it penumbra of the reference.
+    const nlohmann::json& key = doc["lights"][0];
+    EXPECT_EQ(key["name"], "key");
+    EXPECT_EQ(key["technique"], "testgood");
+    EXPECT_EQ(key["params"]["fill"], 0.25);
+    const nlohmann::json& v = key["visibility"];
+    const int geometry = v["geometry_pixels"].get<int>();
+    EXPECT_GT(geometry, 0);
+    EXPECT_LT(geometry, 64 * 48) << "the sky is background and not compared";
+    EXPECT_EQ(v["all"]["pixels"], geometry);
+    EXPECT_EQ(v["all"]["rmse"], 0.5);
+    EXPECT_EQ(v["all"]["mae"], 0.5);
+    EXPECT_EQ(v["all"]["max_abs_error"], 0.5);
+    EXPECT_EQ(v["all"]["above"][0]["percent"], 100.0);
+    EXPECT_EQ(v["all"]["above"][1]["percent"], 100.0);
+    EXPECT_EQ(v["regions"]["penumbra"]["pixels"], geometry);
+    EXPECT_EQ(v["regions"]["umbra"]["pixels"], 0);
+    EXPECT_TRUE(v["regions"]["umbra"]["max_at"].is_null());
+    // Constant images: SSIM is the luminance term (2ab + C1) / (a² + b² + C1), C1 = 1e-4.
+    EXPECT_NEAR(v["ssim"].get<double>(), (2 * 0.25 * 0.75 + 1e-4) / (0.25 * 0.25 + 0.75 * 0.75 + 1e-4), 1e-9);
+
+    // The light whose plugin is missing rendered unshadowed: V = 1 against 0.75.
+    const nlohmann::json& fill = doc["lights"][1];
+    EXPECT_EQ(fill["technique"], "unshadowed");
+    EXPECT_TRUE(fill["params"].is_null());
+    EXPECT_EQ(fill["visibility"]["all"]["rmse"], 0.25);
+    EXPECT_TRUE(has(doc["warnings"].dump(), "test render: light 1: rendered without shadows: plugin 'nosuch'")) << doc.dump();
+
+    EXPECT_EQ(doc["color"]["geometry_pixels"], geometry);
+    EXPECT_GT(doc["color"]["all"]["rmse"].get<double>(), 0.0) << "less light reaches the test image";
+    EXPECT_FALSE(doc.contains("files"));
+}
+
+TEST_F(Cli, ComparePrintsATableByRegion)
+{
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << compareConfig("0.25");
+    const CliResult r = run(fmt::format("compare '{}' {}", cfg.string(), kTestGoodReference), pluginPath());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    for (const char* line : {"reference technique testgood", "regions of the reference: umbra V <= 0.01, lit V >= 0.99",
+                             "light 0 'key': testgood", "light 1 'fill': unshadowed", "region       pixels      RMSE",
+                             "SSIM 0.60006", "colour (sRGB values in [0, 1], averaged over R, G, B)", "SSIM (luma)"}) {
+        EXPECT_TRUE(has(r.out, line)) << line << "\n" << r.out;
+    }
+    EXPECT_TRUE(has(r.out, "  umbra             0   0.00000   0.00000   0.00000            -    0.00%    0.00%")) << r.out;
+    EXPECT_TRUE(has(r.out, "0.50000   0.50000   0.50000")) << r.out;
+}
+
+TEST_F(Cli, CompareWritesEveryImageAndLeavesOtherFilesAlone)
+{
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << compareConfig("0.25");
+    const fs::path out = dir / "out";
+    fs::create_directories(out);
+    std::ofstream(out / "notes.txt") << "mine";
+    std::ofstream(out / "key.test.png") << "an older run";
+    const CliResult r = run(fmt::format("compare '{}' {} -o '{}/' --json", cfg.string(), kTestGoodReference, out.string()),
+                            pluginPath());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+
+    std::set<std::string> names;
+    for (const auto& entry : fs::directory_iterator(out)) names.insert(entry.path().filename().string());
+    EXPECT_EQ(names, (std::set<std::string>{"notes.txt", "key.test.png", "key.reference.png", "key.diff.png", "fill.test.png",
+                                            "fill.reference.png", "fill.diff.png", "color.test.png", "color.reference.png",
+                                            "metrics.json"}))
+        << "no temporary file is left";
+    EXPECT_EQ(slurp(out / "notes.txt"), "mine");
+
+    const nlohmann::json metrics = nlohmann::json::parse(slurp(out / "metrics.json"));
+    EXPECT_EQ(metrics, nlohmann::json::parse(r.out)) << "metrics.json is what --json prints";
+    EXPECT_EQ(metrics["lights"][0]["files"]["diff"], "key.diff.png");
+    EXPECT_EQ(metrics["color"]["files"]["test"], "color.test.png");
+
+    // Greyscale V: round(255 V). The pixel of the largest error is one of geometry.
+    const int x = metrics["lights"][0]["visibility"]["all"]["max_at"]["x"], y = metrics["lights"][0]["visibility"]["all"]["max_at"]["y"];
+    const Png test = readPng(out / "key.test.png"), reference = readPng(out / "key.reference.png");
+    ASSERT_EQ(test.width, 64);
+    ASSERT_EQ(test.height, 48);
+    EXPECT_EQ(test.at(x, y), (std::vector<int>{64, 64, 64, 255}));
+    EXPECT_EQ(reference.at(x, y), (std::vector<int>{191, 191, 191, 255}));
+    // Difference: too dark by 0.5 = the default full scale: the darkest blue; the
+    // unshadowed light too lit by 0.25: halfway along the red stops; background grey.
+    EXPECT_EQ(readPng(out / "key.diff.png").at(x, y), (std::vector<int>{5, 48, 97, 255}));
+    const Png fillDiff = readPng(out / "fill.diff.png");
+    EXPECT_EQ(fillDiff.at(x, y), (std::vector<int>{229, 131, 104, 255}));
+    EXPECT_EQ(fillDiff.at(0, 0), (std::vector<int>{128, 128, 128, 255})) << "the top-left corner is sky";
+    const Png color = readPng(out / "color.test.png");
+    EXPECT_EQ(color.width, 64);
+}
+
+TEST_F(Cli, CompareRendersARealTechniqueAgainstAFilteredOne)
+{
+    const fs::path out = dir / "out";
+    const CliResult r = run(fmt::format("compare {} --width 160 --height 90 --set hard.resolution=512 --reference hard "
+                                        "--reference-set filter=poisson --reference-set hard.filter_radius=4 --json "
+                                        "--validation -o '{}'",
+                                        config("default.json"), out.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const nlohmann::json doc = nlohmann::json::parse(r.out);
+    EXPECT_EQ(doc["reference"]["params"]["filter"], "poisson");
+    EXPECT_EQ(doc["reference"]["params"]["resolution"], 2048) << "the reference does not take the test's --set";
+    EXPECT_EQ(doc["lights"][0]["params"]["resolution"], 512);
+    const nlohmann::json& v = doc["lights"][0]["visibility"];
+    // An unfiltered map against a filtered one: they differ at shadow edges only.
+    EXPECT_GT(v["all"]["rmse"].get<double>(), 0.01);
+    EXPECT_LT(v["all"]["rmse"].get<double>(), 0.3);
+    EXPECT_GT(v["regions"]["penumbra"]["rmse"].get<double>(), v["regions"]["lit"]["rmse"].get<double>());
+    int regionPixels = 0;
+    for (const char* region : {"umbra", "penumbra", "lit"}) regionPixels += v["regions"][region]["pixels"].get<int>();
+    EXPECT_EQ(regionPixels, v["all"]["pixels"].get<int>());
+    EXPECT_GT(v["ssim"].get<double>(), 0.5);
+    EXPECT_LT(v["ssim"].get<double>(), 1.0);
+    EXPECT_TRUE(fs::exists(out / "light0.diff.png"));
+}
+
+TEST_F(Cli, CompareRefusesBadInputBeforeRenderingOrWriting)
+{
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << compareConfig("0.25");
+    const fs::path out = dir / "out";
+    const auto refused = [&](const std::string& flags, const std::string& message) {
+        const CliResult r = run(fmt::format("compare '{}' {} -o '{}'", cfg.string(), flags, out.string()), pluginPath());
+        EXPECT_EQ(r.exitCode, 1) << flags;
+        EXPECT_TRUE(has(r.err, message)) << flags << "\n" << r.err;
+        EXPECT_FALSE(has(r.err, "render:")) << "nothing rendered: " << r.err;
+        EXPECT_FALSE(fs::exists(out)) << flags;
+    };
+    refused("--reference nosuch", "--reference nosuch: plugin 'nosuch': no file penumbra-nosuch.so on the plugin search path");
+    refused("--reference testgood --reference-set fil=0.5",
+            "--reference-set fil: plugin 'testgood' has no parameter 'fil'; did you mean 'fill'?");
+    refused("--reference testgood --reference-set fill=3", "--reference-set fill: must be a number in [0, 1]");
+    refused("--reference testgood --reference-set fill", "--reference-set 'fill': expected parameter=value");
+    refused("--reference testgood --reference-set hard.fill=1",
+            "--reference-set 'hard.fill=1': 'hard' is not the reference technique 'testgood'");
+    refused("--reference testgood --set testgood.kernel=99", "--set testgood.kernel: must be an integer in [1, 15]");
+    refused("--reference testgood --set other.size=1", "--set other.size: no light of ");
+    refused("--reference testgood --diff-scale 0", "--diff-scale must be in (0, 1], got 0");
+
+    // -o: a file, or a folder whose parent is missing.
+    std::ofstream(dir / "file") << "x";
+    CliResult r = run(fmt::format("compare '{}' {} -o '{}'", cfg.string(), kTestGoodReference, (dir / "file").string()),
+                      pluginPath());
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(has(r.err, "/file: exists and is not a folder")) << r.err;
+    EXPECT_EQ(slurp(dir / "file"), "x");
+    r = run(fmt::format("compare '{}' {} -o '{}/a/b'", cfg.string(), kTestGoodReference, dir.string()), pluginPath());
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(has(r.err, "/a/b: cannot create the folder: '")) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "a"));
+
+    r = run(fmt::format("compare '{}/nope.json' {}", dir.string(), kTestGoodReference), pluginPath());
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(has(r.err, "nope.json: config file not found")) << r.err;
+    EXPECT_NE(run("compare").exitCode, 0) << "the config is required";
 }

@@ -3,8 +3,10 @@
 // procedural scene as glTF; `penumbra validate scene.gltf` loads and repairs a glTF
 // file (or checks a config and its plugins) and says what it found; `penumbra plugins`
 // lists the technique plugins and their parameters; `penumbra graph cfg.json` prints the
-// frame's compiled render graph; `penumbra devices` lists the Vulkan devices the loader
-// sees.
+// frame's compiled render graph; `penumbra compare cfg.json` measures each light's
+// technique against the reference technique; `penumbra devices` lists the Vulkan devices
+// the loader sees.
+#include "CompareCommand.h"
 #include "GraphCommand.h"
 #include "PluginsCommand.h"
 #include "penumbra/config/Config.h"
@@ -464,6 +466,28 @@ int main(int argc, char** argv)
     addParamOverrideFlag(graph, graphFlags.settings);
     addDeviceFlags(graph);
 
+    penumbra::app::CompareFlags compareFlags;
+    CLI::App* compare = app.add_subcommand("compare", "Render a config with its techniques and with the reference "
+                                                      "technique; print each light's error figures (RMSE, MAE, max, % "
+                                                      "wrong, by umbra/penumbra/lit; SSIM) and the colour image's");
+    compare->add_option("config", compareFlags.config, "Scene config (JSON)")->required();
+    compare->add_option("-o,--output", compareFlags.output,
+                        "Write <light>.test.png, <light>.reference.png, <light>.diff.png, color.test.png, "
+                        "color.reference.png and metrics.json into this folder (created if missing; other files "
+                        "in it are left alone)");
+    compare->add_option("--reference", compareFlags.reference, "The reference technique plugin")->capture_default_str();
+    compare->add_option("--reference-set", compareFlags.referenceSettings,
+                        "Set a parameter of the reference technique: --reference-set samples=64 (repeatable)")
+        ->allow_extra_args(false);
+    compare->add_option("--diff-scale", compareFlags.diffScale,
+                        "|dV| at which the difference image's colours saturate, in (0, 1]")
+        ->capture_default_str();
+    compare->add_flag("--json", compareFlags.json, "Print the figures as one JSON document (as metrics.json)");
+    compare->add_option("--width", compareFlags.width, "Output width (overrides the config)")->check(CLI::Range(1u, 16384u));
+    compare->add_option("--height", compareFlags.height, "Output height (overrides the config)")->check(CLI::Range(1u, 16384u));
+    addParamOverrideFlag(compare, compareFlags.settings);
+    addDeviceFlags(compare);
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -478,6 +502,7 @@ int main(int argc, char** argv)
         if (validate->parsed()) return runValidate(validateFlags);
         if (devices->parsed()) return runDevices();
         if (graph->parsed()) return penumbra::app::runGraph(graphFlags, contextOptions(deviceFlags));
+        if (compare->parsed()) return penumbra::app::runCompare(compareFlags, contextOptions(deviceFlags));
         if (plugins->parsed()) return penumbra::app::runPlugins(pluginsFlags);
     } catch (const penumbra::Error& e) {
         fmt::print(stderr, "penumbra: error: {}\n", e.what());
