@@ -1,5 +1,6 @@
 // Procedural scenes: determinism, counts, well-formed meshes, parameter checks, scale,
 // and the penumbra scene's closed-form visibility against ray casting.
+#include "ErrorText.h"
 #include "RayCast.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/scene/Generators.h"
@@ -14,6 +15,7 @@
 
 using namespace penumbra;
 using namespace penumbra::scene;
+using penumbra::test::errorOf;
 
 namespace {
 
@@ -53,16 +55,6 @@ std::vector<std::pair<std::string, Scene>> everyGenerator()
     scenes.emplace_back("fence tilt 0", generateScene("fence", {{"tilt_deg", "0"}, {"elevation", "0.5"}}));
     scenes.emplace_back("fence tilt 30", generateScene("fence", {{"tilt_deg", "30"}}));
     return scenes;
-}
-
-std::string errorOf(const std::function<void()>& f)
-{
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "(no error)";
 }
 
 const Mesh& meshNamed(const Scene& s, const std::string& name)

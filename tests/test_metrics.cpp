@@ -2,6 +2,7 @@
 // region split, SSIM (against a direct evaluation of Wang et al.'s definition), colour,
 // the images to look at, the JSON form, and every guard (empty mask, constant images,
 // non-finite values, size mismatches).
+#include "ErrorText.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/metrics/DifferenceImage.h"
 #include "penumbra/metrics/ImageComparison.h"
@@ -17,6 +18,7 @@
 
 using namespace penumbra;
 using namespace penumbra::metrics;
+using penumbra::test::errorOf;
 
 namespace {
 
@@ -92,16 +94,6 @@ double directSsim(const Image& a, const Image& b, const PixelMask* mask)
             ++count;
         }
     return sum / count;
-}
-
-std::string errorOf(const std::function<void()>& f)
-{
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "(no error)";
 }
 
 // nlohmann writes NaN and inf as null: every number must be finite and no figure null.

@@ -64,6 +64,23 @@ bool checkVisibilityValue(float v, InvalidValues& invalid)
     return true;
 }
 
+// Calls f(x, y, index) for every pixel of `mask` (every pixel without one) in row order;
+// returns how many there were.
+template <typename PixelFunction>
+uint64_t forEachComparedPixel(uint32_t width, uint32_t height, const PixelMask* mask, PixelFunction&& f)
+{
+    uint64_t count = 0;
+    for (uint32_t y = 0; y < height; ++y) {
+        for (uint32_t x = 0; x < width; ++x) {
+            const size_t i = size_t(y) * width + x;
+            if (mask && !mask->covered[i]) continue;
+            ++count;
+            f(x, y, i);
+        }
+    }
+    return count;
+}
+
 template <typename View>
 void checkTestAndReference(std::string_view operation, const View& test, const View& reference, size_t channels,
                            const PixelMask* mask)
@@ -109,21 +126,16 @@ VisibilityComparison compareVisibility(FloatImageView test, FloatImageView refer
     result.height = test.height;
     ErrorAccumulator all;
     std::array<ErrorAccumulator, kRegionCount> regions;
-    for (uint32_t y = 0; y < test.height; ++y) {
-        for (uint32_t x = 0; x < test.width; ++x) {
-            const size_t i = size_t(y) * test.width + x;
-            if (mask && !mask->covered[i]) continue;
-            ++result.geometryPixels;
-            const float t = test.pixels[i], r = reference.pixels[i];
-            const bool testFinite = checkVisibilityValue(t, result.test);
-            const bool referenceFinite = checkVisibilityValue(r, result.reference);
-            if (!testFinite || !referenceFinite) continue;
-            const double error = double(t) - double(r);
-            const double absError = std::abs(error);
-            all.add(x, y, error * error, absError, 1, absError, t, r);
-            regions[size_t(classifyReference(r))].add(x, y, error * error, absError, 1, absError, t, r);
-        }
-    }
+    result.geometryPixels = forEachComparedPixel(test.width, test.height, mask, [&](uint32_t x, uint32_t y, size_t i) {
+        const float t = test.pixels[i], r = reference.pixels[i];
+        const bool testFinite = checkVisibilityValue(t, result.test);
+        const bool referenceFinite = checkVisibilityValue(r, result.reference);
+        if (!testFinite || !referenceFinite) return;
+        const double error = double(t) - double(r);
+        const double absError = std::abs(error);
+        all.add(x, y, error * error, absError, 1, absError, t, r);
+        regions[size_t(classifyReference(r))].add(x, y, error * error, absError, 1, absError, t, r);
+    });
     result.all = all.finish();
     for (size_t r = 0; r < kRegionCount; ++r) result.regions[r] = regions[r].finish();
     result.ssim = meanSsim(test, reference, mask);
@@ -148,28 +160,23 @@ ColorComparison compareColor(Rgba8ImageView test, Rgba8ImageView reference, cons
     result.width = test.width;
     result.height = test.height;
     ErrorAccumulator all;
-    for (uint32_t y = 0; y < test.height; ++y) {
-        for (uint32_t x = 0; x < test.width; ++x) {
-            const size_t i = size_t(y) * test.width + x;
-            if (mask && !mask->covered[i]) continue;
-            ++result.geometryPixels;
-            double sumSquared = 0.0, sumAbs = 0.0, maxAbs = -1.0;
-            uint32_t maxChannel = 0;
-            for (uint32_t c = 0; c < 3; ++c) {
-                const double error = (double(test.pixels[4 * i + c]) - double(reference.pixels[4 * i + c])) / 255.0;
-                sumSquared += error * error;
-                sumAbs += std::abs(error);
-                if (std::abs(error) > maxAbs) {
-                    maxAbs = std::abs(error);
-                    maxChannel = c;
-                }
-            }
-            if (all.add(x, y, sumSquared, sumAbs, 3, maxAbs, test.pixels[4 * i + maxChannel] / 255.0,
-                        reference.pixels[4 * i + maxChannel] / 255.0)) {
-                result.maxChannel = maxChannel;
+    result.geometryPixels = forEachComparedPixel(test.width, test.height, mask, [&](uint32_t x, uint32_t y, size_t i) {
+        double sumSquared = 0.0, sumAbs = 0.0, maxAbs = -1.0;
+        uint32_t maxChannel = 0;
+        for (uint32_t c = 0; c < 3; ++c) {
+            const double error = (double(test.pixels[4 * i + c]) - double(reference.pixels[4 * i + c])) / 255.0;
+            sumSquared += error * error;
+            sumAbs += std::abs(error);
+            if (std::abs(error) > maxAbs) {
+                maxAbs = std::abs(error);
+                maxChannel = c;
             }
         }
-    }
+        if (all.add(x, y, sumSquared, sumAbs, 3, maxAbs, test.pixels[4 * i + maxChannel] / 255.0,
+                    reference.pixels[4 * i + maxChannel] / 255.0)) {
+            result.maxChannel = maxChannel;
+        }
+    });
     result.all = all.finish();
     const std::vector<float> testLuma = colorLuma(test), referenceLuma = colorLuma(reference);
     result.ssimLuma = meanSsim({test.width, test.height, testLuma}, {reference.width, reference.height, referenceLuma}, mask);
