@@ -324,14 +324,15 @@ int runCompare(const CompareFlags& flags, const gpu::ContextOptions& device)
     doc["diff_scale"] = flags.diffScale;
     doc["warnings"] = warnings;
 
+    // Files first: figures on stdout mean that the files, if asked for, are there too.
+    if (!flags.output.empty()) {
+        writeOutputs(dir, files, test, ref, mask, float(flags.diffScale), doc);
+        spdlog::info("wrote {} files into {}", files.all().size(), dir.string());
+    }
     if (flags.json) {
         fmt::print("{}\n", doc.dump(2));
     } else {
         printTable(doc, comparisons, color);
-    }
-    if (!flags.output.empty()) {
-        writeOutputs(dir, files, test, ref, mask, float(flags.diffScale), doc);
-        spdlog::info("wrote {} files into {}", files.all().size(), dir.string());
     }
 
     if (context.validationEnabled() && context.validationMessageCount() > 0) {

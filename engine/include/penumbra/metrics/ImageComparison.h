@@ -43,8 +43,8 @@ struct ErrorStats {
     double rmse = 0.0;          // sqrt(mean ΔV²)
     double mae = 0.0;           // mean |ΔV|
     double maxAbsError = 0.0;   // max |ΔV|
-    // Where the maximum is (the first such pixel in row order) and the two values there;
-    // meaningful only when pixels > 0.
+    // Where the maximum is (pixel column x and row y from the top-left; the first such
+    // pixel in row order) and the two values there; meaningful only when pixels > 0.
     uint32_t maxX = 0;
     uint32_t maxY = 0;
     double testAtMax = 0.0;
