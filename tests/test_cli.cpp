@@ -844,3 +844,312 @@ TEST_F(Cli, CompareRefusesBadInputBeforeRenderingOrWriting)
     EXPECT_TRUE(has(r.err, "nope.json: config file not found")) << r.err;
     EXPECT_NE(run("compare").exitCode, 0) << "the config is required";
 }
+
+// --- bench -------------------------------------------------------------------------------
+
+namespace {
+
+// RFC 4180: fields split at commas outside quotes, "" inside quotes is one quote, records
+// end with CRLF.
+std::vector<std::vector<std::string>> readCsv(const std::string& text)
+{
+    std::vector<std::vector<std::string>> rows;
+    std::vector<std::string> row(1);
+    bool quoted = false;
+    for (size_t i = 0; i < text.size(); ++i) {
+        const char c = text[i];
+        if (quoted && c == '"' && i + 1 < text.size() && text[i + 1] == '"') {
+            row.back() += '"';
+            ++i;
+        } else if (c == '"') {
+            quoted = !quoted;
+        } else if (!quoted && c == ',') {
+            row.emplace_back();
+        } else if (!quoted && c == '\r' && i + 1 < text.size() && text[i + 1] == '\n') {
+            rows.push_back(std::move(row));
+            row.assign(1, "");
+            ++i;
+        } else {
+            row.back() += c;
+        }
+    }
+    EXPECT_EQ(row, std::vector<std::string>(1)) << "the last record ends with CRLF";
+    return rows;
+}
+
+// A CSV as records keyed by the header's column names.
+std::vector<std::map<std::string, std::string>> csvRecords(const std::string& text)
+{
+    const std::vector<std::vector<std::string>> rows = readCsv(text);
+    std::vector<std::map<std::string, std::string>> records;
+    for (size_t r = 1; r < rows.size(); ++r) {
+        EXPECT_EQ(rows[r].size(), rows[0].size()) << "row " << r << " has every column";
+        std::map<std::string, std::string> record;
+        for (size_t c = 0; c < rows[0].size() && c < rows[r].size(); ++c) record[rows[0][c]] = rows[r][c];
+        records.push_back(std::move(record));
+    }
+    return records;
+}
+
+// testGoodConfig at 64 x 48 with the key light's fill swept over 0.25 and 0.5 (the other
+// light renders unshadowed): against the reference testgood fill=0.75, every error is known.
+std::string benchConfig(const std::string& sweep = R"([{"path": "/lights/0/shadow/fill", "values": [0.25, 0.5]}])")
+{
+    return testGoodConfig(R"(, "fill": 0.25)", fmt::format(R"(, "output": {{"width": 64, "height": 48}}, "sweep": {})", sweep));
+}
+
+std::set<std::string> filesIn(const fs::path& dir)
+{
+    std::set<std::string> names;
+    for (const auto& entry : fs::directory_iterator(dir)) names.insert(entry.path().filename().string());
+    return names;
+}
+
+} // namespace
+
+TEST_F(Cli, BenchMeasuresEveryVariantAgainstOneReferenceRender)
+{
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << benchConfig();
+    const fs::path out = dir / "out";
+    const CliResult r = run(fmt::format("bench '{}' {} --frames 2 --warmup 1 -o '{}' --validation", cfg.string(),
+                                        kTestGoodReference, out.string()),
+                            pluginPath());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_EQ(filesIn(out), (std::set<std::string>{"results.csv", "results.json", "pareto.svg"}));
+    EXPECT_TRUE(has(r.err, "variant 1/2: /lights/0/shadow/fill=0.25")) << r.err;
+    EXPECT_TRUE(has(r.err, "variant 2/2: /lights/0/shadow/fill=0.5")) << r.err;
+
+    // One row per variant x light, every column filled; errors exact: |fill - 0.75| on
+    // every geometry pixel, and the unshadowed light's |1 - 0.75|.
+    const std::vector<std::map<std::string, std::string>> rows = csvRecords(slurp(out / "results.csv"));
+    ASSERT_EQ(rows.size(), 4u);
+    const std::vector<std::string> rmse = {"0.5", "0.25", "0.25", "0.25"};
+    const std::vector<std::string> technique = {"testgood", "unshadowed", "testgood", "unshadowed"};
+    for (size_t i = 0; i < rows.size(); ++i) {
+        SCOPED_TRACE(i);
+        const std::map<std::string, std::string>& row = rows[i];
+        EXPECT_EQ(row.at("variant"), std::to_string(i / 2));
+        EXPECT_EQ(row.at("light_index"), std::to_string(i % 2));
+        EXPECT_EQ(row.at("light"), i % 2 ? "fill" : "key");
+        EXPECT_EQ(row.at("technique"), technique[i]);
+        EXPECT_EQ(row.at("rmse"), rmse[i]);
+        EXPECT_EQ(row.at("mae"), rmse[i]);
+        EXPECT_EQ(row.at("max_abs_error"), rmse[i]);
+        EXPECT_EQ(row.at("pct_above_0.05"), "100");
+        EXPECT_EQ(row.at("pct_above_0.2"), "100");
+        EXPECT_EQ(row.at("penumbra_pixels"), row.at("pixels")) << "V_ref = 0.75 everywhere: all penumbra";
+        EXPECT_EQ(row.at("umbra_pixels"), "0");
+        EXPECT_EQ(row.at("umbra_rmse"), "0");
+        EXPECT_EQ(row.at("memory_bytes"), "0") << "neither the clear nor the fallback has resources of its own";
+        EXPECT_EQ(row.at("scene"), "box-grid");
+        EXPECT_EQ(row.at("width"), "64");
+        for (const char* column : {"technique_gpu_ms", "technique_cpu_ms", "frame_gpu_ms", "frame_wall_ms", "ssim"}) {
+            EXPECT_NO_THROW((void)std::stod(row.at(column))) << column;
+        }
+    }
+    EXPECT_GT(std::stoi(rows[0].at("pixels")), 0);
+    EXPECT_EQ(rows[2].at("label"), "/lights/0/shadow/fill=0.5");
+    EXPECT_EQ(nlohmann::json::parse(rows[2].at("params"))["fill"], 0.5);
+    EXPECT_EQ(rows[3].at("params"), "null");
+    // The sweep sets the key light's technique and, for the fill light, its context.
+    EXPECT_EQ(rows[2].at("technique_label"), "fill=0.5");
+    EXPECT_EQ(rows[2].at("context"), "");
+    EXPECT_EQ(rows[3].at("technique_label"), "");
+    EXPECT_EQ(rows[3].at("context"), "fill=0.5");
+    EXPECT_TRUE(nlohmann::json::parse(rows[0].at("pass_gpu_ms")).contains("light0.testgood.fill"));
+    EXPECT_TRUE(nlohmann::json::parse(rows[1].at("pass_gpu_ms")).contains("light1.unshadowed"));
+
+    const nlohmann::json doc = nlohmann::json::parse(slurp(out / "results.json"));
+    EXPECT_EQ(doc["frames"], 2);
+    EXPECT_EQ(doc["warmup"], 1);
+    EXPECT_EQ(doc["reference"]["technique"], "testgood");
+    EXPECT_EQ(doc["reference"]["params"]["fill"], 0.75);
+    EXPECT_EQ(doc["reference"]["renders"], 1) << "both variants share scene, camera and lights: one reference render";
+    EXPECT_EQ(doc["argv"][1], "bench");
+    EXPECT_TRUE(has(doc["command"].get<std::string>(), "bench")) << doc["command"];
+    EXPECT_FALSE(doc["device"]["name"].get<std::string>().empty());
+    EXPECT_GE(doc["machine"]["cpu_threads"].get<int>(), 0);
+    ASSERT_EQ(doc["variants"].size(), 2u);
+    for (size_t v = 0; v < 2; ++v) {
+        const nlohmann::json& variant = doc["variants"][v];
+        EXPECT_EQ(variant["choices"][0]["value"], v);
+        ASSERT_EQ(variant["lights"].size(), 2u);
+        std::set<std::string> passes;
+        for (const nlohmann::json& p : variant["timing"]["passes"]) passes.insert(p["name"]);
+        EXPECT_TRUE(passes.count("gbuffer") && passes.count("shading") && passes.count("light0.testgood.fill")) << variant.dump();
+        const nlohmann::json& key = variant["lights"][0];
+        EXPECT_EQ(key["visibility"]["all"]["rmse"], v == 0 ? 0.5 : 0.25);
+        ASSERT_EQ(key["timing"]["passes"].size(), 1u);
+        EXPECT_EQ(key["timing"]["passes"][0]["name"], "light0.testgood.fill");
+        EXPECT_EQ(key["memory"]["bytes"], 0);
+        // A panel's front is never empty; a panel of one point is its own front.
+        EXPECT_TRUE(variant["lights"][1]["pareto_front"].get<bool>());
+    }
+    EXPECT_TRUE(doc["variants"][0]["lights"][0]["pareto_front"].get<bool>() ||
+                doc["variants"][1]["lights"][0]["pareto_front"].get<bool>());
+
+    const std::string svg = slurp(out / "pareto.svg");
+    EXPECT_EQ(svg.rfind("<?xml", 0), 0u);
+    EXPECT_TRUE(has(svg, "</svg>"));
+    for (const char* text : {">light 'key'</text>", ">fill=0.25 · light 'fill'</text>", ">fill=0.5</text>", ">testgood</text>",
+                             ">unshadowed</text>", "RMSE against the reference"}) {
+        EXPECT_TRUE(has(svg, text)) << text;
+    }
+    EXPECT_TRUE(has(r.out, "2 variant(s), medians of 2 frame(s) after 1 warm-up; reference testgood")) << r.out;
+}
+
+TEST_F(Cli, BenchSummaryIsAMarkdownTablePerPanel)
+{
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << benchConfig();
+    const fs::path summary = dir / "tradeoff.md";
+    const CliResult r = run(fmt::format("bench '{}' {} --frames 1 --warmup 0 --summary '{}'", cfg.string(), kTestGoodReference,
+                                        summary.string()),
+                            pluginPath());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_EQ(filesIn(dir), (std::set<std::string>{"cfg.json", "tradeoff.md", "stdout.txt", "stderr.txt"}))
+        << "without -o only the summary is written";
+    const std::string md = slurp(summary);
+    EXPECT_EQ(md.rfind("# Speed–accuracy trade-off\n", 0), 0u) << md;
+    for (const char* text : {"\n## light 'key'\n", "\n## fill=0.25 · light 'fill'\n", "\n## fill=0.5 · light 'fill'\n",
+                             "| technique | variant | GPU ms | memory | RMSE | RMSE penumbra | MAE | max | > 0.05 | > 0.2 | SSIM | front |",
+                             "| 0 B | 0.5000 | 0.5000 | 0.5000 | 0.500 | 100.00% | 100.00% | 0.6001 |",
+                             "| 0 B | 0.2500 | 0.2500 | 0.2500 | 0.250 | 100.00% | 100.00% |", "| testgood | fill=0.25 |",
+                             "| unshadowed | – |", "- reference: `testgood` `{", "- frames: 1 measured after 0 warm-up",
+                             "Regenerate with:\n\n```sh\n"}) {
+        EXPECT_TRUE(has(md, text)) << text << "\n" << md;
+    }
+    EXPECT_TRUE(has(md, fmt::format("bench {} --reference testgood", cfg.string()))) << md;
+}
+
+TEST_F(Cli, BenchRefusesBadInputBeforeRenderingOrWriting)
+{
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << benchConfig();
+    const fs::path out = dir / "out";
+    const auto refused = [&](const std::string& config, const std::string& flags, const std::string& message, int code = 1) {
+        const CliResult r = run(fmt::format("bench '{}' {} -o '{}'", config, flags, out.string()), pluginPath());
+        if (code) EXPECT_EQ(r.exitCode, code) << flags;
+        else EXPECT_NE(r.exitCode, 0) << flags;
+        EXPECT_TRUE(has(r.err, message)) << flags << "\n" << r.err;
+        EXPECT_FALSE(has(r.err, "variant 1/")) << "nothing rendered: " << r.err;
+        EXPECT_FALSE(fs::exists(out)) << flags;
+    };
+    // Frames and warm-up: command-line usage errors that name the flag.
+    refused(cfg.string(), kTestGoodReference + " --frames 0", "--frames", 0);
+    refused(cfg.string(), kTestGoodReference + " --frames x", "--frames", 0);
+    refused(cfg.string(), kTestGoodReference + " --warmup -1", "--warmup", 0);
+    // The sweep: a path that sets nothing, a value its plugin refuses.
+    const fs::path badPath = dir / "bad-path.json", badValue = dir / "bad-value.json";
+    std::ofstream(badPath) << benchConfig(R"([{"path": "/lights/0/shadw/fill", "values": [0.25]}])");
+    refused(badPath.string(), kTestGoodReference,
+            "bad-path.json: /sweep/0/path: \"/lights/0/shadw/fill\": the config has no \"/lights/0/shadw\" to set it in");
+    std::ofstream(badValue) << benchConfig(R"([{"path": "/lights/0/shadow/fill", "values": [0.25, 3]}])");
+    refused(badValue.string(), kTestGoodReference,
+            "bad-value.json (/sweep/0/values/1): /lights/0/shadow/fill: must be a number in [0, 1]");
+    // The reference and --set.
+    refused(cfg.string(), "--reference nosuch", "--reference nosuch: plugin 'nosuch': no file penumbra-nosuch.so");
+    refused(cfg.string(), kTestGoodReference + " --set other.size=1",
+            "--set other.size: no light of any sweep variant uses technique 'other'");
+    refused(cfg.string(), kTestGoodReference + " --set testgood.kernel=99", "--set testgood.kernel: must be an integer in [1, 15]");
+    // Outputs: the summary's folder missing; -o a file or under a missing folder.
+    refused(cfg.string(), kTestGoodReference + fmt::format(" --summary '{}/no/where.md'", dir.string()), "/no/where.md: output folder");
+    std::ofstream(dir / "file") << "x";
+    CliResult r = run(fmt::format("bench '{}' {} -o '{}'", cfg.string(), kTestGoodReference, (dir / "file").string()), pluginPath());
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(has(r.err, "/file: exists and is not a folder")) << r.err;
+    EXPECT_EQ(slurp(dir / "file"), "x");
+    r = run(fmt::format("bench '{}' {} -o '{}/a/b'", cfg.string(), kTestGoodReference, dir.string()), pluginPath());
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(has(r.err, "/a/b: cannot create the folder: '")) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "a"));
+    EXPECT_NE(run("bench").exitCode, 0) << "the config is required";
+}
+
+TEST_F(Cli, BenchReplacesItsOwnFilesAndLeavesOthersAlone)
+{
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << benchConfig(R"([{"path": "/lights/0/shadow/fill", "values": [0.25]}])");
+    const fs::path out = dir / "out";
+    fs::create_directories(out);
+    std::ofstream(out / "notes.txt") << "mine";
+    std::ofstream(out / "results.csv") << "an older run";
+    const CliResult r = run(fmt::format("bench '{}' {} --frames 1 -o '{}/'", cfg.string(), kTestGoodReference, out.string()),
+                            pluginPath());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_EQ(filesIn(out), (std::set<std::string>{"notes.txt", "results.csv", "results.json", "pareto.svg"}))
+        << "no temporary file is left";
+    EXPECT_EQ(slurp(out / "notes.txt"), "mine");
+    EXPECT_EQ(csvRecords(slurp(out / "results.csv")).size(), 2u);
+}
+
+TEST_F(Cli, BenchSweepsTechniquesAndScenesWithOneReferencePerScene)
+{
+    // Two scenes, each with its own camera, times a real technique and the test one.
+    // The reference is hard shadows at the swept hard variant's own settings: that
+    // variant's error is exactly 0, and its shadow map is its memory.
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << R"({
+        "scene": {"generator": "box-grid", "params": {"rows": 1, "columns": 1, "plane_size": 8}},
+        "camera": {"position": [0, 5, 6], "target": [0, 0, 0]},
+        "lights": [{"type": "spot", "position": [0.5, 4, 0.5], "target": [0, 0, 0], "outer_cone_deg": 50}],
+        "output": {"width": 64, "height": 48},
+        "sweep": [
+          {"paths": ["/scene", "/camera"], "labels": ["grid", "occluder"], "values": [
+            [{"generator": "box-grid", "params": {"rows": 1, "columns": 1, "plane_size": 8}}, {"position": [0, 5, 6], "target": [0, 0, 0]}],
+            [{"generator": "penumbra"}, {"position": [2.5, 3, 3.5], "target": [0, 0, 0]}]]},
+          {"path": "/lights/0/shadow", "labels": ["hard 128", "constant"], "values": [
+            {"technique": "hard", "resolution": 128}, {"technique": "testgood", "fill": 1}]}]})";
+    const fs::path out = dir / "out";
+    const CliResult r = run(fmt::format("bench '{}' --reference hard --reference-set resolution=128 --frames 1 -o '{}' --validation",
+                                        cfg.string(), out.string()),
+                            pluginPath());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const nlohmann::json doc = nlohmann::json::parse(slurp(out / "results.json"));
+    EXPECT_EQ(doc["reference"]["renders"], 2) << "one reference per scene, shared by both techniques";
+    ASSERT_EQ(doc["variants"].size(), 4u);
+    for (size_t v = 0; v < 4; ++v) {
+        SCOPED_TRACE(v);
+        const nlohmann::json& variant = doc["variants"][v];
+        const nlohmann::json& light = variant["lights"][0];
+        const bool hard = v % 2 == 0;
+        EXPECT_EQ(variant["scene"], v < 2 ? "box-grid" : "penumbra");
+        EXPECT_EQ(light["context"], v < 2 ? "grid" : "occluder");
+        EXPECT_EQ(light["technique_label"], hard ? "hard 128" : "constant");
+        EXPECT_EQ(light["technique"], hard ? "hard" : "testgood");
+        if (hard) {
+            EXPECT_EQ(light["visibility"]["all"]["rmse"], 0.0);
+            EXPECT_TRUE(light["pareto_front"].get<bool>()) << "nothing beats an exact match";
+            EXPECT_GE(light["memory"]["bytes"].get<uint64_t>(), 128u * 128u * 4u) << "the 128^2 D32 shadow map";
+            for (const nlohmann::json& resource : light["memory"]["resources"]) {
+                EXPECT_EQ(resource["name"].get<std::string>().rfind("light0.hard.", 0), 0u) << resource;
+            }
+        } else {
+            EXPECT_GT(light["visibility"]["all"]["rmse"].get<double>(), 0.0) << "V = 1 misses the shadow";
+            EXPECT_EQ(light["memory"]["bytes"], 0);
+        }
+    }
+    const std::string svg = slurp(out / "pareto.svg");
+    EXPECT_TRUE(has(svg, ">grid · light 'light0'</text>")) << svg;
+    EXPECT_TRUE(has(svg, ">occluder · light 'light0'</text>")) << svg;
+    EXPECT_TRUE(has(svg, ">hard 128</text>")) << svg;
+}
+
+TEST_F(Cli, BenchInterruptedWritesNothing)
+{
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << benchConfig(R"([{"path": "/lights/0/shadow/fill", "values": [0.25]}])");
+    const fs::path out = dir / "out", err = dir / "bench-err.txt", code = dir / "code.txt";
+    // Started in the background; once it is rendering, SIGTERM. It stops after the frame
+    // in flight, through the normal unwinding.
+    const std::string script = fmt::format(
+        "{} '{}' bench '{}' {} --frames 100000 -o '{}' 2> '{}' > /dev/null < /dev/null & pid=$!; "
+        "for i in $(seq 1 600); do grep -q 'variant 1/1' '{}' && break; sleep 0.1; done; sleep 0.5; "
+        "kill -TERM $pid; wait $pid; echo $? > '{}'",
+        pluginPath(), PENUMBRA_EXE, cfg.string(), kTestGoodReference, out.string(), err.string(), err.string(), code.string());
+    ASSERT_EQ(std::system(script.c_str()), 0);
+    EXPECT_EQ(slurp(code), "143\n") << slurp(err);
+    EXPECT_TRUE(has(slurp(err), "penumbra: interrupted after 0 of 1 variant(s); nothing written")) << slurp(err);
+    EXPECT_FALSE(fs::exists(out));
+}

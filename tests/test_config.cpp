@@ -148,6 +148,159 @@ TEST(Config, BadSweepValueNamesTheSweepEntry)
     EXPECT_THROW(config::expandSweep(doc), ConfigError);
 }
 
+namespace {
+
+// The message expandSweep throws for `doc` (file "sweep.json").
+std::string sweepError(const json& doc)
+{
+    config::ConfigDocument d;
+    d.file = "sweep.json";
+    d.json = doc;
+    try {
+        config::expandSweep(d);
+    } catch (const ConfigError& e) {
+        return e.what();
+    }
+    ADD_FAILURE() << "sweep was accepted: " << doc.dump();
+    return {};
+}
+
+std::vector<config::SweepVariant> expand(const json& doc)
+{
+    config::ConfigDocument d;
+    d.file = "sweep.json";
+    d.json = doc;
+    return config::expandSweep(d);
+}
+
+bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+} // namespace
+
+TEST(Config, SweptObjectReplacesTheObjectWhole)
+{
+    // A technique and its parameters change together: nothing of the base "shadow" object
+    // (its resolution) survives into a variant that replaces it.
+    json doc = minimal();
+    doc["lights"][0]["shadow"] = {{"technique", "hard"}, {"resolution", 512}};
+    doc["sweep"] = json::parse(R"([{"path": "/lights/0/shadow", "labels": ["pcss", "vsm"],
+        "values": [{"technique": "pcss", "blocker_samples": 8}, {"technique": "vsm", "variant": "evsm"}]}])");
+    const std::vector<config::SweepVariant> v = expand(doc);
+    ASSERT_EQ(v.size(), 2u);
+    EXPECT_EQ(v[0].config.lights[0].shadow.technique, "pcss");
+    EXPECT_EQ(*v[0].config.lights[0].shadow.param("blocker_samples"), 8);
+    EXPECT_EQ(v[0].config.lights[0].shadow.param("resolution"), nullptr);
+    EXPECT_EQ(v[1].config.lights[0].shadow.technique, "vsm");
+    EXPECT_EQ(*v[1].config.lights[0].shadow.param("variant"), "evsm");
+    EXPECT_EQ(v[1].label, "/lights/0/shadow=vsm");
+    ASSERT_EQ(v[1].choices.size(), 1u);
+    EXPECT_EQ(v[1].choices[0].paths, std::vector<std::string>{"/lights/0/shadow"});
+    EXPECT_EQ(v[1].choices[0].value, 1u);
+    EXPECT_EQ(v[1].choices[0].label, "vsm");
+    EXPECT_TRUE(v[1].choices[0].labelled);
+    // Where a parameter came from: the swept value, not the base object it replaced.
+    EXPECT_EQ(v[1].config.lights[0].shadow.params[0].where, "sweep.json (/sweep/0/values/1): /lights/0/shadow/variant");
+}
+
+TEST(Config, LaterSweepEntriesSetValuesInsideEarlierOnes)
+{
+    // The first entry varies slowest; the second sets a parameter inside the object the
+    // first swept, in every variant.
+    json doc = minimal();
+    doc["lights"][0]["shadow"] = {{"technique", "hard"}};
+    doc["sweep"] = json::parse(R"([{"path": "/lights/0/shadow", "values": [{"technique": "a"}, {"technique": "b"}]},
+                                    {"path": "/lights/0/shadow/resolution", "values": [256, 512, 1024]}])");
+    const std::vector<config::SweepVariant> v = expand(doc);
+    ASSERT_EQ(v.size(), 6u);
+    for (size_t i = 0; i < v.size(); ++i) {
+        EXPECT_EQ(v[i].config.lights[0].shadow.technique, i < 3 ? "a" : "b") << i;
+        EXPECT_EQ(*v[i].config.lights[0].shadow.param("resolution"), 256 << (i % 3)) << i;
+    }
+    EXPECT_EQ(v[4].label, R"(/lights/0/shadow={"technique":"b"}, /lights/0/shadow/resolution=512)");
+    EXPECT_FALSE(v[4].choices[1].labelled);
+    EXPECT_EQ(v[4].choices[1].label, "512");
+}
+
+TEST(Config, SweepPathsSetSeveralValuesTogether)
+{
+    json doc = minimal();
+    doc["sweep"] = json::parse(R"([{"paths": ["/scene", "/camera/fov_y_deg"], "labels": ["grid", "fence"], "values": [
+        [{"generator": "box-grid", "params": {"rows": 2}}, 30],
+        [{"generator": "fence", "scale": 2}, 60]]}])");
+    const std::vector<config::SweepVariant> v = expand(doc);
+    ASSERT_EQ(v.size(), 2u);
+    EXPECT_EQ(v[0].config.scene.generator, "box-grid");
+    EXPECT_FLOAT_EQ(v[0].config.camera.fovYDeg, 30.0f);
+    EXPECT_EQ(v[1].config.scene.generator, "fence");
+    EXPECT_FLOAT_EQ(v[1].config.scene.scale, 2.0f);
+    EXPECT_FLOAT_EQ(v[1].config.camera.fovYDeg, 60.0f);
+    EXPECT_EQ(v[1].label, "/scene+/camera/fov_y_deg=fence");
+    EXPECT_EQ(v[1].choices[0].paths, (std::vector<std::string>{"/scene", "/camera/fov_y_deg"}));
+    // A bad value inside names its own place in the sweep.
+    doc["sweep"][0]["values"][1][1] = 500;
+    EXPECT_TRUE(has(sweepError(doc), "sweep.json (/sweep/0/values/1/1): /camera/fov_y_deg: must be in (0, 179], got 500"))
+        << sweepError(doc);
+}
+
+TEST(Config, BadSweepEntriesNameTheirJsonPath)
+{
+    const auto withSweep = [](const char* sweep) {
+        json doc = minimal();
+        doc["sweep"] = json::parse(sweep);
+        return sweepError(doc);
+    };
+    const std::vector<std::pair<const char*, const char*>> cases = {
+        {R"([{"path": "lights/0/intensity", "values": [1]}])", "sweep.json: /sweep/0/path: \"lights/0/intensity\" is not a JSON pointer"},
+        {R"([{"path": "/nothing/here", "values": [1]}])", "sweep.json: /sweep/0/path: \"/nothing/here\": the config has no \"/nothing\" to set it in"},
+        {R"([{"path": "/lights/3/intensity", "values": [1]}])", "sweep.json: /sweep/0/path: \"/lights/3/intensity\": the config has no \"/lights/3\""},
+        {R"([{"path": "/lights/1", "values": [{}]}])", "sweep.json: /sweep/0/path: \"/lights/1\": \"/lights\" has 1 elements; a sweep replaces an element, it does not add one"},
+        {R"([{"path": "/sweep", "values": [1]}])", "sweep.json: /sweep/0/path: cannot sweep \"/sweep\""},
+        {R"([{"path": 3, "values": [1]}])", "sweep.json: /sweep/0/path: must be a JSON pointer string"},
+        {R"([{"values": [1]}])", "sweep.json: /sweep/0: give either \"path\" (one JSON pointer) or \"paths\" (several)"},
+        {R"([{"path": "/frames", "paths": ["/frames"], "values": [1]}])", "sweep.json: /sweep/0: give either"},
+        {R"([{"paths": [], "values": [1]}])", "sweep.json: /sweep/0/paths: must be a non-empty array of JSON pointers"},
+        {R"([{"paths": ["/camera", "/camera/fov_y_deg"], "values": [[{}, 1]]}])",
+         "sweep.json: /sweep/0/paths/1: \"/camera/fov_y_deg\" lies inside \"/camera\", which the same entry sets"},
+        {R"([{"paths": ["/frames", "/output/width"], "values": [[1, 2], [3]]}])",
+         "sweep.json: /sweep/0/values/1: must be an array of 2 values, one per path, got [3]"},
+        {R"([{"path": "/frames", "values": []}])", "sweep.json: /sweep/0/values: must be a non-empty array"},
+        {R"([{"path": "/frames", "values": [1, 2], "labels": ["one"]}])", "sweep.json: /sweep/0/labels: must be an array of 2 strings, one per value"},
+        {R"([{"path": "/frames", "values": [1, 2], "labels": ["one", ""]}])", "sweep.json: /sweep/0/labels/1: must be a non-empty string"},
+        {R"([{"path": "/frames", "values": [1, 2], "labels": ["one", "one"]}])", "sweep.json: /sweep/0/labels/1: \"one\" labels another value already"},
+        {R"([{"path": "/frames", "values": [1], "label": ["one"]}])", "sweep.json: /sweep/0/label: unknown key; did you mean \"labels\"?"},
+        // The parent exists in one variant only: the message names the variant.
+        {R"([{"path": "/lights/0/shadow", "values": [{"technique": "a"}, 5]}, {"path": "/lights/0/shadow/resolution", "values": [1]}])",
+         "sweep.json: /sweep/1/path: \"/lights/0/shadow/resolution\": the config has no \"/lights/0/shadow\" to set it in (in the variant /lights/0/shadow=5)"},
+    };
+    for (const auto& [sweep, message] : cases) {
+        const std::string what = withSweep(sweep);
+        EXPECT_TRUE(has(what, message)) << sweep << "\n  got: " << what << "\n  expected: " << message;
+    }
+}
+
+TEST(Config, TheTradeoffBenchmarkCoversEveryBaselineAtTwoLightSizesOnTwoScenes)
+{
+    // config/bench/tradeoff.json (docs/tradeoff.md): every variant parses and builds its
+    // scene; its plugins are checked by `penumbra validate` once pcss and vsm exist.
+    const config::ConfigDocument doc = config::loadDocument(fs::path(PENUMBRA_SOURCE_DIR) / "config/bench/tradeoff.json");
+    const std::vector<config::SweepVariant> variants = config::expandSweep(doc);
+    ASSERT_EQ(variants.size(), 2u * 2u * 7u);
+    std::set<std::string> scenes, techniques, labels;
+    std::set<float> sizes;
+    for (config::SweepVariant v : variants) {
+        SCOPED_TRACE(v.label);
+        scenes.insert(v.config.scene.generator);
+        sizes.insert(v.config.lights[0].light.angularDiameterDeg);
+        techniques.insert(v.config.lights[0].shadow.technique);
+        labels.insert(v.choices[2].label);
+        EXPECT_NO_THROW(config::buildScene(v.config));
+    }
+    EXPECT_EQ(scenes, (std::set<std::string>{"box-grid", "fence"}));
+    EXPECT_EQ(sizes.size(), 2u);
+    EXPECT_EQ(techniques, (std::set<std::string>{"hard", "pcss", "vsm"}));
+    EXPECT_EQ(labels, (std::set<std::string>{"hard", "pcf 5x5", "poisson 32", "pcss", "vsm", "evsm", "esm"}));
+}
+
 TEST(Config, LightTypesAndTheirKeys)
 {
     json doc = minimal();

@@ -324,6 +324,17 @@ TEST_F(GraphExecutorTest, AliasedTransientsShareMemoryWithoutCorruptingLiveData)
     EXPECT_EQ(compiled.resources[size_t(first)].memorySlot, compiled.resources[size_t(second)].memorySlot);
     EXPECT_NE(compiled.resources[size_t(first)].memorySlot, compiled.resources[size_t(live)].memorySlot);
     EXPECT_LT(executor.transientBytesAllocated(), executor.transientBytesWithoutAliasing());
+    // Each resource's own memory, whatever it shares: every transient once, in
+    // declaration order, at least its texels, together the unaliased total.
+    const std::vector<TransientMemory> memory = executor.transientMemory();
+    ASSERT_EQ(memory.size(), 5u);
+    VkDeviceSize sum = 0;
+    for (size_t i = 0; i < memory.size(); ++i) {
+        EXPECT_EQ(memory[i].name, compiled.resources[i].name);
+        EXPECT_GE(memory[i].bytes, compiled.resources[i].sizeBytes) << memory[i].name;
+        sum += memory[i].bytes;
+    }
+    EXPECT_EQ(sum, executor.transientBytesWithoutAliasing());
 
     constexpr size_t kWords = kEdge * kEdge;
     EXPECT_TRUE(allEqual(readWords(*context, executor.buffer("out first")), 0, kWords, 7u));

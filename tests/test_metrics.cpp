@@ -6,6 +6,7 @@
 #include "penumbra/core/Error.h"
 #include "penumbra/metrics/DifferenceImage.h"
 #include "penumbra/metrics/ImageComparison.h"
+#include "penumbra/metrics/Pareto.h"
 #include "penumbra/metrics/Ssim.h"
 
 #include <gtest/gtest.h>
@@ -464,4 +465,57 @@ TEST(Metrics, JsonCarriesEveryFigure)
     EXPECT_EQ(j["invalid"]["test"], (nlohmann::json{{"non_finite", 0}, {"out_of_range", 0}}));
     EXPECT_TRUE(j["ssim"].is_number());
     expectAllFinite(j);
+}
+
+// ---- the Pareto front of (time, error) points -------------------------------------------
+
+TEST(Pareto, FrontOfHandMadePoints)
+{
+    // index:               0          1          2          3           4          5          6
+    const std::vector<TradeoffPoint> points = {{4.0, 0.10}, {1.0, 0.50}, {2.0, 0.20}, {3.0, 0.25}, {8.0, 0.10}, {2.0, 0.30},
+                                               {16.0, 0.01}};
+    // 3 is beaten by 2 (faster and better), 4 by 0 (slower, equal error), 5 by 2 (equal
+    // time, worse error). The front runs from the fastest to the most accurate.
+    EXPECT_EQ(paretoFront(points), (std::vector<size_t>{1, 2, 0, 6}));
+}
+
+TEST(Pareto, EdgeCases)
+{
+    EXPECT_TRUE(paretoFront(std::vector<TradeoffPoint>{}).empty());
+    EXPECT_EQ(paretoFront(std::vector<TradeoffPoint>{{5.0, 0.5}}), std::vector<size_t>{0});
+    // Equal points dominate each other in neither coordinate: both stay, in index order.
+    EXPECT_EQ(paretoFront(std::vector<TradeoffPoint>{{2.0, 0.3}, {1.0, 0.4}, {2.0, 0.3}}), (std::vector<size_t>{1, 0, 2}));
+    // One point best in both: the front is that point alone.
+    EXPECT_EQ(paretoFront(std::vector<TradeoffPoint>{{3.0, 0.3}, {1.0, 0.1}, {2.0, 0.2}}), std::vector<size_t>{1});
+    // Zero time (no timestamps) and zero error are ordinary values; NaN takes no part,
+    // neither on the front nor hiding a point it would otherwise beat.
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_EQ(paretoFront(std::vector<TradeoffPoint>{{0.0, 0.2}, {nan, 0.0}, {1.0, 0.0}, {0.5, nan}}),
+              (std::vector<size_t>{0, 2}));
+    // An infinite error is still a point: alone, it is the front.
+    EXPECT_EQ(paretoFront(std::vector<TradeoffPoint>{{1.0, std::numeric_limits<double>::infinity()}}), std::vector<size_t>{0});
+}
+
+TEST(Pareto, NoFrontPointIsDominatedAndEveryOtherPointIs)
+{
+    // The definition, checked directly on random points with many ties.
+    std::mt19937 rng(7);
+    std::uniform_int_distribution<int> coordinate(0, 9);
+    for (int trial = 0; trial < 50; ++trial) {
+        std::vector<TradeoffPoint> points(20);
+        for (TradeoffPoint& p : points) p = {double(coordinate(rng)), double(coordinate(rng)) / 10.0};
+        const std::vector<size_t> front = paretoFront(points);
+        const auto dominates = [](const TradeoffPoint& a, const TradeoffPoint& b) {
+            return a.timeMs <= b.timeMs && a.error <= b.error && (a.timeMs < b.timeMs || a.error < b.error);
+        };
+        for (size_t i = 0; i < points.size(); ++i) {
+            const bool dominated = std::any_of(points.begin(), points.end(), [&](const TradeoffPoint& q) { return dominates(q, points[i]); });
+            const bool onFront = std::find(front.begin(), front.end(), i) != front.end();
+            EXPECT_NE(dominated, onFront) << "trial " << trial << " point " << i;
+        }
+        for (size_t k = 1; k < front.size(); ++k) {
+            EXPECT_LE(points[front[k - 1]].timeMs, points[front[k]].timeMs);
+            EXPECT_GE(points[front[k - 1]].error, points[front[k]].error);
+        }
+    }
 }

@@ -1,5 +1,9 @@
 #include "CompareCommand.h"
 
+#include "FrameCapture.h"
+#include "OutputFolder.h"
+#include "ReferenceTechnique.h"
+
 #include "penumbra/config/Config.h"
 #include "penumbra/config/Overrides.h"
 #include "penumbra/core/Error.h"
@@ -14,8 +18,6 @@
 
 #include <cctype>
 #include <chrono>
-#include <cstdio>
-#include <fstream>
 #include <set>
 
 using nlohmann::json;
@@ -23,16 +25,6 @@ namespace fs = std::filesystem;
 
 namespace penumbra::app {
 namespace {
-
-// What one render leaves for the comparison.
-struct FrameImages {
-    uint32_t width = 0;
-    uint32_t height = 0;
-    std::vector<uint8_t> color;                  // sRGB RGBA8
-    std::vector<std::vector<float>> visibility;  // V_l per light
-    std::vector<float> positions;                // G-buffer world positions (w = 0: background)
-    std::vector<std::string> techniques;         // per light; empty: rendered unshadowed (fallback)
-};
 
 // Renders one frame of `config` and reads back what the comparison needs. The renderer
 // is gone when this returns, so that the two renders never hold device memory together.
@@ -48,62 +40,7 @@ FrameImages renderOnce(gpu::Context& context, const scene::Scene& scene, const c
     renderer.renderFrame();
     spdlog::info("{} render: {:.0f} ms", label,
                  std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-    FrameImages images;
-    images.width = renderer.width();
-    images.height = renderer.height();
-    images.color = renderer.readColor();
-    images.positions = renderer.readPositions();
-    for (size_t i = 0; i < renderer.lightCount(); ++i) {
-        images.visibility.push_back(renderer.readVisibility(i));
-        images.techniques.push_back(renderer.techniqueName(i));
-    }
-    return images;
-}
-
-// "--reference-set samples=64", or with the reference's name as for --set:
-// "--reference-set reference.samples=64".
-config::ParamOverride parseReferenceSetting(const std::string& reference, const std::string& setting)
-{
-    const size_t eq = setting.find('=');
-    std::string key = setting.substr(0, eq);
-    if (const size_t dot = key.find('.'); dot != std::string::npos) {
-        if (key.substr(0, dot) != reference) {
-            throw Error(fmt::format("--reference-set '{}': '{}' is not the reference technique '{}' (--set sets the "
-                                    "parameters of the techniques under test)",
-                                    setting, key.substr(0, dot), reference));
-        }
-        key = key.substr(dot + 1);
-    }
-    if (eq == std::string::npos || key.empty()) {
-        throw Error(fmt::format("--reference-set '{}': expected parameter=value, e.g. --reference-set samples=64", setting));
-    }
-    config::ParamOverride o = config::parseParamOverride(fmt::format("{}.{}{}", reference, key, setting.substr(eq)));
-    o.where = fmt::format("--reference-set {}", key);
-    return o;
-}
-
-// The reference technique with the --reference-set values, checked against the plugin's
-// parameters before anything renders. Required: a reference that cannot run must stop
-// the comparison, never compare against an unshadowed light.
-config::ShadowSettings referenceShadow(const CompareFlags& flags, plugin::PluginRegistry& plugins, json& resolved)
-{
-    config::ShadowSettings shadow;
-    shadow.technique = flags.reference;
-    shadow.required = true;
-    for (const std::string& setting : flags.referenceSettings) {
-        config::ParamOverride o = parseReferenceSetting(flags.reference, setting);
-        shadow.setParam(std::move(o.param), std::move(o.value), std::move(o.where));
-    }
-    const plugin::LoadedPlugin* loaded = nullptr;
-    try {
-        loaded = &plugins.load(flags.reference);
-    } catch (const plugin::PluginError& e) {
-        throw Error(fmt::format("--reference {}: {}", flags.reference, e.what()));
-    }
-    std::vector<std::string> errors;
-    resolved = plugin::resolveParams(*loaded, shadow, &errors).toJson();
-    if (!errors.empty()) throw Error(fmt::format("{}", fmt::join(errors, "\n")));
-    return shadow;
+    return captureFrame(renderer);
 }
 
 // File names for each light's images: its name where that is a plain file name, else
@@ -154,23 +91,6 @@ OutputFiles outputFiles(const fs::path& dir, const config::RenderConfig& config)
     return files;
 }
 
-// Fails before rendering when the folder cannot be made or a file in it not written. A
-// folder that exists keeps every file that is not one of ours.
-void checkOutputFolder(const fs::path& dir, const OutputFiles& files)
-{
-    std::error_code ec;
-    if (!fs::exists(dir, ec)) {
-        const fs::path parent = dir.has_parent_path() ? dir.parent_path() : fs::path(".");
-        if (!fs::is_directory(parent, ec)) {
-            throw Error(fmt::format("-o {}: cannot create the folder: '{}' does not exist", dir.string(), parent.string()));
-        }
-        io::checkWritable(dir);  // the parent is writable
-        return;
-    }
-    if (!fs::is_directory(dir, ec)) throw Error(fmt::format("-o {}: exists and is not a folder", dir.string()));
-    for (const fs::path& file : files.all()) io::checkWritable(file);
-}
-
 std::string percent(double value) { return fmt::format("{:.2f}%", value); }
 
 void printStatsRow(const std::string& label, const metrics::ErrorStats& s)
@@ -215,23 +135,10 @@ void printTable(const json& doc, const std::vector<metrics::VisibilityComparison
     fmt::print("  SSIM (luma) {:.5f}\n", color.ssimLuma);
 }
 
-void writeJson(const fs::path& path, const json& doc)
-{
-    io::StagedFile file(path);
-    std::ofstream out = file.openTemp();
-    out << doc.dump(2) << '\n';
-    out.close();
-    if (!out) throw Error(fmt::format("{}: could not write the metrics", path.string()));
-    file.commit();
-}
-
 void writeOutputs(const fs::path& dir, const OutputFiles& files, const FrameImages& test, const FrameImages& reference,
                   const metrics::PixelMask& mask, float diffScale, const json& doc)
 {
-    std::error_code ec;
-    if (!fs::is_directory(dir, ec) && !fs::create_directory(dir, ec) && ec) {
-        throw Error(fmt::format("-o {}: cannot create the folder: {}", dir.string(), ec.message()));
-    }
+    createOutputFolder(dir);
     const uint32_t w = test.width, h = test.height;
     for (size_t i = 0; i < files.lights.size(); ++i) {
         const metrics::FloatImageView v{w, h, test.visibility[i]}, vRef{w, h, reference.visibility[i]};
@@ -242,7 +149,7 @@ void writeOutputs(const fs::path& dir, const OutputFiles& files, const FrameImag
     io::writePng(files.colorTest, w, h, test.color);
     io::writePng(files.colorReference, w, h, reference.color);
     // Last: a metrics.json newer than the images says the set is complete.
-    writeJson(files.metrics, doc);
+    io::writeTextFile(files.metrics, doc.dump(2) + "\n");
 }
 
 } // namespace
@@ -258,24 +165,13 @@ int runCompare(const CompareFlags& flags, const gpu::ContextOptions& device)
     if (flags.height) config.height = *flags.height;
 
     plugin::PluginRegistry plugins;
-    json referenceParams;
-    const config::ShadowSettings reference = referenceShadow(flags, plugins, referenceParams);
+    const ReferenceTechnique reference = loadReferenceTechnique(flags.reference, flags.referenceSettings, plugins);
+    const scene::Scene scene = buildFirstFrame(config, overrides);
+    const config::RenderConfig referenceConfig = withReferenceShadows(config, reference);
 
-    scene::Scene scene = config::buildScene(config);
-    config::applyParamOverrides(config, overrides);  // after buildScene: "lights": "scene"
-    if (!config.animation.empty()) {
-        // An animated config is compared at its first frame, as `render` shows it.
-        config::applyAnimation(config.animation, 0.0f, config, scene);
-        scene.updateTransforms();
-    }
-    config::RenderConfig referenceConfig = config;
-    for (config::LightConfig& light : referenceConfig.lights) light.shadow = reference;
-
-    // "out/" names the folder "out".
-    fs::path dir = fs::path(flags.output).lexically_normal();
-    if (!dir.empty() && dir.filename().empty()) dir = dir.parent_path();
+    const fs::path dir = outputFolder(flags.output);
     const OutputFiles files = outputFiles(dir, config);
-    if (!flags.output.empty()) checkOutputFolder(dir, files);
+    if (!flags.output.empty()) checkOutputFolder(dir, files.all());
 
     gpu::Context context(device);
     spdlog::info("device: {} ({})", context.deviceInfo().name, context.deviceInfo().type);
@@ -290,7 +186,7 @@ int runCompare(const CompareFlags& flags, const gpu::ContextOptions& device)
     json doc = {{"config", flags.config},
                 {"width", w},
                 {"height", h},
-                {"reference", {{"technique", flags.reference}, {"params", referenceParams}}},
+                {"reference", {{"technique", flags.reference}, {"params", reference.params}}},
                 {"lights", json::array()}};
     for (size_t i = 0; i < config.lights.size(); ++i) {
         comparisons.push_back(metrics::compareVisibility({w, h, test.visibility[i]}, {w, h, ref.visibility[i]}, &mask));

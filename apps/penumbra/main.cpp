@@ -4,11 +4,14 @@
 // file (or checks a config and its plugins) and says what it found; `penumbra plugins`
 // lists the technique plugins and their parameters; `penumbra graph cfg.json` prints the
 // frame's compiled render graph; `penumbra compare cfg.json` measures each light's
-// technique against the reference technique; `penumbra devices` lists the Vulkan devices
-// the loader sees.
+// technique against the reference technique; `penumbra bench cfg.json` runs a config's
+// sweep and measures time, memory and error of every variant; `penumbra devices` lists
+// the Vulkan devices the loader sees.
+#include "BenchCommand.h"
 #include "CompareCommand.h"
 #include "GraphCommand.h"
 #include "PluginsCommand.h"
+#include "TimingSummary.h"
 #include "penumbra/config/Config.h"
 #include "penumbra/config/Overrides.h"
 #include "penumbra/core/Error.h"
@@ -31,7 +34,6 @@
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
-#include <map>
 #include <optional>
 
 namespace {
@@ -68,14 +70,6 @@ struct ValidateFlags {
     std::vector<std::string> settings;  // technique.param=value
 };
 
-double median(std::vector<double> v)
-{
-    if (v.empty()) return 0.0;
-    std::sort(v.begin(), v.end());
-    const size_t n = v.size();
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 penumbra::gpu::ContextOptions contextOptions(const DeviceFlags& flags)
 {
     penumbra::gpu::ContextOptions options;
@@ -84,32 +78,6 @@ penumbra::gpu::ContextOptions contextOptions(const DeviceFlags& flags)
     options = penumbra::gpu::contextOptionsFromEnvironment(options);
     if (flags.validation) options.validation = true;
     return options;
-}
-
-void printTimings(const std::vector<penumbra::render::FrameTimings>& frames)
-{
-    // Passes keep their record order; collect each pass's samples by name.
-    std::vector<std::string> order;
-    std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> samples;
-    std::vector<double> gpuTotal, frameCpu;
-    for (const auto& frame : frames) {
-        double total = 0.0;
-        for (const auto& pass : frame.passes) {
-            if (!samples.count(pass.name)) order.push_back(pass.name);
-            samples[pass.name].first.push_back(pass.gpuMs);
-            samples[pass.name].second.push_back(pass.cpuMs);
-            total += pass.gpuMs;
-        }
-        gpuTotal.push_back(total);
-        frameCpu.push_back(frame.frameCpuMs);
-    }
-    fmt::print("timings: median of {} frame(s)\n", frames.size());
-    fmt::print("  {:<28} {:>10} {:>12}\n", "pass", "GPU ms", "CPU rec ms");
-    for (const std::string& name : order) {
-        fmt::print("  {:<28} {:>10.3f} {:>12.3f}\n", name, median(samples[name].first), median(samples[name].second));
-    }
-    fmt::print("  {:<28} {:>10.3f}\n", "sum of passes (GPU)", median(gpuTotal));
-    fmt::print("  {:<28} {:>10.3f}\n", "frame wall clock (CPU)", median(frameCpu));
 }
 
 // "-o frames/f{frame:04}.png" writes every measured frame; a plain name, the last one.
@@ -164,7 +132,7 @@ int runRender(const RenderFlags& flags, const DeviceFlags& deviceFlags)
             penumbra::io::writePng(framePath(flags.output, frame), renderer.width(), renderer.height(), renderer.readColor());
         }
     }
-    if (flags.timings) printTimings(measured);
+    if (flags.timings) penumbra::app::printTimings(penumbra::app::summarizeTimings(measured));
 
     if (outputPerFrame(flags.output)) {
         spdlog::info("wrote {} frames: {} ... {}", config.frames, framePath(flags.output, 0),
@@ -488,6 +456,31 @@ int main(int argc, char** argv)
     addParamOverrideFlag(compare, compareFlags.settings);
     addDeviceFlags(compare);
 
+    penumbra::app::BenchFlags benchFlags;
+    benchFlags.command.assign(argv, argv + argc);
+    CLI::App* bench = app.add_subcommand("bench", "Run a config's sweep (techniques x parameters x scenes x lights): "
+                                                  "GPU and CPU time per pass, memory per technique and each light's "
+                                                  "error against the reference technique; write CSV, JSON and a Pareto plot");
+    bench->add_option("config", benchFlags.config, "Scene config (JSON) with a \"sweep\"")->required();
+    bench->add_option("-o,--output", benchFlags.output,
+                      "Write results.csv, results.json and pareto.svg into this folder (created if missing; other "
+                      "files in it are left alone)");
+    bench->add_option("--summary", benchFlags.summary, "Also write the results as a Markdown summary to this file");
+    bench->add_option("--frames", benchFlags.frames, "Measured frames per variant (medians)")
+        ->check(CLI::Range(1u, 100000u))
+        ->capture_default_str();
+    bench->add_option("--warmup", benchFlags.warmup, "Untimed frames before the measured ones, per variant")
+        ->check(CLI::Range(0u, 100000u))
+        ->capture_default_str();
+    bench->add_option("--reference", benchFlags.reference, "The reference technique plugin")->capture_default_str();
+    bench->add_option("--reference-set", benchFlags.referenceSettings,
+                      "Set a parameter of the reference technique: --reference-set samples=64 (repeatable)")
+        ->allow_extra_args(false);
+    bench->add_option("--width", benchFlags.width, "Output width (overrides every variant)")->check(CLI::Range(1u, 16384u));
+    bench->add_option("--height", benchFlags.height, "Output height (overrides every variant)")->check(CLI::Range(1u, 16384u));
+    addParamOverrideFlag(bench, benchFlags.settings);
+    addDeviceFlags(bench);
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -503,6 +496,7 @@ int main(int argc, char** argv)
         if (devices->parsed()) return runDevices();
         if (graph->parsed()) return penumbra::app::runGraph(graphFlags, contextOptions(deviceFlags));
         if (compare->parsed()) return penumbra::app::runCompare(compareFlags, contextOptions(deviceFlags));
+        if (bench->parsed()) return penumbra::app::runBench(benchFlags, contextOptions(deviceFlags));
         if (plugins->parsed()) return penumbra::app::runPlugins(pluginsFlags);
     } catch (const penumbra::Error& e) {
         fmt::print(stderr, "penumbra: error: {}\n", e.what());

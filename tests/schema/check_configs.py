@@ -14,7 +14,8 @@ jsonschema.Draft202012Validator.check_schema(schema)
 validator = jsonschema.Draft202012Validator(schema)
 
 failures = 0
-shipped = sorted((root / "config").glob("*.json")) + sorted((root / "tests/data/configs/include").glob("*.json"))
+shipped = (sorted((root / "config").glob("*.json")) + sorted((root / "config/bench").glob("*.json"))
+           + sorted((root / "tests/data/configs/include").glob("*.json")))
 for path in shipped:
     errors = list(validator.iter_errors(json.loads(path.read_text())))
     expect_invalid = path.name.startswith("bad_")
@@ -33,6 +34,8 @@ bad = {
     "bad track target": {"animation": {"tracks": [{"target": "/camera/roll", "keys": [{"t": 0, "value": 1}]}]}},
     "gltf and generator": {"scene": {"gltf": "a.gltf", "generator": "box-grid"}},
     "zero width": {"output": {"width": 0}},
+    "sweep with path and paths": {"sweep": [{"path": "/scene", "paths": ["/camera"], "values": [1]}]},
+    "sweep label not a string": {"sweep": [{"path": "/scene", "values": [1], "labels": [2]}]},
 }
 for name, doc in bad.items():
     if validator.is_valid(doc):

@@ -79,6 +79,7 @@ struct GraphExecutor::State {
     std::vector<VkDeviceMemory> memory;
     VkDeviceSize bytesAllocated = 0;
     VkDeviceSize bytesWithoutAliasing = 0;
+    std::vector<TransientMemory> transientMemory;  // what each created transient requires
     std::map<std::string, uint32_t, std::less<>> resourceIndex;
 
     // The object behind every resource the executed passes use; imports are resolved
@@ -113,6 +114,7 @@ void GraphExecutor::State::releaseTransients()
     memory.clear();
     bytesAllocated = 0;
     bytesWithoutAliasing = 0;
+    transientMemory.clear();
 }
 
 void GraphExecutor::State::createTransients(const CompiledGraph& graph)
@@ -148,7 +150,8 @@ void GraphExecutor::State::createTransients(const CompiledGraph& graph)
         } catch (const Error& e) {
             throw GpuError(fmt::format("render graph: transient {} '{}': {}", kindName(res), res.name, e.what()));
         }
-        bytesWithoutAliasing += alignUp(requirements[r].size, requirements[r].alignment);
+        transientMemory.push_back({res.name, alignUp(requirements[r].size, requirements[r].alignment)});
+        bytesWithoutAliasing += transientMemory.back().bytes;
     }
     for (uint32_t s = 0; s < graph.memorySlots.size(); ++s) placeSlot(graph, s, requirements);
     // compile() puts every used transient in a slot; should one be missing, it still
@@ -462,5 +465,7 @@ VkImageLayout GraphExecutor::finalLayout(std::string_view name) const
 VkDeviceSize GraphExecutor::transientBytesAllocated() const { return state_->bytesAllocated; }
 
 VkDeviceSize GraphExecutor::transientBytesWithoutAliasing() const { return state_->bytesWithoutAliasing; }
+
+std::vector<TransientMemory> GraphExecutor::transientMemory() const { return state_->transientMemory; }
 
 } // namespace penumbra::graph

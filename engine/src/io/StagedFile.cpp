@@ -67,4 +67,14 @@ void StagedFile::commit()
     committed_ = true;
 }
 
+void writeTextFile(const fs::path& path, std::string_view text)
+{
+    StagedFile file(path);
+    std::ofstream out = file.openTemp();
+    out.write(text.data(), std::streamsize(text.size()));
+    out.close();
+    if (!out) throw Error(fmt::format("{}: could not write the file: {}", path.string(), std::strerror(errno)));
+    file.commit();
+}
+
 } // namespace penumbra::io

@@ -217,7 +217,7 @@ bool FrameRenderer::registerTechnique(size_t light)
     graph::RenderGraph& g = *graph_;
     if (slot.instance) {
         plugin::LightPassIo io;
-        io.prefix = fmt::format("light{}.{}.", light, slot.technique);
+        io.prefix = shadowPassPrefix(light);
         io.gPosition = kGPosition;
         io.gNormal = kGNormal;
         io.gDepth = kGDepth;
@@ -240,7 +240,7 @@ bool FrameRenderer::registerTechnique(size_t light)
     }
     // No technique: the light is unshadowed, V = 1 (the contract's neutral value).
     const std::string name = slot.visibility;
-    g.addPass(fmt::format("light{}.unshadowed", light), graph::QueueKind::Graphics)
+    g.addPass(shadowPassPrefix(light), graph::QueueKind::Graphics)
         .write(name, graph::Usage::TransferDst)
         .execute([name](graph::PassContext& pass) {
             const VkClearColorValue one{{1.0f, 1.0f, 1.0f, 1.0f}};
@@ -248,6 +248,12 @@ bool FrameRenderer::registerTechnique(size_t light)
             vkCmdClearColorImage(pass.cmd(), pass.image(name).handle(), pass.layout(name), &one, 1, &range);
         });
     return true;
+}
+
+std::string FrameRenderer::shadowPassPrefix(size_t light) const
+{
+    const LightSlot& slot = lights_.at(light);
+    return slot.instance ? fmt::format("light{}.{}.", light, slot.technique) : fmt::format("light{}.unshadowed", light);
 }
 
 const graph::CompiledGraph& FrameRenderer::compiledGraph() { return *graph_->compile(); }

@@ -50,6 +50,14 @@ struct PassTiming {
     double cpuMs = 0.0;  // time the execute callback took to record
 };
 
+// What one transient resource takes on its own (vkGet*MemoryRequirements, size rounded
+// up to its alignment): the figure for "memory per technique". Aliasing may place it in
+// memory shared with others, so these add up to transientBytesWithoutAliasing().
+struct TransientMemory {
+    std::string name;
+    VkDeviceSize bytes = 0;
+};
+
 struct ExecutorOptions {
     // Timestamps around every pass. gpu::GpuTimer follows each start timestamp with an
     // execution barrier over all commands (lavapipe reads late without it), which also
@@ -99,6 +107,9 @@ public:
     // the same resources would take with one allocation each.
     VkDeviceSize transientBytesAllocated() const;
     VkDeviceSize transientBytesWithoutAliasing() const;
+    // Each transient resource of the last recorded graph that an executed pass uses, in
+    // declaration order (empty before the first record).
+    std::vector<TransientMemory> transientMemory() const;
 
 private:
     friend class PassContext;

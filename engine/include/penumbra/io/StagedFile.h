@@ -5,6 +5,7 @@
 // leaves the target as it was and removes the temporary file.
 #include <filesystem>
 #include <fstream>
+#include <string_view>
 
 namespace penumbra::io {
 
@@ -37,5 +38,9 @@ private:
     std::filesystem::path temp_;
     bool committed_ = false;
 };
+
+// Writes `text` to `path` through a StagedFile: the file appears complete or not at all.
+// Throws Error naming the path.
+void writeTextFile(const std::filesystem::path& path, std::string_view text);
 
 } // namespace penumbra::io

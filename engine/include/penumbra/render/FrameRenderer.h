@@ -61,6 +61,10 @@ public:
     const std::vector<std::string>& warnings() const { return warnings_; }
     // The technique a light uses ("hard"), empty when it fell back to unshadowed.
     const std::string& techniqueName(size_t light) const { return lights_.at(light).technique; }
+    // What the names of a light's shadow passes and resources begin with: its technique's
+    // LightPassIo::prefix ("light0.hard."), or the unshadowed fallback's one pass
+    // ("light0.unshadowed"). For timing and memory per technique.
+    std::string shadowPassPrefix(size_t light) const;
 
     // The frame's graph as compiled (passes in order, culled passes and why, resources
     // with sizes and aliasing), and the executor that allocated its memory.

@@ -1,0 +1,500 @@
+#include "BenchCommand.h"
+
+#include "BenchResults.h"
+#include "FrameCapture.h"
+#include "OutputFolder.h"
+#include "ParetoPlot.h"
+#include "PluginsCommand.h"
+#include "ReferenceTechnique.h"
+#include "TimingSummary.h"
+
+#include "penumbra/config/Animation.h"
+#include "penumbra/config/Config.h"
+#include "penumbra/config/Overrides.h"
+#include "penumbra/core/Error.h"
+#include "penumbra/io/StagedFile.h"
+#include "penumbra/metrics/ImageComparison.h"
+#include "penumbra/plugin/PluginRegistry.h"
+#include "penumbra/render/FrameRenderer.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+#include <sys/utsname.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <ctime>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <set>
+#include <thread>
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+namespace penumbra::app {
+namespace {
+
+// ---- interruption ---------------------------------------------------------------------
+// SIGINT or SIGTERM ends the run after the frame in flight, through the normal unwinding
+// (every renderer destroyed, nothing written): a run stopped half-way has no results to
+// show, and a staged file must not be left behind by a kill in the middle of a write. A
+// second signal ends the process at once (SA_RESETHAND).
+
+volatile std::sig_atomic_t gInterrupted = 0;  // the signal's number
+
+extern "C" void onInterrupt(int signal) { gInterrupted = signal; }
+
+struct Interrupted {
+    int signal = 0;
+};
+
+class InterruptHandler {
+public:
+    InterruptHandler()
+    {
+        gInterrupted = 0;
+        struct sigaction action {};
+        action.sa_handler = onInterrupt;
+        sigemptyset(&action.sa_mask);
+        action.sa_flags = SA_RESETHAND;
+        sigaction(SIGINT, &action, &oldInt_);
+        sigaction(SIGTERM, &action, &oldTerm_);
+    }
+    ~InterruptHandler()
+    {
+        sigaction(SIGINT, &oldInt_, nullptr);
+        sigaction(SIGTERM, &oldTerm_, nullptr);
+    }
+    InterruptHandler(const InterruptHandler&) = delete;
+    InterruptHandler& operator=(const InterruptHandler&) = delete;
+
+    static void check()
+    {
+        if (gInterrupted) throw Interrupted{int(gInterrupted)};
+    }
+
+private:
+    struct sigaction oldInt_ {};
+    struct sigaction oldTerm_ {};
+};
+
+// ---- progress on stderr ---------------------------------------------------------------
+// One log line per variant; on a terminal, a bar over all the run's frames instead,
+// redrawn in place.
+class Progress {
+public:
+    Progress(size_t variants, uint32_t framesPerVariant)
+        : bar_(::isatty(STDERR_FILENO) == 1), variants_(variants), total_(variants * framesPerVariant)
+    {
+    }
+    ~Progress() { clear(); }
+    Progress(const Progress&) = delete;
+    Progress& operator=(const Progress&) = delete;
+
+    void startVariant(size_t index, const std::string& label)
+    {
+        variant_ = index;
+        label_ = label;
+        if (bar_) draw();
+        else spdlog::info("variant {}/{}: {}", index + 1, variants_, label);
+    }
+    void frameDone()
+    {
+        ++done_;
+        if (bar_) draw();
+    }
+    // Before a log line, so that it does not run into the bar.
+    void clear()
+    {
+        if (bar_ && drawn_) fmt::print(stderr, "\r\x1b[K");
+        drawn_ = false;
+    }
+
+private:
+    void draw()
+    {
+        constexpr size_t kWidth = 24, kLabel = 60;
+        const size_t filled = total_ ? done_ * kWidth / total_ : kWidth;
+        const std::string label = label_.size() > kLabel ? label_.substr(0, kLabel - 3) + "..." : label_;
+        fmt::print(stderr, "\r\x1b[K[{}{}] {:3}% variant {}/{}: {}", std::string(filled, '#'), std::string(kWidth - filled, '.'),
+                   total_ ? done_ * 100 / total_ : 100, variant_ + 1, variants_, label);
+        std::fflush(stderr);
+        drawn_ = true;
+    }
+
+    bool bar_;
+    bool drawn_ = false;
+    size_t variants_;
+    size_t total_;
+    size_t done_ = 0;
+    size_t variant_ = 0;
+    std::string label_;
+};
+
+// ---- what the reports say about the machine -------------------------------------------
+
+json machineJson()
+{
+    json machine = json::object();
+    utsname name{};
+    if (::uname(&name) == 0) {
+        machine["os"] = fmt::format("{} {}", name.sysname, name.release);
+        machine["arch"] = name.machine;
+    }
+    std::ifstream cpuinfo("/proc/cpuinfo");
+    for (std::string line; std::getline(cpuinfo, line);) {
+        if (line.rfind("model name", 0) != 0) continue;
+        const size_t colon = line.find(':');
+        if (colon != std::string::npos) machine["cpu"] = line.substr(line.find_first_not_of(' ', colon + 1));
+        break;
+    }
+    machine["cpu_threads"] = std::thread::hardware_concurrency();
+    return machine;
+}
+
+json deviceJson(const gpu::DeviceInfo& d)
+{
+    return {{"name", d.name},
+            {"type", d.type},
+            {"vulkan", fmt::format("{}.{}.{}", VK_API_VERSION_MAJOR(d.apiVersion), VK_API_VERSION_MINOR(d.apiVersion),
+                                   VK_API_VERSION_PATCH(d.apiVersion))},
+            {"driver", d.driverInfo}};
+}
+
+std::string utcNow()
+{
+    const std::time_t now = std::time(nullptr);
+    std::tm utc{};
+    gmtime_r(&now, &utc);
+    char text[32];
+    std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
+    return text;
+}
+
+// ---- sweep variants ---------------------------------------------------------------------
+
+// Whether a sweep entry sets light `light`'s shadow settings (its technique or parameters).
+bool setsShadowOf(const config::SweepChoice& choice, size_t light)
+{
+    const std::string shadow = fmt::format("/lights/{}/shadow", light);
+    return std::all_of(choice.paths.begin(), choice.paths.end(), [&](const std::string& p) {
+        return p.rfind(shadow, 0) == 0 && (p.size() == shadow.size() || p[shadow.size()] == '/');
+    });
+}
+
+// A choice as a table or a plot shows it: its label when the entry names its values, else
+// "<last path token>=<value>" ("resolution=512").
+std::string choiceText(const config::SweepChoice& choice)
+{
+    if (choice.labelled) return choice.label;
+    std::vector<std::string> names;
+    for (const std::string& p : choice.paths) names.push_back(p.substr(p.rfind('/') + 1));
+    return fmt::format("{}={}", fmt::join(names, "+"), choice.label);
+}
+
+// The variant's choices that set light `light`'s shadow (technique = true), or the others.
+std::string choicesText(const config::SweepVariant& variant, size_t light, bool technique)
+{
+    std::vector<std::string> parts;
+    for (const config::SweepChoice& c : variant.choices) {
+        if (setsShadowOf(c, light) == technique) parts.push_back(choiceText(c));
+    }
+    return fmt::format("{}", fmt::join(parts, ", "));
+}
+
+// The --set overrides that apply to `config`: those whose technique one of its lights
+// uses. Others belong to other variants.
+std::vector<config::ParamOverride> overridesFor(const std::vector<config::ParamOverride>& overrides,
+                                                const config::RenderConfig& config)
+{
+    std::vector<config::ParamOverride> used;
+    for (const config::ParamOverride& o : overrides) {
+        const bool named = std::any_of(config.lights.begin(), config.lights.end(),
+                                       [&](const config::LightConfig& l) { return l.shadow.technique == o.technique; });
+        if (named) used.push_back(o);
+    }
+    return used;
+}
+
+// Everything a variant would fail on, for every variant, before the first renders: each
+// light's plugin loaded and its parameters checked (--set included), and every --set
+// used by some variant. Lights from a glTF file ("lights": "scene") need its scene loaded.
+void checkVariants(const std::vector<config::SweepVariant>& variants, const std::vector<config::ParamOverride>& overrides,
+                   plugin::PluginRegistry& plugins)
+{
+    PluginCheck check;
+    std::set<std::string> usedOverrides;
+    for (const config::SweepVariant& variant : variants) {
+        config::RenderConfig config = variant.config;
+        if (config.lightsFromScene) config::buildScene(config);
+        const std::vector<config::ParamOverride> used = overridesFor(overrides, config);
+        for (const config::ParamOverride& o : used) usedOverrides.insert(o.where);
+        config::applyParamOverrides(config, used);
+        check.check(config, plugins, false);
+    }
+    for (const config::ParamOverride& o : overrides) {
+        if (!usedOverrides.count(o.where)) {
+            throw Error(fmt::format("{}: no light of any sweep variant uses technique '{}'", o.where, o.technique));
+        }
+    }
+    if (!check.errors().empty()) throw Error(fmt::format("{}", fmt::join(check.errors(), "\n")));
+}
+
+std::string sceneName(const config::SceneSource& source)
+{
+    return source.kind == config::SceneSource::Kind::Gltf ? source.gltf.filename().string() : source.generator;
+}
+
+// The generator parameters as JSON numbers where they are numbers (the config keeps them
+// as text for the generator to parse).
+json sceneParamsJson(const config::SceneSource& source)
+{
+    json params = json::object();
+    for (const auto& [name, text] : source.params) {
+        json value = json::parse(text, nullptr, false);
+        params[name] = value.is_discarded() ? json(text) : value;
+    }
+    return {{"params", std::move(params)}, {"scale", source.scale}};
+}
+
+// ---- the reference, once per distinct (scene, camera, light, image size) -----------------
+
+// What a light's reference visibility depends on, as text: the scene (its source, and the
+// poses its node tracks give it at frame 0), the camera, the light itself and the image
+// size. Techniques, other lights and culling do not enter.
+std::string referenceKey(const config::RenderConfig& config, size_t light)
+{
+    const auto vec = [](const glm::vec3& v) { return json::array({v.x, v.y, v.z}); };
+    const config::SceneSource& s = config.scene;
+    json nodes = json::array();
+    for (const config::AnimationTrack& track : config.animation.tracks) {
+        if (track.target.rfind("node:", 0) == 0) nodes.push_back({track.target, config::evaluate(track, 0.0f)});
+    }
+    const scene::Camera& c = config.camera;
+    const scene::Light& l = config.lights[light].light;
+    return json{{"scene", {s.kind == config::SceneSource::Kind::Gltf, s.gltf.string(), s.generator, s.params, s.scale, nodes}},
+                {"camera", {vec(c.position), vec(c.target), vec(c.up), c.fovYDeg, c.nearWorld}},
+                {"light",
+                 {scene::lightTypeName(l.type), vec(l.position), vec(l.direction), vec(l.tangent), l.outerConeDeg,
+                  l.innerConeDeg, l.angularDiameterDeg, l.sizeWorld.x, l.sizeWorld.y, l.radiusWorld}},
+                {"size", {config.width, config.height}}}
+        .dump();
+}
+
+struct ReferenceVisibility {
+    std::vector<float> visibility;
+    // The reference render's geometry pixels, shared by the lights rendered with it.
+    std::shared_ptr<const metrics::PixelMask> mask;
+};
+
+class ReferenceCache {
+public:
+    ReferenceCache(gpu::Context& context, plugin::PluginRegistry& plugins, const ReferenceTechnique& reference)
+        : context_(context), plugins_(plugins), reference_(reference)
+    {
+    }
+
+    // The reference visibility of each light of `config` (posed at frame 0, drawing
+    // `scene`), rendering those not seen before in one frame.
+    std::vector<const ReferenceVisibility*> lookUp(const config::RenderConfig& config, const scene::Scene& scene,
+                                                    Progress& progress)
+    {
+        std::vector<std::string> keys;
+        config::RenderConfig missing = config;
+        missing.lights.clear();
+        missing.animation = {};  // posed already; its light indices would not match the subset
+        std::vector<std::string> missingKeys;
+        for (size_t l = 0; l < config.lights.size(); ++l) {
+            keys.push_back(referenceKey(config, l));
+            if (cache_.count(keys.back()) || std::count(missingKeys.begin(), missingKeys.end(), keys.back())) continue;
+            missing.lights.push_back(config.lights[l]);
+            missingKeys.push_back(keys.back());
+        }
+        if (!missing.lights.empty()) render(withReferenceShadows(missing, reference_), scene, missingKeys, progress);
+        std::vector<const ReferenceVisibility*> found;
+        for (const std::string& key : keys) found.push_back(&cache_.at(key));
+        return found;
+    }
+
+    size_t renders() const { return renders_; }
+
+private:
+    void render(const config::RenderConfig& config, const scene::Scene& scene, const std::vector<std::string>& keys,
+                Progress& progress)
+    {
+        progress.clear();
+        spdlog::info("reference: rendering {} light(s) with {}", config.lights.size(), reference_.shadow.technique);
+        render::FrameRenderer renderer(context_, scene, config, plugins_);
+        renderer.renderFrame();
+        InterruptHandler::check();
+        FrameImages images = captureFrame(renderer);
+        auto mask = std::make_shared<const metrics::PixelMask>(metrics::geometryMask(images.width, images.height, images.positions));
+        for (size_t i = 0; i < keys.size(); ++i) cache_[keys[i]] = {std::move(images.visibility[i]), mask};
+        ++renders_;
+    }
+
+    gpu::Context& context_;
+    plugin::PluginRegistry& plugins_;
+    const ReferenceTechnique& reference_;
+    std::map<std::string, ReferenceVisibility> cache_;
+    size_t renders_ = 0;
+};
+
+// ---- measuring one variant ----------------------------------------------------------------
+
+struct BenchSession {
+    const BenchFlags& flags;
+    gpu::Context& context;
+    plugin::PluginRegistry& plugins;
+    const std::vector<config::ParamOverride>& overrides;
+    ReferenceCache& references;
+    Progress& progress;
+    std::vector<std::string>& warnings;
+};
+
+BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& variant, size_t index)
+{
+    config::RenderConfig config = variant.config;
+    const scene::Scene scene = buildFirstFrame(config, overridesFor(session.overrides, config));
+    const std::vector<const ReferenceVisibility*> references = session.references.lookUp(config, scene, session.progress);
+
+    render::FrameRenderer renderer(session.context, scene, config, session.plugins);
+    for (const std::string& warning : renderer.warnings()) {
+        session.progress.clear();
+        session.warnings.push_back(fmt::format("variant {} ({}): {}", index, variant.label, warning));
+        spdlog::warn("{}", session.warnings.back());
+    }
+    std::vector<render::FrameTimings> measured;
+    for (uint32_t frame = 0; frame < session.flags.warmup + session.flags.frames; ++frame) {
+        render::FrameTimings timings = renderer.renderFrame();
+        if (frame >= session.flags.warmup) measured.push_back(std::move(timings));
+        session.progress.frameDone();
+        InterruptHandler::check();
+    }
+    const FrameImages images = captureFrame(renderer);
+    const std::vector<graph::TransientMemory> memory = renderer.executor().transientMemory();
+
+    BenchVariant result;
+    result.index = index;
+    result.label = variant.label;
+    result.choices = variant.choices;
+    result.scene = sceneName(config.scene);
+    result.sceneParams = sceneParamsJson(config.scene);
+    result.width = images.width;
+    result.height = images.height;
+    result.frame = summarizeTimings(measured);
+    for (size_t l = 0; l < config.lights.size(); ++l) {
+        BenchLight light;
+        light.index = l;
+        light.name = config.lights[l].name;
+        const std::string& technique = images.techniques[l];
+        light.technique = technique.empty() ? "unshadowed" : technique;
+        light.params = technique.empty() ? json(nullptr)
+                                         : plugin::resolveParams(session.plugins.load(technique), config.lights[l].shadow).toJson();
+        light.techniqueLabel = choicesText(variant, l, true);
+        light.contextLabel = choicesText(variant, l, false);
+        const std::string prefix = renderer.shadowPassPrefix(l);
+        light.timing = summarizeTimings(measured, prefix);
+        for (const graph::TransientMemory& m : memory) {
+            if (m.name.rfind(prefix, 0) == 0) light.memory.push_back(m);
+        }
+        const ReferenceVisibility& reference = *references[l];
+        light.visibility = metrics::compareVisibility({images.width, images.height, images.visibility[l]},
+                                                      {images.width, images.height, reference.visibility}, reference.mask.get());
+        result.lights.push_back(std::move(light));
+    }
+    return result;
+}
+
+void printTable(const BenchRun& run)
+{
+    fmt::print("bench {}: {} variant(s), medians of {} frame(s) after {} warm-up; reference {} {} ({} render(s))\n",
+               run.config, run.variants.size(), run.frames, run.warmup, run.reference, run.referenceParams.dump(),
+               run.referenceRenders);
+    fmt::print("  {:>3} {:<12} {:<12} {:>10} {:>10} {:>12} {:>9} {:>9}  {}\n", "#", "light", "technique", "GPU ms", "frame ms",
+               "memory B", "RMSE", "SSIM", "variant (* Pareto front)");
+    for (const BenchVariant& v : run.variants) {
+        for (const BenchLight& l : v.lights) {
+            fmt::print("  {:>3} {:<12} {:<12} {:>10.3f} {:>10.3f} {:>12} {:>9.5f} {:>9.5f}  {}{}\n", v.index, l.name, l.technique,
+                       l.timing.gpuMs, v.frame.frameWallMs, l.memoryBytes(), l.visibility.all.rmse, l.visibility.ssim,
+                       l.paretoFront ? "* " : "  ", v.label.empty() ? "(no sweep)" : v.label);
+        }
+    }
+}
+
+} // namespace
+
+int runBench(const BenchFlags& flags, const gpu::ContextOptions& device)
+{
+    if (flags.frames == 0) throw Error("--frames must be at least 1 (the measured frames)");
+    const config::ConfigDocument document = config::loadDocument(flags.config);
+    std::vector<config::SweepVariant> variants = config::expandSweep(document);
+    for (config::SweepVariant& v : variants) {
+        if (flags.width) v.config.width = *flags.width;
+        if (flags.height) v.config.height = *flags.height;
+    }
+    const std::vector<config::ParamOverride> overrides = config::parseParamOverrides(flags.settings);
+
+    plugin::PluginRegistry plugins;
+    const ReferenceTechnique reference = loadReferenceTechnique(flags.reference, flags.referenceSettings, plugins);
+    checkVariants(variants, overrides, plugins);
+
+    const fs::path dir = outputFolder(flags.output);
+    const fs::path csvFile = dir / "results.csv", jsonFile = dir / "results.json", plotFile = dir / "pareto.svg";
+    if (!flags.output.empty()) checkOutputFolder(dir, {csvFile, jsonFile, plotFile});
+    if (!flags.summary.empty()) io::checkWritable(flags.summary);
+
+    const InterruptHandler interruptHandler;
+    gpu::Context context(device);
+    spdlog::info("device: {} ({})", context.deviceInfo().name, context.deviceInfo().type);
+    BenchRun run;
+    run.config = flags.config;
+    run.command = flags.command;
+    run.date = utcNow();
+    run.machine = machineJson();
+    run.device = deviceJson(context.deviceInfo());
+    run.frames = flags.frames;
+    run.warmup = flags.warmup;
+    run.reference = flags.reference;
+    run.referenceParams = reference.params;
+    try {
+        ReferenceCache references(context, plugins, reference);
+        Progress progress(variants.size(), flags.warmup + flags.frames);
+        BenchSession session{flags, context, plugins, overrides, references, progress, run.warnings};
+        for (size_t i = 0; i < variants.size(); ++i) {
+            progress.startVariant(i, variants[i].label.empty() ? "(no sweep)" : variants[i].label);
+            run.variants.push_back(measureVariant(session, variants[i], i));
+        }
+        run.referenceRenders = references.renders();
+    } catch (const Interrupted& interrupted) {
+        fmt::print(stderr, "penumbra: interrupted after {} of {} variant(s); nothing written\n", run.variants.size(),
+                   variants.size());
+        return 128 + interrupted.signal;  // as the shell reports a process the signal ended
+    }
+    markParetoFronts(run);
+
+    // Files first, results.json last: a results.json newer than the others says the set
+    // is complete. Figures on stdout mean that the files are there too.
+    if (!flags.output.empty()) {
+        createOutputFolder(dir);
+        io::writeTextFile(plotFile, paretoSvg(run));
+        io::writeTextFile(csvFile, resultsCsv(run));
+        io::writeTextFile(jsonFile, resultsJson(run).dump(2) + "\n");
+        spdlog::info("wrote {}, {} and {}", csvFile.string(), jsonFile.string(), plotFile.string());
+    }
+    if (!flags.summary.empty()) {
+        io::writeTextFile(flags.summary, summaryMarkdown(run));
+        spdlog::info("wrote {}", flags.summary);
+    }
+    printTable(run);
+
+    if (context.validationEnabled() && context.validationMessageCount() > 0) {
+        spdlog::error("the Vulkan validation layer reported {} message(s)", context.validationMessageCount());
+        return 3;
+    }
+    return 0;
+}
+
+} // namespace penumbra::app

@@ -1,0 +1,272 @@
+#include "BenchResults.h"
+
+#include "penumbra/metrics/Pareto.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <map>
+#include <numeric>
+
+using nlohmann::json;
+
+namespace penumbra::app {
+namespace {
+
+// "0.05" for kErrorThresholds[0]: in column names and table headers.
+std::string thresholdText(size_t i) { return fmt::format("{}", metrics::kErrorThresholds[i]); }
+
+json timingJson(const TimingSummary& t)
+{
+    json passes = json::array();
+    for (const PassTimes& p : t.passes) passes.push_back({{"name", p.name}, {"gpu_ms", p.gpuMs}, {"cpu_ms", p.cpuMs}});
+    return {{"gpu_ms", t.gpuMs}, {"cpu_ms", t.cpuMs}, {"wall_ms", t.frameWallMs}, {"passes", std::move(passes)}};
+}
+
+// RFC 4180: a field with a comma, a quote or a line break is quoted, quotes doubled.
+std::string csvField(const std::string& text)
+{
+    if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
+    std::string quoted = "\"";
+    for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return quoted + "\"";
+}
+
+// The shortest text that reads back to the same double ("0.5", "1e-07").
+std::string number(double value) { return fmt::format("{}", value); }
+
+std::vector<std::string> csvHeader()
+{
+    std::vector<std::string> columns = {"variant",     "label",        "technique",    "technique_label", "context",
+                                        "params",      "scene",        "scene_params", "width",           "height",
+                                        "light_index", "light",        "technique_gpu_ms", "technique_cpu_ms",
+                                        "frame_gpu_ms", "frame_wall_ms", "pass_gpu_ms", "memory_bytes"};
+    const auto statsColumns = [&](const std::string& prefix) {
+        for (const char* figure : {"pixels", "rmse", "mae", "max_abs_error"}) columns.push_back(prefix + figure);
+        for (size_t t = 0; t < metrics::kErrorThresholds.size(); ++t) {
+            columns.push_back(fmt::format("{}pct_above_{}", prefix, thresholdText(t)));
+        }
+    };
+    statsColumns("");
+    columns.push_back("ssim");
+    for (size_t r = 0; r < metrics::kRegionCount; ++r) statsColumns(fmt::format("{}_", metrics::regionName(metrics::Region(r))));
+    columns.push_back("pareto_front");
+    return columns;
+}
+
+void appendStats(std::vector<std::string>& fields, const metrics::ErrorStats& s)
+{
+    fields.insert(fields.end(), {std::to_string(s.pixels), number(s.rmse), number(s.mae), number(s.maxAbsError)});
+    for (size_t t = 0; t < metrics::kErrorThresholds.size(); ++t) fields.push_back(number(s.percentAbove(t)));
+}
+
+std::vector<std::string> csvRow(const BenchVariant& v, const BenchLight& l)
+{
+    json passGpu = json::object();
+    for (const PassTimes& p : l.timing.passes) passGpu[p.name] = p.gpuMs;
+    std::vector<std::string> fields = {std::to_string(v.index),
+                                       v.label,
+                                       l.technique,
+                                       l.techniqueLabel,
+                                       l.contextLabel,
+                                       l.params.dump(),
+                                       v.scene,
+                                       v.sceneParams.dump(),
+                                       std::to_string(v.width),
+                                       std::to_string(v.height),
+                                       std::to_string(l.index),
+                                       l.name,
+                                       number(l.timing.gpuMs),
+                                       number(l.timing.cpuMs),
+                                       number(v.frame.gpuMs),
+                                       number(v.frame.frameWallMs),
+                                       passGpu.dump(),
+                                       std::to_string(l.memoryBytes())};
+    appendStats(fields, l.visibility.all);
+    fields.push_back(number(l.visibility.ssim));
+    for (const metrics::ErrorStats& region : l.visibility.regions) appendStats(fields, region);
+    fields.push_back(l.paretoFront ? "true" : "false");
+    return fields;
+}
+
+std::string csvLine(const std::vector<std::string>& fields)
+{
+    std::string line;
+    for (size_t i = 0; i < fields.size(); ++i) {
+        if (i > 0) line += ',';
+        line += csvField(fields[i]);
+    }
+    // RFC 4180 ends records with CRLF; spreadsheets and csv readers accept it everywhere.
+    return line + "\r\n";
+}
+
+json lightJson(const BenchLight& l)
+{
+    json memory = json::array();
+    for (const graph::TransientMemory& m : l.memory) memory.push_back({{"name", m.name}, {"bytes", m.bytes}});
+    return {{"index", l.index},
+            {"name", l.name},
+            {"technique", l.technique},
+            {"params", l.params},
+            {"technique_label", l.techniqueLabel},
+            {"context", l.contextLabel},
+            {"timing", timingJson(l.timing)},
+            {"memory", {{"bytes", l.memoryBytes()}, {"resources", std::move(memory)}}},
+            {"visibility", metrics::toJson(l.visibility)},
+            {"pareto_front", l.paretoFront}};
+}
+
+std::string bytesText(uint64_t bytes)
+{
+    if (bytes < 1024) return fmt::format("{} B", bytes);
+    if (bytes < 1024 * 1024) return fmt::format("{:.1f} KiB", double(bytes) / 1024.0);
+    return fmt::format("{:.1f} MiB", double(bytes) / (1024.0 * 1024.0));
+}
+
+// A Markdown table cell: a '|' would end it.
+std::string cell(const std::string& text)
+{
+    std::string out;
+    for (char c : text) out += c == '|' ? std::string("\\|") : std::string(1, c);
+    return out.empty() ? "–" : out;
+}
+
+} // namespace
+
+uint64_t BenchLight::memoryBytes() const
+{
+    return std::accumulate(memory.begin(), memory.end(), uint64_t(0),
+                           [](uint64_t sum, const graph::TransientMemory& m) { return sum + m.bytes; });
+}
+
+std::vector<TradeoffPanel> tradeoffPanels(const BenchRun& run)
+{
+    std::vector<TradeoffPanel> panels;
+    std::map<std::pair<std::string, size_t>, size_t> byKey;  // (context, light) -> panel
+    for (size_t v = 0; v < run.variants.size(); ++v) {
+        for (size_t l = 0; l < run.variants[v].lights.size(); ++l) {
+            const BenchLight& light = run.variants[v].lights[l];
+            const auto [it, added] = byKey.try_emplace({light.contextLabel, light.index}, panels.size());
+            if (added) {
+                const std::string lightText = fmt::format("light '{}'", light.name);
+                panels.push_back({light.contextLabel.empty() ? lightText : light.contextLabel + " · " + lightText, {}});
+            }
+            panels[it->second].members.push_back({v, l});
+        }
+    }
+    return panels;
+}
+
+void markParetoFronts(BenchRun& run)
+{
+    for (const TradeoffPanel& panel : tradeoffPanels(run)) {
+        std::vector<metrics::TradeoffPoint> points;
+        for (const TradeoffPanel::Member& m : panel.members) {
+            const BenchLight& l = run.variants[m.variant].lights[m.light];
+            points.push_back({l.timing.gpuMs, l.visibility.all.rmse});
+        }
+        for (size_t i : metrics::paretoFront(points)) {
+            const TradeoffPanel::Member& m = panel.members[i];
+            run.variants[m.variant].lights[m.light].paretoFront = true;
+        }
+    }
+}
+
+std::string shellCommand(const std::vector<std::string>& command)
+{
+    std::vector<std::string> words;
+    for (const std::string& arg : command) {
+        const bool plain = !arg.empty() && std::all_of(arg.begin(), arg.end(), [](unsigned char c) {
+            return std::isalnum(c) || std::string_view("-_./=:,+@%").find(char(c)) != std::string_view::npos;
+        });
+        std::string quoted = "'";
+        for (char c : arg) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+        words.push_back(plain ? arg : quoted + "'");
+    }
+    return fmt::format("{}", fmt::join(words, " "));
+}
+
+std::string resultsCsv(const BenchRun& run)
+{
+    std::string text = csvLine(csvHeader());
+    for (const BenchVariant& v : run.variants) {
+        for (const BenchLight& l : v.lights) text += csvLine(csvRow(v, l));
+    }
+    return text;
+}
+
+json resultsJson(const BenchRun& run)
+{
+    json variants = json::array();
+    for (const BenchVariant& v : run.variants) {
+        json choices = json::array();
+        for (const config::SweepChoice& c : v.choices) {
+            choices.push_back({{"paths", c.paths}, {"value", c.value}, {"label", c.label}});
+        }
+        json lights = json::array();
+        for (const BenchLight& l : v.lights) lights.push_back(lightJson(l));
+        variants.push_back({{"index", v.index},
+                            {"label", v.label},
+                            {"choices", std::move(choices)},
+                            {"scene", v.scene},
+                            {"scene_params", v.sceneParams},
+                            {"width", v.width},
+                            {"height", v.height},
+                            {"timing", timingJson(v.frame)},
+                            {"lights", std::move(lights)}});
+    }
+    return {{"config", run.config},
+            {"command", shellCommand(run.command)},
+            {"argv", run.command},
+            {"date", run.date},
+            {"machine", run.machine},
+            {"device", run.device},
+            {"frames", run.frames},
+            {"warmup", run.warmup},
+            {"reference", {{"technique", run.reference}, {"params", run.referenceParams}, {"renders", run.referenceRenders}}},
+            {"variants", std::move(variants)},
+            {"warnings", run.warnings}};
+}
+
+std::string summaryMarkdown(const BenchRun& run)
+{
+    std::string md = "# Speed–accuracy trade-off\n\n";
+    md += fmt::format("- device: {}, {}, Vulkan {}, driver {}\n", run.device.value("name", "?"), run.device.value("type", "?"),
+                      run.device.value("vulkan", "?"), run.device.value("driver", "?"));
+    md += fmt::format("- machine: {}, {} hardware threads, {} {}\n", run.machine.value("cpu", "unknown CPU"),
+                      run.machine.value("cpu_threads", 0u), run.machine.value("os", "unknown OS"), run.machine.value("arch", ""));
+    md += fmt::format("- date: {}\n", run.date);
+    md += fmt::format("- frames: {} measured after {} warm-up, per variant; times are medians\n", run.frames, run.warmup);
+    md += fmt::format("- reference: `{}` `{}`\n\n", run.reference, run.referenceParams.dump());
+    md += "GPU ms is the light's shadow passes on the GPU (timestamp queries), memory the transient memory of "
+          "those passes, and the errors compare the light's visibility image with the reference's over the pixels "
+          "that show geometry (penumbra: where the reference is strictly between 0.01 and 0.99). A ✓ marks the "
+          "Pareto front: no other variant in the same table is both faster and more accurate.\n\n";
+    md += fmt::format("Regenerate with:\n\n```sh\n{}\n```\n", shellCommand(run.command));
+    for (const TradeoffPanel& panel : tradeoffPanels(run)) {
+        md += fmt::format("\n## {}\n\n", panel.title);
+        md += fmt::format("| technique | variant | GPU ms | memory | RMSE | RMSE penumbra | MAE | max | > {} | > {} | SSIM | "
+                          "front |\n",
+                          thresholdText(0), thresholdText(1));
+        md += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|:-:|\n";
+        std::vector<const BenchLight*> rows;
+        for (const TradeoffPanel::Member& m : panel.members) rows.push_back(&run.variants[m.variant].lights[m.light]);
+        std::stable_sort(rows.begin(), rows.end(),
+                         [](const BenchLight* a, const BenchLight* b) { return a->timing.gpuMs < b->timing.gpuMs; });
+        for (const BenchLight* l : rows) {
+            const metrics::ErrorStats& all = l->visibility.all;
+            md += fmt::format("| {} | {} | {:.3f} | {} | {:.4f} | {:.4f} | {:.4f} | {:.3f} | {:.2f}% | {:.2f}% | {:.4f} | {} |\n",
+                              cell(l->technique), cell(l->techniqueLabel), l->timing.gpuMs, bytesText(l->memoryBytes()),
+                              all.rmse, l->visibility.region(metrics::Region::Penumbra).rmse, all.mae, all.maxAbsError,
+                              all.percentAbove(0), all.percentAbove(1), l->visibility.ssim, l->paretoFront ? "✓" : "");
+        }
+    }
+    if (!run.warnings.empty()) {
+        md += "\n## Warnings\n\n";
+        for (const std::string& w : run.warnings) md += fmt::format("- {}\n", w);
+    }
+    return md;
+}
+
+} // namespace penumbra::app

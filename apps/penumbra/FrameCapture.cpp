@@ -1,0 +1,30 @@
+#include "FrameCapture.h"
+
+namespace penumbra::app {
+
+scene::Scene buildFirstFrame(config::RenderConfig& config, const std::vector<config::ParamOverride>& overrides)
+{
+    scene::Scene scene = config::buildScene(config);
+    config::applyParamOverrides(config, overrides);
+    if (!config.animation.empty()) {
+        config::applyAnimation(config.animation, 0.0f, config, scene);
+        scene.updateTransforms();
+    }
+    return scene;
+}
+
+FrameImages captureFrame(const render::FrameRenderer& renderer)
+{
+    FrameImages images;
+    images.width = renderer.width();
+    images.height = renderer.height();
+    images.color = renderer.readColor();
+    images.positions = renderer.readPositions();
+    for (size_t i = 0; i < renderer.lightCount(); ++i) {
+        images.visibility.push_back(renderer.readVisibility(i));
+        images.techniques.push_back(renderer.techniqueName(i));
+    }
+    return images;
+}
+
+} // namespace penumbra::app

@@ -1,0 +1,64 @@
+#include "TimingSummary.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <map>
+
+namespace penumbra::app {
+
+double median(std::vector<double> samples)
+{
+    if (samples.empty()) return 0.0;
+    std::sort(samples.begin(), samples.end());
+    const size_t n = samples.size();
+    return n % 2 ? samples[n / 2] : 0.5 * (samples[n / 2 - 1] + samples[n / 2]);
+}
+
+TimingSummary summarizeTimings(const std::vector<render::FrameTimings>& frames, std::string_view prefix)
+{
+    struct Samples {
+        std::vector<double> gpu, cpu;
+    };
+    std::vector<std::string> order;
+    std::map<std::string, Samples, std::less<>> samples;
+    std::vector<double> gpuSums, cpuSums, wall;
+    for (const render::FrameTimings& frame : frames) {
+        double gpu = 0.0, cpu = 0.0;
+        for (const render::PassTiming& pass : frame.passes) {
+            if (pass.name.compare(0, prefix.size(), prefix) != 0) continue;
+            if (!samples.count(pass.name)) order.push_back(pass.name);
+            samples[pass.name].gpu.push_back(pass.gpuMs);
+            samples[pass.name].cpu.push_back(pass.cpuMs);
+            gpu += pass.gpuMs;
+            cpu += pass.cpuMs;
+        }
+        gpuSums.push_back(gpu);
+        cpuSums.push_back(cpu);
+        wall.push_back(frame.frameCpuMs);
+    }
+    TimingSummary summary;
+    summary.frames = frames.size();
+    for (const std::string& name : order) {
+        // A pass that ran in only some frames (a graph rebuilt mid-run) took 0 ms in the others.
+        Samples& s = samples[name];
+        s.gpu.resize(frames.size(), 0.0);
+        s.cpu.resize(frames.size(), 0.0);
+        summary.passes.push_back({name, median(s.gpu), median(s.cpu)});
+    }
+    summary.gpuMs = median(std::move(gpuSums));
+    summary.cpuMs = median(std::move(cpuSums));
+    summary.frameWallMs = median(std::move(wall));
+    return summary;
+}
+
+void printTimings(const TimingSummary& summary)
+{
+    fmt::print("timings: median of {} frame(s)\n", summary.frames);
+    fmt::print("  {:<28} {:>10} {:>12}\n", "pass", "GPU ms", "CPU rec ms");
+    for (const PassTimes& pass : summary.passes) fmt::print("  {:<28} {:>10.3f} {:>12.3f}\n", pass.name, pass.gpuMs, pass.cpuMs);
+    fmt::print("  {:<28} {:>10.3f}\n", "sum of passes (GPU)", summary.gpuMs);
+    fmt::print("  {:<28} {:>10.3f}\n", "frame wall clock (CPU)", summary.frameWallMs);
+}
+
+} // namespace penumbra::app
