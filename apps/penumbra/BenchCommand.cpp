@@ -113,19 +113,27 @@ public:
     }
 
 private:
+    // Redrawn only when what it shows changes: frames of a small image take a
+    // millisecond, and a terminal need not be written a thousand times a second.
     void draw()
     {
         constexpr size_t kWidth = 24, kLabel = 60;
+        const size_t percent = total_ ? done_ * 100 / total_ : 100;
+        if (drawn_ && percent == drawnPercent_ && variant_ == drawnVariant_) return;
+        drawnPercent_ = percent;
+        drawnVariant_ = variant_;
         const size_t filled = total_ ? done_ * kWidth / total_ : kWidth;
         const std::string label = label_.size() > kLabel ? label_.substr(0, kLabel - 3) + "..." : label_;
         fmt::print(stderr, "\r\x1b[K[{}{}] {:3}% variant {}/{}: {}", std::string(filled, '#'), std::string(kWidth - filled, '.'),
-                   total_ ? done_ * 100 / total_ : 100, variant_ + 1, variants_, label);
+                   percent, variant_ + 1, variants_, label);
         std::fflush(stderr);
         drawn_ = true;
     }
 
     bool bar_;
     bool drawn_ = false;
+    size_t drawnPercent_ = 0;
+    size_t drawnVariant_ = 0;
     size_t variants_;
     size_t total_;
     size_t done_ = 0;
