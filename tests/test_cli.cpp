@@ -450,7 +450,7 @@ TEST_F(Cli, PluginsListsEveryPluginWithItsParametersAndEveryFailure)
     EXPECT_TRUE(has(r.out, "hard ")) << r.out;
     EXPECT_TRUE(has(r.out, " plugin(s), 7 file(s) failed to load")) << r.out;
     EXPECT_TRUE(has(r.out, "error [abi-mismatch]: plugin 'abi'")) << r.out;
-    EXPECT_TRUE(has(r.out, "built for plugin ABI 9999, this engine has ABI 1")) << r.out;
+    EXPECT_TRUE(has(r.out, "built for plugin ABI 9999, this engine has ABI 2")) << r.out;
     EXPECT_TRUE(has(r.out, "error [dependency-missing]: plugin 'nodep'")) << r.out;
     EXPECT_TRUE(has(r.out, "libpenumbra_test_absent.so: cannot open shared object file")) << r.out;
     EXPECT_TRUE(has(r.out, "error [not-a-library]: plugin 'garbage'")) << r.out;
