@@ -468,7 +468,7 @@ TEST_F(Cli, PluginsJsonDescribesSpecsAndErrors)
     const CliResult r = run("plugins --json", pluginPath());
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const nlohmann::json doc = nlohmann::json::parse(r.out);
-    EXPECT_EQ(doc["abi"], 1);
+    EXPECT_EQ(doc["abi"], 2);  // PENUMBRA_PLUGIN_ABI_VERSION
     EXPECT_EQ(doc["search_path"][0], kTestPlugins);
     EXPECT_EQ(doc["search_path"][1], kShadowedPlugins);
     std::map<std::string, nlohmann::json> plugins;
@@ -476,7 +476,7 @@ TEST_F(Cli, PluginsJsonDescribesSpecsAndErrors)
     ASSERT_TRUE(plugins.count("testgood")) << r.out;
     const nlohmann::json& good = plugins["testgood"];
     EXPECT_EQ(good["version"], "1.2.0");
-    EXPECT_EQ(good["abi"], 1);
+    EXPECT_EQ(good["abi"], 2);
     EXPECT_EQ(good["file"], kTestPlugins + "/penumbra-testgood.so");
     EXPECT_EQ(good["summary"], "test plugin: clears V_l to a constant");
     EXPECT_EQ(good["params"], nlohmann::json::parse(R"json([

@@ -275,7 +275,7 @@ void GraphExecutor::State::resolveImports(const CompiledGraph& graph)
         if (!res.imported || res.firstUse < 0) continue;
         const auto missing = [&] {
             return Error(fmt::format("render graph: imported {} '{}' is not bound (used by {}); call "
-                                     "GraphExecutor::bind{}() before record()",
+                                     "GraphExecutor::bind{}() before execute()",
                                      kindName(res), res.name, passesUsing(graph, r), res.isImage ? "Image" : "Buffer"));
         };
         if (res.isImage) {

@@ -2,7 +2,6 @@
 
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
-#include "penumbra/gpu/Check.h"
 #include "penumbra/plugin/Params.h"
 
 #include <fmt/format.h>
