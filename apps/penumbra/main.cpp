@@ -104,7 +104,7 @@ void printTimings(const std::vector<penumbra::render::FrameTimings>& frames)
         frameCpu.push_back(frame.frameCpuMs);
     }
     fmt::print("timings: median of {} frame(s)\n", frames.size());
-    fmt::print("  {:<28} {:>10} {:>12}\n", "pass", "GPU ms", "CPU rec ms");
+    fmt::print("  {:<28} {:>10} {:>12}\n", "pass", "GPU ms", "CPU ms");
     for (const std::string& name : order) {
         fmt::print("  {:<28} {:>10.3f} {:>12.3f}\n", name, median(samples[name].first), median(samples[name].second));
     }
