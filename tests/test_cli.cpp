@@ -453,7 +453,7 @@ TEST_F(Cli, PluginsListsEveryPluginWithItsParametersAndEveryFailure)
     EXPECT_TRUE(has(r.out, "hard ")) << r.out;
     EXPECT_TRUE(has(r.out, " plugin(s), 7 file(s) failed to load")) << r.out;
     EXPECT_TRUE(has(r.out, "error [abi-mismatch]: plugin 'abi'")) << r.out;
-    EXPECT_TRUE(has(r.out, "built for plugin ABI 9999, this engine has ABI 1")) << r.out;
+    EXPECT_TRUE(has(r.out, "built for plugin ABI 9999, this engine has ABI 2")) << r.out;
     EXPECT_TRUE(has(r.out, "error [dependency-missing]: plugin 'nodep'")) << r.out;
     EXPECT_TRUE(has(r.out, "libpenumbra_test_absent.so: cannot open shared object file")) << r.out;
     EXPECT_TRUE(has(r.out, "error [not-a-library]: plugin 'garbage'")) << r.out;
@@ -471,7 +471,7 @@ TEST_F(Cli, PluginsJsonDescribesSpecsAndErrors)
     const CliResult r = run("plugins --json", pluginPath());
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const nlohmann::json doc = nlohmann::json::parse(r.out);
-    EXPECT_EQ(doc["abi"], 1);
+    EXPECT_EQ(doc["abi"], 2);  // PENUMBRA_PLUGIN_ABI_VERSION
     EXPECT_EQ(doc["search_path"][0], kTestPlugins);
     EXPECT_EQ(doc["search_path"][1], kShadowedPlugins);
     std::map<std::string, nlohmann::json> plugins;
@@ -479,7 +479,7 @@ TEST_F(Cli, PluginsJsonDescribesSpecsAndErrors)
     ASSERT_TRUE(plugins.count("testgood")) << r.out;
     const nlohmann::json& good = plugins["testgood"];
     EXPECT_EQ(good["version"], "1.2.0");
-    EXPECT_EQ(good["abi"], 1);
+    EXPECT_EQ(good["abi"], 2);
     EXPECT_EQ(good["file"], kTestPlugins + "/penumbra-testgood.so");
     EXPECT_EQ(good["summary"], "test plugin: clears V_l to a constant");
     EXPECT_EQ(good["params"], nlohmann::json::parse(R"json([
@@ -942,9 +942,12 @@ TEST_F(Cli, BenchMeasuresEveryVariantAgainstOneReferenceRender)
         EXPECT_EQ(row.at("umbra_pixels"), "0");
         EXPECT_EQ(row.at("umbra_rmse"), "0");
         EXPECT_EQ(row.at("memory_bytes"), "0") << "neither the clear nor the fallback has resources of its own";
+        EXPECT_EQ(row.at("technique_host_ms"), "0") << "no host pass";
+        EXPECT_EQ(row.at("technique_ms"), row.at("technique_gpu_ms")) << "without host passes, the time is the GPU's";
         EXPECT_EQ(row.at("scene"), "box-grid");
         EXPECT_EQ(row.at("width"), "64");
-        for (const char* column : {"technique_gpu_ms", "technique_cpu_ms", "frame_gpu_ms", "frame_wall_ms", "ssim"}) {
+        for (const char* column : {"technique_ms", "technique_gpu_ms", "technique_host_ms", "technique_cpu_ms", "frame_gpu_ms",
+                                   "frame_wall_ms", "ssim"}) {
             EXPECT_NO_THROW((void)std::stod(row.at(column))) << column;
         }
     }
@@ -957,8 +960,8 @@ TEST_F(Cli, BenchMeasuresEveryVariantAgainstOneReferenceRender)
     EXPECT_EQ(rows[2].at("context"), "");
     EXPECT_EQ(rows[3].at("technique_label"), "");
     EXPECT_EQ(rows[3].at("context"), "fill=0.5");
-    EXPECT_TRUE(nlohmann::json::parse(rows[0].at("pass_gpu_ms")).contains("light0.testgood.fill"));
-    EXPECT_TRUE(nlohmann::json::parse(rows[1].at("pass_gpu_ms")).contains("light1.unshadowed"));
+    EXPECT_TRUE(nlohmann::json::parse(rows[0].at("pass_ms")).contains("light0.testgood.fill"));
+    EXPECT_TRUE(nlohmann::json::parse(rows[1].at("pass_ms")).contains("light1.unshadowed"));
 
     const nlohmann::json doc = nlohmann::json::parse(slurp(out / "results.json"));
     EXPECT_EQ(doc["frames"], 2);
@@ -1013,7 +1016,7 @@ TEST_F(Cli, BenchSummaryIsAMarkdownTablePerPanel)
     const std::string md = slurp(summary);
     EXPECT_EQ(md.rfind("# Speed–accuracy trade-off\n", 0), 0u) << md;
     for (const char* text : {"\n## light 'key'\n", "\n## fill=0.25 · light 'fill'\n", "\n## fill=0.5 · light 'fill'\n",
-                             "| technique | variant | GPU ms | memory | RMSE | RMSE penumbra | MAE | max | > 0.05 | > 0.2 | SSIM | front |",
+                             "| technique | variant | ms | memory | RMSE | RMSE penumbra | MAE | max | > 0.05 | > 0.2 | SSIM | front |",
                              "| 0 B | 0.5000 | 0.5000 | 0.5000 | 0.500 | 100.00% | 100.00% | 0.6001 |",
                              "| 0 B | 0.2500 | 0.2500 | 0.2500 | 0.250 | 100.00% | 100.00% |", "| testgood | fill=0.25 |",
                              "| unshadowed | – |", "- reference: `testgood` `{", "- frames: 1 measured after 0 warm-up",

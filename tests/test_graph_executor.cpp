@@ -25,6 +25,8 @@
 #include <functional>
 #include <map>
 #include <random>
+#include <span>
+#include <thread>
 
 using namespace penumbra;
 using namespace penumbra::graph;
@@ -34,11 +36,6 @@ namespace {
 const std::filesystem::path kShaders = std::filesystem::path(PENUMBRA_TEST_DATA_DIR) / "shaders";
 
 constexpr ExecutorOptions kNoTimestamps{false};
-
-void runFrame(gpu::Context& context, GraphExecutor& executor, RenderGraph& graph)
-{
-    context.submitAndWait([&](VkCommandBuffer cmd) { executor.record(cmd, graph); });
-}
 
 // Copies a whole buffer (device-local or not) into host memory after everything
 // submitted before it.
@@ -151,7 +148,7 @@ TEST_F(GraphExecutorTest, CulledPassNeverExecutes)
 
     GraphExecutor executor(*context, kNoTimestamps);
     executor.bindBuffer("probe", probe);
-    runFrame(*context, executor, graph);
+    executor.execute(graph);
     ASSERT_EQ(executor.compiled()->culled.size(), 1u);
     EXPECT_EQ(executor.compiled()->culled[0].name, "unread");
     EXPECT_EQ(unreadCalls, 0);
@@ -163,7 +160,7 @@ TEST_F(GraphExecutorTest, CulledPassNeverExecutes)
     // The control: once its output is read, the same pass runs and the sentinel shows,
     // so the probe above could have seen it.
     graph.markOutput("scratch");
-    runFrame(*context, executor, graph);
+    executor.execute(graph);
     EXPECT_EQ(unreadCalls, 1);
     EXPECT_EQ(keptCalls, 2);
     EXPECT_TRUE(allEqual(readWords(*context, probe), 0, 64, kSentinel));
@@ -230,7 +227,7 @@ TEST_F(GraphExecutorTest, ComputeChainProducesTheExpectedValues)
     graph.markOutput("result");
 
     GraphExecutor executor(*context);
-    runFrame(*context, executor, graph);
+    executor.execute(graph);
     const std::vector<float> result = readFloats(*context, executor.buffer("result"));
     ASSERT_EQ(result.size(), kCount);
     for (uint32_t i = 0; i < kCount; ++i) {
@@ -273,7 +270,7 @@ TEST_F(GraphExecutorTest, DepthImagesTransitionWithTheDepthAspect)
     graph.markOutput("depth copy");
 
     GraphExecutor executor(*context, kNoTimestamps);
-    runFrame(*context, executor, graph);
+    executor.execute(graph);
     for (float v : readFloats(*context, executor.buffer("depth copy"))) ASSERT_EQ(v, 0.25f);
 }
 
@@ -315,7 +312,7 @@ TEST_F(GraphExecutorTest, AliasedTransientsShareMemoryWithoutCorruptingLiveData)
     graph.markOutput("out second");
 
     GraphExecutor executor(*context, kNoTimestamps);
-    runFrame(*context, executor, graph);
+    executor.execute(graph);
     const CompiledGraph& compiled = *executor.compiled();
     const int first = resourceIndex(compiled, "first");
     const int second = resourceIndex(compiled, "second");
@@ -447,7 +444,7 @@ TEST_F(GraphExecutorTest, RandomTransferGraphsMatchACpuSimulation)
         for (size_t i = 0; i < imports.size(); ++i) executor.bindBuffer(record.imported[i], imports[i]);
         for (int frame = 1; frame <= 2; ++frame) {
             SCOPED_TRACE(fmt::format("frame {}", frame));
-            runFrame(*context, executor, record.graph);
+            executor.execute(record.graph);
             for (const std::string& name : record.marked)
                 EXPECT_EQ(readWords(*context, executor.buffer(name)), expected.at(name)) << name;
         }
@@ -498,7 +495,7 @@ TEST_F(GraphExecutorTest, ImportedImageReturnsToItsLayoutAndFramesReuseTransient
     for (int frame = 1; frame <= 2; ++frame) {
         SCOPED_TRACE(fmt::format("frame {}", frame));
         frameValue = 1.5f * float(frame);
-        runFrame(*context, executor, graph);
+        executor.execute(graph);
         EXPECT_EQ(executor.finalLayout("history"), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
         // Read back in the declared layout: the layer checks at submission that the image
         // really is in it.
@@ -527,14 +524,14 @@ TEST_F(GraphExecutorTest, UnboundImportNamesTheResourceAndItsPasses)
         .execute([](PassContext&) {});
     graph.markOutput("out");
     GraphExecutor executor(*context);
-    const std::string message = errorOf([&] { runFrame(*context, executor, graph); });
+    const std::string message = errorOf([&] { executor.execute(graph); });
     EXPECT_NE(message.find("'light table' is not bound"), std::string::npos) << message;
     EXPECT_NE(message.find("'copy lights'"), std::string::npos) << message;
     EXPECT_NE(message.find("bindBuffer"), std::string::npos) << message;
 
     gpu::Buffer small(*context, 64, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "small");
     executor.bindBuffer("light table", small);
-    const std::string tooSmall = errorOf([&] { runFrame(*context, executor, graph); });
+    const std::string tooSmall = errorOf([&] { executor.execute(graph); });
     EXPECT_NE(tooSmall.find("'light table' is declared 256 bytes"), std::string::npos) << tooSmall;
 }
 
@@ -554,7 +551,7 @@ TEST_F(GraphExecutorTest, UndeclaredAccessNamesPassAndResource)
     graph.markOutput("b");
     graph.markOutput("a");
     GraphExecutor executor(*context);
-    EXPECT_NO_THROW(runFrame(*context, executor, graph));  // "write b" declared "a" (a read)
+    EXPECT_NO_THROW(executor.execute(graph));  // "write b" declared "a" (a read)
 
     // A resource of the graph that "write b" did not declare.
     graph.declareBuffer({"c", 256, false});
@@ -563,11 +560,11 @@ TEST_F(GraphExecutorTest, UndeclaredAccessNamesPassAndResource)
     });
     graph.markOutput("c");
     asked = "c";
-    const std::string message = errorOf([&] { runFrame(*context, executor, graph); });
+    const std::string message = errorOf([&] { executor.execute(graph); });
     EXPECT_NE(message.find("pass 'write b' uses 'c', which it did not declare"), std::string::npos) << message;
 
     asked = "nonexistent";
-    const std::string unknown = errorOf([&] { runFrame(*context, executor, graph); });
+    const std::string unknown = errorOf([&] { executor.execute(graph); });
     EXPECT_NE(unknown.find("'nonexistent'"), std::string::npos) << unknown;
     EXPECT_NE(unknown.find("no resource of that name"), std::string::npos) << unknown;
 
@@ -578,7 +575,7 @@ TEST_F(GraphExecutorTest, UndeclaredAccessNamesPassAndResource)
     });
     graph.markOutput("img");
     asked = "a";
-    const std::string wrongKind = errorOf([&] { runFrame(*context, executor, graph); });
+    const std::string wrongKind = errorOf([&] { executor.execute(graph); });
     EXPECT_NE(wrongKind.find("pass 'clear img' asks for buffer 'img', which is an image"), std::string::npos)
         << wrongKind;
 }
@@ -591,12 +588,12 @@ TEST_F(GraphExecutorTest, CallbackExceptionsAndMissingCallbacksNameThePass)
     graph.markOutput("out");
     GraphExecutor executor(*context);
 
-    const std::string missing = errorOf([&] { runFrame(*context, executor, graph); });
+    const std::string missing = errorOf([&] { executor.execute(graph); });
     EXPECT_NE(missing.find("pass 'shade'"), std::string::npos) << missing;
     EXPECT_NE(missing.find("no execute callback"), std::string::npos) << missing;
 
     pass.execute([](PassContext&) { throw std::runtime_error("pipeline 'shade.frag' is missing"); });
-    const std::string failed = errorOf([&] { runFrame(*context, executor, graph); });
+    const std::string failed = errorOf([&] { executor.execute(graph); });
     EXPECT_NE(failed.find("render graph: pass 'shade' failed while recording: pipeline 'shade.frag' is missing"),
               std::string::npos)
         << failed;
@@ -605,10 +602,254 @@ TEST_F(GraphExecutorTest, CallbackExceptionsAndMissingCallbacksNameThePass)
     // Setting the callback did not change the declaration: the same compiled graph runs.
     const CompiledGraph* compiled = executor.compiled().get();
     pass.execute([](PassContext& p) { fill(p, "out", 5); });
-    runFrame(*context, executor, graph);
+    executor.execute(graph);
     EXPECT_EQ(executor.compiled().get(), compiled);
     EXPECT_TRUE(allEqual(readWords(*context, executor.buffer("out")), 0, 64, 5u));
 
     EXPECT_NE(errorOf([&] { executor.buffer("nope"); }).find("no resource 'nope'"), std::string::npos);
     EXPECT_NE(errorOf([&] { executor.image("out"); }).find("'out' is a buffer"), std::string::npos);
+}
+
+// ---------------------------------------------------------------------------------------
+// Host passes: CPU work between GPU passes in one frame.
+
+namespace {
+
+const Barrier* barrierOn(const CompiledPass& pass, int resource)
+{
+    for (const Barrier& b : pass.barriersBefore)
+        if (int(b.resource) == resource) return &b;
+    return nullptr;
+}
+
+const CompiledPass* passNamed(const CompiledGraph& compiled, const std::string& name)
+{
+    for (const CompiledPass& pass : compiled.passes)
+        if (pass.name == name) return &pass;
+    return nullptr;
+}
+
+} // namespace
+
+TEST_F(GraphExecutorTest, TransferHostTransferChainRoundTripsDataExactly)
+{
+    // An imported source -> "stage" (device-local) -> "down" (host-readable) -> the host
+    // pass reverses the words and adds the frame number into "up" (host-writable) ->
+    // "result" (device-local). Every word of the result is checked, two frames in a row,
+    // with GPU timestamps on (the host pass splits the frame into two submissions).
+    constexpr uint32_t kWords = 1024;
+    constexpr VkDeviceSize kBytes = kWords * sizeof(uint32_t);
+    std::vector<uint32_t> source(kWords);
+    std::mt19937 rng(7);
+    for (uint32_t& w : source) w = uint32_t(rng());
+    gpu::Buffer input(*context, kBytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, "input");
+    std::memcpy(input.mapped(), source.data(), kBytes);
+
+    uint32_t frame = 0;
+    int hostCalls = 0;
+    std::vector<uint32_t> seenByHost;
+    RenderGraph graph;
+    graph.declareBuffer({"input", kBytes, true});
+    for (const char* name : {"stage", "down", "up", "result"}) graph.declareBuffer({name, kBytes, false});
+    graph.addPass("stage", QueueKind::Transfer)
+        .read("input", Usage::TransferSrc)
+        .write("stage", Usage::TransferDst)
+        .execute([&](PassContext& pass) {
+            const VkBufferCopy region{0, 0, kBytes};
+            vkCmdCopyBuffer(pass.cmd(), pass.buffer("input").handle(), pass.buffer("stage").handle(), 1, &region);
+        });
+    graph.addPass("read back", QueueKind::Transfer)
+        .read("stage", Usage::TransferSrc)
+        .write("down", Usage::TransferDst)
+        .execute([&](PassContext& pass) {
+            const VkBufferCopy region{0, 0, kBytes};
+            vkCmdCopyBuffer(pass.cmd(), pass.buffer("stage").handle(), pass.buffer("down").handle(), 1, &region);
+        });
+    graph.addPass("on the cpu", QueueKind::Host)
+        .read("down", Usage::HostRead)
+        .write("up", Usage::HostWrite)
+        .execute([&](PassContext& pass) {
+            ++hostCalls;
+            EXPECT_EQ(pass.cmd(), VK_NULL_HANDLE);
+            const std::span<std::byte> down = pass.hostMemory("down");
+            const std::span<std::byte> up = pass.hostMemory("up");
+            ASSERT_EQ(down.size(), kBytes);
+            ASSERT_EQ(up.size(), kBytes);
+            seenByHost.resize(kWords);
+            std::memcpy(seenByHost.data(), down.data(), kBytes);
+            std::vector<uint32_t> out(seenByHost.rbegin(), seenByHost.rend());
+            for (uint32_t& w : out) w += frame;
+            std::memcpy(up.data(), out.data(), kBytes);
+            // Long enough that the pass's CPU time cannot be anything but its own.
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        });
+    graph.addPass("upload", QueueKind::Transfer)
+        .read("up", Usage::TransferSrc)
+        .write("result", Usage::TransferDst)
+        .execute([&](PassContext& pass) {
+            const VkBufferCopy region{0, 0, kBytes};
+            vkCmdCopyBuffer(pass.cmd(), pass.buffer("up").handle(), pass.buffer("result").handle(), 1, &region);
+        });
+    graph.markOutput("result");
+
+    GraphExecutor executor(*context);
+    executor.bindBuffer("input", input);
+    for (frame = 1; frame <= 2; ++frame) {
+        SCOPED_TRACE(fmt::format("frame {}", frame));
+        executor.execute(graph);
+        EXPECT_EQ(hostCalls, int(frame));
+        EXPECT_EQ(seenByHost, source);
+        const std::vector<uint32_t> result = readWords(*context, executor.buffer("result"));
+        ASSERT_EQ(result.size(), kWords);
+        for (uint32_t i = 0; i < kWords; ++i) ASSERT_EQ(result[i], source[kWords - 1 - i] + frame) << "word " << i;
+
+        const std::vector<PassTiming> timings = executor.collectTimings();
+        ASSERT_EQ(timings.size(), 4u);
+        EXPECT_EQ(timings[2].name, "on the cpu");
+        EXPECT_EQ(timings[2].gpuMs, 0.0);
+        EXPECT_GE(timings[2].cpuMs, 5.0);
+        EXPECT_GT(timings[0].gpuMs + timings[1].gpuMs + timings[3].gpuMs, 0.0) << "GPU passes on both sides are timed";
+    }
+
+    // The barriers carry the HOST stage: device writes made available to the host before
+    // the host pass, the host's writes ordered before the upload.
+    const CompiledGraph& compiled = *executor.compiled();
+    const int down = resourceIndex(compiled, "down");
+    const int up = resourceIndex(compiled, "up");
+    const Barrier* toHost = barrierOn(*passNamed(compiled, "on the cpu"), down);
+    ASSERT_NE(toHost, nullptr);
+    EXPECT_EQ(toHost->srcStage, VK_PIPELINE_STAGE_2_TRANSFER_BIT);
+    EXPECT_EQ(toHost->srcAccess, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    EXPECT_EQ(toHost->dstStage, VK_PIPELINE_STAGE_2_HOST_BIT);
+    EXPECT_EQ(toHost->dstAccess, VK_ACCESS_2_HOST_READ_BIT);
+    const Barrier* fromHost = barrierOn(*passNamed(compiled, "upload"), up);
+    ASSERT_NE(fromHost, nullptr);
+    EXPECT_EQ(fromHost->srcStage, VK_PIPELINE_STAGE_2_HOST_BIT);
+    EXPECT_EQ(fromHost->srcAccess, VK_ACCESS_2_HOST_WRITE_BIT);
+    EXPECT_EQ(fromHost->dstStage, VK_PIPELINE_STAGE_2_TRANSFER_BIT);
+    EXPECT_EQ(fromHost->dstAccess, VK_ACCESS_2_TRANSFER_READ_BIT);
+
+    // "stage" is dead before "up" is born, and as large: only the kind of memory keeps
+    // them apart. No slot mixes the two kinds.
+    const CompiledResource& stage = compiled.resources[size_t(resourceIndex(compiled, "stage"))];
+    EXPECT_LT(stage.lastUse, compiled.resources[size_t(up)].firstUse);
+    EXPECT_TRUE(compiled.resources[size_t(down)].hostVisible);
+    EXPECT_TRUE(compiled.resources[size_t(up)].hostVisible);
+    EXPECT_FALSE(stage.hostVisible);
+    EXPECT_NE(stage.memorySlot, compiled.resources[size_t(up)].memorySlot);
+    for (const MemorySlot& slot : compiled.memorySlots)
+        for (uint32_t r : slot.resources) EXPECT_EQ(compiled.resources[r].hostVisible, slot.hostVisible);
+
+    const std::string text = compiled.toText();
+    EXPECT_NE(text.find("2 on the cpu (host)"), std::string::npos) << text;
+    EXPECT_NE(text.find("-> { Host } { HostRead }"), std::string::npos) << text;
+    EXPECT_NE(text.find("down: buffer, 0.00 MiB, host-visible"), std::string::npos) << text;
+    EXPECT_NE(compiled.toDot().find("host"), std::string::npos);
+}
+
+TEST_F(GraphExecutorTest, HostPassNobodyReadsIsCulledAndNeverRuns)
+{
+    constexpr VkDeviceSize kBytes = 256;
+    int hostCalls = 0;
+    RenderGraph graph;
+    graph.declareBuffer({"down", kBytes, false});
+    graph.declareBuffer({"unread", kBytes, false});
+    graph.declareBuffer({"out", kBytes, false});
+    graph.addPass("read back", QueueKind::Transfer).write("down", Usage::TransferDst).execute([](PassContext& pass) {
+        fill(pass, "down", 3);
+    });
+    graph.addPass("analyse", QueueKind::Host)
+        .read("down", Usage::HostRead)
+        .write("unread", Usage::HostWrite)
+        .execute([&](PassContext&) { ++hostCalls; });
+    graph.addPass("kept", QueueKind::Transfer).write("out", Usage::TransferDst).execute([](PassContext& pass) {
+        fill(pass, "out", 4);
+    });
+    graph.markOutput("out");
+
+    GraphExecutor executor(*context, kNoTimestamps);
+    executor.execute(graph);
+    const CompiledGraph& compiled = *executor.compiled();
+    std::vector<std::string> culled;
+    for (const CulledPass& pass : compiled.culled) culled.push_back(pass.name);
+    EXPECT_EQ(culled, (std::vector<std::string>{"read back", "analyse"}));
+    EXPECT_EQ(hostCalls, 0);
+    EXPECT_TRUE(allEqual(readWords(*context, executor.buffer("out")), 0, 64, 4u));
+
+    // The control: read what it writes and it runs, once per frame.
+    graph.markOutput("unread");
+    executor.execute(graph);
+    EXPECT_EQ(hostCalls, 1);
+}
+
+TEST_F(GraphExecutorTest, HostPassMisuseNamesThePass)
+{
+    const auto compileError = [](const std::function<void(RenderGraph&)>& declare) {
+        RenderGraph graph;
+        graph.declareBuffer({"buf", 256, false});
+        graph.declareImage({"img", 4, 4, VK_FORMAT_R32_SFLOAT, false, {}});
+        declare(graph);
+        return errorOf([&] { graph.compile(); });
+    };
+    EXPECT_NE(compileError([](RenderGraph& g) { g.addPass("cpu", QueueKind::Host).write("img", Usage::HostWrite); })
+                  .find("pass 'cpu', resource 'img': host write usage needs a buffer, not an image"),
+              std::string::npos);
+    EXPECT_NE(compileError([](RenderGraph& g) { g.addPass("cpu", QueueKind::Host).write("buf", Usage::TransferDst); })
+                  .find("pass 'cpu', resource 'buf': transfer destination usage is not available on a host pass"),
+              std::string::npos);
+    EXPECT_NE(compileError([](RenderGraph& g) { g.addPass("copy", QueueKind::Transfer).write("buf", Usage::HostWrite); })
+                  .find("pass 'copy', resource 'buf': host write usage is not available on a transfer pass"),
+              std::string::npos);
+    EXPECT_NE(compileError([](RenderGraph& g) { g.addPass("shade", QueueKind::Compute).write("buf", Usage::HostWrite); })
+                  .find("pass 'shade', resource 'buf': host write usage needs a host pass"),
+              std::string::npos);
+
+    // record() fills one command buffer: it cannot wait for the GPU before a host pass.
+    RenderGraph graph;
+    graph.declareBuffer({"buf", 256, true});
+    std::string asked = "buf";
+    graph.addPass("cpu", QueueKind::Host).write("buf", Usage::HostWrite).execute([&](PassContext& pass) {
+        (void)pass.hostMemory(asked);
+    });
+    graph.declareBuffer({"gpu", 256, false});
+    PassBuilder gpuPass =
+        graph.addPass("gpu", QueueKind::Transfer).write("gpu", Usage::TransferDst).execute([](PassContext& pass) {
+            (void)pass.hostMemory("gpu");
+        });
+    graph.markOutput("buf");
+    graph.markOutput("gpu");
+    GraphExecutor executor(*context, kNoTimestamps);
+    gpu::Buffer deviceOnly(*context, 256, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, "device only");
+    executor.bindBuffer("buf", deviceOnly);
+    const std::string unmapped = errorOf([&] { executor.execute(graph); });
+    EXPECT_NE(unmapped.find("imported buffer 'buf' is used by the host passes 'cpu' but the bound buffer is not "
+                            "host-visible"),
+              std::string::npos)
+        << unmapped;
+
+    gpu::Buffer mapped(*context, 256, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, "mapped");
+    executor.bindBuffer("buf", mapped);
+    const std::string recorded = errorOf([&] {
+        context->submitAndWait([&](VkCommandBuffer cmd) { executor.record(cmd, graph); });
+    });
+    EXPECT_NE(recorded.find("pass 'cpu' is a host pass: record() fills one command buffer"), std::string::npos)
+        << recorded;
+
+    // A GPU pass may not touch mapped memory; the failure leaves the executor's command
+    // buffer recording, and the next frame must still run.
+    const std::string gpuError = errorOf([&] { executor.execute(graph); });
+    EXPECT_NE(gpuError.find("pass 'gpu' failed while recording: render graph: pass 'gpu' asks for the host memory "
+                            "of 'gpu' but is not a host pass"),
+              std::string::npos)
+        << gpuError;
+    gpuPass.execute([](PassContext& pass) { fill(pass, "gpu", 6); });
+    asked = "nonexistent";
+    const std::string hostError = errorOf([&] { executor.execute(graph); });
+    EXPECT_NE(hostError.find("pass 'cpu' failed while running on the host: render graph: pass 'cpu' uses "
+                             "'nonexistent', which it did not declare"),
+              std::string::npos)
+        << hostError;
+    asked = "buf";
+    executor.execute(graph);
+    EXPECT_TRUE(allEqual(readWords(*context, executor.buffer("gpu")), 0, 64, 6u));
 }

@@ -576,8 +576,8 @@ protected:
         const render::SceneGpu sceneGpu(*context, scene);
         const render::Casters casters(sceneGpu);
         const gpu::ShaderCompiler shaders({hard.shaderDir, gpu::engineShaderDir()});
-        const plugin::TechniqueSetup setup{*context, shaders,       casters,   params,     cfg.lights[0].light,
-                                           scene.bounds(), 0,  cfg.width, cfg.height};
+        const plugin::TechniqueSetup setup{*context,           shaders,        casters, scene,     params,
+                                           cfg.lights[0].light, scene.bounds(), 0,       cfg.width, cfg.height};
         registry->create(hard, setup, "light 0");
     }
 

@@ -408,7 +408,7 @@ TEST_F(Registry, AbiMismatchNamesBothVersions)
 {
     const PluginError e = loadError("abi", PluginErrorKind::AbiMismatch);
     EXPECT_TRUE(contains(e.what(), "plugin 'abi' (" + (kPlugins / "penumbra-abi.so").string() +
-                                       "): built for plugin ABI 9999, this engine has ABI 1: rebuild the plugin against "
+                                       "): built for plugin ABI 9999, this engine has ABI 2: rebuild the plugin against "
                                        "this engine"));
     expectStillWorks();
 }
@@ -682,7 +682,8 @@ protected:
     std::unique_ptr<plugin::Technique> create(const plugin::LoadedPlugin& plugin, const ParamValues& params,
                                               uint32_t lightIndex = 0)
     {
-        const plugin::TechniqueSetup setup{*context, *shaders, *casters, params, light, scene.bounds(), lightIndex, 64, 32};
+        const plugin::TechniqueSetup setup{*context, *shaders,       *casters,   scene, params,
+                                           light,    scene.bounds(), lightIndex, 64,    32};
         return registry.create(plugin, setup, fmt::format("light {}", lightIndex));
     }
 

@@ -383,6 +383,10 @@ BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& v
     }
     const FrameImages images = captureFrame(renderer);
     const std::vector<graph::TransientMemory> memory = renderer.executor().transientMemory();
+    std::set<std::string, std::less<>> hostPasses;  // their cost is CPU time
+    for (const graph::CompiledPass& pass : renderer.executor().compiled()->passes) {
+        if (pass.queue == graph::QueueKind::Host) hostPasses.insert(pass.name);
+    }
 
     BenchVariant result;
     result.index = index;
@@ -392,7 +396,7 @@ BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& v
     result.sceneParams = sceneParamsJson(config.scene);
     result.width = images.width;
     result.height = images.height;
-    result.frame = summarizeTimings(measured);
+    result.frame = summarizeTimings(measured, "", hostPasses);
     for (size_t l = 0; l < config.lights.size(); ++l) {
         BenchLight light;
         light.index = l;
@@ -404,7 +408,7 @@ BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& v
         light.techniqueLabel = choicesText(variant, l, true);
         light.contextLabel = choicesText(variant, l, false);
         const std::string prefix = renderer.shadowPassPrefix(l);
-        light.timing = summarizeTimings(measured, prefix);
+        light.timing = summarizeTimings(measured, prefix, hostPasses);
         for (const graph::TransientMemory& m : memory) {
             if (m.name.rfind(prefix, 0) == 0) light.memory.push_back(m);
         }
@@ -421,12 +425,12 @@ void printTable(const BenchRun& run)
     fmt::print("bench {}: {} variant(s), medians of {} frame(s) after {} warm-up; reference {} {} ({} render(s))\n",
                run.config, run.variants.size(), run.frames, run.warmup, run.reference, run.referenceParams.dump(),
                run.referenceRenders);
-    fmt::print("  {:>3} {:<12} {:<12} {:>10} {:>10} {:>12} {:>9} {:>9}  {}\n", "#", "light", "technique", "GPU ms", "frame ms",
+    fmt::print("  {:>3} {:<12} {:<12} {:>10} {:>10} {:>12} {:>9} {:>9}  {}\n", "#", "light", "technique", "ms", "frame ms",
                "memory B", "RMSE", "SSIM", "variant (* Pareto front)");
     for (const BenchVariant& v : run.variants) {
         for (const BenchLight& l : v.lights) {
             fmt::print("  {:>3} {:<12} {:<12} {:>10.3f} {:>10.3f} {:>12} {:>9.5f} {:>9.5f}  {}{}\n", v.index, l.name, l.technique,
-                       l.timing.gpuMs, v.frame.frameWallMs, l.memoryBytes(), l.visibility.all.rmse, l.visibility.ssim,
+                       l.timing.workMs, v.frame.frameWallMs, l.memoryBytes(), l.visibility.all.rmse, l.visibility.ssim,
                        l.paretoFront ? "* " : "  ", v.label.empty() ? "(no sweep)" : v.label);
         }
     }

@@ -20,8 +20,11 @@ std::string thresholdText(size_t i) { return fmt::format("{}", metrics::kErrorTh
 json timingJson(const TimingSummary& t)
 {
     json passes = json::array();
-    for (const PassTimes& p : t.passes) passes.push_back({{"name", p.name}, {"gpu_ms", p.gpuMs}, {"cpu_ms", p.cpuMs}});
-    return {{"gpu_ms", t.gpuMs}, {"cpu_ms", t.cpuMs}, {"wall_ms", t.frameWallMs}, {"passes", std::move(passes)}};
+    for (const PassTimes& p : t.passes) {
+        passes.push_back({{"name", p.name}, {"host", p.host}, {"gpu_ms", p.gpuMs}, {"cpu_ms", p.cpuMs}});
+    }
+    return {{"work_ms", t.workMs}, {"gpu_ms", t.gpuMs},         {"host_ms", t.hostMs},
+            {"cpu_ms", t.cpuMs},   {"wall_ms", t.frameWallMs}, {"passes", std::move(passes)}};
 }
 
 // RFC 4180: a field with a comma, a quote or a line break is quoted, quotes doubled.
@@ -40,8 +43,9 @@ std::vector<std::string> csvHeader()
 {
     std::vector<std::string> columns = {"variant",     "label",        "technique",    "technique_label", "context",
                                         "params",      "scene",        "scene_params", "width",           "height",
-                                        "light_index", "light",        "technique_gpu_ms", "technique_cpu_ms",
-                                        "frame_gpu_ms", "frame_wall_ms", "pass_gpu_ms", "memory_bytes"};
+                                        "light_index", "light",        "technique_ms", "technique_gpu_ms",
+                                        "technique_host_ms", "technique_cpu_ms", "frame_gpu_ms", "frame_wall_ms",
+                                        "pass_ms", "memory_bytes"};
     const auto statsColumns = [&](const std::string& prefix) {
         for (const char* figure : {"pixels", "rmse", "mae", "max_abs_error"}) columns.push_back(prefix + figure);
         for (size_t t = 0; t < metrics::kErrorThresholds.size(); ++t) {
@@ -63,8 +67,8 @@ void appendStats(std::vector<std::string>& fields, const metrics::ErrorStats& s)
 
 std::vector<std::string> csvRow(const BenchVariant& v, const BenchLight& l)
 {
-    json passGpu = json::object();
-    for (const PassTimes& p : l.timing.passes) passGpu[p.name] = p.gpuMs;
+    json passMs = json::object();  // each pass's work: GPU time, or a host pass's CPU time
+    for (const PassTimes& p : l.timing.passes) passMs[p.name] = p.host ? p.cpuMs : p.gpuMs;
     std::vector<std::string> fields = {std::to_string(v.index),
                                        v.label,
                                        l.technique,
@@ -77,11 +81,13 @@ std::vector<std::string> csvRow(const BenchVariant& v, const BenchLight& l)
                                        std::to_string(v.height),
                                        std::to_string(l.index),
                                        l.name,
+                                       number(l.timing.workMs),
                                        number(l.timing.gpuMs),
+                                       number(l.timing.hostMs),
                                        number(l.timing.cpuMs),
                                        number(v.frame.gpuMs),
                                        number(v.frame.frameWallMs),
-                                       passGpu.dump(),
+                                       passMs.dump(),
                                        std::to_string(l.memoryBytes())};
     appendStats(fields, l.visibility.all);
     fields.push_back(number(l.visibility.ssim));
@@ -164,7 +170,7 @@ void markParetoFronts(BenchRun& run)
         std::vector<metrics::TradeoffPoint> points;
         for (const TradeoffPanel::Member& m : panel.members) {
             const BenchLight& l = run.variants[m.variant].lights[m.light];
-            points.push_back({l.timing.gpuMs, l.visibility.all.rmse});
+            points.push_back({l.timing.workMs, l.visibility.all.rmse});
         }
         for (size_t i : metrics::paretoFront(points)) {
             const TradeoffPanel::Member& m = panel.members[i];
@@ -239,25 +245,25 @@ std::string summaryMarkdown(const BenchRun& run)
     md += fmt::format("- date: {}\n", run.date);
     md += fmt::format("- frames: {} measured after {} warm-up, per variant; times are medians\n", run.frames, run.warmup);
     md += fmt::format("- reference: `{}` `{}`\n\n", run.reference, run.referenceParams.dump());
-    md += "GPU ms is the light's shadow passes on the GPU (timestamp queries), memory the transient memory of "
-          "those passes, and the errors compare the light's visibility image with the reference's over the pixels "
+    md += "ms is the time of the light's shadow passes: on the GPU (timestamp queries), and on the CPU for host "
+          "passes; memory is the transient memory of those passes, and the errors compare the light's visibility image with the reference's over the pixels "
           "that show geometry (penumbra: where the reference is strictly between 0.01 and 0.99). A ✓ marks the "
           "Pareto front: no other variant in the same table is both faster and more accurate.\n\n";
     md += fmt::format("Regenerate with:\n\n```sh\n{}\n```\n", shellCommand(run.command));
     for (const TradeoffPanel& panel : tradeoffPanels(run)) {
         md += fmt::format("\n## {}\n\n", panel.title);
-        md += fmt::format("| technique | variant | GPU ms | memory | RMSE | RMSE penumbra | MAE | max | > {} | > {} | SSIM | "
+        md += fmt::format("| technique | variant | ms | memory | RMSE | RMSE penumbra | MAE | max | > {} | > {} | SSIM | "
                           "front |\n",
                           thresholdText(0), thresholdText(1));
         md += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|:-:|\n";
         std::vector<const BenchLight*> rows;
         for (const TradeoffPanel::Member& m : panel.members) rows.push_back(&run.variants[m.variant].lights[m.light]);
         std::stable_sort(rows.begin(), rows.end(),
-                         [](const BenchLight* a, const BenchLight* b) { return a->timing.gpuMs < b->timing.gpuMs; });
+                         [](const BenchLight* a, const BenchLight* b) { return a->timing.workMs < b->timing.workMs; });
         for (const BenchLight* l : rows) {
             const metrics::ErrorStats& all = l->visibility.all;
             md += fmt::format("| {} | {} | {:.3f} | {} | {:.4f} | {:.4f} | {:.4f} | {:.3f} | {:.2f}% | {:.2f}% | {:.4f} | {} |\n",
-                              cell(l->technique), cell(l->techniqueLabel), l->timing.gpuMs, bytesText(l->memoryBytes()),
+                              cell(l->technique), cell(l->techniqueLabel), l->timing.workMs, bytesText(l->memoryBytes()),
                               all.rmse, l->visibility.region(metrics::Region::Penumbra).rmse, all.mae, all.maxAbsError,
                               all.percentAbove(0), all.percentAbove(1), l->visibility.ssim, l->paretoFront ? "✓" : "");
         }

@@ -31,7 +31,7 @@ struct BenchLight {
     TimingSummary timing;    // the light's shadow passes (FrameRenderer::shadowPassPrefix)
     std::vector<graph::TransientMemory> memory;  // the transient resources of those passes
     metrics::VisibilityComparison visibility;    // against the reference
-    bool paretoFront = false;  // not dominated in (timing.gpuMs, RMSE) within its panel
+    bool paretoFront = false;  // not dominated in (timing.workMs, RMSE) within its panel
 
     uint64_t memoryBytes() const;
 };
@@ -77,7 +77,7 @@ struct TradeoffPanel {
 // Panels in order of first appearance.
 std::vector<TradeoffPanel> tradeoffPanels(const BenchRun& run);
 
-// Sets BenchLight::paretoFront: the front of each panel over (technique GPU ms, RMSE).
+// Sets BenchLight::paretoFront: the front of each panel over (technique ms, RMSE).
 void markParetoFronts(BenchRun& run);
 
 // The shell command that `command` was, quoted where needed ("penumbra bench 'a b.json'").

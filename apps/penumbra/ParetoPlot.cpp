@@ -160,7 +160,7 @@ std::string drawPanel(const TradeoffPanel& panel, const BenchRun& run, double ox
     for (const TradeoffPanel::Member& m : panel.members) {
         const BenchVariant& v = run.variants[m.variant];
         const BenchLight& l = v.lights[m.light];
-        points.push_back({l.timing.gpuMs, l.visibility.all.rmse, &l, &v});
+        points.push_back({l.timing.workMs, l.visibility.all.rmse, &l, &v});
     }
     std::vector<double> times, errors;
     for (const Point& p : points) {
@@ -187,7 +187,7 @@ std::string drawPanel(const TradeoffPanel& panel, const BenchRun& run, double ox
     }
     svg += fmt::format("<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"{:.1f}\" height=\"{:.1f}\" class=\"frame\"/>\n", left, top,
                        right - left, bottom - top);
-    svg += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" class=\"axis\" text-anchor=\"middle\">technique GPU ms{}</text>\n",
+    svg += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" class=\"axis\" text-anchor=\"middle\">technique ms{}</text>\n",
                        0.5 * (left + right), oy + kPanelHeight - 14, x.log ? " (log scale)" : "");
     svg += fmt::format("<text transform=\"translate({:.1f} {:.1f}) rotate(-90)\" class=\"axis\" text-anchor=\"middle\">"
                        "RMSE against the reference</text>\n",
@@ -252,7 +252,7 @@ std::string paretoSvg(const BenchRun& run)
         "<rect width=\"100%\" height=\"100%\" fill=\"#fff\"/>\n",
         width, height);
     svg += fmt::format("<text x=\"16\" y=\"24\" class=\"title\">{}: error against time</text>\n", xmlText(run.config));
-    svg += fmt::format("<text x=\"16\" y=\"44\" class=\"axis\">{}; reference {}; medians of {} frame(s)</text>\n",
+    svg += fmt::format("<text x=\"16\" y=\"44\" class=\"axis\">{}; reference technique: {}; medians of {} frame(s)</text>\n",
                        xmlText(run.device.value("name", "")), xmlText(run.reference), run.frames);
     double legendX = 16;
     for (const std::string& technique : techniques) {

@@ -15,16 +15,17 @@ double median(std::vector<double> samples)
     return n % 2 ? samples[n / 2] : 0.5 * (samples[n / 2 - 1] + samples[n / 2]);
 }
 
-TimingSummary summarizeTimings(const std::vector<render::FrameTimings>& frames, std::string_view prefix)
+TimingSummary summarizeTimings(const std::vector<render::FrameTimings>& frames, std::string_view prefix,
+                               const std::set<std::string, std::less<>>& hostPasses)
 {
     struct Samples {
         std::vector<double> gpu, cpu;
     };
     std::vector<std::string> order;
     std::map<std::string, Samples, std::less<>> samples;
-    std::vector<double> gpuSums, cpuSums, wall;
+    std::vector<double> gpuSums, cpuSums, hostSums, workSums, wall;
     for (const render::FrameTimings& frame : frames) {
-        double gpu = 0.0, cpu = 0.0;
+        double gpu = 0.0, cpu = 0.0, host = 0.0;
         for (const render::PassTiming& pass : frame.passes) {
             if (pass.name.compare(0, prefix.size(), prefix) != 0) continue;
             if (!samples.count(pass.name)) order.push_back(pass.name);
@@ -32,9 +33,12 @@ TimingSummary summarizeTimings(const std::vector<render::FrameTimings>& frames, 
             samples[pass.name].cpu.push_back(pass.cpuMs);
             gpu += pass.gpuMs;
             cpu += pass.cpuMs;
+            if (hostPasses.count(pass.name)) host += pass.cpuMs;
         }
         gpuSums.push_back(gpu);
         cpuSums.push_back(cpu);
+        hostSums.push_back(host);
+        workSums.push_back(gpu + host);
         wall.push_back(frame.frameCpuMs);
     }
     TimingSummary summary;
@@ -44,10 +48,12 @@ TimingSummary summarizeTimings(const std::vector<render::FrameTimings>& frames, 
         Samples& s = samples[name];
         s.gpu.resize(frames.size(), 0.0);
         s.cpu.resize(frames.size(), 0.0);
-        summary.passes.push_back({name, median(s.gpu), median(s.cpu)});
+        summary.passes.push_back({name, hostPasses.count(name) > 0, median(s.gpu), median(s.cpu)});
     }
     summary.gpuMs = median(std::move(gpuSums));
     summary.cpuMs = median(std::move(cpuSums));
+    summary.hostMs = median(std::move(hostSums));
+    summary.workMs = median(std::move(workSums));
     summary.frameWallMs = median(std::move(wall));
     return summary;
 }
@@ -55,7 +61,7 @@ TimingSummary summarizeTimings(const std::vector<render::FrameTimings>& frames, 
 void printTimings(const TimingSummary& summary)
 {
     fmt::print("timings: median of {} frame(s)\n", summary.frames);
-    fmt::print("  {:<28} {:>10} {:>12}\n", "pass", "GPU ms", "CPU rec ms");
+    fmt::print("  {:<28} {:>10} {:>12}\n", "pass", "GPU ms", "CPU ms");
     for (const PassTimes& pass : summary.passes) fmt::print("  {:<28} {:>10.3f} {:>12.3f}\n", pass.name, pass.gpuMs, pass.cpuMs);
     fmt::print("  {:<28} {:>10.3f}\n", "sum of passes (GPU)", summary.gpuMs);
     fmt::print("  {:<28} {:>10.3f}\n", "frame wall clock (CPU)", summary.frameWallMs);

@@ -4,6 +4,7 @@
 #include "penumbra/render/FrameRenderer.h"
 
 #include <cstddef>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -15,8 +16,9 @@ double median(std::vector<double> samples);
 
 struct PassTimes {
     std::string name;
+    bool host = false;   // a host pass: its work is cpuMs, it has no GPU time
     double gpuMs = 0.0;  // median GPU time (timestamp queries)
-    double cpuMs = 0.0;  // median CPU time its callback took to record
+    double cpuMs = 0.0;  // median CPU time of its callback: recording, or a host pass's work
 };
 
 struct TimingSummary {
@@ -24,14 +26,20 @@ struct TimingSummary {
     std::vector<PassTimes> passes;  // in the order they first ran
     // Per frame, the sum over `passes`; then the median over the frames. A sum's median,
     // not a sum of medians: the figure of one typical frame.
-    double gpuMs = 0.0;
-    double cpuMs = 0.0;
+    double gpuMs = 0.0;   // GPU time (host passes have none)
+    double cpuMs = 0.0;   // callbacks: recording, and host passes' work
+    double hostMs = 0.0;  // host passes' work alone
+    // What the frame waits for: GPU passes on the GPU plus host passes on the CPU. The
+    // cost of a technique whatever runs where; gpuMs when it has no host pass.
+    double workMs = 0.0;
     double frameWallMs = 0.0;  // median of FrameTimings::frameCpuMs (record, submit, wait)
 };
 
-// Summarises the passes whose names start with `prefix` (every pass for ""). A pass
-// missing from a frame counts as 0 ms there. With no frames every figure is 0.
-TimingSummary summarizeTimings(const std::vector<render::FrameTimings>& frames, std::string_view prefix = "");
+// Summarises the passes whose names start with `prefix` (every pass for ""); those named
+// in `hostPasses` are host passes (graph::QueueKind::Host). A pass missing from a frame
+// counts as 0 ms there. With no frames every figure is 0.
+TimingSummary summarizeTimings(const std::vector<render::FrameTimings>& frames, std::string_view prefix = "",
+                               const std::set<std::string, std::less<>>& hostPasses = {});
 
 // The table `render --timings` prints on stdout.
 void printTimings(const TimingSummary& summary);

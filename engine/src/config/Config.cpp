@@ -285,6 +285,7 @@ LightConfig readLight(const json& v, const Locator& locator, size_t index)
             }
         } else if (type == "point") {
             l.type = scene::LightType::Point;
+            l.radiusWorld = float(r.number("radius", 0.0, 0.0, 1e9));
         } else if (type == "rect") {
             l.type = scene::LightType::Rect;
             readAxis(r, lc, true);

@@ -63,7 +63,11 @@ const ResourceUse& declaredUse(const CompiledGraph& graph, const CompiledPass& p
 
 struct GraphExecutor::State {
     State(gpu::Context& context, ExecutorOptions options) : context(context), options(options) {}
-    ~State() { releaseTransients(); }
+    ~State()
+    {
+        releaseTransients();
+        if (cmd) vkFreeCommandBuffers(context.device(), context.commandPool(), 1, &cmd);
+    }
     State(const State&) = delete;
     State& operator=(const State&) = delete;
 
@@ -77,6 +81,8 @@ struct GraphExecutor::State {
     std::vector<gpu::Image> transientImages;
     std::vector<gpu::Buffer> transientBuffers;
     std::vector<VkDeviceMemory> memory;
+    // Per resource: the start of its mapped memory (host-visible buffers), else null.
+    std::vector<std::byte*> hostPointers;
     VkDeviceSize bytesAllocated = 0;
     VkDeviceSize bytesWithoutAliasing = 0;
     std::vector<TransientMemory> transientMemory;  // what each created transient requires
@@ -89,8 +95,16 @@ struct GraphExecutor::State {
 
     std::unique_ptr<gpu::GpuTimer> timer;
     uint32_t timerScopes = 0;
-    std::vector<double> cpuMs;  // per executed pass of the last frame
+    bool timed = false;              // this frame has GPU timestamps
+    std::vector<double> cpuMs;       // per executed pass of the last frame
+    std::vector<int> timerScope;     // per executed pass: its GPU timestamp scope, -1 for none
     bool frameRecorded = false;
+    VkCommandBuffer cmd = VK_NULL_HANDLE;  // execute()'s, reused by every segment
+
+    struct Block {
+        VkDeviceMemory memory = VK_NULL_HANDLE;
+        std::byte* mapped = nullptr;  // host-visible blocks only
+    };
 
     // Reused between frames so that recording barriers allocates nothing.
     std::vector<VkImageMemoryBarrier2> imageBarriers;
@@ -98,8 +112,10 @@ struct GraphExecutor::State {
 
     void createTransients(const CompiledGraph& graph);
     void placeSlot(const CompiledGraph& graph, uint32_t slot, const std::vector<VkMemoryRequirements>& requirements);
-    VkDeviceMemory allocate(VkDeviceSize size, uint32_t typeBits, const std::string& name);
-    void bind(const CompiledGraph& graph, uint32_t r, VkDeviceMemory memory);
+    Block allocate(VkDeviceSize size, uint32_t typeBits, bool hostVisible, const std::string& name);
+    void bind(const CompiledGraph& graph, uint32_t r, const Block& block);
+    void beginSegment();
+    void submitSegment();
     void releaseTransients();
     void resolveImports(const CompiledGraph& graph);
     void recordBarriers(VkCommandBuffer cmd, const CompiledGraph& graph, const std::vector<Barrier>& barriers);
@@ -110,8 +126,10 @@ void GraphExecutor::State::releaseTransients()
     // Objects before the memory they are bound to.
     transientImages.clear();
     transientBuffers.clear();
+    // Freeing mapped memory unmaps it.
     for (VkDeviceMemory block : memory) vkFreeMemory(context.device(), block, nullptr);
     memory.clear();
+    hostPointers.clear();
     bytesAllocated = 0;
     bytesWithoutAliasing = 0;
     transientMemory.clear();
@@ -129,6 +147,7 @@ void GraphExecutor::State::createTransients(const CompiledGraph& graph)
     transientBuffers.resize(count);
     images.assign(count, nullptr);
     buffers.assign(count, nullptr);
+    hostPointers.assign(count, nullptr);
     resourceIndex.clear();
 
     std::vector<VkMemoryRequirements> requirements(count);
@@ -159,7 +178,7 @@ void GraphExecutor::State::createTransients(const CompiledGraph& graph)
     for (uint32_t r = 0; r < count; ++r) {
         const CompiledResource& res = graph.resources[r];
         if (res.imported || res.firstUse < 0 || res.memorySlot >= 0) continue;
-        bind(graph, r, allocate(requirements[r].size, requirements[r].memoryTypeBits, res.name));
+        bind(graph, r, allocate(requirements[r].size, requirements[r].memoryTypeBits, res.hostVisible, res.name));
     }
 }
 
@@ -169,6 +188,7 @@ void GraphExecutor::State::createTransients(const CompiledGraph& graph)
 void GraphExecutor::State::placeSlot(const CompiledGraph& graph, uint32_t slot,
                                      const std::vector<VkMemoryRequirements>& requirements)
 {
+    const bool hostVisible = graph.memorySlots[slot].hostVisible;
     std::vector<uint32_t> shared;
     uint32_t typeBits = ~0u;
     VkDeviceSize size = 0;
@@ -181,7 +201,7 @@ void GraphExecutor::State::placeSlot(const CompiledGraph& graph, uint32_t slot,
             // say, depth images in a type of their own): it gets its own allocation. It
             // still shares nothing with a live resource, so correctness is unaffected;
             // only the saving is lost.
-            bind(graph, r, allocate(req.size, req.memoryTypeBits, graph.resources[r].name));
+            bind(graph, r, allocate(req.size, req.memoryTypeBits, hostVisible, graph.resources[r].name));
             continue;
         }
         typeBits &= req.memoryTypeBits;
@@ -191,34 +211,64 @@ void GraphExecutor::State::placeSlot(const CompiledGraph& graph, uint32_t slot,
         names += fmt::format("{}{}", names.empty() ? "" : ", ", graph.resources[r].name);
     }
     if (shared.empty()) return;
-    const VkDeviceMemory block = allocate(alignUp(size, alignment), typeBits,
-                                          fmt::format("render graph slot {}: {}", slot, names));
+    const Block block = allocate(alignUp(size, alignment), typeBits, hostVisible,
+                                 fmt::format("render graph slot {}: {}", slot, names));
     for (uint32_t r : shared) bind(graph, r, block);
 }
 
-VkDeviceMemory GraphExecutor::State::allocate(VkDeviceSize size, uint32_t typeBits, const std::string& name)
+// Host-visible blocks are coherent (no flush or invalidate around host passes) and
+// preferably cached (host passes read what the GPU wrote); they stay mapped while they
+// live.
+GraphExecutor::State::Block GraphExecutor::State::allocate(VkDeviceSize size, uint32_t typeBits, bool hostVisible,
+                                                           const std::string& name)
 {
     VkMemoryAllocateInfo info{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     info.allocationSize = size;
-    info.memoryTypeIndex = context.findMemoryType(typeBits, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-    VkDeviceMemory block = VK_NULL_HANDLE;
-    gpu::check(vkAllocateMemory(context.device(), &info, nullptr, &block),
+    info.memoryTypeIndex =
+        hostVisible ? context.findMemoryType(typeBits,
+                                             VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
+                                             VK_MEMORY_PROPERTY_HOST_CACHED_BIT)
+                    : context.findMemoryType(typeBits, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+    Block block;
+    gpu::check(vkAllocateMemory(context.device(), &info, nullptr, &block.memory),
                fmt::format("vkAllocateMemory ({} bytes for {})", size, name));
-    memory.push_back(block);
+    memory.push_back(block.memory);
     bytesAllocated += size;
-    context.setName(VK_OBJECT_TYPE_DEVICE_MEMORY, reinterpret_cast<uint64_t>(block), name);
+    context.setName(VK_OBJECT_TYPE_DEVICE_MEMORY, reinterpret_cast<uint64_t>(block.memory), name);
+    if (hostVisible) {
+        void* mapped = nullptr;
+        gpu::check(vkMapMemory(context.device(), block.memory, 0, VK_WHOLE_SIZE, 0, &mapped),
+                   fmt::format("vkMapMemory ({} bytes for {})", size, name));
+        block.mapped = static_cast<std::byte*>(mapped);
+    }
     return block;
 }
 
-void GraphExecutor::State::bind(const CompiledGraph& graph, uint32_t r, VkDeviceMemory block)
+void GraphExecutor::State::bind(const CompiledGraph& graph, uint32_t r, const Block& block)
 {
     const CompiledResource& res = graph.resources[r];
     try {
-        if (res.isImage) transientImages[r].bindMemory(block, 0);
-        else transientBuffers[r].bindMemory(block, 0);
+        if (res.isImage) transientImages[r].bindMemory(block.memory, 0);
+        else transientBuffers[r].bindMemory(block.memory, 0);
     } catch (const Error& e) {
         throw GpuError(fmt::format("render graph: transient {} '{}': {}", kindName(res), res.name, e.what()));
     }
+    hostPointers[r] = block.mapped;
+}
+
+void GraphExecutor::State::beginSegment()
+{
+    // A callback that threw may have left the buffer recording: reset it either way.
+    gpu::check(vkResetCommandBuffer(cmd, 0), "vkResetCommandBuffer (render graph)");
+    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    gpu::check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer (render graph)");
+}
+
+void GraphExecutor::State::submitSegment()
+{
+    gpu::check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer (render graph)");
+    context.submitAndWait(cmd);
 }
 
 void GraphExecutor::State::resolveImports(const CompiledGraph& graph)
@@ -228,7 +278,7 @@ void GraphExecutor::State::resolveImports(const CompiledGraph& graph)
         if (!res.imported || res.firstUse < 0) continue;
         const auto missing = [&] {
             return Error(fmt::format("render graph: imported {} '{}' is not bound (used by {}); call "
-                                     "GraphExecutor::bind{}() before record()",
+                                     "GraphExecutor::bind{}() before execute()",
                                      kindName(res), res.name, passesUsing(graph, r), res.isImage ? "Image" : "Buffer"));
         };
         if (res.isImage) {
@@ -254,7 +304,12 @@ void GraphExecutor::State::resolveImports(const CompiledGraph& graph)
                 throw Error(fmt::format("render graph: imported buffer '{}' is declared {} bytes but the bound "
                                         "buffer has {}",
                                         res.name, res.sizeBytes, found->second->size()));
+            if (res.hostVisible && !found->second->mapped())
+                throw Error(fmt::format("render graph: imported buffer '{}' is used by the host passes {} but the "
+                                        "bound buffer is not host-visible; create it with hostVisible = true",
+                                        res.name, passesUsing(graph, r)));
             buffers[r] = found->second;
+            hostPointers[r] = static_cast<std::byte*>(found->second->mapped());
         }
     }
 }
@@ -322,6 +377,21 @@ const gpu::Buffer& PassContext::buffer(std::string_view name) const
     return *object;
 }
 
+std::span<std::byte> PassContext::hostMemory(std::string_view name) const
+{
+    const ResourceUse& use = declaredUse(*executor_->compiled_, *pass_, name);
+    if (pass_->queue != QueueKind::Host)
+        throw Error(fmt::format("render graph: pass '{}' asks for the host memory of '{}' but is not a host pass "
+                                "(the GPU may be using that memory while it records)",
+                                *passName_, name));
+    std::byte* mapped = executor_->state_->hostPointers[use.resource];
+    if (!mapped)
+        throw Error(fmt::format("render graph: pass '{}' asks for the host memory of '{}', which is not a "
+                                "host-visible buffer",
+                                *passName_, name));
+    return {mapped, size_t(executor_->compiled_->resources[use.resource].sizeBytes)};
+}
+
 VkImageLayout PassContext::layout(std::string_view name) const
 {
     const ResourceUse& use = declaredUse(*executor_->compiled_, *pass_, name);
@@ -350,11 +420,12 @@ void GraphExecutor::bindBuffer(std::string_view name, const gpu::Buffer& buffer)
     state_->boundBuffers.insert_or_assign(std::string(name), &buffer);
 }
 
-void GraphExecutor::record(VkCommandBuffer cmd, RenderGraph& graph)
+const CompiledGraph& GraphExecutor::prepare(RenderGraph& graph)
 {
     State& st = *state_;
     st.frameRecorded = false;
     st.cpuMs.clear();
+    st.timerScope.clear();
     const std::shared_ptr<const CompiledGraph> compiled = graph.compile();
     if (compiled != compiled_) {
         compiled_.reset();
@@ -369,41 +440,125 @@ void GraphExecutor::record(VkCommandBuffer cmd, RenderGraph& graph)
                                     "callback; give it one with PassBuilder::execute()",
                                     pass.name));
 
-    const auto passCount = uint32_t(compiled->passes.size());
-    const bool timed = st.options.gpuTimestamps && passCount > 0;
-    if (timed) {
-        if (!st.timer || st.timerScopes < passCount) {
-            st.timer = std::make_unique<gpu::GpuTimer>(st.context, passCount);
-            st.timerScopes = passCount;
-        }
-        st.timer->beginFrame(cmd);
+    const auto gpuPasses = uint32_t(std::count_if(compiled->passes.begin(), compiled->passes.end(),
+                                                  [](const CompiledPass& p) { return p.queue != QueueKind::Host; }));
+    st.timed = st.options.gpuTimestamps && gpuPasses > 0;
+    if (st.timed && (!st.timer || st.timerScopes < gpuPasses)) {
+        st.timer = std::make_unique<gpu::GpuTimer>(st.context, gpuPasses);
+        st.timerScopes = gpuPasses;
     }
-    st.cpuMs.reserve(passCount);
-    for (const CompiledPass& pass : compiled->passes) {
-        st.recordBarriers(cmd, *compiled, pass.barriersBefore);
-        st.context.beginLabel(cmd, pass.name);
-        const uint32_t scope = timed ? st.timer->beginScope(cmd, pass.name) : 0;
-        PassContext context;
-        context.cmd_ = cmd;
-        context.context_ = &st.context;
-        context.passName_ = &pass.name;
-        context.executor_ = this;
-        context.pass_ = &pass;
-        const auto start = std::chrono::steady_clock::now();
-        try {
-            graph.executeFn(pass.declarationIndex)(context);
-        } catch (const std::exception& e) {
-            st.context.endLabel(cmd);
-            throw Error(fmt::format("render graph: pass '{}' failed while recording: {}", pass.name, e.what()));
-        } catch (...) {
-            st.context.endLabel(cmd);
-            throw Error(fmt::format("render graph: pass '{}' failed while recording: unknown exception", pass.name));
-        }
-        st.cpuMs.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-        if (timed) st.timer->endScope(cmd, scope);
+    st.cpuMs.reserve(compiled->passes.size());
+    st.timerScope.reserve(compiled->passes.size());
+    return *compiled;
+}
+
+namespace {
+
+double msSince(std::chrono::steady_clock::time_point start)
+{
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Runs a pass's callback; an exception becomes an Error naming the pass.
+void runCallback(const ExecuteFn& fn, PassContext& context, const CompiledPass& pass, const char* doing)
+{
+    try {
+        fn(context);
+    } catch (const std::exception& e) {
+        throw Error(fmt::format("render graph: pass '{}' failed while {}: {}", pass.name, doing, e.what()));
+    } catch (...) {
+        throw Error(fmt::format("render graph: pass '{}' failed while {}: unknown exception", pass.name, doing));
+    }
+}
+
+} // namespace
+
+void GraphExecutor::recordGpuPass(VkCommandBuffer cmd, RenderGraph& graph, size_t index)
+{
+    State& st = *state_;
+    const CompiledPass& pass = compiled_->passes[index];
+    st.recordBarriers(cmd, *compiled_, pass.barriersBefore);
+    st.context.beginLabel(cmd, pass.name);
+    const int scope = st.timed ? int(st.timer->beginScope(cmd, pass.name)) : -1;
+    PassContext context;
+    context.cmd_ = cmd;
+    context.context_ = &st.context;
+    context.passName_ = &pass.name;
+    context.executor_ = this;
+    context.pass_ = &pass;
+    const auto start = std::chrono::steady_clock::now();
+    try {
+        runCallback(graph.executeFn(pass.declarationIndex), context, pass, "recording");
+    } catch (...) {
         st.context.endLabel(cmd);
+        throw;
     }
-    st.recordBarriers(cmd, *compiled, compiled->barriersAfter);
+    st.cpuMs.push_back(msSince(start));
+    st.timerScope.push_back(scope);
+    if (scope >= 0) st.timer->endScope(cmd, uint32_t(scope));
+    st.context.endLabel(cmd);
+}
+
+void GraphExecutor::runHostPass(RenderGraph& graph, size_t index)
+{
+    State& st = *state_;
+    const CompiledPass& pass = compiled_->passes[index];
+    PassContext context;
+    context.context_ = &st.context;
+    context.passName_ = &pass.name;
+    context.executor_ = this;
+    context.pass_ = &pass;
+    const auto start = std::chrono::steady_clock::now();
+    runCallback(graph.executeFn(pass.declarationIndex), context, pass, "running on the host");
+    st.cpuMs.push_back(msSince(start));
+    st.timerScope.push_back(-1);
+}
+
+void GraphExecutor::execute(RenderGraph& graph)
+{
+    State& st = *state_;
+    const CompiledGraph& compiled = prepare(graph);
+    if (!st.cmd) {
+        VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+        alloc.commandPool = st.context.commandPool();
+        alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+        alloc.commandBufferCount = 1;
+        gpu::check(vkAllocateCommandBuffers(st.context.device(), &alloc, &st.cmd),
+                   "vkAllocateCommandBuffers (render graph)");
+    }
+    st.beginSegment();
+    if (st.timed) st.timer->beginFrame(st.cmd);
+    for (size_t i = 0; i < compiled.passes.size(); ++i) {
+        const CompiledPass& pass = compiled.passes[i];
+        if (pass.queue != QueueKind::Host) {
+            recordGpuPass(st.cmd, graph, i);
+            continue;
+        }
+        // The host pass's barriers end the segment before it: their HOST destination
+        // makes the segment's writes available to the host, and the wait makes them
+        // visible. Its own writes reach the next segment through the submission.
+        st.recordBarriers(st.cmd, compiled, pass.barriersBefore);
+        st.submitSegment();
+        runHostPass(graph, i);
+        st.beginSegment();
+    }
+    st.recordBarriers(st.cmd, compiled, compiled.barriersAfter);
+    st.submitSegment();
+    st.frameRecorded = true;
+}
+
+void GraphExecutor::record(VkCommandBuffer cmd, RenderGraph& graph)
+{
+    State& st = *state_;
+    const CompiledGraph& compiled = prepare(graph);
+    for (const CompiledPass& pass : compiled.passes)
+        if (pass.queue == QueueKind::Host)
+            throw Error(fmt::format("render graph: pass '{}' is a host pass: record() fills one command buffer and "
+                                    "cannot wait for the GPU before it; run the frame with execute()",
+                                    pass.name));
+    if (st.timed) st.timer->beginFrame(cmd);
+    for (size_t i = 0; i < compiled.passes.size(); ++i) recordGpuPass(cmd, graph, i);
+    st.recordBarriers(cmd, compiled, compiled.barriersAfter);
     st.frameRecorded = true;
 }
 
@@ -411,14 +566,17 @@ std::vector<PassTiming> GraphExecutor::collectTimings() const
 {
     const State& st = *state_;
     if (!st.frameRecorded)
-        throw Error("render graph: collectTimings() needs a frame whose record() finished and whose command buffer "
-                    "was submitted");
+        throw Error("render graph: collectTimings() needs a frame that execute() finished (or whose record() "
+                    "finished and whose command buffer was submitted)");
     std::vector<gpu::ScopeTime> gpuTimes;
-    if (st.options.gpuTimestamps && !st.cpuMs.empty()) gpuTimes = st.timer->collect();
+    if (st.timed) gpuTimes = st.timer->collect();
     std::vector<PassTiming> out;
     out.reserve(st.cpuMs.size());
-    for (size_t i = 0; i < st.cpuMs.size(); ++i)
-        out.push_back({compiled_->passes[i].name, i < gpuTimes.size() ? gpuTimes[i].gpuMs : 0.0, st.cpuMs[i]});
+    for (size_t i = 0; i < st.cpuMs.size(); ++i) {
+        const int scope = st.timerScope[i];
+        const double gpuMs = scope >= 0 && size_t(scope) < gpuTimes.size() ? gpuTimes[size_t(scope)].gpuMs : 0.0;
+        out.push_back({compiled_->passes[i].name, gpuMs, st.cpuMs[i]});
+    }
     return out;
 }
 

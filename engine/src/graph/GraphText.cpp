@@ -15,6 +15,7 @@ const char* queueName(QueueKind queue)
     case QueueKind::Graphics: return "graphics";
     case QueueKind::Compute: return "compute";
     case QueueKind::Transfer: return "transfer";
+    case QueueKind::Host: return "host";
     }
     return "?";
 }
@@ -27,6 +28,7 @@ std::string describe(const CompiledResource& res)
                                                  vk::to_string(vk::Format(res.format)))
                                    : std::string("buffer");
     text += fmt::format(", {}", mebibytes(res.sizeBytes));
+    if (res.hostVisible) text += ", host-visible";
     if (res.imported) text += ", imported";
     else if (res.memorySlot >= 0) text += fmt::format(", slot {}", res.memorySlot);
     if (res.markedOutput) text += ", output";

@@ -39,6 +39,8 @@ const char* usageName(Usage usage)
     case Usage::VertexBuffer: return "vertex buffer";
     case Usage::IndexBuffer: return "index buffer";
     case Usage::IndirectBuffer: return "indirect buffer";
+    case Usage::HostRead: return "host read";
+    case Usage::HostWrite: return "host write";
     }
     return "?";
 }
@@ -87,12 +89,18 @@ AccessScope deriveScope(Usage usage, Access direction, QueueKind queue, bool isI
         if (!ok) throw Error(fmt::format("{} usage {}", usageName(usage), what));
     };
     const bool imageOnly = usage == Usage::ColorAttachment || usage == Usage::DepthAttachment || usage == Usage::Sampled;
+    const bool hostUsage = usage == Usage::HostRead || usage == Usage::HostWrite;
     const bool bufferOnly = usage == Usage::UniformBuffer || usage == Usage::VertexBuffer ||
-                            usage == Usage::IndexBuffer || usage == Usage::IndirectBuffer;
+                            usage == Usage::IndexBuffer || usage == Usage::IndirectBuffer || hostUsage;
     require(!imageOnly || isImage, "needs an image, not a buffer");
     require(!bufferOnly || !isImage, "needs a buffer, not an image");
     const bool transferUsage = usage == Usage::TransferSrc || usage == Usage::TransferDst;
     require(queue != QueueKind::Transfer || transferUsage, "is not available on a transfer pass");
+    // The CPU can only reach mapped buffers: a host pass declares nothing else, and the
+    // host usages mean nothing to a pass that records commands.
+    require(queue != QueueKind::Host || hostUsage,
+            "is not available on a host pass (it reads and writes buffers, as host read / host write)");
+    require(!hostUsage || queue == QueueKind::Host, "needs a host pass");
 
     // Graphics passes may read in either shader stage; naming both keeps a vertex
     // shader's reads synchronised at the cost of a slightly earlier wait.
@@ -144,6 +152,14 @@ AccessScope deriveScope(Usage usage, Access direction, QueueKind queue, bool isI
     case Usage::IndirectBuffer:
         require(!write, "is read-only");
         return {noLayout, VK_PIPELINE_STAGE_2_DRAW_INDIRECT_BIT, VK_ACCESS_2_INDIRECT_COMMAND_READ_BIT};
+    // The HOST stage in a barrier makes device writes available to the host before the
+    // executor's wait (read), and orders the device after the host's writes (write).
+    case Usage::HostRead:
+        require(!write, "is read-only");
+        return {noLayout, VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT};
+    case Usage::HostWrite:
+        require(write, "is write-only");
+        return {noLayout, VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_WRITE_BIT};
     }
     throw Error("unknown usage");
 }
@@ -543,8 +559,15 @@ private:
             case Usage::VertexBuffer: res.bufferUsage |= VK_BUFFER_USAGE_VERTEX_BUFFER_BIT; break;
             case Usage::IndexBuffer: res.bufferUsage |= VK_BUFFER_USAGE_INDEX_BUFFER_BIT; break;
             case Usage::IndirectBuffer: res.bufferUsage |= VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT; break;
+            case Usage::HostRead:
+            case Usage::HostWrite: res.hostVisible = true; break;
             }
         }
+        // Vulkan wants some usage on every buffer: one that only host passes touch (a
+        // hand-over between two of them) gets the transfer usages.
+        for (CompiledResource& res : out.resources)
+            if (!res.isImage && res.hostVisible && res.bufferUsage == 0)
+                res.bufferUsage = VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
         // Marked outputs are read after the frame (PNG, metrics, tests): a copy reads them.
         for (CompiledResource& res : out.resources)
             if (res.markedOutput) {
@@ -569,6 +592,8 @@ private:
 
     // Greedy interval assignment: in order of first use (larger first on ties), take the
     // smallest free slot that fits, else grow the largest free slot, else open a slot.
+    // Host-visible buffers and device-local resources never share a slot: they live in
+    // different kinds of memory.
     static void assignMemorySlots(CompiledGraph& out)
     {
         std::vector<uint32_t> transient;
@@ -589,7 +614,7 @@ private:
             int best = -1;
             int largest = -1;
             for (int s = 0; s < int(out.memorySlots.size()); ++s) {
-                if (busyUntil[s] >= res.firstUse) continue;
+                if (busyUntil[s] >= res.firstUse || out.memorySlots[s].hostVisible != res.hostVisible) continue;
                 const VkDeviceSize size = out.memorySlots[s].sizeBytes;
                 if (size >= need && (best < 0 || size < out.memorySlots[best].sizeBytes)) best = s;
                 if (largest < 0 || size > out.memorySlots[largest].sizeBytes) largest = s;
@@ -597,7 +622,7 @@ private:
             if (best < 0) best = largest;
             if (best < 0) {
                 best = int(out.memorySlots.size());
-                out.memorySlots.emplace_back();
+                out.memorySlots.emplace_back().hostVisible = res.hostVisible;
                 busyUntil.push_back(-1);
             }
             MemorySlot& slot = out.memorySlots[best];
@@ -728,6 +753,10 @@ void verifyAliasing(const CompiledGraph& graph)
                 throw Error(fmt::format("render graph: aliasing invariant violated: '{}' cannot live in slot {} "
                                         "({} bytes)",
                                         res.name, s, slot.sizeBytes));
+            if (res.hostVisible != slot.hostVisible)
+                throw Error(fmt::format("render graph: aliasing invariant violated: {} '{}' in {} slot {}",
+                                        res.hostVisible ? "host-visible" : "device-local", res.name,
+                                        slot.hostVisible ? "host-visible" : "device-local", s));
             if (i == 0) continue;
             const CompiledResource& prev = graph.resources[members[i - 1]];
             if (prev.lastUse >= res.firstUse)

@@ -2,7 +2,6 @@
 
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
-#include "penumbra/gpu/Check.h"
 #include "penumbra/plugin/Params.h"
 
 #include <fmt/format.h>
@@ -49,6 +48,7 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
                              plugin::PluginRegistry& plugins)
     : context_(context),
       plugins_(plugins),
+      scene_(scene),
       compiler_({gpu::engineShaderDir()}),
       width_(config.width),
       height_(config.height),
@@ -101,18 +101,11 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
     createTechniques(config, scene);
     updateLights(config, scene.bounds());
     buildGraph();
-
-    VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-    alloc.commandPool = context.commandPool();
-    alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-    alloc.commandBufferCount = 1;
-    gpu::check(vkAllocateCommandBuffers(context.device(), &alloc, &cmd_), "vkAllocateCommandBuffers (frame)");
 }
 
 FrameRenderer::~FrameRenderer()
 {
     vkDeviceWaitIdle(context_.device());
-    if (cmd_) vkFreeCommandBuffers(context_.device(), context_.commandPool(), 1, &cmd_);
     // Techniques are plugin code: destroy them (and the graph, whose callbacks they own)
     // while the registry still holds their libraries.
     graph_.reset();
@@ -144,8 +137,8 @@ void FrameRenderer::createTechniques(const config::RenderConfig& config, const s
             shaders = std::make_unique<gpu::ShaderCompiler>(
                 std::vector<std::filesystem::path>{slot.plugin->shaderDir, gpu::engineShaderDir()});
         }
-        const plugin::TechniqueSetup setup{context_, *shaders,   casters_, *slot.params, slot.light,
-                                           scene.bounds(), uint32_t(i), width_, height_};
+        const plugin::TechniqueSetup setup{context_,     *shaders,      casters_, scene, *slot.params,
+                                           slot.light,   scene.bounds(), uint32_t(i), width_, height_};
         try {
             slot.instance = plugins_.create(*slot.plugin, setup, who);
             slot.technique = lc.shadow.technique;
@@ -265,8 +258,17 @@ void FrameRenderer::update(const config::RenderConfig& config, const scene::Scen
         throw Error(fmt::format("FrameRenderer::update: {} lights, the renderer was built for {}", config.lights.size(),
                                 lights_.size()));
     }
+    // Techniques hold the scene they were created with (TechniqueSetup::scene).
+    if (&scene != &scene_) {
+        throw Error("FrameRenderer::update: called with another scene than the renderer was built with; animate "
+                    "that scene in place (config::applyAnimation, Scene::updateTransforms)");
+    }
     cameraViewProj_ = render::cameraViewProj(config.camera, float(width_) / float(height_));
-    if (!movedInstances.empty()) sceneGpu_.updateInstances(context_, scene);
+    if (!movedInstances.empty()) {
+        sceneGpu_.updateInstances(context_, scene);
+        for (LightSlot& slot : lights_)
+            if (slot.instance) slot.instance->instancesMoved(movedInstances);
+    }
     updateLights(config, scene.bounds());
 }
 
@@ -290,13 +292,7 @@ FrameTimings FrameRenderer::renderFrame()
 {
     const auto frameStart = std::chrono::steady_clock::now();
     FrameTimings timings;
-    gpu::check(vkResetCommandBuffer(cmd_, 0), "vkResetCommandBuffer (frame)");
-    VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-    begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-    gpu::check(vkBeginCommandBuffer(cmd_, &begin), "vkBeginCommandBuffer (frame)");
-    executor_.record(cmd_, *graph_);
-    gpu::check(vkEndCommandBuffer(cmd_), "vkEndCommandBuffer (frame)");
-    context_.submitAndWait(cmd_);
+    executor_.execute(*graph_);
     timings.passes = executor_.collectTimings();
     timings.frameCpuMs = msSince(frameStart);
     return timings;

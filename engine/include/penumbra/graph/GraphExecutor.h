@@ -2,12 +2,16 @@
 // Executes a compiled render graph on a device (Granite's "execute" step): creates the
 // transient images and buffers, places those that share a memory slot in one block of
 // device memory (aliasing, sized from vkGet*MemoryRequirements), records every executed
-// pass as: its barriers (one vkCmdPipelineBarrier2) -> debug label -> GPU timestamp ->
-// the pass's execute callback (CPU-timed) -> timestamp -> end label. Culled passes are
-// never called. Imported resources are bound by the caller before recording.
+// GPU pass as: its barriers (one vkCmdPipelineBarrier2) -> debug label -> GPU timestamp
+// -> the pass's execute callback (CPU-timed) -> timestamp -> end label. Host passes
+// split the frame: the GPU passes before one are submitted and waited for, its callback
+// runs on the CPU (timed), and recording goes on in the next submission. Culled passes
+// are never called. Imported resources are bound by the caller before execution.
 #include "penumbra/graph/RenderGraph.h"
 
+#include <cstddef>
 #include <memory>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -24,6 +28,8 @@ namespace penumbra::graph {
 // declared, by name.
 class PassContext {
 public:
+    // The command buffer being recorded; VK_NULL_HANDLE in a host pass, which records
+    // nothing.
     VkCommandBuffer cmd() const { return cmd_; }
     gpu::Context& context() const { return *context_; }
     const std::string& passName() const { return *passName_; }
@@ -34,6 +40,11 @@ public:
     const gpu::Buffer& buffer(std::string_view name) const;
     // The layout this pass declared for `name` (the executor put it there).
     VkImageLayout layout(std::string_view name) const;
+    // Host passes: the mapped memory (host-visible, coherent) of a buffer the pass
+    // declared with Usage::HostRead or HostWrite, its declared size. The GPU work before
+    // the pass has finished and its writes are visible; what the pass writes is visible
+    // to the GPU passes after it. Throws penumbra::Error naming the pass otherwise.
+    std::span<std::byte> hostMemory(std::string_view name) const;
 
 private:
     friend class GraphExecutor;
@@ -46,8 +57,8 @@ private:
 
 struct PassTiming {
     std::string name;
-    double gpuMs = 0.0;  // 0 when GPU timestamps are off
-    double cpuMs = 0.0;  // time the execute callback took to record
+    double gpuMs = 0.0;  // 0 when GPU timestamps are off, and for host passes
+    double cpuMs = 0.0;  // time the execute callback took: recording, or a host pass's work
 };
 
 // What one transient resource takes on its own (vkGet*MemoryRequirements, size rounded
@@ -79,18 +90,27 @@ public:
     void bindImage(std::string_view name, const gpu::Image& image);
     void bindBuffer(std::string_view name, const gpu::Buffer& buffer);
 
-    // Compiles `graph` (cached while unchanged), (re)creates the transient resources when
-    // the compiled graph changed (after waiting for the device to go idle: the previous
-    // frame may still use the old ones), and records every executed pass into `cmd` (which must
-    // be recording, outside a render pass). Imported images whose declared initialLayout
-    // is not UNDEFINED are returned to it after the last pass, so each frame starts from
-    // the declared state. Throws penumbra::Error naming the pass or resource on misuse
-    // (an unbound or mismatched import, an executed pass without a callback, a callback
-    // that throws); `cmd` is then left partly recorded and must not be submitted.
+    // Runs one frame of `graph` and returns when the device has finished it: compiles
+    // (cached while unchanged), (re)creates the transient resources when the compiled
+    // graph changed (after waiting for the device to go idle: the previous frame may
+    // still use the old ones), records the executed GPU passes into the executor's own
+    // command buffer and submits it, splitting the frame at every host pass (record the
+    // passes before it, submit, wait, run its callback, record on). Imported images whose
+    // declared initialLayout is not UNDEFINED are returned to it after the last pass, so
+    // each frame starts from the declared state. Throws penumbra::Error naming the pass
+    // or resource on misuse (an unbound or mismatched import, an executed pass without a
+    // callback, a callback that throws); the frame's remaining passes then do not run.
+    void execute(RenderGraph& graph);
+
+    // Records the whole frame into `cmd` (recording, outside a render pass) without
+    // submitting it, for a caller that submits the frame with other work or measures
+    // recording alone. Only for graphs without executed host passes (those need the
+    // submissions execute() makes): throws penumbra::Error naming the host pass. Errors
+    // as for execute(); `cmd` is then left partly recorded and must not be submitted.
     void record(VkCommandBuffer cmd, RenderGraph& graph);
 
-    // After the recorded command buffer finished: GPU and CPU time per executed pass, in
-    // execution order.
+    // After the frame finished (execute(), or record() and the caller's submission): GPU
+    // and CPU time per executed pass, in execution order.
     std::vector<PassTiming> collectTimings() const;
 
     // The compiled graph last recorded (null before the first record).
@@ -114,6 +134,9 @@ public:
 private:
     friend class PassContext;
     struct State;
+    const CompiledGraph& prepare(RenderGraph& graph);
+    void recordGpuPass(VkCommandBuffer cmd, RenderGraph& graph, size_t index);
+    void runHostPass(RenderGraph& graph, size_t index);
     std::unique_ptr<State> state_;
     std::shared_ptr<const CompiledGraph> compiled_;
 };

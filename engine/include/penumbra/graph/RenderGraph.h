@@ -3,9 +3,10 @@
 // Passes declare which images and buffers they read and write, with a usage from which
 // the layout and the synchronization2 stage/access masks follow. compile() orders the
 // passes, culls those whose outputs nothing needs, computes lifetimes, aliases transient
-// memory and derives the barriers. graph/GraphExecutor.h records a compiled graph into a
-// command buffer: it allocates the transient resources, inserts the barriers and runs
-// each pass's execute callback between a debug label and two GPU timestamps.
+// memory and derives the barriers. graph/GraphExecutor.h executes a compiled graph: it
+// allocates the transient resources, inserts the barriers and runs each pass's execute
+// callback (GPU passes between a debug label and two GPU timestamps; host passes on the
+// CPU, between two submissions).
 #include <vulkan/vulkan.h>
 
 #include <cstdint>
@@ -19,7 +20,12 @@
 
 namespace penumbra::graph {
 
-enum class QueueKind { Graphics, Compute, Transfer };
+// Where a pass runs. Host passes run their callback on the CPU between GPU work: the
+// executor submits the GPU passes before one and waits for them, runs it, and records
+// the rest in a new submission (a CPU ray tracer between the G-buffer and shading). A
+// host pass touches only buffers, through Usage::HostRead / HostWrite, which the
+// executor places in host-visible memory and maps.
+enum class QueueKind { Graphics, Compute, Transfer, Host };
 
 // How a pass touches a resource. The direction (read or write) is given separately;
 // `usageAllows` says which directions a usage permits.
@@ -34,6 +40,8 @@ enum class Usage {
     VertexBuffer,     // buffer, read
     IndexBuffer,      // buffer, read
     IndirectBuffer,   // buffer, read
+    HostRead,         // buffer, read by a host pass (PassContext::hostMemory)
+    HostWrite,        // buffer, written by a host pass (PassContext::hostMemory)
 };
 
 enum class Access { Read, Write };
@@ -123,12 +131,16 @@ struct CompiledResource {
     // Images: the layout after the frame, including CompiledGraph::barriersAfter (an
     // untouched imported image stays in its initial layout). UNDEFINED for buffers.
     VkImageLayout finalLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    // Buffers a host pass reads or writes: placed in host-visible, coherent memory and
+    // mapped; never aliased with device-local resources.
+    bool hostVisible = false;
 };
 
 // A block of device memory shared by transient resources with disjoint lifetimes.
 struct MemorySlot {
     VkDeviceSize sizeBytes = 0;
     std::vector<uint32_t> resources;  // in order of first use
+    bool hostVisible = false;         // holds host-visible buffers only (else device-local resources only)
 };
 
 struct CompiledGraph {

@@ -10,6 +10,8 @@
 #include "penumbra/render/Casters.h"
 #include "penumbra/scene/Scene.h"
 
+#include <cstdint>
+#include <span>
 #include <string>
 
 namespace penumbra::gpu {
@@ -26,6 +28,10 @@ struct TechniqueSetup {
     // common/*.glsl).
     const gpu::ShaderCompiler& shaders;
     const render::Casters& casters;
+    // The CPU scene (meshes, materials, textures, instances and their world transforms),
+    // for techniques that work on geometry outside the GPU (a CPU ray tracer). Animated
+    // frames move its nodes in place; instancesMoved() says which instances moved.
+    const scene::Scene& scene;
     const ParamValues& params;
     const scene::Light& light;      // as configured (the first frame's state)
     scene::Aabb sceneBounds;
@@ -61,6 +67,14 @@ public:
     // The light or the scene moved (an animated frame): refit frusta, update buffers.
     // Called before the frame's graph executes; the graph itself is not rebuilt.
     virtual void update(const scene::Light& light, const scene::Aabb& sceneBounds) = 0;
+
+    // Scene nodes moved (an animated frame): `instances` (ascending, indices into
+    // TechniqueSetup::scene.instances) have new world transforms, which the scene already
+    // holds. Called before update(), only when something moved. Techniques that draw
+    // through render::Casters need nothing here (the engine updates the instance table
+    // they draw with); one that keeps its own copy of the geometry (an Embree scene)
+    // refits or rebuilds it.
+    virtual void instancesMoved(std::span<const uint32_t> instances) { (void)instances; }
 
     // Declares the technique's resources and passes (with their execute callbacks) into
     // the frame's graph. Called once per graph build; the callbacks run every frame and

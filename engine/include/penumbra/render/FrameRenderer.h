@@ -27,13 +27,14 @@ using PassTiming = graph::PassTiming;
 
 struct FrameTimings {
     std::vector<PassTiming> passes;  // the executed passes, in execution order
-    double frameCpuMs = 0.0;         // record + submit + wait, wall clock
+    double frameCpuMs = 0.0;         // record + submit + wait (+ host passes), wall clock
 };
 
 class FrameRenderer {
 public:
     // Loads the technique plugin of every light from `plugins` (which must outlive the
-    // renderer), creates one technique per light and builds the frame's graph. Throws
+    // renderer), creates one technique per light and builds the frame's graph. `scene`
+    // must outlive the renderer too: techniques keep it (TechniqueSetup::scene). Throws
     // plugin::PluginError when a required technique fails, penumbra::Error (naming the
     // pass) when the graph does not compile.
     FrameRenderer(gpu::Context& context, const scene::Scene& scene, const config::RenderConfig& config,
@@ -44,11 +45,13 @@ public:
 
     // Takes the camera, the lights and moved scene nodes of an animated frame: call it
     // after config::applyAnimation and scene.updateTransforms(), before renderFrame().
+    // `scene` is the one the renderer was built with (animated in place; another throws);
     // `movedInstances` is what updateTransforms() returned.
     void update(const config::RenderConfig& config, const scene::Scene& scene,
                 const std::vector<uint32_t>& movedInstances);
 
-    // Records, submits and waits for one frame; returns the time of every pass.
+    // Runs one frame (GraphExecutor::execute: one submission, or one per stretch of GPU
+    // passes between host passes) and waits for it; returns the time of every pass.
     FrameTimings renderFrame();
 
     uint32_t width() const { return width_; }
@@ -102,6 +105,7 @@ private:
 
     gpu::Context& context_;
     plugin::PluginRegistry& plugins_;
+    const scene::Scene& scene_;
     gpu::ShaderCompiler compiler_;
     uint32_t width_ = 0;
     uint32_t height_ = 0;
@@ -121,7 +125,6 @@ private:
     std::vector<std::string> warnings_;
     std::unique_ptr<graph::RenderGraph> graph_;
     graph::GraphExecutor executor_;
-    VkCommandBuffer cmd_ = VK_NULL_HANDLE;
 };
 
 } // namespace penumbra::render

@@ -78,8 +78,9 @@ struct Camera {
     float nearWorld = 0.05f;
 };
 
-// Light models. Point and spot lights are points; directional lights may have an angular
-// diameter (the sun: 0.53 degrees); rectangle and disk lights have a world-space size.
+// Light models. Spot lights are points; point lights are points or, with a radius,
+// spheres; directional lights may have an angular diameter (the sun: 0.53 degrees);
+// rectangle and disk lights have a world-space size.
 // Hard-shadow techniques treat every light as its centre point (or its direction);
 // soft-shadow techniques use the extent.
 enum class LightType { Directional, Spot, Point, Rect, Disk };
@@ -97,7 +98,7 @@ struct Light {
     float innerConeDeg = 32.0f;              // spot: half-angle of full intensity
     float angularDiameterDeg = 0.0f;         // directional: apparent size of the source
     glm::vec2 sizeWorld{0.0f};               // rect: width, height
-    float radiusWorld = 0.0f;                // disk: radius
+    float radiusWorld = 0.0f;                // disk: radius; point: sphere radius (0: a point)
     // Directional: irradiance on a surface facing the light (W/m²). Others: radiant
     // intensity along the axis / normal (W/sr).
     float intensity = 300.0f;

@@ -1,0 +1,410 @@
+// The reference technique (README.md next to this file): exact area-light visibility by
+// ray tracing with Embree on the CPU. Per frame, inside the frame's render graph: a
+// transfer pass copies the G-buffer's positions and normals into host-visible buffers, a
+// host pass traces stratified shadow rays from every pixel's surface point to the light
+// (or takes V from the disk cache), and a transfer pass uploads V into V_l.
+#include "Digest.h"
+#include "LightSampling.h"
+#include "ReferenceStats.h"
+#include "SceneTracer.h"
+#include "VisibilityCache.h"
+
+#include "penumbra/core/Error.h"
+#include "penumbra/gpu/Resources.h"
+#include "penumbra/graph/GraphExecutor.h"
+#include "penumbra/graph/RenderGraph.h"
+#include "penumbra/plugin/Plugin.h"
+#include "penumbra/plugin/Technique.h"
+
+#include <fmt/format.h>
+#include <glm/gtc/packing.hpp>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <iterator>
+#include <limits>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace penumbra::reference {
+namespace {
+
+using plugin::ParamType;
+
+// One mode today; the brute-force average of N hard shadow maps from light samples
+// (the rasterised reference of the papers) is the second, to come (README.md).
+enum class Mode : uint32_t { RayTraced };
+const char* const kModeNames[] = {"ray_traced"};
+
+const plugin::ParamSpec kParams[] = {
+    {"mode", ParamType::Enum, double(Mode::RayTraced), 0, 0, "",
+     "ray_traced: Embree shadow rays from every pixel to stratified points of the light", kModeNames,
+     uint32_t(std::size(kModeNames))},
+    {"samples", ParamType::Int, 256, 1, 65536, "rays/pixel",
+     "light samples per pixel, stratified (correlated multi-jittered); lights without extent take 1"},
+    {"seed", ParamType::Int, 1, 0, 2147483647, "",
+     "jitter of the sample patterns; the same seed gives a bit-identical image on any thread count"},
+    {"cache", ParamType::Bool, 1, 0, 1, "",
+     "reuse V from the disk cache ($PENUMBRA_CACHE_DIR, else $XDG_CACHE_HOME/penumbra, else ~/.cache/penumbra) "
+     "when scene, G-buffer, light and parameters are unchanged"},
+    {"threads", ParamType::Int, 0, 0, 1024, "", "tracing threads; 0: one per hardware thread"},
+};
+
+// The version of what a cached image means: raise it whenever the tracing changes the
+// values it produces, so that old files stop matching.
+constexpr char kAlgorithmVersion[] = "penumbra-reference ray_traced 1";
+
+// Shadow rays start this far (relative to the scene's radius plus the point's largest
+// coordinate) off the receiver along its normal: well above the G-buffer position's
+// float error at any scale (about 1e-7 of its coordinates), well below any feature a
+// scene resolves (README.md, "Numerical care").
+constexpr float kRayOffset = 1e-5f;
+
+struct Settings {
+    Mode mode = Mode::RayTraced;
+    uint32_t samples = 256;
+    uint32_t seed = 1;
+    bool cache = true;
+    uint32_t threads = 0;
+};
+
+Settings readSettings(const plugin::ParamValues& params)
+{
+    Settings s;
+    s.mode = Mode(params.getEnumIndex("mode"));
+    s.samples = uint32_t(params.getInt("samples"));
+    s.seed = uint32_t(params.getInt("seed"));
+    s.cache = params.getBool("cache");
+    s.threads = uint32_t(params.getInt("threads"));
+    return s;
+}
+
+std::atomic<uint64_t> gFramesTraced{0}, gRaysTraced{0}, gCacheHits{0}, gCacheRejected{0}, gCacheWrites{0};
+
+// G-buffer read-back formats (shaders/common/gbuffer.glsl): position RGBA32F, normal
+// RGBA16F.
+constexpr VkDeviceSize kPositionTexelBytes = 4 * sizeof(float);
+constexpr VkDeviceSize kNormalTexelBytes = 4 * sizeof(uint16_t);
+
+// Shows how far tracing is, on stderr, when stderr is a terminal (never in logs or
+// pipes). Redraws one line from the thread that waits for the tracers.
+class ProgressLine {
+public:
+    ProgressLine(std::string label, uint32_t total)
+        : label_(std::move(label)), total_(total), shown_(isatty(fileno(stderr)) != 0),
+          start_(std::chrono::steady_clock::now())
+    {}
+    bool shown() const { return shown_; }
+    void draw(uint32_t done) const
+    {
+        constexpr int kWidth = 30;
+        const double fraction = total_ > 0 ? double(done) / double(total_) : 1.0;
+        const double elapsedS = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+        const int filled = int(fraction * kWidth);
+        std::string eta = "";
+        if (fraction > 0.0 && fraction < 1.0) eta = fmt::format(", {:.0f} s left", elapsedS * (1.0 - fraction) / fraction);
+        fmt::print(stderr, "\r{}: tracing [{}{}] {:3.0f}%{}   ", label_, std::string(size_t(filled), '#'),
+                   std::string(size_t(kWidth - filled), ' '), 100.0 * fraction, eta);
+        std::fflush(stderr);
+    }
+    void finish() const
+    {
+        draw(total_);
+        fmt::print(stderr, "\n");
+    }
+
+private:
+    std::string label_;
+    uint32_t total_;
+    bool shown_;
+    std::chrono::steady_clock::time_point start_;
+};
+
+class ReferenceShadow final : public plugin::Technique {
+public:
+    explicit ReferenceShadow(const plugin::TechniqueSetup& setup)
+        : settings_(readSettings(setup.params)),
+          lightIndex_(setup.lightIndex),
+          width_(setup.width),
+          height_(setup.height),
+          light_(setup.light),
+          sampler_(setup.light),
+          tracer_(setup.scene),
+          cache_(defaultCacheFolder())
+    {
+        if (settings_.cache && cache_.folder().empty())
+            spdlog::warn("reference (light {}): no cache folder: set PENUMBRA_CACHE_DIR (or XDG_CACHE_HOME or HOME); "
+                         "every frame is traced",
+                         lightIndex_);
+    }
+
+    void update(const scene::Light& light, const scene::Aabb&) override
+    {
+        light_ = light;
+        sampler_ = LightSampler(light);
+    }
+
+    void instancesMoved(std::span<const uint32_t> instances) override { tracer_.refit(instances); }
+
+    void registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io) override
+    {
+        const VkDeviceSize pixels = VkDeviceSize(width_) * height_;
+        const std::string positions = io.local("positions"), normals = io.local("normals"),
+                          visibility = io.local("visibility_host");
+        graph.declareBuffer({positions, pixels * kPositionTexelBytes});
+        graph.declareBuffer({normals, pixels * kNormalTexelBytes});
+        graph.declareBuffer({visibility, pixels * sizeof(float)});
+        graph.addPass(io.local("read_gbuffer"), graph::QueueKind::Transfer)
+            .read(io.gPosition, graph::Usage::TransferSrc)
+            .read(io.gNormal, graph::Usage::TransferSrc)
+            .write(positions, graph::Usage::TransferDst)
+            .write(normals, graph::Usage::TransferDst)
+            .execute([=](graph::PassContext& pass) {
+                copyToBuffer(pass, io.gPosition, positions);
+                copyToBuffer(pass, io.gNormal, normals);
+            });
+        std::string label = io.prefix;
+        if (!label.empty() && label.back() == '.') label.pop_back();
+        graph.addPass(io.local("trace"), graph::QueueKind::Host)
+            .read(positions, graph::Usage::HostRead)
+            .read(normals, graph::Usage::HostRead)
+            .write(visibility, graph::Usage::HostWrite)
+            .execute([=, this](graph::PassContext& pass) {
+                computeVisibility(pass.hostMemory(positions), pass.hostMemory(normals), pass.hostMemory(visibility),
+                                  label);
+            });
+        graph.addPass(io.local("upload"), graph::QueueKind::Transfer)
+            .read(visibility, graph::Usage::TransferSrc)
+            .write(io.visibility, graph::Usage::TransferDst)
+            .execute([=](graph::PassContext& pass) {
+                const gpu::Image& image = pass.image(io.visibility);
+                VkBufferImageCopy region{};
+                region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+                region.imageExtent = {image.desc().width, image.desc().height, 1};
+                vkCmdCopyBufferToImage(pass.cmd(), pass.buffer(visibility).handle(), image.handle(),
+                                       pass.layout(io.visibility), 1, &region);
+            });
+    }
+
+private:
+    static void copyToBuffer(const graph::PassContext& pass, const std::string& image, const std::string& buffer)
+    {
+        const gpu::Image& source = pass.image(image);
+        VkBufferImageCopy region{};
+        region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+        region.imageExtent = {source.desc().width, source.desc().height, 1};
+        vkCmdCopyImageToBuffer(pass.cmd(), source.handle(), pass.layout(image), pass.buffer(buffer).handle(), 1,
+                               &region);
+    }
+
+    // Everything V depends on: the algorithm, the scene's shadow-casting geometry, the
+    // light's shape and placement (not its colour or intensity), the parameters that
+    // change values (not `cache` or `threads`), and the G-buffer, which holds the camera.
+    CacheKey cacheKey(std::span<const std::byte> positions, std::span<const std::byte> normals) const
+    {
+        Digest128 digest;
+        digest.bytes(kAlgorithmVersion, sizeof kAlgorithmVersion)
+            .value(tracer_.geometryDigest())
+            .value(light_.type)
+            .value(light_.position)
+            .value(light_.direction)
+            .value(light_.tangent)
+            .value(light_.angularDiameterDeg)
+            .value(light_.sizeWorld)
+            .value(light_.radiusWorld)
+            .value(settings_.mode)
+            .value(settings_.samples)
+            .value(settings_.seed)
+            .value(width_)
+            .value(height_)
+            .bytes(positions.data(), positions.size())
+            .bytes(normals.data(), normals.size());
+        return digest.finish();
+    }
+
+    void computeVisibility(std::span<const std::byte> positions, std::span<const std::byte> normals,
+                           std::span<std::byte> out, const std::string& label)
+    {
+        const size_t pixels = size_t(width_) * height_;
+        std::optional<CacheKey> key;
+        if (settings_.cache) {
+            key = cacheKey(positions, normals);
+            if (const std::vector<float>* cached = findCached(*key)) {
+                std::memcpy(out.data(), cached->data(), pixels * sizeof(float));
+                ++gCacheHits;
+                return;
+            }
+        }
+        std::vector<float> values = trace(positions, normals, label);
+        std::memcpy(out.data(), values.data(), pixels * sizeof(float));
+        if (key) remember(*key, std::move(values));
+    }
+
+    // The last frame's image when nothing changed since (an unanimated run of many
+    // frames), else a valid file of the disk cache.
+    const std::vector<float>* findCached(const CacheKey& key)
+    {
+        if (lastKey_ == key) return &last_;
+        if (cache_.folder().empty()) return nullptr;
+        VisibilityCache::Lookup lookup = cache_.load(key, width_, height_);
+        if (!lookup.rejected.empty()) {
+            ++gCacheRejected;
+            spdlog::warn("reference (light {}): ignoring the cache file {}; tracing again", lightIndex_,
+                         lookup.rejected);
+        }
+        if (!lookup.values) return nullptr;
+        lastKey_ = key;
+        last_ = std::move(*lookup.values);
+        return &last_;
+    }
+
+    void remember(const CacheKey& key, std::vector<float> values)
+    {
+        lastKey_ = key;
+        last_ = std::move(values);
+        if (cache_.folder().empty()) return;
+        try {
+            cache_.store(key, width_, height_, last_);
+            ++gCacheWrites;
+        } catch (const Error& e) {
+            // The image is right; only the saving failed. Say so once per technique.
+            if (!storeWarned_) spdlog::warn("reference (light {}): {}; results are not cached", lightIndex_, e.what());
+            storeWarned_ = true;
+        }
+    }
+
+    std::vector<float> trace(std::span<const std::byte> positionBytes, std::span<const std::byte> normalBytes,
+                             const std::string& label) const
+    {
+        const auto* positions = reinterpret_cast<const float*>(positionBytes.data());
+        const auto* normals = reinterpret_cast<const uint16_t*>(normalBytes.data());
+        std::vector<float> values(size_t(width_) * height_);
+        const uint32_t threads =
+            std::max(1u, settings_.threads > 0 ? settings_.threads : std::thread::hardware_concurrency());
+        const uint32_t count = sampler_.sampleCount(settings_.samples);
+        std::atomic<uint32_t> nextRow{0}, rowsDone{0};
+        std::atomic<uint64_t> rays{0};
+        std::exception_ptr failure;
+        std::mutex failureMutex;
+
+        // Rows are handed out one at a time; every pixel's value depends only on its own
+        // samples (seeded by seed and pixel), so the split does not change a bit.
+        const auto work = [&] {
+            try {
+                const DenormalsAreZero denormals;
+                RayScratch scratch;
+                uint64_t traced = 0;
+                for (uint32_t y; (y = nextRow++) < height_; ++rowsDone)
+                    for (uint32_t x = 0; x < width_; ++x) {
+                        const size_t i = size_t(y) * width_ + x;
+                        values[i] = tracePixel(i, &positions[4 * i], &normals[4 * i], count, scratch, traced);
+                    }
+                rays += traced;
+            } catch (...) {
+                const std::lock_guard lock(failureMutex);
+                if (!failure) failure = std::current_exception();
+                nextRow = height_;  // the others stop at their next row
+            }
+        };
+        const ProgressLine progress(label, height_);
+        std::vector<std::thread> pool;
+        for (uint32_t t = 0; t < threads; ++t) pool.emplace_back(work);
+        if (progress.shown()) {
+            while (rowsDone.load() < height_ && !failure) {
+                progress.draw(rowsDone.load());
+                std::this_thread::sleep_for(std::chrono::milliseconds(200));
+            }
+        }
+        for (std::thread& t : pool) t.join();
+        if (failure) std::rethrow_exception(failure);
+        if (progress.shown()) progress.finish();
+        ++gFramesTraced;
+        gRaysTraced += rays.load();
+        return values;
+    }
+
+    // V of one pixel: the mean transmittance of its stratified samples, in [0, 1].
+    float tracePixel(size_t pixel, const float* position, const uint16_t* normalHalf, uint32_t count,
+                     RayScratch& scratch, uint64_t& traced) const
+    {
+        if (position[3] == 0.0f) return 1.0f;  // no geometry: VISIBILITY_NO_GEOMETRY
+        const glm::vec3 p(position[0], position[1], position[2]);
+        if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) return 1.0f;
+        const glm::vec3 n(glm::unpackHalf1x16(normalHalf[0]), glm::unpackHalf1x16(normalHalf[1]),
+                          glm::unpackHalf1x16(normalHalf[2]));
+        const float nLength = glm::length(n);
+        const glm::vec3 pAbs = glm::abs(p);
+        const float offset = kRayOffset * (tracer_.sceneRadius() + std::max({pAbs.x, pAbs.y, pAbs.z}));
+        // Off the surface on the side the camera sees (the G-buffer's normal faces it).
+        // Without a usable normal, each ray starts `offset` along itself instead.
+        const bool hasNormal = std::isfinite(nLength) && nLength > 0.5f;
+        const glm::vec3 origin = hasNormal ? p + (offset / nLength) * n : p;
+        const uint32_t pattern = mixBits(uint32_t(pixel) ^ mixBits(settings_.seed + 0x9e3779b9u));
+        double sum = 0.0;
+        for (uint32_t s = 0; s < count; ++s) {
+            const ShadowRay ray = sampler_.sample(glm::dvec3(origin), stratifiedSample(s, count, pattern));
+            // Stop short of the light sample by the same offset: a caster touching the
+            // light does not count, and nothing at the sample itself is hit.
+            const double length = ray.length - double(offset);
+            if (!(length > 0.0)) {
+                sum += 1.0;
+                continue;
+            }
+            const glm::vec3 dir(ray.direction);
+            const glm::vec3 start = hasNormal ? origin : origin + offset * dir;
+            sum += double(tracer_.transmittance(start, dir, std::isinf(length) ? std::numeric_limits<float>::infinity()
+                                                                                : float(length),
+                                                offset, scratch));
+            ++traced;
+        }
+        const float v = float(sum / double(count));
+        return v >= 0.0f ? std::min(v, 1.0f) : 0.0f;  // sanitizeVisibility (shaders/common/visibility.glsl)
+    }
+
+    const Settings settings_;
+    const uint32_t lightIndex_;
+    const uint32_t width_;
+    const uint32_t height_;
+    scene::Light light_;
+    LightSampler sampler_;
+    SceneTracer tracer_;
+    VisibilityCache cache_;
+    std::optional<CacheKey> lastKey_;
+    std::vector<float> last_;
+    bool storeWarned_ = false;
+};
+
+plugin::Technique* createReferenceShadow(const plugin::TechniqueSetup& setup) { return new ReferenceShadow(setup); }
+
+} // namespace
+} // namespace penumbra::reference
+
+PENUMBRA_PLUGIN_EXPORT const PenumbraPluginInfo* penumbra_plugin_entry()
+{
+    static const PenumbraPluginInfo info{PENUMBRA_PLUGIN_ABI_VERSION,
+                                         "reference",
+                                         "1.0.0",
+                                         "exact area-light visibility: stratified shadow rays traced with Embree on the "
+                                         "CPU, translucent casters included, cached on disk",
+                                         penumbra::reference::kParams,
+                                         uint32_t(std::size(penumbra::reference::kParams)),
+                                         &penumbra::reference::createReferenceShadow,
+                                         PENUMBRA_PLUGIN_SHADER_DIR};
+    return &info;
+}
+
+PENUMBRA_PLUGIN_EXPORT PenumbraReferenceStats penumbra_reference_stats()
+{
+    using namespace penumbra::reference;
+    return {gFramesTraced.load(), gRaysTraced.load(), gCacheHits.load(), gCacheRejected.load(), gCacheWrites.load()};
+}

@@ -1,0 +1,532 @@
+// The reference plugin (plugins/reference) end to end, through the engine's frame: the
+// G-buffer read back, traced on the host, V uploaded. Checked on scenes whose visibility
+// is known: hard shadows against the CPU ray caster (tests/support/RayCast.h), soft
+// shadows against closed forms, translucent and alpha-masked casters against their
+// alpha, at scene scales 1e-3 to 1e5; then determinism, the disk cache, refitting.
+#include "RayCast.h"
+#include "TestConfigs.h"
+#include "TestContext.h"
+
+#include "penumbra/config/Config.h"
+#include "penumbra/core/Error.h"
+#include "penumbra/plugin/PluginRegistry.h"
+#include "penumbra/render/FrameRenderer.h"
+#include "penumbra/scene/Generators.h"
+#include "plugins/reference/ReferenceStats.h"
+
+#include <dlfcn.h>
+#include <fmt/format.h>
+#include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <numbers>
+
+using namespace penumbra;
+namespace fs = std::filesystem;
+
+namespace {
+
+PenumbraReferenceStats stats()
+{
+    const plugin::LoadedPlugin& reference = test::plugins().load("reference");
+    void* handle = dlopen(reference.file.c_str(), RTLD_NOW | RTLD_NOLOAD);
+    if (!handle) {
+        ADD_FAILURE() << "penumbra-reference.so is not loaded";
+        return {};
+    }
+    const auto fn = reinterpret_cast<PenumbraReferenceStatsFn>(dlsym(handle, PENUMBRA_REFERENCE_STATS_SYMBOL));
+    const PenumbraReferenceStats s = fn ? fn() : PenumbraReferenceStats{};
+    if (!fn) ADD_FAILURE() << "no " << PENUMBRA_REFERENCE_STATS_SYMBOL;
+    dlclose(handle);
+    return s;
+}
+
+scene::Camera lookDown(glm::vec3 position, glm::vec3 target, float fovDeg)
+{
+    scene::Camera camera;
+    camera.position = position;
+    camera.target = target;
+    camera.up = {0.0f, 0.0f, -1.0f};
+    camera.fovYDeg = fovDeg;
+    camera.nearWorld = 0.01f * glm::length(position - target);
+    return camera;
+}
+
+// One light with the reference technique; the cache is off unless `params` turns it on.
+config::RenderConfig referenceConfig(uint32_t width, uint32_t height, const scene::Camera& camera,
+                                     const scene::Light& light, const nlohmann::json& params = nlohmann::json::object())
+{
+    config::RenderConfig cfg;
+    cfg.width = width;
+    cfg.height = height;
+    cfg.camera = camera;
+    config::LightConfig lc;
+    lc.name = "light0";
+    lc.light = light;
+    lc.shadow.technique = "reference";
+    lc.shadow.required = true;
+    lc.shadow.setParam("cache", false, "test");
+    for (const auto& [name, value] : params.items()) lc.shadow.setParam(name, value, "test");
+    cfg.lights = {lc};
+    return cfg;
+}
+
+// A rendered frame and what the tests read back. Not movable: the renderer keeps
+// references to the scene and the config.
+struct Frame {
+    Frame(gpu::Context& context, const config::RenderConfig& cfg, scene::Scene s)
+        : config(cfg), scene(std::move(s)), renderer(context, scene, config, test::plugins())
+    {
+        render();
+    }
+    Frame(const Frame&) = delete;
+    Frame& operator=(const Frame&) = delete;
+
+    void render()
+    {
+        renderer.renderFrame();
+        visibility = renderer.readVisibility(0);
+        positions = renderer.readPositions();
+        normals = renderer.readNormals();
+    }
+    size_t pixels() const { return visibility.size(); }
+    bool hasGeometry(size_t i) const { return positions[4 * i + 3] != 0.0f; }
+    glm::dvec3 position(size_t i) const { return {positions[4 * i], positions[4 * i + 1], positions[4 * i + 2]}; }
+    glm::dvec3 normal(size_t i) const { return {normals[4 * i], normals[4 * i + 1], normals[4 * i + 2]}; }
+
+    config::RenderConfig config;
+    scene::Scene scene;
+    render::FrameRenderer renderer;
+    std::vector<float> visibility, positions, normals;
+};
+
+// Every V is a number in [0, 1].
+::testing::AssertionResult inUnitRange(const std::vector<float>& v)
+{
+    for (size_t i = 0; i < v.size(); ++i)
+        if (!(v[i] >= 0.0f && v[i] <= 1.0f)) return ::testing::AssertionFailure() << "pixel " << i << ": V = " << v[i];
+    return ::testing::AssertionSuccess();
+}
+
+// The analytic scene: the generator's square occluder (zero thickness: exact) at
+// `scale`, seen from above; the scene's own camera and light scaled with it.
+scene::PenumbraParams analyticParams(float scale, float occluderSize = 1.0f)
+{
+    scene::PenumbraParams p;
+    p.occluderSize = occluderSize * scale;
+    p.occluderThickness = 0.0f;
+    p.occluderHeight = 1.0f * scale;
+    p.groundSize = 20.0f * scale;
+    return p;
+}
+
+class ReferencePlugin : public test::GpuTest {
+protected:
+    void SetUp() override
+    {
+        GpuTest::SetUp();
+        cacheDir = fs::temp_directory_path() /
+                   fmt::format("penumbra_reference_{}_{}", ::getpid(),
+                               ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::remove_all(cacheDir);
+        setenv("PENUMBRA_CACHE_DIR", cacheDir.c_str(), 1);
+    }
+    void TearDown() override
+    {
+        frames.clear();
+        unsetenv("PENUMBRA_CACHE_DIR");
+        fs::remove_all(cacheDir);
+        GpuTest::TearDown();
+    }
+    Frame& render(const config::RenderConfig& cfg, scene::Scene scene)
+    {
+        frames.push_back(std::make_unique<Frame>(*context, cfg, std::move(scene)));
+        EXPECT_TRUE(inUnitRange(frames.back()->visibility));
+        return *frames.back();
+    }
+    std::vector<fs::path> cacheFiles() const
+    {
+        std::vector<fs::path> files;
+        if (fs::exists(cacheDir))
+            for (const auto& entry : fs::directory_iterator(cacheDir)) files.push_back(entry.path());
+        return files;
+    }
+
+    fs::path cacheDir;
+    std::vector<std::unique_ptr<Frame>> frames;
+};
+
+// ---------------------------------------------------------------------------------------
+// Geometry at three scales
+
+class ReferenceAtScale : public ReferencePlugin, public ::testing::WithParamInterface<float> {};
+
+// A point light: one ray per pixel, V exactly 0 or 1, and the same answer as the
+// independent double-precision ray caster wherever that answer is not decided within
+// 1e-4 of the scene's size (an edge through the pixel's point).
+TEST_P(ReferenceAtScale, PointLightGivesExactlyTheRayCastersHardShadow)
+{
+    const float s = GetParam();
+    scene::PenumbraParams params = analyticParams(1.0f);
+    params.occluderThickness = 0.05f;  // a box: its sides cast too
+    scene::Scene scene = scene::generatePenumbra(params);
+    scene::scaleScene(scene, s);
+    scene::Light light;
+    light.type = scene::LightType::Point;
+    light.position = glm::vec3(0.3f, 4.0f, 0.2f) * s;
+    const Frame& f = render(referenceConfig(64, 48, lookDown(glm::vec3(-1.2f, 5.0f, -0.9f) * s, glm::vec3(0.0f), 40.0f),
+                                            light),
+                           scene);
+    const test::RayCaster caster(f.scene);
+    const double radius = f.scene.bounds().radius();
+    const glm::dvec3 lightPos(light.position);
+    size_t lit = 0, shadowed = 0, ambiguous = 0;
+    for (size_t i = 0; i < f.pixels(); ++i) {
+        const float v = f.visibility[i];
+        ASSERT_TRUE(v == 0.0f || v == 1.0f) << "pixel " << i << ": V = " << v;
+        if (!f.hasGeometry(i)) continue;
+        const glm::dvec3 origin = f.position(i) + 1e-5 * radius * glm::normalize(f.normal(i));
+        const bool blocked = caster.segmentBlocked(origin, lightPos);
+        bool decided = true;
+        for (const glm::dvec3 shift : {glm::dvec3(1, 0, 0), glm::dvec3(0, 0, 1)})
+            for (double sign : {-1.0, 1.0})
+                decided = decided && caster.segmentBlocked(origin + sign * 1e-4 * radius * shift, lightPos) == blocked;
+        if (!decided) {
+            ++ambiguous;
+            continue;
+        }
+        EXPECT_EQ(v, blocked ? 0.0f : 1.0f) << "pixel " << i << " at " << f.position(i).x << ", " << f.position(i).y
+                                            << ", " << f.position(i).z;
+        (blocked ? shadowed : lit)++;
+    }
+    EXPECT_GT(shadowed, 100u);
+    EXPECT_GT(lit, 1000u);
+    EXPECT_LT(ambiguous, f.pixels() / 20);
+}
+
+// A rectangular light over the square occluder: V against penumbraVisibility (the
+// closed form of scene/Generators.h: the overlap of the back-projected square with the
+// light, linear across the penumbra of each edge). RMSE over the penumbra pixels
+// (0 < V < 1 analytically) at 256 samples: <= 0.01.
+TEST_P(ReferenceAtScale, RectLightMatchesTheAnalyticPenumbra)
+{
+    const float s = GetParam();
+    const scene::PenumbraParams params = analyticParams(s);
+    scene::Light light;
+    light.type = scene::LightType::Rect;
+    light.position = glm::vec3(0.0f, 4.0f, 0.0f) * s;
+    light.direction = {0.0f, -1.0f, 0.0f};
+    light.tangent = {1.0f, 0.0f, 0.0f};
+    light.sizeWorld = glm::vec2(0.8f, 0.5f) * s;
+    // Oblique enough that some of the umbra shows beside the occluder.
+    const scene::Camera camera = lookDown(glm::vec3(1.2f, 5.0f, 0.9f) * s, glm::vec3(0.3f, 0.0f, 0.2f) * s, 36.0f);
+    const Frame& f = render(referenceConfig(96, 72, camera,
+                                            light, {{"samples", 256}}),
+                           scene::generatePenumbra(params));
+    const scene::RectAreaLight analyticLight{light.position, light.sizeWorld};
+    double squared = 0.0;
+    size_t penumbra = 0, umbra = 0;
+    for (size_t i = 0; i < f.pixels(); ++i) {
+        if (!f.hasGeometry(i) || f.position(i).y > 0.5 * params.occluderHeight) continue;  // the occluder's top
+        const glm::dvec3 p = f.position(i);
+        const double expected = scene::penumbraVisibility(params, analyticLight, glm::vec2(p.x, p.z));
+        if (expected <= 0.0) ++umbra;
+        if (expected <= 0.0 || expected >= 1.0) {
+            EXPECT_EQ(f.visibility[i], float(expected)) << "pixel " << i;  // every sample agrees there
+            continue;
+        }
+        squared += (f.visibility[i] - expected) * (f.visibility[i] - expected);
+        ++penumbra;
+    }
+    ASSERT_GT(penumbra, 200u);
+    EXPECT_GT(umbra, 50u);
+    const double rmse = std::sqrt(squared / double(penumbra));
+    RecordProperty("penumbra_rmse", fmt::format("{:.5f}", rmse));
+    EXPECT_LE(rmse, 0.01) << penumbra << " penumbra pixels";
+}
+
+INSTANTIATE_TEST_SUITE_P(Scales, ReferenceAtScale, ::testing::Values(1e-3f, 1.0f, 1e5f),
+                         [](const ::testing::TestParamInfo<float>& info) {
+                             return info.param < 1.0f ? std::string("Milli") : info.param > 1.0f ? "HundredThousand" : "One";
+                         });
+
+// A disk light beside the straight edge of a large occluder: the hidden part of the
+// light is a circular segment, V = (acos d - d sqrt(1 - d²)) / pi with d the back-projected
+// edge's offset from the light's centre in radii.
+TEST_F(ReferencePlugin, DiskLightMatchesTheCircularSegmentAtAStraightEdge)
+{
+    const scene::PenumbraParams params = analyticParams(1.0f, 6.0f);
+    scene::Light light;
+    light.type = scene::LightType::Disk;
+    light.position = {0.0f, 4.0f, 0.0f};
+    light.direction = {0.0f, -1.0f, 0.0f};
+    light.radiusWorld = 0.4f;
+    const Frame& f = render(referenceConfig(96, 48, lookDown({4.0f, 5.0f, 0.001f}, {4.0f, 0.0f, 0.0f}, 20.0f), light,
+                                            {{"samples", 256}}),
+                           scene::generatePenumbra(params));
+    const double h = params.occluderHeight, H = light.position.y, R = light.radiusWorld, half = 0.5 * params.occluderSize;
+    double squared = 0.0;
+    size_t penumbra = 0;
+    for (size_t i = 0; i < f.pixels(); ++i) {
+        const glm::dvec3 p = f.position(i);
+        if (!f.hasGeometry(i) || p.y > 0.5 * h || std::abs(p.z) > 1.0) continue;
+        // Light points with x below the back-projected edge are hidden.
+        const double d = std::clamp((p.x + (half - p.x) * H / h) / R, -1.0, 1.0);
+        const double expected = (std::acos(d) - d * std::sqrt(1.0 - d * d)) / std::numbers::pi;
+        if (expected <= 0.0 || expected >= 1.0) continue;
+        squared += (f.visibility[i] - expected) * (f.visibility[i] - expected);
+        ++penumbra;
+    }
+    ASSERT_GT(penumbra, 100u);
+    const double rmse = std::sqrt(squared / double(penumbra));
+    RecordProperty("penumbra_rmse", fmt::format("{:.5f}", rmse));
+    EXPECT_LE(rmse, 0.01);
+}
+
+// Spheres and the sun have extent too: umbra, penumbra and light all show, and a light
+// of size 0 of every kind is exactly the point light (one ray).
+TEST_F(ReferencePlugin, LightSizeZeroEqualsThePointLightAndSizedLightsSoften)
+{
+    const scene::Camera camera = lookDown({1.0f, 5.0f, 0.7f}, {0.0f, 0.0f, 0.0f}, 40.0f);
+    const scene::PenumbraParams params = analyticParams(1.0f);
+    scene::Light point;
+    point.type = scene::LightType::Point;
+    point.position = {0.3f, 4.0f, -0.2f};
+    const std::vector<float> hard = render(referenceConfig(48, 36, camera, point), scene::generatePenumbra(params)).visibility;
+
+    scene::Light rect = point, disk = point, sphere = point;
+    rect.type = scene::LightType::Rect;
+    rect.sizeWorld = {0.0f, 0.0f};
+    disk.type = scene::LightType::Disk;
+    disk.radiusWorld = 0.0f;
+    for (const scene::Light& light : {rect, disk, sphere}) {
+        SCOPED_TRACE(scene::lightTypeName(light.type));
+        EXPECT_EQ(render(referenceConfig(48, 36, camera, light, {{"samples", 64}}), scene::generatePenumbra(params)).visibility,
+                  hard);
+    }
+
+    scene::Light sun;
+    sun.type = scene::LightType::Directional;
+    sun.direction = glm::normalize(glm::vec3(0.2f, -1.0f, 0.1f));
+    sun.angularDiameterDeg = 8.0f;
+    sphere.radiusWorld = 0.3f;
+    for (const scene::Light& light : {sphere, sun}) {
+        SCOPED_TRACE(scene::lightTypeName(light.type));
+        const std::vector<float>& v =
+            render(referenceConfig(48, 36, camera, light, {{"samples", 64}}), scene::generatePenumbra(params)).visibility;
+        const auto count = [&](auto predicate) { return std::count_if(v.begin(), v.end(), predicate); };
+        EXPECT_GT(count([](float x) { return x == 0.0f; }), 20);
+        EXPECT_GT(count([](float x) { return x > 0.0f && x < 1.0f; }), 20);
+        EXPECT_GT(count([](float x) { return x == 1.0f; }), 200);
+    }
+
+    // The config gives a point light its radius.
+    const config::RenderConfig parsed = config::parseConfig(
+        nlohmann::json::parse(R"({"scene": {"generator": "penumbra"}, "camera": {"position": [0, 2, 5], "target": [0, 0, 0]},
+                                  "lights": [{"type": "point", "position": [0, 4, 0], "radius": 0.25}]})"),
+        "test.json");
+    EXPECT_EQ(parsed.lights[0].light.radiusWorld, 0.25f);
+}
+
+// ---------------------------------------------------------------------------------------
+// Translucent and alpha-masked casters
+
+scene::Scene glassScene(std::initializer_list<float> heights)
+{
+    scene::Scene s;
+    s.materials.push_back({"glass", {1.0f, 1.0f, 1.0f, 0.3f}, scene::kNoTexture, scene::AlphaMode::Blend, 0.5f, true});
+    scene::Mesh ground = scene::makePlane("ground");
+    scene::Mesh pane = scene::makePlane("pane");
+    pane.material = 1;
+    ground.computeBounds();
+    pane.computeBounds();
+    s.meshes = {ground, pane};
+    const glm::mat4 identity(1.0f);
+    s.addInstance(0, s.graph.addNode("ground", scene::kNoParent, glm::scale(identity, glm::vec3(20, 1, 20))));
+    for (float h : heights)
+        s.addInstance(1, s.graph.addNode(fmt::format("pane{}", h), scene::kNoParent,
+                                         glm::scale(glm::translate(identity, glm::vec3(0, h, 0)), glm::vec3(2, 1, 2))));
+    s.updateTransforms();
+    return s;
+}
+
+// Panes of alpha 0.3 ([-1, 1]² at the given heights) under a point light off to the
+// side: a ground point behind k panes gets 0.7^k.
+TEST_F(ReferencePlugin, TranslucentPanesAttenuateByOneMinusAlphaEach)
+{
+    scene::Light light;
+    light.type = scene::LightType::Point;
+    light.position = {3.0f, 4.0f, 0.0f};
+    const scene::Camera camera = lookDown({-2.5f, 6.0f, 0.001f}, {-2.5f, 0.0f, 0.0f}, 40.0f);
+    for (const std::vector<float>& heights : {std::vector<float>{1.0f}, std::vector<float>{1.0f, 1.5f}}) {
+        SCOPED_TRACE(fmt::format("{} pane(s)", heights.size()));
+        const Frame& f = render(referenceConfig(64, 48, camera, light),
+                                heights.size() == 1 ? glassScene({1.0f}) : glassScene({1.0f, 1.5f}));
+        size_t counted[3] = {0, 0, 0};
+        for (size_t i = 0; i < f.pixels(); ++i) {
+            const glm::dvec3 p = f.position(i);
+            if (!f.hasGeometry(i) || p.y > 0.1) continue;
+            int crossed = 0;
+            bool nearEdge = false;
+            for (float h : heights) {
+                const glm::dvec3 at = p + (glm::dvec3(light.position) - p) * (double(h) / light.position.y);
+                const double inside = 1.0 - std::max(std::abs(at.x), std::abs(at.z));  // > 0 inside the pane
+                nearEdge = nearEdge || std::abs(inside) < 0.03;
+                crossed += inside > 0.0 ? 1 : 0;
+            }
+            if (nearEdge) continue;
+            EXPECT_NEAR(f.visibility[i], std::pow(0.7, crossed), 1e-5) << "pixel " << i << ", " << crossed << " pane(s)";
+            ++counted[crossed];
+        }
+        for (size_t k = 0; k <= heights.size(); ++k) EXPECT_GT(counted[k], 50u) << k << " pane(s) crossed";
+    }
+}
+
+// The half-masked quad (tests/support): light passes where the texture's alpha is below
+// the cutoff, as the raster path cuts its holes; the opaque half casts a full shadow.
+TEST_F(ReferencePlugin, MaskedTextureHolesLetLightThrough)
+{
+    const config::RenderConfig base = test::halfMaskedQuadConfig();
+    scene::Camera camera = base.camera;
+    const Frame& f = render(referenceConfig(64, 48, camera, base.lights[0].light), test::halfMaskedQuadScene());
+    size_t throughHoles = 0, behindOpaque = 0;
+    for (size_t i = 0; i < f.pixels(); ++i) {
+        const glm::dvec3 p = f.position(i);
+        if (!f.hasGeometry(i) || p.y > 0.1 || std::abs(p.z) > 1.8) continue;
+        if (p.x > -0.85 && p.x < 0.85) {
+            EXPECT_EQ(f.visibility[i], 1.0f) << "pixel " << i << " at x = " << p.x;
+            ++throughHoles;
+        } else if (p.x > 1.15 && p.x < 2.85) {
+            EXPECT_EQ(f.visibility[i], 0.0f) << "pixel " << i << " at x = " << p.x;
+            ++behindOpaque;
+        }
+    }
+    EXPECT_GT(throughHoles, 30u);
+    EXPECT_GT(behindOpaque, 30u);
+}
+
+// ---------------------------------------------------------------------------------------
+// Determinism, cache, animation
+
+config::RenderConfig smallRectConfig(const nlohmann::json& params)
+{
+    scene::Light light;
+    light.type = scene::LightType::Rect;
+    light.position = {0.2f, 3.0f, 0.0f};
+    light.direction = {0.0f, -1.0f, 0.0f};
+    light.sizeWorld = {0.6f, 0.6f};
+    return referenceConfig(48, 36, lookDown({0.5f, 4.0f, 1.5f}, {0.0f, 0.0f, 0.0f}, 45.0f), light, params);
+}
+
+TEST_F(ReferencePlugin, SameSeedGivesABitIdenticalImageOnAnyThreadCount)
+{
+    const scene::Scene scene = scene::generatePenumbra({});
+    const std::vector<float> one =
+        render(smallRectConfig({{"samples", 49}, {"seed", 7}, {"threads", 1}}), scene).visibility;
+    const std::vector<float> three =
+        render(smallRectConfig({{"samples", 49}, {"seed", 7}, {"threads", 3}}), scene).visibility;
+    EXPECT_EQ(std::memcmp(one.data(), three.data(), one.size() * sizeof(float)), 0);
+    const std::vector<float> otherSeed =
+        render(smallRectConfig({{"samples", 49}, {"seed", 8}, {"threads", 3}}), scene).visibility;
+    EXPECT_NE(one, otherSeed) << "the seed changes the jitter";
+}
+
+TEST_F(ReferencePlugin, SecondRunComesFromTheCacheAndDamagedFilesAreIgnored)
+{
+    const scene::Scene scene = scene::generatePenumbra({});
+    const config::RenderConfig cfg = smallRectConfig({{"samples", 16}, {"cache", true}});
+    const PenumbraReferenceStats before = stats();
+    Frame& first = render(cfg, scene);
+    const std::vector<float> traced = first.visibility;
+    PenumbraReferenceStats now = stats();
+    EXPECT_EQ(now.framesTraced - before.framesTraced, 1u);
+    EXPECT_EQ(now.cacheWrites - before.cacheWrites, 1u);
+    EXPECT_EQ(now.raysTraced - before.raysTraced, 16u * 48u * 36u);  // every pixel sees the ground
+    const std::vector<fs::path> files = cacheFiles();
+    ASSERT_EQ(files.size(), 1u);
+
+    // The same frame again: the renderer's last image; a new renderer: the file.
+    first.render();
+    EXPECT_EQ(first.visibility, traced);
+    EXPECT_EQ(render(cfg, scene).visibility, traced);
+    PenumbraReferenceStats after = stats();
+    EXPECT_EQ(after.framesTraced, now.framesTraced) << "a cached frame traced rays";
+    EXPECT_EQ(after.cacheHits - now.cacheHits, 2u);
+
+    // Truncated, then one flipped byte: each is rejected, traced again, rewritten whole.
+    const auto size = fs::file_size(files[0]);
+    const std::vector<std::function<void()>> damages = {
+        [&] { fs::resize_file(files[0], size / 2); },
+        [&] {
+            std::fstream file(files[0], std::ios::in | std::ios::out | std::ios::binary);
+            file.seekp(std::streamoff(size / 2));
+            file.put('\x7f');
+        },
+    };
+    for (size_t d = 0; d < damages.size(); ++d) {
+        SCOPED_TRACE(d == 0 ? "truncated" : "flipped byte");
+        damages[d]();
+        now = stats();
+        EXPECT_EQ(render(cfg, scene).visibility, traced);
+        after = stats();
+        EXPECT_EQ(after.cacheRejected - now.cacheRejected, 1u);
+        EXPECT_EQ(after.framesTraced - now.framesTraced, 1u);
+        EXPECT_EQ(fs::file_size(files[0]), size);
+        EXPECT_EQ(cacheFiles().size(), 1u) << "no temporary file stays behind";
+    }
+    now = stats();
+    EXPECT_EQ(render(cfg, scene).visibility, traced);
+    EXPECT_EQ(stats().cacheHits - now.cacheHits, 1u);
+
+    // Another parameter is another key; cache off writes nothing and always traces.
+    render(smallRectConfig({{"samples", 16}, {"seed", 2}, {"cache", true}}), scene);
+    EXPECT_EQ(cacheFiles().size(), 2u);
+    now = stats();
+    Frame& uncached = render(smallRectConfig({{"samples", 16}}), scene);
+    uncached.render();
+    EXPECT_EQ(stats().framesTraced - now.framesTraced, 2u);
+    EXPECT_EQ(cacheFiles().size(), 2u);
+}
+
+// Moving the occluder's node (an animated frame) refits the Embree scene: the next frame
+// is what a renderer built on the moved scene gives.
+TEST_F(ReferencePlugin, MovedInstancesAreTracedWhereTheyAreNow)
+{
+    const config::RenderConfig cfg = smallRectConfig({{"samples", 16}});
+    Frame& frame = render(cfg, scene::generatePenumbra({}));
+    const std::vector<float> before = frame.visibility;
+    uint32_t occluder = 0;
+    for (const scene::Instance& instance : frame.scene.instances)
+        if (frame.scene.meshes[instance.mesh].name == "occluder") occluder = instance.node;
+    frame.scene.graph.setLocal(occluder, glm::translate(glm::mat4(1.0f), glm::vec3(0.4f, 0.0f, 0.0f)) *
+                                             frame.scene.graph.local(occluder));
+    const std::vector<uint32_t> moved = frame.scene.updateTransforms();
+    ASSERT_EQ(moved.size(), 1u);
+    frame.renderer.update(frame.config, frame.scene, moved);
+    frame.render();
+    EXPECT_NE(frame.visibility, before);
+    EXPECT_EQ(render(cfg, frame.scene).visibility, frame.visibility);
+}
+
+TEST_F(ReferencePlugin, ParametersAreReflectedWithRanges)
+{
+    const plugin::LoadedPlugin& reference = test::plugins().load("reference");
+    plugin::ParamValues params = reference.defaultParams();
+    EXPECT_EQ(params.getInt("samples"), 256);
+    EXPECT_EQ(params.getEnum("mode"), "ray_traced");
+    EXPECT_TRUE(params.getBool("cache"));
+    EXPECT_THROW(params.set("samples", 0, "test"), ConfigError);
+    EXPECT_THROW(params.set("threads", -1, "test"), ConfigError);
+    EXPECT_THROW(params.set("mode", "shadow_maps", "test"), ConfigError);
+}
+
+} // namespace
