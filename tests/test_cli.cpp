@@ -1139,6 +1139,37 @@ TEST_F(Cli, BenchSweepsTechniquesAndScenesWithOneReferencePerScene)
     EXPECT_TRUE(has(svg, ">hard 128</text>")) << svg;
 }
 
+TEST_F(Cli, BenchCountsAHostPassAsTheTechniquesTime)
+{
+    // The ray-traced reference as the technique under test: its tracing is a host pass,
+    // whose CPU time is part of the technique's time; against itself, no error.
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << R"({
+        "scene": {"generator": "penumbra"},
+        "camera": {"position": [2.5, 3, 3.5], "target": [0, 0, 0]},
+        "lights": [{"type": "rect", "position": [0, 3, 0], "direction": [0, -1, 0], "size": [0.5, 0.5]}],
+        "output": {"width": 32, "height": 24},
+        "sweep": [{"path": "/lights/0/shadow", "labels": ["traced"], "values": [{"technique": "reference", "samples": 4, "cache": false}]}]})";
+    const fs::path out = dir / "out";
+    const CliResult r = run(fmt::format("bench '{}' --reference-set samples=4 --reference-set cache=false --frames 1 --warmup 0 "
+                                        "-o '{}' --validation",
+                                        cfg.string(), out.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const nlohmann::json light = nlohmann::json::parse(slurp(out / "results.json"))["variants"][0]["lights"][0];
+    EXPECT_EQ(light["technique"], "reference");
+    EXPECT_EQ(light["visibility"]["all"]["rmse"], 0.0) << "same samples, same seed";
+    std::map<std::string, bool> host;
+    for (const nlohmann::json& pass : light["timing"]["passes"]) host[pass["name"]] = pass["host"];
+    EXPECT_EQ(host, (std::map<std::string, bool>{{"light0.reference.read_gbuffer", false},
+                                                 {"light0.reference.trace", true},
+                                                 {"light0.reference.upload", false}}));
+    const nlohmann::json& t = light["timing"];
+    EXPECT_EQ(t["work_ms"].get<double>(), t["gpu_ms"].get<double>() + t["host_ms"].get<double>()) << "one frame: exact";
+    const std::vector<std::map<std::string, std::string>> rows = csvRecords(slurp(out / "results.csv"));
+    ASSERT_EQ(rows.size(), 1u);
+    EXPECT_TRUE(nlohmann::json::parse(rows[0].at("pass_ms")).contains("light0.reference.trace"));
+}
+
 TEST_F(Cli, BenchInterruptedWritesNothing)
 {
     const fs::path cfg = dir / "cfg.json";

@@ -245,10 +245,12 @@ std::string summaryMarkdown(const BenchRun& run)
     md += fmt::format("- date: {}\n", run.date);
     md += fmt::format("- frames: {} measured after {} warm-up, per variant; times are medians\n", run.frames, run.warmup);
     md += fmt::format("- reference: `{}` `{}`\n\n", run.reference, run.referenceParams.dump());
-    md += "ms is the time of the light's shadow passes: on the GPU (timestamp queries), and on the CPU for host "
-          "passes; memory is the transient memory of those passes, and the errors compare the light's visibility image with the reference's over the pixels "
-          "that show geometry (penumbra: where the reference is strictly between 0.01 and 0.99). A ✓ marks the "
-          "Pareto front: no other variant in the same table is both faster and more accurate.\n\n";
+    md += fmt::format("ms is the time of the light's shadow passes: on the GPU (timestamp queries), and on the CPU "
+                      "for host passes; memory is the transient memory of those passes; the errors compare the "
+                      "light's visibility image with the reference's over the pixels that show geometry (penumbra: "
+                      "where the reference is above {} and below {}). A ✓ marks the Pareto front: no other variant "
+                      "in the same table is both faster and more accurate.\n\n",
+                      metrics::kUmbraMaxVisibility, metrics::kLitMinVisibility);
     md += fmt::format("Regenerate with:\n\n```sh\n{}\n```\n", shellCommand(run.command));
     for (const TradeoffPanel& panel : tradeoffPanels(run)) {
         md += fmt::format("\n## {}\n\n", panel.title);

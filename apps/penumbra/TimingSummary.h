@@ -32,7 +32,7 @@ struct TimingSummary {
     // What the frame waits for: GPU passes on the GPU plus host passes on the CPU. The
     // cost of a technique whatever runs where; gpuMs when it has no host pass.
     double workMs = 0.0;
-    double frameWallMs = 0.0;  // median of FrameTimings::frameCpuMs (record, submit, wait)
+    double frameWallMs = 0.0;  // median of FrameTimings::frameCpuMs: the whole frame, wall clock
 };
 
 // Summarises the passes whose names start with `prefix` (every pass for ""); those named
