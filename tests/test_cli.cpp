@@ -58,6 +58,21 @@ protected:
     }
 
     std::string config(const std::string& name) const { return fmt::format("'{}/config/{}'", PENUMBRA_SOURCE_DIR, name); }
+
+    // `command` (all but -o) refuses an -o that names a file, or a folder whose parent is
+    // missing, and changes neither.
+    void expectBadOutputFoldersRefused(const std::string& command, const std::string& env) const
+    {
+        std::ofstream(dir / "file") << "x";
+        CliResult r = run(fmt::format("{} -o '{}'", command, (dir / "file").string()), env);
+        EXPECT_EQ(r.exitCode, 1);
+        EXPECT_NE(r.err.find("/file: exists and is not a folder"), std::string::npos) << r.err;
+        EXPECT_EQ(slurp(dir / "file"), "x");
+        r = run(fmt::format("{} -o '{}/a/b'", command, dir.string()), env);
+        EXPECT_EQ(r.exitCode, 1);
+        EXPECT_NE(r.err.find("/a/b: cannot create the folder: '"), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(dir / "a"));
+    }
     std::string data(const std::string& name) const { return fmt::format("'{}/{}'", PENUMBRA_TEST_DATA_DIR, name); }
 
     fs::path dir;
@@ -827,19 +842,9 @@ TEST_F(Cli, CompareRefusesBadInputBeforeRenderingOrWriting)
     refused("--reference testgood --set other.size=1", "--set other.size: no light of ");
     refused("--reference testgood --diff-scale 0", "--diff-scale must be in (0, 1], got 0");
 
-    // -o: a file, or a folder whose parent is missing.
-    std::ofstream(dir / "file") << "x";
-    CliResult r = run(fmt::format("compare '{}' {} -o '{}'", cfg.string(), kTestGoodReference, (dir / "file").string()),
-                      pluginPath());
-    EXPECT_EQ(r.exitCode, 1);
-    EXPECT_TRUE(has(r.err, "/file: exists and is not a folder")) << r.err;
-    EXPECT_EQ(slurp(dir / "file"), "x");
-    r = run(fmt::format("compare '{}' {} -o '{}/a/b'", cfg.string(), kTestGoodReference, dir.string()), pluginPath());
-    EXPECT_EQ(r.exitCode, 1);
-    EXPECT_TRUE(has(r.err, "/a/b: cannot create the folder: '")) << r.err;
-    EXPECT_FALSE(fs::exists(dir / "a"));
+    expectBadOutputFoldersRefused(fmt::format("compare '{}' {}", cfg.string(), kTestGoodReference), pluginPath());
 
-    r = run(fmt::format("compare '{}/nope.json' {}", dir.string(), kTestGoodReference), pluginPath());
+    const CliResult r = run(fmt::format("compare '{}/nope.json' {}", dir.string(), kTestGoodReference), pluginPath());
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_TRUE(has(r.err, "nope.json: config file not found")) << r.err;
     EXPECT_NE(run("compare").exitCode, 0) << "the config is required";
@@ -1058,15 +1063,7 @@ TEST_F(Cli, BenchRefusesBadInputBeforeRenderingOrWriting)
     refused(cfg.string(), kTestGoodReference + " --set testgood.kernel=99", "--set testgood.kernel: must be an integer in [1, 15]");
     // Outputs: the summary's folder missing; -o a file or under a missing folder.
     refused(cfg.string(), kTestGoodReference + fmt::format(" --summary '{}/no/where.md'", dir.string()), "/no/where.md: output folder");
-    std::ofstream(dir / "file") << "x";
-    CliResult r = run(fmt::format("bench '{}' {} -o '{}'", cfg.string(), kTestGoodReference, (dir / "file").string()), pluginPath());
-    EXPECT_EQ(r.exitCode, 1);
-    EXPECT_TRUE(has(r.err, "/file: exists and is not a folder")) << r.err;
-    EXPECT_EQ(slurp(dir / "file"), "x");
-    r = run(fmt::format("bench '{}' {} -o '{}/a/b'", cfg.string(), kTestGoodReference, dir.string()), pluginPath());
-    EXPECT_EQ(r.exitCode, 1);
-    EXPECT_TRUE(has(r.err, "/a/b: cannot create the folder: '")) << r.err;
-    EXPECT_FALSE(fs::exists(dir / "a"));
+    expectBadOutputFoldersRefused(fmt::format("bench '{}' {}", cfg.string(), kTestGoodReference), pluginPath());
     EXPECT_NE(run("bench").exitCode, 0) << "the config is required";
 }
 

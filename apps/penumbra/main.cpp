@@ -434,6 +434,14 @@ int main(int argc, char** argv)
     addParamOverrideFlag(graph, graphFlags.settings);
     addDeviceFlags(graph);
 
+    // The technique that compare and bench measure against.
+    auto addReferenceFlags = [](CLI::App* cmd, std::string& reference, std::vector<std::string>& settings) {
+        cmd->add_option("--reference", reference, "The reference technique plugin")->capture_default_str();
+        cmd->add_option("--reference-set", settings,
+                        "Set a parameter of the reference technique: --reference-set samples=64 (repeatable)")
+            ->allow_extra_args(false);
+    };
+
     penumbra::app::CompareFlags compareFlags;
     CLI::App* compare = app.add_subcommand("compare", "Render a config with its techniques and with the reference "
                                                       "technique; print each light's error figures (RMSE, MAE, max, % "
@@ -443,10 +451,7 @@ int main(int argc, char** argv)
                         "Write <light>.test.png, <light>.reference.png, <light>.diff.png, color.test.png, "
                         "color.reference.png and metrics.json into this folder (created if missing; other files "
                         "in it are left alone)");
-    compare->add_option("--reference", compareFlags.reference, "The reference technique plugin")->capture_default_str();
-    compare->add_option("--reference-set", compareFlags.referenceSettings,
-                        "Set a parameter of the reference technique: --reference-set samples=64 (repeatable)")
-        ->allow_extra_args(false);
+    addReferenceFlags(compare, compareFlags.reference, compareFlags.referenceSettings);
     compare->add_option("--diff-scale", compareFlags.diffScale,
                         "|dV| at which the difference image's colours saturate, in (0, 1]")
         ->capture_default_str();
@@ -472,10 +477,7 @@ int main(int argc, char** argv)
     bench->add_option("--warmup", benchFlags.warmup, "Untimed frames before the measured ones, per variant")
         ->check(CLI::Range(0u, 100000u))
         ->capture_default_str();
-    bench->add_option("--reference", benchFlags.reference, "The reference technique plugin")->capture_default_str();
-    bench->add_option("--reference-set", benchFlags.referenceSettings,
-                      "Set a parameter of the reference technique: --reference-set samples=64 (repeatable)")
-        ->allow_extra_args(false);
+    addReferenceFlags(bench, benchFlags.reference, benchFlags.referenceSettings);
     bench->add_option("--width", benchFlags.width, "Output width (overrides every variant)")->check(CLI::Range(1u, 16384u));
     bench->add_option("--height", benchFlags.height, "Output height (overrides every variant)")->check(CLI::Range(1u, 16384u));
     addParamOverrideFlag(bench, benchFlags.settings);
