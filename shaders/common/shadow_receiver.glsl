@@ -8,7 +8,8 @@
 //                         2 receiver plane depth bias (Isidoro 2006)
 //                         (render::ReceiverBias in render/ShadowMap.h)
 // and declares `gNormal` (GBUFFER_NORMAL_FORMAT, readonly image2D) for biases 1 and 2,
-// `gPosition` (GBUFFER_POSITION_FORMAT, readonly image2D) for bias 2.
+// `gPosition` (GBUFFER_POSITION_FORMAT, readonly image2D) for bias 2 (and for
+// SHADOW_SURFACE_NEIGHBOURS, below).
 #ifndef PENUMBRA_SHADOW_RECEIVER_GLSL
 #define PENUMBRA_SHADOW_RECEIVER_GLSL
 
@@ -110,15 +111,11 @@ vec3 shadowOffsetAlongNormal(uint face, vec3 p, vec3 n, float texelWorld, float 
 }
 #endif
 
-#if SHADOW_RECEIVER_BIAS == SHADOW_RECEIVER_BIAS_PLANE
-// Receiver plane depth bias (Isidoro, "Shadow Mapping: GPU-based Tips and Techniques",
-// GDC 2006): the receiver's depth is an affine function of light uv over its plane
-// (exact for planes, perspective or orthographic: NDC depth is affine in NDC xy over a
-// plane), so each tap compares the texel's caster depth with the plane's depth at that
-// texel's centre instead of the receiver's own depth. Self-shadowing of planar
-// receivers disappears for any filter radius without pushing shadows away from their
-// casters.
-
+#if SHADOW_RECEIVER_BIAS == SHADOW_RECEIVER_BIAS_PLANE || defined(SHADOW_SURFACE_NEIGHBOURS)
+// Neighbouring pixels on the receiver's own surface: they give the receiver plane, and
+// (define SHADOW_SURFACE_NEIGHBOURS and declare gPosition for this part alone) a pixel's
+// footprint in the map, for filters that choose a level of detail.
+//
 // Neighbours give the plane of the triangle the map holds, where the receiver is flat
 // at the scale of a pixel: each must lie within 0.6 degrees of the receiver's tangent
 // plane (the G-buffer normal), the plane through the three must agree with the normal
@@ -155,6 +152,16 @@ bool shadowSurfaceNeighbour(ivec2 pixel, ivec2 axis, vec3 p, vec3 n, out vec3 q)
     }
     return found;
 }
+#endif
+
+#if SHADOW_RECEIVER_BIAS == SHADOW_RECEIVER_BIAS_PLANE
+// Receiver plane depth bias (Isidoro, "Shadow Mapping: GPU-based Tips and Techniques",
+// GDC 2006): the receiver's depth is an affine function of light uv over its plane
+// (exact for planes, perspective or orthographic: NDC depth is affine in NDC xy over a
+// plane), so each tap compares the texel's caster depth with the plane's depth at that
+// texel's centre instead of the receiver's own depth. Self-shadowing of planar
+// receivers disappears for any filter radius without pushing shadows away from their
+// casters.
 
 // dDepth/dUv of the plane through the receiver and two more points of it, given as
 // (uv, depth) differences a and b: solves [a.xy; b.xy] g = [a.z; b.z]. False when the
