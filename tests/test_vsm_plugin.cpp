@@ -347,13 +347,12 @@ protected:
 
 TEST_F(VsmBleeding, ReductionRemovesTheLightThatBleedsUnderTwoBlockers)
 {
+    // Measured: 0.11 without reduction, 0 with 0.2, EVSM 0.006 without.
     const float bleeding = brightestGround("vsm", 0.0);
     EXPECT_GT(bleeding, 0.05f) << "the premise: plain VSM bleeds here";
-    const float reduced = brightestGround("vsm", 0.2);
-    EXPECT_LT(reduced, 0.25f * bleeding) << "bleeding_reduction 0.2";
-    EXPECT_LT(brightestGround("vsm", 0.5), 1e-6f) << "bleeding_reduction 0.5 cuts every bound below 0.5";
+    EXPECT_LT(brightestGround("vsm", 0.2), 0.1f * bleeding) << "bleeding_reduction 0.2";
     // EVSM's exponential warp separates the two plates far more than their depths do.
-    EXPECT_LT(brightestGround("evsm", 0.0), 0.25f * bleeding) << "evsm without reduction";
+    EXPECT_LT(brightestGround("evsm", 0.0), 0.1f * bleeding) << "evsm without reduction";
 }
 
 // ---------------------------------------------------------------------------------
