@@ -15,6 +15,8 @@
 
 #include <gtest/gtest.h>
 
+#include <glm/gtc/matrix_transform.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -416,6 +418,36 @@ TEST_F(PcssTest, HugeLightIsClampedToTheMaximumRadii)
     size_t differ = 0;
     for (size_t i = 0; i < huge.size(); ++i) differ += huge[i] != large[i];
     EXPECT_LT(differ, huge.size() / 100);
+}
+
+TEST_F(PcssTest, BlockerAtTheLightIsClampedNotInfinite)
+{
+    // d_b -> 0: a 0.2 x 0.2 plate 1 mm under a point light 3 m above the ground, whose
+    // shadow covers all the ground in view (seen from under the plate). (d_r - d_b) / d_b
+    // is 3000: the radii stop at their maxima, every tap finds the plate, V = 0 exactly.
+    scene::Scene s = test::planeScene();
+    scene::Mesh plate = scene::makePlane("plate");
+    plate.computeBounds();
+    s.meshes.push_back(plate);
+    s.addInstance(1, s.graph.addNode("plate", scene::kNoParent,
+                                     glm::scale(glm::translate(glm::mat4(1.0f), {0.0f, 2.999f, 0.0f}),
+                                                {0.2f, 1.0f, 0.2f})));
+    config::RenderConfig cfg = test::boxOnGroundConfig();
+    cfg.camera.position = {0.0f, 1.0f, 0.0f};
+    cfg.camera.target = {0.0f, 0.0f, 0.0f};
+    cfg.lights[0].light.type = scene::LightType::Point;
+    cfg.lights[0].light.position = {0.0f, 3.0f, 0.0f};
+    PcssSettings settings;
+    settings.lightSize = 0.5;
+    const std::vector<float> v = renderPcss(cfg, settings, std::move(s));
+    size_t ground = 0, lit = 0;
+    for (size_t i = 0; i < v.size(); ++i) {
+        if (!frame->onGround(i)) continue;
+        ++ground;
+        lit += v[i] != 0.0f;
+    }
+    EXPECT_GT(ground, v.size() / 2);
+    EXPECT_EQ(lit, 0u) << "ground pixels not in the plate's umbra";
 }
 
 TEST_F(PcssTest, AngularDiameterBeyond180DegreesIsClamped)

@@ -4,7 +4,6 @@
 // blockers over the region the light covers as seen from the receiver, estimates the
 // penumbra width from the average blocker distance, and filters that many texels of
 // compares with a rotated Poisson disk (visibility.comp).
-#include "penumbra/core/Error.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/gpu/Pipeline.h"
 #include "penumbra/graph/GraphExecutor.h"

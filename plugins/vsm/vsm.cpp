@@ -118,14 +118,14 @@ struct Settings {
     bool mips() const { return filter == Filter::Trilinear || filter == Filter::Anisotropic; }
 };
 
-// An exponent from the parameters, clamped to what the format holds (with a warning:
-// the value asked for is not the one used).
+// An exponent from the parameters, clamped to what the storage format allows (with a
+// warning: the value asked for is not the one used).
 float clampExponent(const plugin::ParamValues& params, const char* name, float limit, const char* format)
 {
     const float value = params.getFloat(name);
     if (value <= limit) return value;
-    spdlog::warn("vsm: {} {} exceeds {}, the largest that {} holds (README); using {}", name, value, limit, format,
-                 limit);
+    spdlog::warn("vsm: {} {} exceeds {}, the largest {} allows (plugins/vsm/README.md); using {}", name, value, limit,
+                 format, limit);
     return limit;
 }
 
