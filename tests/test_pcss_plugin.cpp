@@ -96,6 +96,9 @@ struct LightCase {
     int resolution = 1024;
 };
 
+// Test parameters print as their names (ctest lists them).
+std::ostream& operator<<(std::ostream& os, const LightCase& c) { return os << c.name; }
+
 class PcssLightTypes : public PcssTest, public ::testing::WithParamInterface<LightCase> {};
 
 } // namespace
@@ -134,6 +137,8 @@ struct ZeroSizeCase {
     scene::LightType type;
     const char* biasMode;
 };
+
+std::ostream& operator<<(std::ostream& os, const ZeroSizeCase& c) { return os << c.name; }
 
 class PcssZeroSize : public PcssTest, public ::testing::WithParamInterface<ZeroSizeCase> {};
 

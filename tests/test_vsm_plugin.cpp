@@ -106,6 +106,9 @@ struct LightCase {
     scene::LightType type;
 };
 
+// Test parameters print as their names (ctest lists them).
+std::ostream& operator<<(std::ostream& os, const LightCase& c) { return os << c.name; }
+
 const LightCase kLights[] = {{"spot", scene::LightType::Spot},
                              {"directional", scene::LightType::Directional},
                              {"point", scene::LightType::Point},
@@ -152,6 +155,8 @@ struct FilterCase {
     const char* format;
     float tolerance;
 };
+
+std::ostream& operator<<(std::ostream& os, const FilterCase& c) { return os << c.name; }
 
 class VsmFilters : public VsmTest, public ::testing::WithParamInterface<FilterCase> {};
 
@@ -372,6 +377,11 @@ struct ExtremeCase {
     const char* format;
     float scale;
 };
+
+std::ostream& operator<<(std::ostream& os, const ExtremeCase& c)
+{
+    return os << c.variant << " " << c.format << " at scale " << c.scale;
+}
 
 class VsmExtremes : public VsmTest, public ::testing::WithParamInterface<ExtremeCase> {};
 

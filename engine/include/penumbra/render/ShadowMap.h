@@ -32,8 +32,7 @@
 
 namespace penumbra::gpu {
 class Context;
-class ShaderCompiler;
-} // namespace penumbra::gpu
+}
 
 namespace penumbra::graph {
 class PassContext;
