@@ -33,6 +33,12 @@ bad = {
     "bad track target": {"animation": {"tracks": [{"target": "/camera/roll", "keys": [{"t": 0, "value": 1}]}]}},
     "gltf and generator": {"scene": {"gltf": "a.gltf", "generator": "box-grid"}},
     "zero width": {"output": {"width": 0}},
+    "pcss radius out of range": {"lights": [{"type": "point", "position": [0, 1, 0],
+                                             "shadow": {"technique": "pcss", "max_filter_radius": 1000}}]},
+    "vsm unknown variant": {"lights": [{"type": "point", "position": [0, 1, 0],
+                                        "shadow": {"technique": "vsm", "variant": "msm"}}]},
+    "hard parameter on vsm": {"lights": [{"type": "point", "position": [0, 1, 0],
+                                          "shadow": {"technique": "vsm", "pcf_kernel": 3}}]},
 }
 for name, doc in bad.items():
     if validator.is_valid(doc):
