@@ -12,6 +12,7 @@
 // declares them. Turn the option on (or list the file in penumbra_tests) once
 // FrameRenderer runs technique plugins through the render graph.
 // ---------------------------------------------------------------------------------
+#include "PluginFrame.h"
 #include "RayCastAgreement.h"
 #include "TestConfigs.h"
 #include "TestContext.h"
@@ -104,63 +105,7 @@ double edgeShiftTexels(const HardSettings& s)
     return 0.0;
 }
 
-// One frame rendered with plugins and what the tests read back from it. Not movable:
-// the renderer keeps references to the scene and the config.
-struct RenderedFrame {
-    RenderedFrame(gpu::Context& context, plugin::PluginRegistry& registry, const config::RenderConfig& cfg,
-                  scene::Scene s)
-        : config(cfg), scene(std::move(s)), renderer(context, scene, config, registry)
-    {
-        renderer.renderFrame();
-        positions = renderer.readPositions();
-        normals = renderer.readNormals();
-    }
-    RenderedFrame(const RenderedFrame&) = delete;
-    RenderedFrame& operator=(const RenderedFrame&) = delete;
-
-    bool hasGeometry(size_t pixel) const { return positions[4 * pixel + 3] != 0.0f; }
-
-    // The light's shadow map as the plugin builds it: the same frusta (from the scene
-    // bounds) and the configured resolution.
-    test::LightRayClassifier classifier(size_t l) const
-    {
-        const scene::Light& light = config.lights[l].light;
-        const nlohmann::json* resolution = config.lights[l].shadow.param("resolution");
-        return test::LightRayClassifier(scene, light, render::shadowFrusta(light, scene.bounds()),
-                                        resolution ? resolution->get<uint32_t>() : 2048u);
-    }
-
-    config::RenderConfig config;
-    scene::Scene scene;
-    render::FrameRenderer renderer;
-    std::vector<float> positions;
-    std::vector<float> normals;
-};
-
-// A GPU test with a plugin registry; frames must be destroyed before the registry
-// unloads the libraries their techniques live in.
-class PluginGpuTest : public test::GpuTest {
-protected:
-    void SetUp() override
-    {
-        test::GpuTest::SetUp();
-        registry = std::make_unique<plugin::PluginRegistry>();
-    }
-    void TearDown() override
-    {
-        frame.reset();
-        registry.reset();
-        test::GpuTest::TearDown();
-    }
-    void render(const config::RenderConfig& cfg, scene::Scene scene)
-    {
-        frame.reset();
-        frame = std::make_unique<RenderedFrame>(*context, *registry, cfg, std::move(scene));
-    }
-
-    std::unique_ptr<plugin::PluginRegistry> registry;
-    std::unique_ptr<RenderedFrame> frame;
-};
+using test::PluginGpuTest;
 
 // ---------------------------------------------------------------------------------
 // Each variant in the default scene.
@@ -398,20 +343,10 @@ protected:
         return cfg;
     }
 
-    static scene::Scene planeScene()
-    {
-        scene::Scene s;
-        scene::Mesh plane = scene::makePlane("plane");
-        plane.computeBounds();
-        s.meshes = {plane};
-        s.addInstance(0, s.graph.addNode("plane", scene::kNoParent, glm::scale(glm::mat4(1.0f), glm::vec3(20, 1, 20))));
-        return s;
-    }
-
     // Fraction of the plane's pixels that are not fully lit.
     double unlitFraction(const HardSettings& s)
     {
-        render(grazingConfig(s), planeScene());
+        render(grazingConfig(s), test::planeScene());
         const std::vector<float> v = frame->renderer.readVisibility(0);
         size_t plane = 0, unlit = 0;
         for (size_t i = 0; i < v.size(); ++i) {

@@ -73,10 +73,12 @@ TEST(HardShaders, EveryVisibilityVariantCompiles)
 
 TEST(HardShaders, CasterShadersCompileSolidAndMasked)
 {
+    // The depth pass is the engine's (render::ShadowMap), compiled through the plugin's
+    // search path as the plugin's ShadowMap does.
     const gpu::ShaderCompiler compiler = pluginCompiler();
-    EXPECT_NO_THROW(compiler.compile("shadow_depth.vert"));
-    EXPECT_NO_THROW(compiler.compile("shadow_depth.vert", {{"ALPHA_MASK", "1"}}));
-    EXPECT_NO_THROW(compiler.compile("shadow_masked.frag", {{"ALPHA_MASK", "1"}}));
+    EXPECT_NO_THROW(compiler.compile("engine/shadow_depth.vert"));
+    EXPECT_NO_THROW(compiler.compile("engine/shadow_depth.vert", {{"ALPHA_MASK", "1"}}));
+    EXPECT_NO_THROW(compiler.compile("engine/shadow_masked.frag", {{"ALPHA_MASK", "1"}}));
 }
 
 TEST(HardShaders, VariantWithoutItsDefinesIsAnError)

@@ -1,10 +1,10 @@
-// The hard shadow-map technique (README.md next to this file): a depth-only pass from
-// the light into one frustum (spot: perspective, directional: orthographic box around
-// the scene) or six 90° cube faces in a 3 x 2 atlas (point, rect and disk lights, seen
-// from their centre), then a compute pass that compares every G-buffer position with
-// the map and writes the light's visibility image V_l. Bias modes and filters are
-// parameters; the filter and receiver-side bias pick a shader variant
-// (visibility_pass.h), the constant and slope-scaled bias are the rasterizer's.
+// The hard shadow-map technique (README.md next to this file): the engine's shadow map
+// (render/ShadowMap.h: one frustum for spot and directional lights, six cube faces in a
+// 3 x 2 atlas for point, rect and disk lights, seen from their centre), then a compute
+// pass that compares every G-buffer position with the map and writes the light's
+// visibility image V_l. Bias modes and filters are parameters; the filter and
+// receiver-side bias pick a shader variant (visibility_pass.h), the constant and
+// slope-scaled bias are the rasterizer's.
 #include "visibility_pass.h"
 
 #include "penumbra/core/Error.h"
@@ -15,13 +15,10 @@
 #include "penumbra/graph/RenderGraph.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/Technique.h"
-#include "penumbra/render/Casters.h"
-#include "penumbra/render/Projection.h"
+#include "penumbra/render/ShadowMap.h"
 
 #include <fmt/format.h>
 
-#include <algorithm>
-#include <cmath>
 #include <iterator>
 #include <string>
 #include <vector>
@@ -108,21 +105,6 @@ float footprintWidthTexels(const Settings& s)
     return 1.0f;
 }
 
-uint32_t faceCountFor(scene::LightType type)
-{
-    return type == scene::LightType::Spot || type == scene::LightType::Directional ? 1u : kMaxFaces;
-}
-
-// World size of one texel per unit of clip w (visibility_pass.h FaceData::texel). A
-// texel spans 2 / R of NDC and NDC x = P00 · x_view / w (orthographic: w = 1), so at
-// clip w it spans 2 w / (P00 · R) of the world; the larger of the x and y sizes (an
-// orthographic box need not be square).
-float worldTexelPerW(const glm::mat4& proj, uint32_t resolution)
-{
-    const float scale = std::min(std::abs(proj[0][0]), std::abs(proj[1][1]));
-    return scale > 0.0f ? 2.0f / (scale * float(resolution)) : 0.0f;
-}
-
 class HardShadow final : public plugin::Technique {
 public:
     explicit HardShadow(const plugin::TechniqueSetup& setup);
@@ -133,74 +115,28 @@ public:
     void registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io) override;
 
 private:
-    void recordShadowMap(const graph::PassContext& pass, const std::string& map) const;
     void recordVisibility(const graph::PassContext& pass, const plugin::LightPassIo& io, const std::string& map) const;
 
     gpu::Context& context_;
-    const render::Casters& casters_;
-    const uint32_t lightIndex_;
     const Settings settings_;
-    const uint32_t faceCount_;
-    gpu::Pipeline depth_;        // solid casters: no fragment shader
-    gpu::Pipeline depthMasked_;  // alpha-masked casters: a fragment shader cuts the holes
+    render::ShadowMap shadowMap_;
     gpu::Pipeline visibility_;
-    gpu::Buffer faces_;  // FaceData[faceCount_], host-visible, written by update()
-    std::vector<render::LightFrustum> frusta_;
-    glm::vec4 light_{0.0f};  // VisibilityPush::light
     gpu::Sampler compareSampler_;
 };
 
 HardShadow::HardShadow(const plugin::TechniqueSetup& setup)
     : context_(setup.context),
-      casters_(setup.casters),
-      lightIndex_(setup.lightIndex),
       settings_(readSettings(setup.params)),
-      faceCount_(faceCountFor(setup.light.type)),
-      faces_(setup.context, sizeof(FaceData) * kMaxFaces, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true,
-             fmt::format("light{}.hard.faces", setup.lightIndex))
+      shadowMap_(setup, settings_.resolution, "hard")
 {
-    const uint32_t atlasWidth = settings_.resolution * (faceCount_ == kMaxFaces ? 3u : 1u);
-    const uint32_t maxDimension = context_.properties().limits.maxImageDimension2D;
-    if (atlasWidth > maxDimension) {
-        throw ConfigError(fmt::format("hard: resolution: {} texels per face {}needs a {}-texel wide map, more than this "
-                                      "device's largest image ({}); use at most {}",
-                                      settings_.resolution, faceCount_ == kMaxFaces ? "in a 3 x 2 cube atlas " : "",
-                                      atlasWidth, maxDimension, maxDimension / (atlasWidth / settings_.resolution)));
-    }
-
-    gpu::GraphicsPipelineDesc d;
-    d.name = fmt::format("light{}.hard.shadow_map", lightIndex_);
-    d.vertexShader = "shadow_depth.vert";
-    d.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
-    d.pushConstantBytes = sizeof(glm::mat4);
-    d.vertexLayout = casters_.positionLayout();
-    d.depthFormat = VK_FORMAT_D32_SFLOAT;
-    d.depthCompare = VK_COMPARE_OP_GREATER_OR_EQUAL;  // reversed-Z: nearer is larger
-    d.depthBias = true;
-    // Both faces cast: a receiver's own back faces would otherwise let light leak
-    // through single-sided or open geometry.
-    d.cullMode = VK_CULL_MODE_NONE;
-    depth_ = gpu::Pipeline(context_, setup.shaders, d);
-    if (casters_.hasAlphaMasked()) {
-        d.name += ".masked";
-        d.fragmentShader = "shadow_masked.frag";
-        d.defines = {{"ALPHA_MASK", "1"}};
-        d.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                      {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                      {2, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}};
-        d.vertexLayout = casters_.positionUvLayout();
-        depthMasked_ = gpu::Pipeline(context_, setup.shaders, d);
-    }
-
     gpu::ComputePipelineDesc c;
-    c.name = fmt::format("light{}.hard.visibility", lightIndex_);
+    c.name = fmt::format("light{}.hard.visibility", setup.lightIndex);
     c.shader = "visibility.comp";
     c.defines = visibilityDefines(settings_.variant);
     c.bindings = visibilityBindings(settings_.variant);
     c.pushConstantBytes = sizeof(VisibilityPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
 
-    update(setup.light, setup.sceneBounds);
     // Nearest (one texel per compare) unless the hardware bilinear compare is wanted;
     // points outside the map never reach the sampler (the shader calls them lit).
     compareSampler_ = gpu::createSampler(context_, settings_.variant.samplerFilter(),
@@ -209,34 +145,18 @@ HardShadow::HardShadow(const plugin::TechniqueSetup& setup)
 
 void HardShadow::update(const scene::Light& light, const scene::Aabb& sceneBounds)
 {
-    if (faceCountFor(light.type) != faceCount_) {
-        throw Error(fmt::format("hard: light {} changed type to {}; the technique was created for a {}-face map",
-                                lightIndex_, scene::lightTypeName(light.type), faceCount_));
-    }
-    frusta_ = render::shadowFrusta(light, sceneBounds);
-    auto* faces = static_cast<FaceData*>(faces_.mapped());
-    for (size_t i = 0; i < frusta_.size(); ++i) {
-        faces[i] = {frusta_[i].viewProj, glm::vec4(worldTexelPerW(frusta_[i].proj, settings_.resolution), 0, 0, 0)};
-    }
-    if (light.type == scene::LightType::Directional) {
-        const float length = glm::length(light.direction);
-        light_ = glm::vec4(length > 0.0f ? -light.direction / length : glm::vec3(0.0f, 1.0f, 0.0f), 0.0f);
-    } else {
-        light_ = glm::vec4(light.position, 1.0f);
-    }
+    shadowMap_.update(light, sceneBounds);
 }
 
 void HardShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io)
 {
-    // The map is transient: written and read within the frame, so the graph may alias
-    // its memory with other lights' maps.
+    // Reversed-Z is the shadow map's business; here every term is "away from the light".
+    // Only bias_mode slope scales with the caster's slope; normal_offset and
+    // receiver_plane bias the receiver instead (shaders/common/shadow_receiver.glsl).
+    const float slope =
+        settings_.variant.bias == BiasMode::Slope ? settings_.slopeBias * footprintWidthTexels(settings_) : 0.0f;
     const std::string map = io.local("shadow_map");
-    const bool cube = faceCount_ == kMaxFaces;
-    graph.declareImage({map, settings_.resolution * (cube ? 3u : 1u), settings_.resolution * (cube ? 2u : 1u),
-                        VK_FORMAT_D32_SFLOAT});
-    graph.addPass(map, graph::QueueKind::Graphics)
-        .write(map, graph::Usage::DepthAttachment)
-        .execute([this, map](graph::PassContext& pass) { recordShadowMap(pass, map); });
+    shadowMap_.addDepthPass(graph, map, {settings_.depthBias, slope, settings_.biasClamp});
 
     graph::PassBuilder visibility = graph.addPass(io.local("visibility"), graph::QueueKind::Compute);
     visibility.read(io.gPosition, graph::Usage::Storage)
@@ -244,61 +164,6 @@ void HardShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
         .write(io.visibility, graph::Usage::Storage);
     if (settings_.variant.readsNormals()) visibility.read(io.gNormal, graph::Usage::Storage);
     visibility.execute([this, io, map](graph::PassContext& pass) { recordVisibility(pass, io, map); });
-}
-
-void HardShadow::recordShadowMap(const graph::PassContext& pass, const std::string& map) const
-{
-    VkCommandBuffer cmd = pass.cmd();
-    const gpu::Image& image = pass.image(map);
-    VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-    depth.imageView = image.view();
-    depth.imageLayout = pass.layout(map);
-    depth.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-    depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    depth.clearValue.depthStencil = {0.0f, 0};  // reversed-Z: far is 0
-    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
-    info.renderArea = {{0, 0}, {image.desc().width, image.desc().height}};
-    info.layerCount = 1;
-    info.pDepthAttachment = &depth;
-    vkCmdBeginRendering(cmd, &info);
-
-    // Reversed-Z: "away from the light" is towards smaller depth, so every bias term is
-    // negated; a negative clamp bounds the bias from below (Vulkan: max(bias, clamp)).
-    // Only bias_mode slope scales with the caster's slope; normal_offset and
-    // receiver_plane bias the receiver instead (visibility.comp).
-    const float slope =
-        settings_.variant.bias == BiasMode::Slope ? settings_.slopeBias * footprintWidthTexels(settings_) : 0.0f;
-    vkCmdSetDepthBias(cmd, -settings_.depthBias, -settings_.biasClamp, -slope);
-
-    const uint32_t size = settings_.resolution;
-    const bool masked = casters_.hasAlphaMasked();
-    for (uint32_t face = 0; face < frusta_.size(); ++face) {
-        // Each face draws into its own cell of the atlas (the scissor keeps it there).
-        const int32_t x = int32_t((face % 3) * size), y = int32_t((face / 3) * size);
-        const VkViewport viewport{float(x), float(y), float(size), float(size), 0.0f, 1.0f};
-        const VkRect2D scissor{{x, y}, {size, size}};
-        vkCmdSetViewport(cmd, 0, 1, &viewport);
-        vkCmdSetScissor(cmd, 0, 1, &scissor);
-        const render::CasterView view{frusta_[face].viewProj, lightIndex_, face};
-        // The solid pipeline stays bound across faces unless the masked one replaced it.
-        if (face == 0 || masked) {
-            depth_.bind(cmd);
-            gpu::DescriptorPush().storageBuffer(0, casters_.instanceBuffer()).push(context_, cmd, depth_);
-        }
-        depth_.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
-        casters_.draw(cmd, view, render::DrawFilter::Solid);
-        if (!masked) continue;
-        depthMasked_.bind(cmd);
-        depthMasked_.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
-        casters_.draw(cmd, view, render::DrawFilter::AlphaMasked, [&](const gpu::Image& texture) {
-            gpu::DescriptorPush()
-                .storageBuffer(0, casters_.instanceBuffer())
-                .storageBuffer(1, casters_.materialBuffer())
-                .sampledImage(2, texture, casters_.textureSampler())
-                .push(context_, cmd, depthMasked_);
-        });
-    }
-    vkCmdEndRendering(cmd);
 }
 
 void HardShadow::recordVisibility(const graph::PassContext& pass, const plugin::LightPassIo& io,
@@ -311,11 +176,10 @@ void HardShadow::recordVisibility(const graph::PassContext& pass, const plugin::
     descriptors.storageImage(kBindingPosition, pass.image(io.gPosition))
         .sampledImage(kBindingShadowMap, pass.image(map), compareSampler_, pass.layout(map))
         .storageImage(kBindingVisibility, out)
-        .storageBuffer(kBindingFaces, faces_);
+        .storageBuffer(kBindingShadowMapData, shadowMap_.buffer());
     if (settings_.variant.readsNormals()) descriptors.storageImage(kBindingNormal, pass.image(io.gNormal));
     descriptors.push(context_, cmd, visibility_);
-    const VisibilityPush push{light_, faceCount_, float(settings_.resolution),
-                              settings_.normalOffsetTexels * footprintWidthTexels(settings_),
+    const VisibilityPush push{settings_.normalOffsetTexels * footprintWidthTexels(settings_),
                               settings_.filterRadiusTexels};
     visibility_.pushConstants(cmd, &push, sizeof(push));
     vkCmdDispatch(cmd, (out.desc().width + 7) / 8, (out.desc().height + 7) / 8, 1);

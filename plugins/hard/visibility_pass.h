@@ -2,12 +2,11 @@
 // The C++ side of visibility.comp: which shader variant a parameter set compiles (the
 // filter and the receiver-side bias are chosen by defines, not by branches on uniforms:
 // each variant is straight-line code with its tap count known to the compiler), the
-// bindings, the push constants and the per-face data. hard.cpp and the shader tests
+// bindings and the push constants. hard.cpp and the shader tests
 // include it, so that the tests compile exactly the variants the plugin can ask for.
 #include "penumbra/gpu/Pipeline.h"
 #include "penumbra/gpu/ShaderCompiler.h"
-
-#include <glm/glm.hpp>
+#include "penumbra/render/ShadowMap.h"
 
 #include <cstdint>
 #include <string>
@@ -24,8 +23,7 @@ enum class Filter : uint32_t { None, Pcf, Poisson, Bilinear };
 inline constexpr const char* kFilterNames[] = {"none", "pcf", "poisson", "bilinear"};
 
 inline constexpr int kPcfKernelMin = 1, kPcfKernelMax = 15;
-inline constexpr int kPoissonSamplesMin = 4, kPoissonSamplesMax = 64;  // poisson_disk.glsl has 64
-inline constexpr uint32_t kMaxFaces = 6;
+inline constexpr int kPoissonSamplesMin = 4, kPoissonSamplesMax = render::kPoissonDiskPoints;
 
 struct VisibilityVariant {
     Filter filter = Filter::None;
@@ -34,9 +32,15 @@ struct VisibilityVariant {
     uint32_t poissonSamples = 16;  // Filter::Poisson only
 
     // Constant and slope-scaled bias live in the rasterizer (depth pass); the shader
-    // only sees the two receiver-side modes.
+    // only sees the two receiver-side modes (shaders/common/shadow_receiver.glsl).
     bool offsetsAlongNormal() const { return bias == BiasMode::NormalOffset; }
     bool usesReceiverPlane() const { return bias == BiasMode::ReceiverPlane; }
+    render::ReceiverBias receiverBias() const
+    {
+        return offsetsAlongNormal()  ? render::ReceiverBias::NormalOffset
+               : usesReceiverPlane() ? render::ReceiverBias::Plane
+                                     : render::ReceiverBias::None;
+    }
     // Normal offset moves the receiver along its normal; receiver plane uses the normal
     // to tell neighbours on the receiver's surface from those across a silhouette.
     bool readsNormals() const { return offsetsAlongNormal() || usesReceiverPlane(); }
@@ -51,9 +55,8 @@ struct VisibilityVariant {
 // reads are set, so two parameter sets that compile the same code give equal lists.
 inline std::vector<gpu::ShaderDefine> visibilityDefines(const VisibilityVariant& variant)
 {
-    const uint32_t receiverBias = variant.offsetsAlongNormal() ? 1u : variant.usesReceiverPlane() ? 2u : 0u;
     std::vector<gpu::ShaderDefine> defines = {{"FILTER", std::to_string(uint32_t(variant.filter))},
-                                              {"RECEIVER_BIAS", std::to_string(receiverBias)}};
+                                              {"RECEIVER_BIAS", std::to_string(uint32_t(variant.receiverBias()))}};
     if (variant.filter == Filter::Pcf) defines.push_back({"PCF_KERNEL", std::to_string(variant.pcfKernel)});
     if (variant.filter == Filter::Poisson) defines.push_back({"POISSON_SAMPLES", std::to_string(variant.poissonSamples)});
     return defines;
@@ -61,11 +64,11 @@ inline std::vector<gpu::ShaderDefine> visibilityDefines(const VisibilityVariant&
 
 // Bindings of visibility.comp.
 enum VisibilityBinding : uint32_t {
-    kBindingPosition = 0,    // G-buffer world position (storage, rgba32f)
-    kBindingShadowMap = 1,   // the depth atlas (sampler2DShadow)
-    kBindingVisibility = 2,  // V_l (storage, r32f)
-    kBindingFaces = 3,       // FaceData[faceCount] (storage buffer)
-    kBindingNormal = 4,      // G-buffer world normal (storage, rgba16f), readsNormals() only
+    kBindingPosition = 0,       // G-buffer world position (storage, rgba32f)
+    kBindingShadowMap = 1,      // the depth atlas (sampler2DShadow)
+    kBindingVisibility = 2,     // V_l (storage, r32f)
+    kBindingShadowMapData = 3,  // render::ShadowMap::buffer() (storage buffer, SHADOW_MAP_BINDING)
+    kBindingNormal = 4,         // G-buffer world normal (storage, rgba16f), readsNormals() only
 };
 
 inline std::vector<gpu::Binding> visibilityBindings(const VisibilityVariant& variant)
@@ -73,27 +76,15 @@ inline std::vector<gpu::Binding> visibilityBindings(const VisibilityVariant& var
     std::vector<gpu::Binding> b = {{kBindingPosition, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
                                    {kBindingShadowMap, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
                                    {kBindingVisibility, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                   {kBindingFaces, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
+                                   {kBindingShadowMapData, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
     if (variant.readsNormals()) b.push_back({kBindingNormal, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE});
     return b;
 }
 
-// One light-view frustum (a spot or directional map, or a cube face), std430.
-struct FaceData {
-    glm::mat4 viewProj{1.0f};  // world -> clip (reversed-Z)
-    // x: world size of one shadow-map texel per unit of clip w at the receiver
-    // (perspective: w is the view depth, so texels grow with distance; orthographic:
-    // w = 1, one size everywhere). The larger of the two axes'. yzw unused.
-    glm::vec4 texel{0.0f};
-};
-
 struct VisibilityPush {
-    glm::vec4 light{0.0f};           // xyz position (w = 1), or unit direction towards the light (w = 0)
-    uint32_t faceCount = 1;          // 1, or 6 cube faces packed 3 x 2
-    float faceTexels = 0.0f;         // texels per face side
-    float normalOffsetTexels = 0.0f; // RECEIVER_BIAS 1
-    float filterRadiusTexels = 0.0f; // FILTER 2 (poisson)
+    float normalOffsetTexels = 0.0f;  // RECEIVER_BIAS 1
+    float filterRadiusTexels = 0.0f;  // FILTER 2 (poisson)
 };
-static_assert(sizeof(VisibilityPush) == 32);
+static_assert(sizeof(VisibilityPush) == 8);
 
 } // namespace penumbra::hard

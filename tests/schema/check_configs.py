@@ -36,6 +36,12 @@ bad = {
     "zero width": {"output": {"width": 0}},
     "sweep with path and paths": {"sweep": [{"path": "/scene", "paths": ["/camera"], "values": [1]}]},
     "sweep label not a string": {"sweep": [{"path": "/scene", "values": [1], "labels": [2]}]},
+    "pcss radius out of range": {"lights": [{"type": "point", "position": [0, 1, 0],
+                                             "shadow": {"technique": "pcss", "max_filter_radius": 1000}}]},
+    "vsm unknown variant": {"lights": [{"type": "point", "position": [0, 1, 0],
+                                        "shadow": {"technique": "vsm", "variant": "msm"}}]},
+    "hard parameter on vsm": {"lights": [{"type": "point", "position": [0, 1, 0],
+                                          "shadow": {"technique": "vsm", "pcf_kernel": 3}}]},
 }
 for name, doc in bad.items():
     if validator.is_valid(doc):

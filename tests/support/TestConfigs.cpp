@@ -53,6 +53,46 @@ void setLightType(config::LightConfig& lightConfig, scene::LightType type)
     }
 }
 
+scene::Scene planeScene()
+{
+    scene::Scene s;
+    scene::Mesh plane = scene::makePlane("plane");
+    plane.computeBounds();
+    s.meshes = {plane};
+    s.addInstance(0, s.graph.addNode("plane", scene::kNoParent, glm::scale(glm::mat4(1.0f), glm::vec3(20, 1, 20))));
+    return s;
+}
+
+scene::Scene boxOnGroundScene()
+{
+    scene::Scene s = planeScene();
+    scene::Mesh box = scene::makeBox("box");
+    box.computeBounds();
+    s.meshes.push_back(box);
+    s.addInstance(1, s.graph.addNode("box", scene::kNoParent, glm::translate(glm::mat4(1.0f), {0.0f, 0.5f, 0.0f})));
+    return s;
+}
+
+config::RenderConfig boxOnGroundConfig()
+{
+    config::RenderConfig cfg = defaultTestConfig();
+    cfg.camera.position = {1.3f, 2.5f, 0.0f};
+    cfg.camera.target = {1.3f, 0.0f, 0.0f};
+    cfg.camera.up = {0.0f, 0.0f, -1.0f};
+    cfg.camera.fovYDeg = 60.0f;
+    cfg.camera.nearWorld = 0.01f;
+    cfg.lights.resize(1);
+    scene::Light& light = cfg.lights[0].light;
+    light = {};
+    light.type = scene::LightType::Rect;
+    light.position = {-3.0f, 3.0f, 0.0f};
+    light.direction = {0.0f, -1.0f, 0.0f};
+    light.sizeWorld = {0.5f, 0.5f};
+    light.intensity = 40.0f;
+    cfg.lights[0].shadow = {};
+    return cfg;
+}
+
 scene::Scene halfMaskedQuadScene()
 {
     scene::Scene s;

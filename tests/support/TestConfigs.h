@@ -21,6 +21,17 @@ void scaleConfig(config::RenderConfig& c, float s);
 // emitting downwards. Spot: unchanged.
 void setLightType(config::LightConfig& light, scene::LightType type);
 
+// A 20 x 20 plane alone at y = 0: a receiver with nothing to cast onto it.
+scene::Scene planeScene();
+
+// A unit box standing on planeScene()'s ground (touching it along its whole foot),
+// centred at x = z = 0.
+scene::Scene boxOnGroundScene();
+// Its view and light: a 0.5 x 0.5 rect light at (-3, 3, 0) facing down, so that the box's
+// shadow falls towards +x, from its foot at x = 0.5 to x = 2.25; the camera looks
+// straight down on it from (1.3, 2.5, 0). The light's technique is left to the test.
+config::RenderConfig boxOnGroundConfig();
+
 // Alpha-masked casters: a 4 x 4 quad at height 2 over a 20 x 20 ground, textured half
 // transparent (x < 0: alpha 0) and half opaque, alpha-masked.
 scene::Scene halfMaskedQuadScene();

@@ -1,5 +1,5 @@
 #version 460
-// Alpha-masked casters: texels below the material's cutoff cast no shadow.
+// render::ShadowMap, alpha-masked casters: texels below the material's cutoff cast no shadow.
 #include "common/scene.glsl"
 
 layout(location = 0) in vec2 inUv;

@@ -1,5 +1,6 @@
 #version 460
-// Depth-only shadow-map pass: casters from the light, reversed-Z (near = 1, far = 0).
+// The depth pass of render::ShadowMap (render/ShadowMap.h): casters from the light,
+// reversed-Z (near = 1, far = 0).
 // With ALPHA_MASK defined it also hands the fragment shader what it needs to cut holes.
 #include "common/scene.glsl"
 

@@ -1,0 +1,136 @@
+#pragma once
+// The casters' depth as one light sees it, for every technique that needs a shadow map
+// (hard, pcss, the VSM family, a rasterised reference): the light's views, the data
+// shaders read about them, and the depth pass with its pipelines.
+//
+//   spot                 one perspective map over the outer cone
+//   directional          one orthographic map fitted around the scene
+//   point, rect, disk    six 90° cube faces around the light's centre, +X -X +Y -Y +Z -Z,
+//                        packed 3 x 2 in one atlas (face f at cell (f % 3, f / 3))
+//
+// Frusta come from render::shadowFrusta (Projection.h). Every map is reversed-Z
+// D32_SFLOAT: 1 at the near plane, 0 where nothing was drawn. Alpha-masked casters cut
+// their holes (a fragment shader tests alpha); both sides of every triangle cast.
+//
+// Shaders read the maps through shaders/common/shadow_map.glsl (projection, face choice,
+// atlas addressing, distances and normalised depth along the light) and
+// shaders/common/shadow_receiver.glsl (the receiver as the map sees it, with normal
+// offset or receiver plane bias). docs/plugins.md, "Shadow maps", walks through a use.
+#include "penumbra/gpu/Pipeline.h"
+#include "penumbra/gpu/Resources.h"
+#include "penumbra/graph/RenderGraph.h"
+#include "penumbra/render/Casters.h"
+#include "penumbra/render/Projection.h"
+#include "penumbra/scene/Scene.h"
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace penumbra::gpu {
+class Context;
+}
+
+namespace penumbra::graph {
+class PassContext;
+}
+
+namespace penumbra::plugin {
+struct TechniqueSetup;
+}
+
+namespace penumbra::render {
+
+inline constexpr uint32_t kMaxShadowFaces = 6;
+inline constexpr VkFormat kShadowDepthFormat = VK_FORMAT_D32_SFLOAT;
+// Points in shaders/common/poisson_disk.glsl: a filter takes the first N.
+inline constexpr int kPoissonDiskPoints = 64;
+
+// 1 for spot and directional lights, 6 (a cube atlas) for point, rect and disk lights.
+uint32_t shadowFaceCount(scene::LightType type);
+
+// One face (std430; shaders/common/shadow_map.glsl ShadowFace).
+struct ShadowFaceData {
+    glm::mat4 viewProj{1.0f};  // world -> clip, reversed-Z
+    // x: world size of one texel per unit of clip w at the receiver (perspective: w is
+    // the distance along the face's axis, so texels grow with distance; orthographic:
+    // w = 1). The larger of the two axes'. yzw unused.
+    glm::vec4 texel{0.0f};
+    // x: near, y: far: distances along the face's axis (world) between which every
+    // caster and receiver of the scene lies; z: 1 for an orthographic face, 0 for a
+    // perspective one; w unused. shadowDistance() / shadowLinearDepth() use them.
+    glm::vec4 depthRange{0.0f};
+};
+
+// What shaders know about the map (std430; shadow_map.glsl ShadowMapBuffer).
+struct ShadowMapData {
+    glm::vec4 light{0.0f};     // xyz position (w = 1), or unit direction towards the light (w = 0)
+    uint32_t faceCount = 1;    // 1, or 6 cube faces in a 3 x 2 atlas
+    float faceTexels = 0.0f;   // texels per face side
+    uint32_t pad0 = 0, pad1 = 0;
+    ShadowFaceData faces[kMaxShadowFaces];
+};
+static_assert(sizeof(ShadowFaceData) == 96 && sizeof(ShadowMapData) == 32 + 6 * 96, "std430 layout of shadow_map.glsl");
+
+// The rasterizer's depth bias, positive "away from the light" (the depth pass negates it
+// for reversed-Z).
+struct ShadowDepthBias {
+    float constant = 0.0f;  // in Vulkan's minimum resolvable depth differences r
+    float slope = 0.0f;     // times the caster's depth slope
+    float clamp = 0.0f;     // largest bias in NDC depth; 0: no clamp
+};
+
+// Receiver-side bias of shadow_receiver.glsl (its SHADOW_RECEIVER_BIAS define).
+enum class ReceiverBias : uint32_t { None = 0, NormalOffset = 1, Plane = 2 };
+
+// One light's shadow map: its frusta, a host-visible buffer of ShadowMapData for the
+// shaders, and the depth pass. Owned by the technique (one per light).
+class ShadowMap {
+public:
+    // For the technique created with `setup`; `technique` ("hard") names its GPU objects
+    // ("light0.hard.shadow_map") and prefixes errors. Throws penumbra::ConfigError when
+    // the atlas of `resolution` texels per face exceeds the device's largest image
+    // (naming `resolution`), penumbra::Error when a shader does not compile.
+    ShadowMap(const plugin::TechniqueSetup& setup, uint32_t resolution, std::string_view technique);
+    ShadowMap(const ShadowMap&) = delete;
+    ShadowMap& operator=(const ShadowMap&) = delete;
+
+    // Refits the frusta to the light and the scene bounds and rewrites buffer(). Call it
+    // from Technique::update; throws when the light changed to a type with another face
+    // count (the map was sized for the first).
+    void update(const scene::Light& light, const scene::Aabb& sceneBounds);
+
+    // Declares the transient depth image `image` (atlasWidth() x atlasHeight(),
+    // kShadowDepthFormat) and the graphics pass named `image` that clears it and draws
+    // every face's casters with `bias`. Readers declare it as Usage::Sampled.
+    void addDepthPass(graph::RenderGraph& graph, const std::string& image, ShadowDepthBias bias) const;
+
+    uint32_t faceCount() const { return faceCount_; }
+    uint32_t resolution() const { return resolution_; }
+    uint32_t atlasWidth() const { return resolution_ * (faceCount_ == kMaxShadowFaces ? 3u : 1u); }
+    uint32_t atlasHeight() const { return resolution_ * (faceCount_ == kMaxShadowFaces ? 2u : 1u); }
+    // ShadowMapData, as shaders/common/shadow_map.glsl binds it (a storage buffer).
+    const gpu::Buffer& buffer() const { return buffer_; }
+    const ShadowMapData& data() const { return data_; }
+    const std::vector<LightFrustum>& frusta() const { return frusta_; }
+
+private:
+    void recordDepth(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias) const;
+
+    gpu::Context& context_;
+    const Casters& casters_;
+    const uint32_t lightIndex_;
+    const std::string name_;  // "light0.hard"
+    const uint32_t resolution_;
+    const uint32_t faceCount_;
+    gpu::Pipeline depth_;        // solid casters: no fragment shader
+    gpu::Pipeline depthMasked_;  // alpha-masked casters: a fragment shader cuts the holes
+    gpu::Buffer buffer_;         // data_ for the shaders, host-visible
+    ShadowMapData data_;
+    std::vector<LightFrustum> frusta_;
+};
+
+} // namespace penumbra::render

@@ -1,0 +1,195 @@
+#include "penumbra/render/ShadowMap.h"
+
+#include "penumbra/core/Error.h"
+#include "penumbra/gpu/Context.h"
+#include "penumbra/graph/GraphExecutor.h"
+#include "penumbra/plugin/Technique.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+namespace penumbra::render {
+
+uint32_t shadowFaceCount(scene::LightType type)
+{
+    return type == scene::LightType::Spot || type == scene::LightType::Directional ? 1u : kMaxShadowFaces;
+}
+
+namespace {
+
+// World size of one texel per unit of clip w (ShadowFaceData::texel). A texel spans
+// 2 / R of NDC and NDC x = P00 · x_view / w (orthographic: w = 1), so at clip w it spans
+// 2 w / (P00 · R) of the world; the larger of the x and y sizes (an orthographic box
+// need not be square).
+float worldTexelPerW(const glm::mat4& proj, uint32_t resolution)
+{
+    const float scale = std::min(std::abs(proj[0][0]), std::abs(proj[1][1]));
+    return scale > 0.0f ? 2.0f / (scale * float(resolution)) : 0.0f;
+}
+
+bool isOrthographic(const glm::mat4& proj) { return proj[3][3] == 1.0f; }
+
+// Near and far distance along the face's axis between which the scene lies.
+// Orthographic (Projection.cpp directionalFrustum): depth = (far - d) / (far - near), so
+// P22 = 1 / (far - near) and P32 = far / (far - near). Perspective: the near plane the
+// frustum was built with, and the farthest corner of the scene box along the view axis.
+// far > near always: the shaders divide by far - near.
+glm::vec2 depthRange(const LightFrustum& f, const scene::Aabb& bounds)
+{
+    if (isOrthographic(f.proj)) {
+        const float p22 = f.proj[2][2], p32 = f.proj[3][2];
+        const glm::vec2 range(p32 / p22 - 1.0f / p22, p32 / p22);
+        // A degenerate box (a scene of one point) gives no usable range.
+        if (std::isfinite(range.x) && std::isfinite(range.y) && range.y > range.x) return range;
+        return {f.nearWorld, f.nearWorld + std::max(std::abs(f.nearWorld), 1.0f)};
+    }
+    float far = 0.0f;
+    if (!bounds.empty()) {
+        for (int corner = 0; corner < 8; ++corner) {
+            const glm::vec3 c((corner & 1) ? bounds.max.x : bounds.min.x, (corner & 2) ? bounds.max.y : bounds.min.y,
+                              (corner & 4) ? bounds.max.z : bounds.min.z);
+            // View space looks down -z: the distance along the axis is -z_view.
+            far = std::max(far, -(f.view * glm::vec4(c, 1.0f)).z);
+        }
+    }
+    // A scene entirely behind the face (or none): any range will do, nothing projects.
+    return {f.nearWorld, std::max(far, 2.0f * f.nearWorld)};
+}
+
+} // namespace
+
+ShadowMap::ShadowMap(const plugin::TechniqueSetup& setup, uint32_t resolution, std::string_view technique)
+    : context_(setup.context),
+      casters_(setup.casters),
+      lightIndex_(setup.lightIndex),
+      name_(fmt::format("light{}.{}", setup.lightIndex, technique)),
+      resolution_(resolution),
+      faceCount_(shadowFaceCount(setup.light.type)),
+      buffer_(setup.context, sizeof(ShadowMapData), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, name_ + ".shadow_faces")
+{
+    if (resolution_ == 0) throw ConfigError(fmt::format("{}: resolution: must be at least 1 texel, got 0", technique));
+    const uint32_t maxDimension = context_.properties().limits.maxImageDimension2D;
+    if (atlasWidth() > maxDimension) {
+        const bool cube = faceCount_ == kMaxShadowFaces;
+        throw ConfigError(fmt::format("{}: resolution: {} texels per face {}needs a {}-texel wide map, more than this "
+                                      "device's largest image ({}); use at most {}",
+                                      technique, resolution_, cube ? "in a 3 x 2 cube atlas " : "", atlasWidth(),
+                                      maxDimension, maxDimension / (cube ? 3u : 1u)));
+    }
+
+    gpu::GraphicsPipelineDesc d;
+    d.name = name_ + ".shadow_map";
+    d.vertexShader = "engine/shadow_depth.vert";
+    d.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
+    d.pushConstantBytes = sizeof(glm::mat4);
+    d.vertexLayout = casters_.positionLayout();
+    d.depthFormat = kShadowDepthFormat;
+    d.depthCompare = VK_COMPARE_OP_GREATER_OR_EQUAL;  // reversed-Z: nearer is larger
+    d.depthBias = true;
+    // Both faces cast: a receiver's own back faces would otherwise let light leak
+    // through single-sided or open geometry.
+    d.cullMode = VK_CULL_MODE_NONE;
+    depth_ = gpu::Pipeline(context_, setup.shaders, d);
+    if (casters_.hasAlphaMasked()) {
+        d.name += ".masked";
+        d.fragmentShader = "engine/shadow_masked.frag";
+        d.defines = {{"ALPHA_MASK", "1"}};
+        d.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                      {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                      {2, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}};
+        d.vertexLayout = casters_.positionUvLayout();
+        depthMasked_ = gpu::Pipeline(context_, setup.shaders, d);
+    }
+    update(setup.light, setup.sceneBounds);
+}
+
+void ShadowMap::update(const scene::Light& light, const scene::Aabb& sceneBounds)
+{
+    if (shadowFaceCount(light.type) != faceCount_) {
+        throw Error(fmt::format("{}: light {} changed type to {}; the shadow map was created for {} face(s)", name_,
+                                lightIndex_, scene::lightTypeName(light.type), faceCount_));
+    }
+    frusta_ = shadowFrusta(light, sceneBounds);
+    data_ = {};
+    data_.faceCount = faceCount_;
+    data_.faceTexels = float(resolution_);
+    for (size_t i = 0; i < frusta_.size(); ++i) {
+        const LightFrustum& f = frusta_[i];
+        const glm::vec2 range = depthRange(f, sceneBounds);
+        data_.faces[i] = {f.viewProj, glm::vec4(worldTexelPerW(f.proj, resolution_), 0.0f, 0.0f, 0.0f),
+                          glm::vec4(range.x, range.y, isOrthographic(f.proj) ? 1.0f : 0.0f, 0.0f)};
+    }
+    if (light.type == scene::LightType::Directional) {
+        const float length = glm::length(light.direction);
+        data_.light = glm::vec4(length > 0.0f ? -light.direction / length : glm::vec3(0.0f, 1.0f, 0.0f), 0.0f);
+    } else {
+        data_.light = glm::vec4(light.position, 1.0f);
+    }
+    std::memcpy(buffer_.mapped(), &data_, sizeof(data_));
+}
+
+void ShadowMap::addDepthPass(graph::RenderGraph& graph, const std::string& image, ShadowDepthBias bias) const
+{
+    // Transient: written and read within the frame, so the graph may alias its memory
+    // with other lights' maps.
+    graph.declareImage({image, atlasWidth(), atlasHeight(), kShadowDepthFormat});
+    graph.addPass(image, graph::QueueKind::Graphics)
+        .write(image, graph::Usage::DepthAttachment)
+        .execute([this, image, bias](graph::PassContext& pass) { recordDepth(pass, image, bias); });
+}
+
+void ShadowMap::recordDepth(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias) const
+{
+    VkCommandBuffer cmd = pass.cmd();
+    const gpu::Image& target = pass.image(image);
+    VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    depth.imageView = target.view();
+    depth.imageLayout = pass.layout(image);
+    depth.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    depth.clearValue.depthStencil = {0.0f, 0};  // reversed-Z: far is 0
+    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    info.renderArea = {{0, 0}, {target.desc().width, target.desc().height}};
+    info.layerCount = 1;
+    info.pDepthAttachment = &depth;
+    vkCmdBeginRendering(cmd, &info);
+
+    // Reversed-Z: "away from the light" is towards smaller depth, so every bias term is
+    // negated; a negative clamp bounds the bias from below (Vulkan: max(bias, clamp)).
+    vkCmdSetDepthBias(cmd, -bias.constant, -bias.clamp, -bias.slope);
+
+    const uint32_t size = resolution_;
+    const bool masked = casters_.hasAlphaMasked();
+    for (uint32_t face = 0; face < frusta_.size(); ++face) {
+        // Each face draws into its own cell of the atlas (the scissor keeps it there).
+        const int32_t x = int32_t((face % 3) * size), y = int32_t((face / 3) * size);
+        const VkViewport viewport{float(x), float(y), float(size), float(size), 0.0f, 1.0f};
+        const VkRect2D scissor{{x, y}, {size, size}};
+        vkCmdSetViewport(cmd, 0, 1, &viewport);
+        vkCmdSetScissor(cmd, 0, 1, &scissor);
+        const CasterView view{frusta_[face].viewProj, lightIndex_, face};
+        // The solid pipeline stays bound across faces unless the masked one replaced it.
+        if (face == 0 || masked) {
+            depth_.bind(cmd);
+            gpu::DescriptorPush().storageBuffer(0, casters_.instanceBuffer()).push(context_, cmd, depth_);
+        }
+        depth_.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
+        casters_.draw(cmd, view, DrawFilter::Solid);
+        if (!masked) continue;
+        depthMasked_.bind(cmd);
+        depthMasked_.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
+        casters_.draw(cmd, view, DrawFilter::AlphaMasked, [&](const gpu::Image& texture) {
+            gpu::DescriptorPush()
+                .storageBuffer(0, casters_.instanceBuffer())
+                .storageBuffer(1, casters_.materialBuffer())
+                .sampledImage(2, texture, casters_.textureSampler())
+                .push(context_, cmd, depthMasked_);
+        });
+    }
+    vkCmdEndRendering(cmd);
+}
+
+} // namespace penumbra::render

@@ -1,0 +1,227 @@
+// Percentage-closer soft shadows (Fernando 2005, "Percentage-Closer Soft Shadows",
+// SIGGRAPH sketch; README.md next to this file): the engine's shadow map
+// (render/ShadowMap.h), then one compute pass that, per pixel, searches the map for
+// blockers over the region the light covers as seen from the receiver, estimates the
+// penumbra width from the average blocker distance, and filters that many texels of
+// compares with a rotated Poisson disk (visibility.comp).
+#include "penumbra/gpu/Context.h"
+#include "penumbra/gpu/Pipeline.h"
+#include "penumbra/graph/GraphExecutor.h"
+#include "penumbra/graph/RenderGraph.h"
+#include "penumbra/plugin/Plugin.h"
+#include "penumbra/plugin/Technique.h"
+#include "penumbra/render/ShadowMap.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <string>
+
+namespace penumbra::pcss {
+namespace {
+
+using plugin::ParamType;
+
+// Parameter `bias_mode`, in ParamSpec choice order.
+enum class BiasMode : uint32_t { ReceiverPlane, Slope };
+constexpr const char* kBiasModeNames[] = {"receiver_plane", "slope"};
+
+constexpr int kSamplesMin = 4, kSamplesMax = render::kPoissonDiskPoints;
+// Directional lights: the angular diameter is clamped below 180° (tan(θ/2) is finite);
+// the texel radii clamp long before that.
+constexpr float kMaxAngularDiameterDeg = 179.0f;
+
+const plugin::ParamSpec kParams[] = {
+    {"resolution", ParamType::Int, 2048, 16, 16384, "texels",
+     "shadow-map texels per side of each face (point, rect and disk lights: six faces in a 3 x 2 atlas)"},
+    {"light_size", ParamType::Float, -1, -1, 1e9, "world or deg",
+     "-1: the light's own size (rect: sqrt(w h), disk: diameter, directional: angular_diameter_deg; spot and "
+     "point: 0, a hard shadow); >= 0: this size instead, in world units (directional: angular diameter in degrees)"},
+    {"blocker_samples", ParamType::Int, 16, kSamplesMin, kSamplesMax, "", "depth taps of the blocker search"},
+    {"filter_samples", ParamType::Int, 32, kSamplesMin, kSamplesMax, "", "compares of the penumbra filter"},
+    {"max_search_radius", ParamType::Float, 16, 0.5, 128, "texels",
+     "largest blocker-search radius (the light seen from the receiver is clamped to it)"},
+    {"max_filter_radius", ParamType::Float, 16, 0.5, 128, "texels",
+     "largest filter radius (the estimated penumbra is clamped to it)"},
+    {"bias_mode", ParamType::Enum, double(BiasMode::ReceiverPlane), 0, 0, "",
+     "receiver_plane: every tap compares against the receiver's plane at that tap; slope: rasterizer slope bias",
+     kBiasModeNames, uint32_t(std::size(kBiasModeNames))},
+    {"depth_bias", ParamType::Float, 4, 0, 1e6, "r",
+     "constant depth bias in Vulkan's minimum resolvable depth differences r; applied in every bias_mode"},
+    {"slope_bias", ParamType::Float, 2, 0, 1000, "",
+     "slope-scaled rasterizer depth bias factor; bias_mode slope only (it must cover the widest filter)"},
+};
+
+struct Settings {
+    uint32_t resolution = 2048;
+    float lightSizeOverride = -1.0f;
+    uint32_t blockerSamples = 16;
+    uint32_t filterSamples = 32;
+    float maxSearchTexels = 16.0f;
+    float maxFilterTexels = 16.0f;
+    BiasMode bias = BiasMode::ReceiverPlane;
+    float depthBias = 4.0f;
+    float slopeBias = 2.0f;
+};
+
+Settings readSettings(const plugin::ParamValues& params)
+{
+    Settings s;
+    s.resolution = uint32_t(params.getInt("resolution"));
+    s.lightSizeOverride = params.getFloat("light_size");
+    s.blockerSamples = uint32_t(params.getInt("blocker_samples"));
+    s.filterSamples = uint32_t(params.getInt("filter_samples"));
+    s.maxSearchTexels = params.getFloat("max_search_radius");
+    s.maxFilterTexels = params.getFloat("max_filter_radius");
+    s.bias = BiasMode(params.getEnumIndex("bias_mode"));
+    s.depthBias = params.getFloat("depth_bias");
+    s.slopeBias = params.getFloat("slope_bias");
+    return s;
+}
+
+// The light's size as the shader uses it: w_light in world units for lights at a
+// position (a square light's side; the penumbra is (d_r - d_b) w_light / d_b wide), and
+// for a directional light the penumbra width per unit of receiver-blocker distance,
+// 2 tan(θ/2) for the angular diameter θ (w_light / d_b as the light goes to infinity).
+float lightSizeFor(const scene::Light& light, float overrideSize)
+{
+    if (light.type == scene::LightType::Directional) {
+        const float degrees = overrideSize >= 0.0f ? overrideSize : light.angularDiameterDeg;
+        return 2.0f * std::tan(0.5f * glm::radians(std::clamp(degrees, 0.0f, kMaxAngularDiameterDeg)));
+    }
+    if (overrideSize >= 0.0f) return overrideSize;
+    switch (light.type) {
+    // The side of the square of equal area: one isotropic filter for an anisotropic
+    // penumbra (it is w_x h / (H - h) along x, w_z h / (H - h) along z).
+    case scene::LightType::Rect: return std::sqrt(std::max(light.sizeWorld.x * light.sizeWorld.y, 0.0f));
+    case scene::LightType::Disk: return 2.0f * std::max(light.radiusWorld, 0.0f);
+    default: return 0.0f;  // spot and point lights have no size of their own
+    }
+}
+
+// Bindings of visibility.comp.
+enum Binding : uint32_t {
+    kBindingPosition = 0,       // G-buffer world position (storage, rgba32f)
+    kBindingShadowCompare = 1,  // the depth atlas, compare sampler (sampler2DShadow)
+    kBindingVisibility = 2,     // V_l (storage, r32f)
+    kBindingShadowMapData = 3,  // render::ShadowMap::buffer() (storage buffer)
+    kBindingNormal = 4,         // G-buffer world normal (storage, rgba16f), receiver plane only
+    kBindingShadowDepth = 5,    // the depth atlas, nearest sampler without compare (sampler2D)
+};
+
+struct PcssPush {
+    float lightSize = 0.0f;  // lightSizeFor()
+    float maxSearchTexels = 0.0f;
+    float maxFilterTexels = 0.0f;
+    uint32_t blockerSamples = 0;
+    uint32_t filterSamples = 0;
+};
+static_assert(sizeof(PcssPush) == 20);
+
+class PcssShadow final : public plugin::Technique {
+public:
+    explicit PcssShadow(const plugin::TechniqueSetup& setup);
+
+    void update(const scene::Light& light, const scene::Aabb& sceneBounds) override;
+    void registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io) override;
+
+private:
+    bool usesReceiverPlane() const { return settings_.bias == BiasMode::ReceiverPlane; }
+    void recordVisibility(const graph::PassContext& pass, const plugin::LightPassIo& io, const std::string& map) const;
+
+    gpu::Context& context_;
+    const Settings settings_;
+    render::ShadowMap shadowMap_;
+    gpu::Pipeline visibility_;
+    gpu::Sampler compareSampler_;
+    gpu::Sampler depthSampler_;
+    float lightSize_ = 0.0f;
+};
+
+PcssShadow::PcssShadow(const plugin::TechniqueSetup& setup)
+    : context_(setup.context),
+      settings_(readSettings(setup.params)),
+      shadowMap_(setup, settings_.resolution, "pcss")
+{
+    gpu::ComputePipelineDesc c;
+    c.name = fmt::format("light{}.pcss.visibility", setup.lightIndex);
+    c.shader = "visibility.comp";
+    c.defines = {{"RECEIVER_BIAS", std::to_string(uint32_t(usesReceiverPlane() ? render::ReceiverBias::Plane
+                                                                                : render::ReceiverBias::None))}};
+    c.bindings = {{kBindingPosition, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                  {kBindingShadowCompare, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+                  {kBindingVisibility, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                  {kBindingShadowMapData, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                  {kBindingShadowDepth, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}};
+    if (usesReceiverPlane()) c.bindings.push_back({kBindingNormal, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE});
+    c.pushConstantBytes = sizeof(PcssPush);
+    visibility_ = gpu::Pipeline(context_, setup.shaders, c);
+
+    // Every tap reads one texel (at its centre): the search averages texel depths, the
+    // filter counts texel compares. Taps never leave the map (the shader clamps them).
+    compareSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+                                         VK_COMPARE_OP_GREATER_OR_EQUAL);
+    depthSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
+    lightSize_ = lightSizeFor(setup.light, settings_.lightSizeOverride);
+}
+
+void PcssShadow::update(const scene::Light& light, const scene::Aabb& sceneBounds)
+{
+    shadowMap_.update(light, sceneBounds);
+    lightSize_ = lightSizeFor(light, settings_.lightSizeOverride);
+}
+
+void PcssShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io)
+{
+    const std::string map = io.local("shadow_map");
+    shadowMap_.addDepthPass(graph, map,
+                            {settings_.depthBias, settings_.bias == BiasMode::Slope ? settings_.slopeBias : 0.0f, 0.0f});
+
+    graph::PassBuilder visibility = graph.addPass(io.local("visibility"), graph::QueueKind::Compute);
+    visibility.read(io.gPosition, graph::Usage::Storage)
+        .read(map, graph::Usage::Sampled)
+        .write(io.visibility, graph::Usage::Storage);
+    if (usesReceiverPlane()) visibility.read(io.gNormal, graph::Usage::Storage);
+    visibility.execute([this, io, map](graph::PassContext& pass) { recordVisibility(pass, io, map); });
+}
+
+void PcssShadow::recordVisibility(const graph::PassContext& pass, const plugin::LightPassIo& io,
+                                  const std::string& map) const
+{
+    VkCommandBuffer cmd = pass.cmd();
+    const gpu::Image& out = pass.image(io.visibility);
+    visibility_.bind(cmd);
+    gpu::DescriptorPush descriptors;
+    descriptors.storageImage(kBindingPosition, pass.image(io.gPosition))
+        .sampledImage(kBindingShadowCompare, pass.image(map), compareSampler_, pass.layout(map))
+        .storageImage(kBindingVisibility, out)
+        .storageBuffer(kBindingShadowMapData, shadowMap_.buffer())
+        .sampledImage(kBindingShadowDepth, pass.image(map), depthSampler_, pass.layout(map));
+    if (usesReceiverPlane()) descriptors.storageImage(kBindingNormal, pass.image(io.gNormal));
+    descriptors.push(context_, cmd, visibility_);
+    const PcssPush push{lightSize_, settings_.maxSearchTexels, settings_.maxFilterTexels, settings_.blockerSamples,
+                        settings_.filterSamples};
+    visibility_.pushConstants(cmd, &push, sizeof(push));
+    vkCmdDispatch(cmd, (out.desc().width + 7) / 8, (out.desc().height + 7) / 8, 1);
+}
+
+plugin::Technique* createPcssShadow(const plugin::TechniqueSetup& setup) { return new PcssShadow(setup); }
+
+} // namespace
+} // namespace penumbra::pcss
+
+PENUMBRA_PLUGIN_EXPORT const PenumbraPluginInfo* penumbra_plugin_entry()
+{
+    static const PenumbraPluginInfo info{PENUMBRA_PLUGIN_ABI_VERSION,
+                                         "pcss",
+                                         "1.0.0",
+                                         "percentage-closer soft shadows: blocker search, penumbra estimate, "
+                                         "Poisson-disk filter (Fernando 2005)",
+                                         penumbra::pcss::kParams,
+                                         uint32_t(std::size(penumbra::pcss::kParams)),
+                                         &penumbra::pcss::createPcssShadow,
+                                         PENUMBRA_PLUGIN_SHADER_DIR};
+    return &info;
+}

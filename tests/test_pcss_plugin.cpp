@@ -1,0 +1,534 @@
+// The pcss plugin (plugins/pcss) end to end, through render::FrameRenderer: every light
+// type against rays from the light away from penumbrae, light size 0 against the hard
+// plugin, the penumbra's width against the analytic soft shadow of the penumbra scene
+// (scene/Generators.h penumbraVisibility), and the guards: no blocker, a huge light, a
+// blocker touching its receiver, grazing light, scene scales 1e-3 and 1e5.
+#include "PluginFrame.h"
+#include "RayCastAgreement.h"
+#include "TestConfigs.h"
+#include "TestContext.h"
+
+#include "penumbra/config/Config.h"
+#include "penumbra/core/Error.h"
+#include "penumbra/plugin/PluginRegistry.h"
+#include "penumbra/scene/Generators.h"
+
+#include <gtest/gtest.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+
+using namespace penumbra;
+
+namespace {
+
+// Averages of 0/1 compares in fp32: V counts as 0 or 1 within this.
+constexpr float kBinaryTolerance = 1e-5f;
+
+struct PcssSettings {
+    double lightSize = -1.0;  // the light's own
+    int resolution = 1024;
+    double maxSearchTexels = 8.0;
+    double maxFilterTexels = 8.0;
+    int blockerSamples = 16;
+    int filterSamples = 32;
+    std::string biasMode = "receiver_plane";
+};
+
+void applyPcss(config::LightConfig& light, const PcssSettings& s)
+{
+    config::ShadowSettings& shadow = light.shadow;
+    shadow = {};
+    shadow.technique = "pcss";
+    shadow.required = true;
+    shadow.setParam("light_size", s.lightSize, "test");
+    shadow.setParam("resolution", s.resolution, "test");
+    shadow.setParam("max_search_radius", s.maxSearchTexels, "test");
+    shadow.setParam("max_filter_radius", s.maxFilterTexels, "test");
+    shadow.setParam("blocker_samples", s.blockerSamples, "test");
+    shadow.setParam("filter_samples", s.filterSamples, "test");
+    shadow.setParam("bias_mode", s.biasMode, "test");
+}
+
+class PcssTest : public test::PluginGpuTest {
+protected:
+    std::vector<float> renderPcss(config::RenderConfig cfg, const PcssSettings& s, scene::Scene scene)
+    {
+        applyPcss(cfg.lights[0], s);
+        render(cfg, std::move(scene));
+        return frame->checkedVisibility();
+    }
+    std::vector<float> renderPcss(config::RenderConfig cfg, const PcssSettings& s)
+    {
+        scene::Scene scene = config::buildScene(cfg.scene);
+        return renderPcss(std::move(cfg), s, std::move(scene));
+    }
+
+    // Against rays from the light's centre: a pixel whose neighbourhood (as far as the
+    // blocker search or the filter reach, plus two texels) is all lit or all shadowed in
+    // the centre's view has no blocker in reach (V = 1) or only blockers (V = 0).
+    void expectRayCastAgreement(const std::vector<float>& v, const PcssSettings& s, const std::string& label)
+    {
+        const test::FrameImages images{frame->positions, frame->normals, v, frame->config.width,
+                                       frame->config.height};
+        const double band = std::max(s.maxSearchTexels, s.maxFilterTexels) + 2.0;
+        const test::RayCastAgreement a =
+            test::compareWithRayCast(frame->classifier(0), images, {2, band, kBinaryTolerance, label});
+        EXPECT_EQ(a.mismatches, 0u) << label;
+        EXPECT_GT(a.surelyShadowed, 150u) << label;
+        EXPECT_GT(a.surelyLit, 2000u) << label;
+    }
+};
+
+// ---------------------------------------------------------------------------------
+// Every light type, in the default scene.
+
+struct LightCase {
+    const char* name;
+    scene::LightType type;
+    double lightSize;  // -1: the light's own (rect 1 x 0.5, disk radius 0.5: test::setLightType)
+    // The directional light's map spans the whole scene: twice the texels keep the
+    // band around edges as narrow in world units as the spot light's.
+    int resolution = 1024;
+};
+
+// Test parameters print as their names (ctest lists them).
+std::ostream& operator<<(std::ostream& os, const LightCase& c) { return os << c.name; }
+
+class PcssLightTypes : public PcssTest, public ::testing::WithParamInterface<LightCase> {};
+
+} // namespace
+
+TEST_P(PcssLightTypes, MatchesRayCastAwayFromPenumbrae)
+{
+    const LightCase& c = GetParam();
+    config::RenderConfig cfg = test::defaultTestConfig();
+    test::setLightType(cfg.lights[0], c.type);
+    if (c.type == scene::LightType::Directional) cfg.lights[0].light.angularDiameterDeg = 2.0f;
+    PcssSettings s;
+    s.lightSize = c.lightSize;
+    s.resolution = c.resolution;
+    const std::vector<float> v = renderPcss(cfg, s);
+    expectRayCastAgreement(v, s, c.name);
+    size_t soft = 0;
+    for (float x : v) soft += x > 0.02f && x < 0.98f;
+    EXPECT_GT(soft, 200u) << "a light with a size casts penumbrae";
+}
+
+INSTANTIATE_TEST_SUITE_P(Pcss, PcssLightTypes,
+                         ::testing::Values(LightCase{"spot", scene::LightType::Spot, 0.6},
+                                           LightCase{"directional", scene::LightType::Directional, -1.0, 2048},
+                                           LightCase{"point", scene::LightType::Point, 0.4},
+                                           LightCase{"rect", scene::LightType::Rect, -1.0},
+                                           LightCase{"disk", scene::LightType::Disk, -1.0}),
+                         [](const ::testing::TestParamInfo<LightCase>& info) { return std::string(info.param.name); });
+
+// ---------------------------------------------------------------------------------
+// Light size 0: the hard shadow's one compare, with the same bias.
+
+namespace {
+
+struct ZeroSizeCase {
+    const char* name;
+    scene::LightType type;
+    const char* biasMode;
+};
+
+std::ostream& operator<<(std::ostream& os, const ZeroSizeCase& c) { return os << c.name; }
+
+class PcssZeroSize : public PcssTest, public ::testing::WithParamInterface<ZeroSizeCase> {};
+
+} // namespace
+
+TEST_P(PcssZeroSize, EqualsTheHardShadow)
+{
+    const ZeroSizeCase& c = GetParam();
+    config::RenderConfig cfg = test::defaultTestConfig();
+    test::setLightType(cfg.lights[0], c.type);
+    PcssSettings s;
+    s.lightSize = 0.0;
+    s.biasMode = c.biasMode;
+    const std::vector<float> pcss = renderPcss(cfg, s);
+
+    config::ShadowSettings& hard = cfg.lights[0].shadow;
+    hard = {};
+    hard.technique = "hard";
+    hard.required = true;
+    hard.setParam("bias_mode", c.biasMode, "test");
+    hard.setParam("filter", "none", "test");
+    hard.setParam("resolution", s.resolution, "test");
+    render(cfg, config::buildScene(cfg.scene));
+    const std::vector<float> reference = frame->renderer.readVisibility(0);
+
+    // Both compare the same map at the same texel against the same reference depth.
+    size_t differ = 0, shadowed = 0;
+    for (size_t i = 0; i < pcss.size(); ++i) {
+        differ += std::abs(pcss[i] - reference[i]) > 1e-6f;
+        shadowed += reference[i] == 0.0f;
+    }
+    EXPECT_EQ(differ, 0u) << c.name << ": pixels where |V_pcss - V_hard| > 1e-6";
+    EXPECT_GT(shadowed, pcss.size() / 50) << "the scene has shadows to compare";
+}
+
+INSTANTIATE_TEST_SUITE_P(Pcss, PcssZeroSize,
+                         ::testing::Values(ZeroSizeCase{"spot_receiver_plane", scene::LightType::Spot, "receiver_plane"},
+                                           ZeroSizeCase{"spot_slope", scene::LightType::Spot, "slope"},
+                                           ZeroSizeCase{"point_receiver_plane", scene::LightType::Point,
+                                                        "receiver_plane"},
+                                           ZeroSizeCase{"directional_slope", scene::LightType::Directional, "slope"}),
+                         [](const ::testing::TestParamInfo<ZeroSizeCase>& info) {
+                             return std::string(info.param.name);
+                         });
+
+// ---------------------------------------------------------------------------------
+// The penumbra scene: a 1 x 1 plate h above the ground under a square light of side w at
+// H = 3; along x the exact penumbra is w h / (H - h) wide (Generators.h).
+
+namespace {
+
+constexpr float kLightHeight = 3.0f;
+
+struct PenumbraSetup {
+    float lightSide = 0.5f;
+    float occluderHeight = 1.0f;
+    float occluderThickness = 0.01f;
+};
+
+scene::PenumbraParams penumbraParams(const PenumbraSetup& p)
+{
+    scene::PenumbraParams params;
+    params.occluderHeight = p.occluderHeight;
+    params.occluderThickness = p.occluderThickness;
+    return params;
+}
+
+// The camera looks straight down on the ground beside the plate (x in about [0.2, 1.8],
+// z in [-0.45, 0.45]), below the plate, so that only the ground is seen.
+config::RenderConfig penumbraConfig(const PenumbraSetup& p)
+{
+    config::RenderConfig cfg = test::defaultTestConfig();
+    cfg.scene = {};
+    cfg.camera.position = {1.0f, 0.8f, 0.0f};
+    cfg.camera.target = {1.0f, 0.0f, 0.0f};
+    cfg.camera.up = {0.0f, 0.0f, -1.0f};
+    cfg.camera.fovYDeg = 60.0f;
+    cfg.camera.nearWorld = 0.01f;
+    cfg.lights.resize(1);
+    scene::Light& light = cfg.lights[0].light;
+    light = {};
+    light.type = scene::LightType::Rect;
+    light.position = {0.0f, kLightHeight, 0.0f};
+    light.direction = {0.0f, -1.0f, 0.0f};
+    light.tangent = {1.0f, 0.0f, 0.0f};
+    light.sizeWorld = {p.lightSide, p.lightSide};
+    light.intensity = 40.0f;
+    return cfg;
+}
+
+// Wide radii: the penumbrae here are up to 42 texels wide at 1024 texels per cube face.
+PcssSettings penumbraPcss()
+{
+    PcssSettings s;
+    s.maxSearchTexels = 64.0;
+    s.maxFilterTexels = 64.0;
+    s.blockerSamples = 32;
+    s.filterSamples = 64;
+    return s;
+}
+
+// The 10 %-90 % width of a shadow edge from (coordinate across the edge, V) samples on
+// the ground, V averaged over bins of 1 cm (the filter's per-pixel rotation is noise),
+// the umbra at smaller coordinates.
+double rampWidth(const std::vector<std::pair<float, float>>& samples)
+{
+    std::map<int, std::pair<double, int>> bins;  // bin -> (sum of V, count)
+    for (const auto& [coordinate, v] : samples) {
+        auto& bin = bins[int(std::floor(coordinate / 0.01f))];
+        bin.first += v;
+        ++bin.second;
+    }
+    double at10 = NAN, at90 = NAN;
+    for (const auto& [bin, sum] : bins) {
+        const double mean = sum.first / sum.second, coordinate = (bin + 0.5) * 0.01;
+        if (std::isnan(at10) && mean >= 0.1) at10 = coordinate;
+        if (std::isnan(at90) && mean >= 0.9) at90 = coordinate;
+    }
+    return at90 - at10;
+}
+
+// The penumbra scene's edge along x, on the ground near z = 0.
+double edgeWidth(const test::RenderedFrame& frame, const std::vector<float>& v)
+{
+    std::vector<std::pair<float, float>> samples;
+    for (size_t i = 0; i < v.size(); ++i) {
+        if (frame.onGround(i) && std::abs(frame.position(i).z) <= 0.05f) samples.emplace_back(frame.position(i).x, v[i]);
+    }
+    return rampWidth(samples);
+}
+
+class PcssPenumbra : public PcssTest {
+protected:
+    // PCSS's edge width, the exact one measured the same way, and the RMSE of V over the
+    // ground against the exact visibility.
+    struct Widths {
+        double pcss;
+        double exact;
+        double rmse;
+    };
+
+    Widths measure(const PenumbraSetup& p, const PcssSettings& s = penumbraPcss())
+    {
+        const scene::PenumbraParams params = penumbraParams(p);
+        const std::vector<float> v = renderPcss(penumbraConfig(p), s, scene::generatePenumbra(params));
+        std::vector<float> exact(v.size(), 1.0f);
+        double squared = 0.0;
+        size_t ground = 0;
+        const scene::RectAreaLight light{{0.0f, kLightHeight, 0.0f}, {p.lightSide, p.lightSide}};
+        for (size_t i = 0; i < v.size(); ++i) {
+            if (!frame->onGround(i)) continue;
+            const glm::vec3 q = frame->position(i);
+            exact[i] = float(scene::penumbraVisibility(params, light, {q.x, q.z}));
+            squared += (v[i] - exact[i]) * (v[i] - exact[i]);
+            ++ground;
+        }
+        EXPECT_GT(ground, v.size() / 2) << "the camera sees the ground";
+        return {edgeWidth(*frame, v), edgeWidth(*frame, exact), std::sqrt(squared / std::max<size_t>(ground, 1))};
+    }
+};
+
+} // namespace
+
+TEST_F(PcssPenumbra, WidthGrowsWithLightSizeAndFollowsTheExactPenumbra)
+{
+    double previous = 0.0;
+    for (float side : {0.25f, 0.5f, 1.0f}) {
+        PenumbraSetup p;
+        p.lightSide = side;
+        const Widths w = measure(p);
+        SCOPED_TRACE("light side " + std::to_string(side));
+        EXPECT_GT(w.pcss, 1.5 * previous) << "doubling the light widens the penumbra";
+        // A disk filter's 10-90 % ramp spans 0.63 of its diameter, a square light's 0.8
+        // of the penumbra: PCSS's edge is 0.79 times the exact one where its estimate
+        // w = (d_r - d_b) w_light / d_b is right, as it is here (one blocker depth).
+        EXPECT_GT(w.pcss, 0.6 * w.exact) << "exact " << w.exact;
+        EXPECT_LT(w.pcss, 1.1 * w.exact) << "exact " << w.exact;
+        EXPECT_LT(w.rmse, 0.05) << "RMSE against the exact visibility";
+        previous = w.pcss;
+    }
+}
+
+TEST_F(PcssPenumbra, WidthGrowsWithTheReceiverBlockerDistance)
+{
+    double previous = 0.0;
+    for (float height : {0.5f, 1.0f, 1.5f}) {
+        PenumbraSetup p;
+        p.occluderHeight = height;
+        const Widths w = measure(p);
+        SCOPED_TRACE("occluder height " + std::to_string(height));
+        // w h / (H - h): 0.1, 0.25, 0.5 for w = 0.5.
+        EXPECT_GT(w.pcss, 1.5 * previous);
+        EXPECT_GT(w.pcss, 0.6 * w.exact) << "exact " << w.exact;
+        EXPECT_LT(w.pcss, 1.1 * w.exact) << "exact " << w.exact;
+        previous = w.pcss;
+    }
+}
+
+namespace {
+
+// The box's shadow's side edge (along z > 0, on the ground) in the slice x +- 2 cm.
+double sideEdgeWidth(const test::RenderedFrame& frame, const std::vector<float>& v, float x)
+{
+    std::vector<std::pair<float, float>> samples;
+    for (size_t i = 0; i < v.size(); ++i) {
+        const glm::vec3 p = frame.position(i);
+        if (frame.onGround(i) && std::abs(p.x - x) <= 0.02f && p.z >= 0.0f) samples.emplace_back(p.z, v[i]);
+    }
+    return rampWidth(samples);
+}
+
+} // namespace
+
+TEST_F(PcssPenumbra, BlockerTouchingTheReceiverCastsAHardShadow)
+{
+    // At the box's foot the blockers are at the receiver: d_r - d_b -> 0, so the filter
+    // shrinks to one texel's compare (contact hardening) and the ground right behind the
+    // foot is umbra, with no division by zero; the penumbra widens away from the foot.
+    const std::vector<float> v = renderPcss(test::boxOnGroundConfig(), penumbraPcss(), test::boxOnGroundScene());
+    const double texel = 2.0 * 3.0 / 1024.0;  // a texel of the cube face on the ground, at most
+    size_t behindFoot = 0, notUmbra = 0;
+    for (size_t i = 0; i < v.size(); ++i) {
+        const glm::vec3 q = frame->position(i);
+        if (!frame->onGround(i) || std::abs(q.z) > 0.3f || q.x < 0.5f + 4.0f * texel || q.x > 0.65f) continue;
+        ++behindFoot;
+        notUmbra += v[i] != 0.0f;
+    }
+    EXPECT_GT(behindFoot, 100u);
+    EXPECT_EQ(notUmbra, 0u) << "ground pixels right behind the foot that are not umbra";
+    // The side edge widens away from the foot. Less than the exact penumbra does (from
+    // about 1 cm to 0.3 m here): the search also finds the box's top, far from the
+    // ground, and the mean blocker distance mixes the two (Fernando 2005's single
+    // average; measured 0.16 m at x = 0.6 and 0.23 m at x = 2).
+    const double nearFoot = sideEdgeWidth(*frame, v, 0.6f), farFromFoot = sideEdgeWidth(*frame, v, 2.0f);
+    EXPECT_LT(nearFoot, 0.85 * farFromFoot) << "near the foot " << nearFoot << ", far " << farFromFoot;
+}
+
+// ---------------------------------------------------------------------------------
+// Guards.
+
+TEST_F(PcssTest, NoBlockerIsExactlyLit)
+{
+    // A plane alone under a large directional light at 60 and 85 degrees from its normal
+    // (85: grazing): the receiver plane keeps it from finding itself as a blocker, so
+    // every pixel is exactly 1.
+    for (float degrees : {60.0f, 85.0f}) {
+        config::RenderConfig cfg = test::defaultTestConfig();
+        cfg.camera.position = {0.0f, 12.0f, 0.5f};
+        cfg.camera.target = {0.0f, 0.0f, 0.0f};
+        cfg.lights.resize(1);
+        const float a = glm::radians(degrees);
+        cfg.lights[0].light = {};
+        cfg.lights[0].light.type = scene::LightType::Directional;
+        cfg.lights[0].light.direction = {std::sin(a), -std::cos(a), 0.0f};
+        cfg.lights[0].light.angularDiameterDeg = 10.0f;
+        const std::vector<float> v = renderPcss(cfg, {}, test::planeScene());
+        size_t plane = 0, notLit = 0;
+        for (size_t i = 0; i < v.size(); ++i) {
+            if (!frame->hasGeometry(i)) continue;
+            ++plane;
+            notLit += v[i] != 1.0f;
+        }
+        EXPECT_GT(plane, v.size() / 2);
+        EXPECT_EQ(notLit, 0u) << degrees << " degrees";
+    }
+}
+
+TEST_F(PcssTest, HugeLightIsClampedToTheMaximumRadii)
+{
+    // A spot light of 1e9 world units: the search and the filter stop at their maximum
+    // radii, so penumbrae stay that narrow (agreement with the rays beyond them) and the
+    // image is what a light of 1e3 gives, but where the receiver-blocker gap is so
+    // small that 1e3 does not yet reach the maximum filter.
+    config::RenderConfig cfg = test::defaultTestConfig();
+    PcssSettings s;
+    s.lightSize = 1e9;
+    const std::vector<float> huge = renderPcss(cfg, s);
+    expectRayCastAgreement(huge, s, "light size 1e9");
+    s.lightSize = 1e3;
+    const std::vector<float> large = renderPcss(cfg, s);
+    size_t differ = 0;
+    for (size_t i = 0; i < huge.size(); ++i) differ += huge[i] != large[i];
+    EXPECT_LT(differ, huge.size() / 100);
+}
+
+TEST_F(PcssTest, BlockerAtTheLightIsClampedNotInfinite)
+{
+    // d_b -> 0: a 0.2 x 0.2 plate 1 mm under a point light 3 m above the ground, whose
+    // shadow covers all the ground in view (seen from under the plate). (d_r - d_b) / d_b
+    // is 3000: the radii stop at their maxima, every tap finds the plate, V = 0 exactly.
+    scene::Scene s = test::planeScene();
+    scene::Mesh plate = scene::makePlane("plate");
+    plate.computeBounds();
+    s.meshes.push_back(plate);
+    s.addInstance(1, s.graph.addNode("plate", scene::kNoParent,
+                                     glm::scale(glm::translate(glm::mat4(1.0f), {0.0f, 2.999f, 0.0f}),
+                                                {0.2f, 1.0f, 0.2f})));
+    config::RenderConfig cfg = test::boxOnGroundConfig();
+    cfg.camera.position = {0.0f, 1.0f, 0.0f};
+    cfg.camera.target = {0.0f, 0.0f, 0.0f};
+    cfg.lights[0].light.type = scene::LightType::Point;
+    cfg.lights[0].light.position = {0.0f, 3.0f, 0.0f};
+    PcssSettings settings;
+    settings.lightSize = 0.5;
+    const std::vector<float> v = renderPcss(cfg, settings, std::move(s));
+    size_t ground = 0, lit = 0;
+    for (size_t i = 0; i < v.size(); ++i) {
+        if (!frame->onGround(i)) continue;
+        ++ground;
+        lit += v[i] != 0.0f;
+    }
+    EXPECT_GT(ground, v.size() / 2);
+    EXPECT_EQ(lit, 0u) << "ground pixels not in the plate's umbra";
+}
+
+TEST_F(PcssTest, AngularDiameterBeyond180DegreesIsClamped)
+{
+    config::RenderConfig cfg = test::defaultTestConfig();
+    test::setLightType(cfg.lights[0], scene::LightType::Directional);
+    PcssSettings s;
+    s.lightSize = 1e6;  // degrees
+    renderPcss(cfg, s);  // finite, in [0, 1] (expectValidVisibility)
+}
+
+// ---------------------------------------------------------------------------------
+// Scene scale: distances enter only as ratios (d_r - d_b) / d_b, w_light / near, and
+// texels, so the default scene at 1e-3 and 1e5 agrees with the rays as at 1.
+
+namespace {
+
+class PcssScales : public PcssTest, public ::testing::WithParamInterface<std::tuple<float, LightCase>> {};
+
+} // namespace
+
+TEST_P(PcssScales, MatchesRayCastAwayFromPenumbrae)
+{
+    const auto& [scale, c] = GetParam();
+    config::RenderConfig cfg = test::defaultTestConfig();
+    test::setLightType(cfg.lights[0], c.type);
+    PcssSettings s;
+    s.lightSize = c.lightSize * scale;
+    test::scaleConfig(cfg, scale);
+    const std::vector<float> v = renderPcss(cfg, s);
+    expectRayCastAgreement(v, s, c.name);
+}
+
+INSTANTIATE_TEST_SUITE_P(Pcss, PcssScales,
+                         ::testing::Combine(::testing::Values(1e-3f, 1e5f),
+                                            ::testing::Values(LightCase{"spot", scene::LightType::Spot, 0.6},
+                                                              LightCase{"point", scene::LightType::Point, 0.4})),
+                         [](const ::testing::TestParamInfo<std::tuple<float, LightCase>>& info) {
+                             return std::string(std::get<0>(info.param) < 1.0f ? "milli_" : "e5_") +
+                                    std::get<1>(info.param).name;
+                         });
+
+// ---------------------------------------------------------------------------------
+// Parameters.
+
+TEST(PcssPluginEntry, ReflectsEveryParameterWithItsDefault)
+{
+    plugin::PluginRegistry registry;
+    const plugin::ParamValues params = registry.load("pcss").defaultParams();
+    EXPECT_EQ(params.getInt("resolution"), 2048);
+    EXPECT_EQ(params.getFloat("light_size"), -1.0f);
+    EXPECT_EQ(params.getInt("blocker_samples"), 16);
+    EXPECT_EQ(params.getInt("filter_samples"), 32);
+    EXPECT_EQ(params.getFloat("max_search_radius"), 16.0f);
+    EXPECT_EQ(params.getFloat("max_filter_radius"), 16.0f);
+    EXPECT_EQ(params.getEnum("bias_mode"), "receiver_plane");
+    EXPECT_EQ(params.getFloat("depth_bias"), 4.0f);
+    EXPECT_EQ(params.getFloat("slope_bias"), 2.0f);
+    for (const plugin::ParamSpec& spec : params.specs()) EXPECT_NE(std::string(spec.doc), "") << spec.name;
+}
+
+TEST(PcssPluginEntry, OutOfRangeValuesNameTheParameter)
+{
+    plugin::PluginRegistry registry;
+    plugin::ParamValues params = registry.load("pcss").defaultParams();
+    auto message = [&](const char* name, const nlohmann::json& value) -> std::string {
+        try {
+            params.set(name, value, "test.json: /lights/0/shadow");
+        } catch (const ConfigError& e) {
+            return e.what();
+        }
+        ADD_FAILURE() << name << " = " << value << " was accepted";
+        return {};
+    };
+    for (const auto& [name, value] : std::vector<std::pair<const char*, nlohmann::json>>{
+             {"blocker_samples", 65}, {"filter_samples", 3}, {"max_search_radius", 0.0}, {"max_filter_radius", 1e3},
+             {"light_size", -2.0}, {"bias_mode", "normal_offset"}}) {
+        EXPECT_NE(message(name, value).find(name), std::string::npos) << name;
+    }
+}
