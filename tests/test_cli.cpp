@@ -378,6 +378,20 @@ TEST_F(Cli, ValidateConfigListsSweepVariants)
     EXPECT_NE(r.out.find("/lights/0/shadow/resolution=4096, /lights/0/shadow/slope_bias=2.0"), std::string::npos) << r.out;
 }
 
+TEST_F(Cli, TheTradeoffBenchmarkValidatesWithEveryPlugin)
+{
+    // config/bench/tradeoff.json (docs/tradeoff.md): every variant's technique loads and
+    // takes its parameters; a plugin that failed to load would be a warning.
+    const CliResult r = run(fmt::format("validate {}", config("bench/tradeoff.json")));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(r.out.find("sweep: 28 variants") != std::string::npos) << r.out;
+    EXPECT_TRUE(r.out.find("/scene+/camera=pergola, /lights/0/angular_diameter_deg=6° light, /lights/0/shadow=esm") !=
+                std::string::npos)
+        << r.out;
+    EXPECT_EQ(r.out.find("warning:"), std::string::npos) << r.out;
+    EXPECT_TRUE(r.out.find("config ok") != std::string::npos) << r.out;
+}
+
 TEST_F(Cli, ValidateConfigRefusesAMissingGltf)
 {
     const fs::path cfg = dir / "cfg.json";

@@ -34,12 +34,12 @@ std::string xmlText(const std::string& text)
     return out;
 }
 
-// 1, 2 or 5 times a power of ten, at least `x` (> 0).
+// 1, 2 or 5 times a power of ten, near `x` (> 0).
 double niceStep(double x)
 {
     const double decade = std::pow(10.0, std::floor(std::log10(x)));
     const double f = x / decade;
-    return (f <= 1.0 ? 1.0 : f <= 2.0 ? 2.0 : f <= 5.0 ? 5.0 : 10.0) * decade;
+    return (f < 1.5 ? 1.0 : f < 3.0 ? 2.0 : f < 7.0 ? 5.0 : 10.0) * decade;
 }
 
 struct Axis {
@@ -67,20 +67,26 @@ Axis linearAxis(double largest)
     return axis;
 }
 
-// Whole decades around the values; 2× and 5× ticks too when they span few decades.
+// From the largest 1, 2 or 5 times a power of ten at or below the smallest value to the
+// smallest one at or above the largest; ticks at 1, 2 and 5 of each decade when the axis
+// spans few decades, else at whole decades.
 Axis logAxis(double smallest, double largest)
 {
+    constexpr double kSteps[] = {1.0, 2.0, 5.0};
     Axis axis;
     axis.log = true;
-    const double loExp = std::floor(std::log10(smallest)), hiExp = std::max(std::ceil(std::log10(largest)), loExp + 1.0);
-    axis.lo = std::pow(10.0, loExp);
-    axis.hi = std::pow(10.0, hiExp);
-    for (double e = loExp; e <= hiExp; ++e) {
-        const double decade = std::pow(10.0, e);
-        axis.ticks.push_back(decade);
-        if (hiExp - loExp <= 2.0 && e < hiExp) {
-            axis.ticks.push_back(2.0 * decade);
-            axis.ticks.push_back(5.0 * decade);
+    const double loDecade = std::pow(10.0, std::floor(std::log10(smallest)));
+    for (double step : kSteps)
+        if (step * loDecade <= smallest) axis.lo = step * loDecade;
+    const double hiDecade = std::pow(10.0, std::floor(std::log10(largest)));
+    axis.hi = 10.0 * hiDecade;
+    for (double step : {5.0, 2.0, 1.0})
+        if (step * hiDecade >= largest) axis.hi = step * hiDecade;
+    const bool fewDecades = axis.hi / axis.lo <= 1000.0;
+    for (double decade = loDecade; decade <= axis.hi * (1.0 + 1e-9); decade *= 10.0) {
+        for (double step : kSteps) {
+            const double t = step * decade;
+            if ((fewDecades || step == 1.0) && t >= axis.lo * (1.0 - 1e-9) && t <= axis.hi * (1.0 + 1e-9)) axis.ticks.push_back(t);
         }
     }
     return axis;
