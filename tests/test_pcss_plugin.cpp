@@ -210,22 +210,8 @@ scene::PenumbraParams penumbraParams(const PenumbraSetup& p)
 // z in [-0.45, 0.45]), below the plate, so that only the ground is seen.
 config::RenderConfig penumbraConfig(const PenumbraSetup& p)
 {
-    config::RenderConfig cfg = test::defaultTestConfig();
+    config::RenderConfig cfg = test::lookDownRectLightConfig({1.0f, 0.8f, 0.0f}, {0.0f, kLightHeight, 0.0f}, p.lightSide);
     cfg.scene = {};
-    cfg.camera.position = {1.0f, 0.8f, 0.0f};
-    cfg.camera.target = {1.0f, 0.0f, 0.0f};
-    cfg.camera.up = {0.0f, 0.0f, -1.0f};
-    cfg.camera.fovYDeg = 60.0f;
-    cfg.camera.nearWorld = 0.01f;
-    cfg.lights.resize(1);
-    scene::Light& light = cfg.lights[0].light;
-    light = {};
-    light.type = scene::LightType::Rect;
-    light.position = {0.0f, kLightHeight, 0.0f};
-    light.direction = {0.0f, -1.0f, 0.0f};
-    light.tangent = {1.0f, 0.0f, 0.0f};
-    light.sizeWorld = {p.lightSide, p.lightSide};
-    light.intensity = 40.0f;
     return cfg;
 }
 

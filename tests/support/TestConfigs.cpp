@@ -73,11 +73,11 @@ scene::Scene boxOnGroundScene()
     return s;
 }
 
-config::RenderConfig boxOnGroundConfig()
+config::RenderConfig lookDownRectLightConfig(glm::vec3 cameraPosition, glm::vec3 lightPosition, float lightSide)
 {
     config::RenderConfig cfg = defaultTestConfig();
-    cfg.camera.position = {1.3f, 2.5f, 0.0f};
-    cfg.camera.target = {1.3f, 0.0f, 0.0f};
+    cfg.camera.position = cameraPosition;
+    cfg.camera.target = {cameraPosition.x, 0.0f, cameraPosition.z};
     cfg.camera.up = {0.0f, 0.0f, -1.0f};
     cfg.camera.fovYDeg = 60.0f;
     cfg.camera.nearWorld = 0.01f;
@@ -85,10 +85,16 @@ config::RenderConfig boxOnGroundConfig()
     scene::Light& light = cfg.lights[0].light;
     light = {};
     light.type = scene::LightType::Rect;
-    light.position = {-3.0f, 3.0f, 0.0f};
+    light.position = lightPosition;
     light.direction = {0.0f, -1.0f, 0.0f};
-    light.sizeWorld = {0.5f, 0.5f};
+    light.sizeWorld = {lightSide, lightSide};
     light.intensity = 40.0f;
+    return cfg;
+}
+
+config::RenderConfig boxOnGroundConfig()
+{
+    config::RenderConfig cfg = lookDownRectLightConfig({1.3f, 2.5f, 0.0f}, {-3.0f, 3.0f, 0.0f}, 0.5f);
     cfg.lights[0].shadow = {};
     return cfg;
 }

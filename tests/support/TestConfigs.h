@@ -32,6 +32,12 @@ scene::Scene boxOnGroundScene();
 // straight down on it from (1.3, 2.5, 0). The light's technique is left to the test.
 config::RenderConfig boxOnGroundConfig();
 
+// The default config's output with a camera looking straight down (60°, image up = -z)
+// from `cameraPosition` at the point below it, and one square rect light of side
+// `lightSide` at `lightPosition` emitting downwards (width axis x, intensity 40). The
+// scene and the light's shadow settings are left as the default config has them.
+config::RenderConfig lookDownRectLightConfig(glm::vec3 cameraPosition, glm::vec3 lightPosition, float lightSide);
+
 // Alpha-masked casters: a 4 x 4 quad at height 2 over a 20 x 20 ground, textured half
 // transparent (x < 0: alpha 0) and half opaque, alpha-masked.
 scene::Scene halfMaskedQuadScene();
