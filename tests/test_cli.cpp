@@ -1,5 +1,7 @@
 // The `penumbra` command as a user runs it: exit codes, messages that say what and where,
 // and no partial or clobbered output file on failure.
+#include "penumbra/plugin/Plugin.h"
+
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -482,7 +484,9 @@ TEST_F(Cli, PluginsListsEveryPluginWithItsParametersAndEveryFailure)
     EXPECT_TRUE(has(r.out, "hard ")) << r.out;
     EXPECT_TRUE(has(r.out, " plugin(s), 7 file(s) failed to load")) << r.out;
     EXPECT_TRUE(has(r.out, "error [abi-mismatch]: plugin 'abi'")) << r.out;
-    EXPECT_TRUE(has(r.out, "built for plugin ABI 9999, this engine has ABI 2")) << r.out;
+    EXPECT_TRUE(has(r.out, "built for plugin ABI 9999, this engine has ABI " +
+                               std::to_string(PENUMBRA_PLUGIN_ABI_VERSION)))
+        << r.out;
     EXPECT_TRUE(has(r.out, "error [dependency-missing]: plugin 'nodep'")) << r.out;
     EXPECT_TRUE(has(r.out, "libpenumbra_test_absent.so: cannot open shared object file")) << r.out;
     EXPECT_TRUE(has(r.out, "error [not-a-library]: plugin 'garbage'")) << r.out;
@@ -500,7 +504,7 @@ TEST_F(Cli, PluginsJsonDescribesSpecsAndErrors)
     const CliResult r = run("plugins --json", pluginPath());
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const nlohmann::json doc = nlohmann::json::parse(r.out);
-    EXPECT_EQ(doc["abi"], 2);  // PENUMBRA_PLUGIN_ABI_VERSION
+    EXPECT_EQ(doc["abi"], PENUMBRA_PLUGIN_ABI_VERSION);
     EXPECT_EQ(doc["search_path"][0], kTestPlugins);
     EXPECT_EQ(doc["search_path"][1], kShadowedPlugins);
     std::map<std::string, nlohmann::json> plugins;
@@ -508,7 +512,7 @@ TEST_F(Cli, PluginsJsonDescribesSpecsAndErrors)
     ASSERT_TRUE(plugins.count("testgood")) << r.out;
     const nlohmann::json& good = plugins["testgood"];
     EXPECT_EQ(good["version"], "1.2.0");
-    EXPECT_EQ(good["abi"], 2);
+    EXPECT_EQ(good["abi"], PENUMBRA_PLUGIN_ABI_VERSION);
     EXPECT_EQ(good["file"], kTestPlugins + "/penumbra-testgood.so");
     EXPECT_EQ(good["summary"], "test plugin: clears V_l to a constant");
     EXPECT_EQ(good["params"], nlohmann::json::parse(R"json([

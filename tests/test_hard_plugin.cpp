@@ -244,7 +244,9 @@ TEST_P(HardVariants, FractionalVisibilityOnlyNearShadowEdges)
     if (s.filter == "none") {
         EXPECT_EQ(fractionalPixels, 0u) << "one compare per pixel gives V = 0 or 1";
     } else {
-        EXPECT_GT(fractionalPixels, 100u) << "a filter softens the shadow edges";
+        // Bilinear blends one texel: the narrowest band, on lit faces only (faces turned
+        // away from the light hold 0 whatever the map says).
+        EXPECT_GT(fractionalPixels, s.filter == "bilinear" ? 50u : 100u) << "a filter softens the shadow edges";
     }
 }
 

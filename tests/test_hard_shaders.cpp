@@ -107,7 +107,6 @@ TEST(HardShaders, OnlyTheDefinesAVariantReadsAreSet)
     b.bias = hard::BiasMode::ReceiverPlane;
     b.filter = hard::Filter::Bilinear;
     EXPECT_FALSE(b.hardwareBilinear());  // receiver plane compares the four texels by hand
-    EXPECT_TRUE(b.readsNormals());
 }
 
 namespace {

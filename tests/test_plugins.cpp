@@ -408,8 +408,9 @@ TEST_F(Registry, AbiMismatchNamesBothVersions)
 {
     const PluginError e = loadError("abi", PluginErrorKind::AbiMismatch);
     EXPECT_TRUE(contains(e.what(), "plugin 'abi' (" + (kPlugins / "penumbra-abi.so").string() +
-                                       "): built for plugin ABI 9999, this engine has ABI 2: rebuild the plugin against "
-                                       "this engine"));
+                                       "): built for plugin ABI 9999, this engine has ABI " +
+                                       std::to_string(PENUMBRA_PLUGIN_ABI_VERSION) +
+                                       ": rebuild the plugin against this engine"));
     expectStillWorks();
 }
 

@@ -450,7 +450,11 @@ TEST_F(ReferencePlugin, SecondRunComesFromTheCacheAndDamagedFilesAreIgnored)
     PenumbraReferenceStats now = stats();
     EXPECT_EQ(now.framesTraced - before.framesTraced, 1u);
     EXPECT_EQ(now.cacheWrites - before.cacheWrites, 1u);
-    EXPECT_EQ(now.raysTraced - before.raysTraced, 16u * 48u * 36u);  // every pixel sees the ground
+    // Every pixel sees geometry; samples below a surface's horizon (a blocker's far side
+    // seen at a silhouette) need no ray.
+    const uint64_t rays = now.raysTraced - before.raysTraced;
+    EXPECT_LE(rays, 16u * 48u * 36u);
+    EXPECT_GE(rays, 16u * 48u * 35u);
     const std::vector<fs::path> files = cacheFiles();
     ASSERT_EQ(files.size(), 1u);
 

@@ -33,6 +33,12 @@ constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
 // Slope-scaled bias, fixed here to keep the example short (plugins/hard reflects it).
 constexpr float kSlopeBias = 2.0f;
 
+// visibility.comp's push constants.
+struct VisibilityPush {
+    glm::mat4 lightViewProj;
+    glm::vec4 towardsLight;  // xyz the light's position (w = 1) or the direction towards it (w = 0)
+};
+
 class ExampleShadow final : public plugin::Technique {
 public:
     explicit ExampleShadow(const plugin::TechniqueSetup& setup)
@@ -60,8 +66,9 @@ public:
         visibility.shader = "visibility.comp";
         visibility.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
                                {1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                               {2, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
-        visibility.pushConstantBytes = sizeof(glm::mat4);
+                               {2, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                               {3, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
+        visibility.pushConstantBytes = sizeof(VisibilityPush);
         visibilityPipeline_ = gpu::Pipeline(context_, setup.shaders, visibility);
 
         compareSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
@@ -74,6 +81,9 @@ public:
         // Spot: a perspective frustum over the outer cone; directional: an orthographic
         // box around the scene. Both are one frustum.
         lightViewProj_ = render::shadowFrusta(light, sceneBounds).front().viewProj;
+        // The light as the horizon test sees it: a point, or a direction towards it.
+        towardsLight_ = light.type == scene::LightType::Directional ? glm::vec4(-light.direction, 0.0f)
+                                                                    : glm::vec4(light.position, 1.0f);
     }
 
     void registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io) override
@@ -89,11 +99,10 @@ public:
 
         graph.addPass(io.local("visibility"), graph::QueueKind::Compute)
             .read(io.gPosition, graph::Usage::Storage)
+            .read(io.gNormal, graph::Usage::Storage)
             .read(map, graph::Usage::Sampled)
             .write(io.visibility, graph::Usage::Storage)
-            .execute([this, map, position = io.gPosition, visibility = io.visibility](graph::PassContext& pass) {
-                recordVisibility(pass, position, map, visibility);
-            });
+            .execute([this, map, io](graph::PassContext& pass) { recordVisibility(pass, io, map); });
     }
 
 private:
@@ -125,18 +134,19 @@ private:
         vkCmdEndRendering(cmd);
     }
 
-    void recordVisibility(graph::PassContext& pass, const std::string& position, const std::string& map,
-                          const std::string& visibility) const
+    void recordVisibility(graph::PassContext& pass, const plugin::LightPassIo& io, const std::string& map) const
     {
         VkCommandBuffer cmd = pass.cmd();
-        const gpu::Image& out = pass.image(visibility);
+        const gpu::Image& out = pass.image(io.visibility);
         visibilityPipeline_.bind(cmd);
         gpu::DescriptorPush()
-            .storageImage(0, pass.image(position))
+            .storageImage(0, pass.image(io.gPosition))
             .sampledImage(1, pass.image(map), compareSampler_, pass.layout(map))
             .storageImage(2, out)
+            .storageImage(3, pass.image(io.gNormal))
             .push(context_, cmd, visibilityPipeline_);
-        visibilityPipeline_.pushConstants(cmd, &lightViewProj_, sizeof(glm::mat4));
+        const VisibilityPush push{lightViewProj_, towardsLight_};
+        visibilityPipeline_.pushConstants(cmd, &push, sizeof(push));
         vkCmdDispatch(cmd, (out.desc().width + 7) / 8, (out.desc().height + 7) / 8, 1);
     }
 
@@ -149,6 +159,7 @@ private:
     gpu::Pipeline visibilityPipeline_;
     gpu::Sampler compareSampler_;
     glm::mat4 lightViewProj_{1.0f};
+    glm::vec4 towardsLight_{0.0f};
 };
 
 plugin::Technique* createExampleShadow(const plugin::TechniqueSetup& setup)

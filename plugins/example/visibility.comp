@@ -11,9 +11,11 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(binding = 0, GBUFFER_POSITION_FORMAT) uniform readonly image2D gPosition;
 layout(binding = 1) uniform sampler2DShadow shadowMap;
 layout(binding = 2, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
+layout(binding = 3, GBUFFER_NORMAL_FORMAT) uniform readonly image2D gNormal;
 
 layout(push_constant) uniform Push {
     mat4 lightViewProj;
+    vec4 towardsLight;  // xyz position (w = 1) or direction towards the light (w = 0)
 } pc;
 
 void main()
@@ -34,6 +36,11 @@ void main()
                 v = texture(shadowMap, vec3(uv, ndc.z));
             }
         }
+        // The contract (common/visibility.glsl): light from below the surface's tangent
+        // plane is blocked by the surface itself. This example's light is a point.
+        vec3 n = imageLoad(gNormal, pixel).xyz;
+        vec3 l = pc.towardsLight.w > 0.0 ? pc.towardsLight.xyz - position.xyz : pc.towardsLight.xyz;
+        if (dot(n, n) > 0.0 && !(dot(n, l) > 0.0)) v = 0.0;
     }
     imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
 }

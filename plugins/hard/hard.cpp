@@ -133,7 +133,7 @@ HardShadow::HardShadow(const plugin::TechniqueSetup& setup)
     c.name = fmt::format("light{}.hard.visibility", setup.lightIndex);
     c.shader = "visibility.comp";
     c.defines = visibilityDefines(settings_.variant);
-    c.bindings = visibilityBindings(settings_.variant);
+    c.bindings = visibilityBindings();
     c.pushConstantBytes = sizeof(VisibilityPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
 
@@ -161,8 +161,8 @@ void HardShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
     graph::PassBuilder visibility = graph.addPass(io.local("visibility"), graph::QueueKind::Compute);
     visibility.read(io.gPosition, graph::Usage::Storage)
         .read(map, graph::Usage::Sampled)
+        .read(io.gNormal, graph::Usage::Storage)
         .write(io.visibility, graph::Usage::Storage);
-    if (settings_.variant.readsNormals()) visibility.read(io.gNormal, graph::Usage::Storage);
     visibility.execute([this, io, map](graph::PassContext& pass) { recordVisibility(pass, io, map); });
 }
 
@@ -176,8 +176,8 @@ void HardShadow::recordVisibility(const graph::PassContext& pass, const plugin::
     descriptors.storageImage(kBindingPosition, pass.image(io.gPosition))
         .sampledImage(kBindingShadowMap, pass.image(map), compareSampler_, pass.layout(map))
         .storageImage(kBindingVisibility, out)
-        .storageBuffer(kBindingShadowMapData, shadowMap_.buffer());
-    if (settings_.variant.readsNormals()) descriptors.storageImage(kBindingNormal, pass.image(io.gNormal));
+        .storageBuffer(kBindingShadowMapData, shadowMap_.buffer())
+        .storageImage(kBindingNormal, pass.image(io.gNormal));
     descriptors.push(context_, cmd, visibility_);
     const VisibilityPush push{settings_.normalOffsetTexels * footprintWidthTexels(settings_),
                               settings_.filterRadiusTexels};

@@ -49,9 +49,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(binding = 0, GBUFFER_POSITION_FORMAT) uniform readonly image2D gPosition;
 layout(binding = 1) uniform sampler2DShadow shadowMap;
 layout(binding = 2, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
-#if RECEIVER_BIAS != 0
 layout(binding = 4, GBUFFER_NORMAL_FORMAT) uniform readonly image2D gNormal;
-#endif
 
 #define SHADOW_MAP_BINDING 3
 #define SHADOW_RECEIVER_BIAS RECEIVER_BIAS
@@ -103,7 +101,9 @@ void main()
     vec4 position = imageLoad(gPosition, pixel);
     float v = VISIBILITY_NO_GEOMETRY;
     ShadowReceiver r;
-    if (position.w != 0.0 && makeShadowReceiver(pixel, position.xyz, pc.normalOffsetTexels, r))
-        v = filteredVisibility(r, pixel);
+    if (position.w != 0.0) {
+        if (makeShadowReceiver(pixel, position.xyz, pc.normalOffsetTexels, r)) v = filteredVisibility(r, pixel);
+        v *= shadowLightAboveHorizon(position.xyz, shadowReceiverNormal(pixel));
+    }
     imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
 }

@@ -41,9 +41,6 @@ struct VisibilityVariant {
                : usesReceiverPlane() ? render::ReceiverBias::Plane
                                      : render::ReceiverBias::None;
     }
-    // Normal offset moves the receiver along its normal; receiver plane uses the normal
-    // to tell neighbours on the receiver's surface from those across a silhouette.
-    bool readsNormals() const { return offsetsAlongNormal() || usesReceiverPlane(); }
     // Bilinear compares in the sampler (hardware 2 x 2 PCF), except with receiver plane
     // bias, which needs each of the four texels compared against its own reference
     // depth: those four taps are done by hand with a nearest sampler.
@@ -68,17 +65,19 @@ enum VisibilityBinding : uint32_t {
     kBindingShadowMap = 1,      // the depth atlas (sampler2DShadow)
     kBindingVisibility = 2,     // V_l (storage, r32f)
     kBindingShadowMapData = 3,  // render::ShadowMap::buffer() (storage buffer, SHADOW_MAP_BINDING)
-    kBindingNormal = 4,         // G-buffer world normal (storage, rgba16f), readsNormals() only
+    // G-buffer world normal (storage, rgba16f): the part of the light above the
+    // receiver's horizon; normal offset moves the receiver along it; receiver plane
+    // tells neighbours on the receiver's surface from those across a silhouette by it.
+    kBindingNormal = 4,
 };
 
-inline std::vector<gpu::Binding> visibilityBindings(const VisibilityVariant& variant)
+inline std::vector<gpu::Binding> visibilityBindings()
 {
-    std::vector<gpu::Binding> b = {{kBindingPosition, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                   {kBindingShadowMap, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                                   {kBindingVisibility, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                                   {kBindingShadowMapData, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
-    if (variant.readsNormals()) b.push_back({kBindingNormal, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE});
-    return b;
+    return {{kBindingPosition, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+            {kBindingShadowMap, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+            {kBindingVisibility, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+            {kBindingShadowMapData, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+            {kBindingNormal, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
 }
 
 struct VisibilityPush {

@@ -107,7 +107,7 @@ enum Binding : uint32_t {
     kBindingShadowCompare = 1,  // the depth atlas, compare sampler (sampler2DShadow)
     kBindingVisibility = 2,     // V_l (storage, r32f)
     kBindingShadowMapData = 3,  // render::ShadowMap::buffer() (storage buffer)
-    kBindingNormal = 4,         // G-buffer world normal (storage, rgba16f), receiver plane only
+    kBindingNormal = 4,         // G-buffer world normal (storage, rgba16f): horizon, receiver plane
     kBindingShadowDepth = 5,    // the depth atlas, nearest sampler without compare (sampler2D)
 };
 
@@ -154,8 +154,8 @@ PcssShadow::PcssShadow(const plugin::TechniqueSetup& setup)
                   {kBindingShadowCompare, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
                   {kBindingVisibility, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
                   {kBindingShadowMapData, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                  {kBindingShadowDepth, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}};
-    if (usesReceiverPlane()) c.bindings.push_back({kBindingNormal, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE});
+                  {kBindingShadowDepth, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+                  {kBindingNormal, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
     c.pushConstantBytes = sizeof(PcssPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
 
@@ -182,8 +182,8 @@ void PcssShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
     graph::PassBuilder visibility = graph.addPass(io.local("visibility"), graph::QueueKind::Compute);
     visibility.read(io.gPosition, graph::Usage::Storage)
         .read(map, graph::Usage::Sampled)
+        .read(io.gNormal, graph::Usage::Storage)
         .write(io.visibility, graph::Usage::Storage);
-    if (usesReceiverPlane()) visibility.read(io.gNormal, graph::Usage::Storage);
     visibility.execute([this, io, map](graph::PassContext& pass) { recordVisibility(pass, io, map); });
 }
 
@@ -198,8 +198,8 @@ void PcssShadow::recordVisibility(const graph::PassContext& pass, const plugin::
         .sampledImage(kBindingShadowCompare, pass.image(map), compareSampler_, pass.layout(map))
         .storageImage(kBindingVisibility, out)
         .storageBuffer(kBindingShadowMapData, shadowMap_.buffer())
-        .sampledImage(kBindingShadowDepth, pass.image(map), depthSampler_, pass.layout(map));
-    if (usesReceiverPlane()) descriptors.storageImage(kBindingNormal, pass.image(io.gNormal));
+        .sampledImage(kBindingShadowDepth, pass.image(map), depthSampler_, pass.layout(map))
+        .storageImage(kBindingNormal, pass.image(io.gNormal));
     descriptors.push(context_, cmd, visibility_);
     const PcssPush push{lightSize_, settings_.maxSearchTexels, settings_.maxFilterTexels, settings_.blockerSamples,
                         settings_.filterSamples};

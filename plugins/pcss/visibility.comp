@@ -29,9 +29,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(binding = 0, GBUFFER_POSITION_FORMAT) uniform readonly image2D gPosition;
 layout(binding = 1) uniform sampler2DShadow shadowCompare;
 layout(binding = 2, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
-#if RECEIVER_BIAS != 0
 layout(binding = 4, GBUFFER_NORMAL_FORMAT) uniform readonly image2D gNormal;
-#endif
 layout(binding = 5) uniform sampler2D shadowDepth;  // the same map, raw depths
 
 #define SHADOW_MAP_BINDING 3
@@ -128,6 +126,9 @@ void main()
     vec4 position = imageLoad(gPosition, pixel);
     float v = VISIBILITY_NO_GEOMETRY;
     ShadowReceiver r;
-    if (position.w != 0.0 && makeShadowReceiver(pixel, position.xyz, 0.0, r)) v = pcssVisibility(r, pixel);
+    if (position.w != 0.0) {
+        if (makeShadowReceiver(pixel, position.xyz, 0.0, r)) v = pcssVisibility(r, pixel);
+        v *= shadowLightAboveHorizon(position.xyz, shadowReceiverNormal(pixel));
+    }
     imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
 }

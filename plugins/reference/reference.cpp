@@ -62,7 +62,7 @@ const plugin::ParamSpec kParams[] = {
 
 // The version of what a cached image means: raise it whenever the tracing changes the
 // values it produces, so that old files stop matching.
-constexpr char kAlgorithmVersion[] = "penumbra-reference ray_traced 1";
+constexpr char kAlgorithmVersion[] = "penumbra-reference ray_traced 2";
 
 // Shadow rays start this far (relative to the scene's radius plus the point's largest
 // coordinate) off the receiver along its normal: well above the G-buffer position's
@@ -361,6 +361,9 @@ private:
                 continue;
             }
             const glm::vec3 dir(ray.direction);
+            // Below the surface's tangent plane: the surface itself blocks the sample
+            // (shaders/common/visibility.glsl).
+            if (hasNormal && !(glm::dot(n, dir) > 0.0f)) continue;
             const glm::vec3 start = hasNormal ? origin : origin + offset * dir;
             sum += double(tracer_.transmittance(start, dir, std::isinf(length) ? std::numeric_limits<float>::infinity()
                                                                                 : float(length),

@@ -32,9 +32,8 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 0, GBUFFER_POSITION_FORMAT) uniform readonly image2D gPosition;
 layout(binding = 1, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
-#if FILTER != FILTER_BLUR
+// The horizon (every filter) and the footprint (mips) read the normal.
 layout(binding = 3, GBUFFER_NORMAL_FORMAT) uniform readonly image2D gNormal;
-#endif
 // Level k has faceTexels / 2^k texels per face; each its own image (a graph resource).
 layout(binding = 4) uniform sampler2D momentLevels[LEVELS];
 
@@ -196,10 +195,13 @@ void main()
     vec4 position = imageLoad(gPosition, pixel);
     float v = VISIBILITY_NO_GEOMETRY;
     ShadowReceiver r;
-    if (position.w != 0.0 && makeShadowReceiver(pixel, position.xyz, 0.0, r)) {
-        float t = shadowLinearDepth(r.face, r.depth);
-        v = momentVisibility(filteredMoments(r, pixel, position.xyz), t, pc.exponents, pc.minVariance,
-                             pc.bleedingReduction);
+    if (position.w != 0.0) {
+        if (makeShadowReceiver(pixel, position.xyz, 0.0, r)) {
+            float t = shadowLinearDepth(r.face, r.depth);
+            v = momentVisibility(filteredMoments(r, pixel, position.xyz), t, pc.exponents, pc.minVariance,
+                                 pc.bleedingReduction);
+        }
+        v *= shadowLightAboveHorizon(position.xyz, shadowReceiverNormal(pixel));
     }
     imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
 }

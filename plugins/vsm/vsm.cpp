@@ -269,8 +269,8 @@ VsmShadow::VsmShadow(const plugin::TechniqueSetup& setup)
     c.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
                   {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
                   {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                  {3, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
                   {4, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, uint32_t(levels_)}};
-    if (settings_.mips()) c.bindings.push_back({3, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE});
     c.pushConstantBytes = sizeof(VisibilityPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
 
@@ -339,8 +339,9 @@ void VsmShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPas
     }
 
     graph::PassBuilder visibility = graph.addPass(io.local("visibility"), graph::QueueKind::Compute);
-    visibility.read(io.gPosition, graph::Usage::Storage).write(io.visibility, graph::Usage::Storage);
-    if (settings_.mips()) visibility.read(io.gNormal, graph::Usage::Storage);
+    visibility.read(io.gPosition, graph::Usage::Storage)
+        .read(io.gNormal, graph::Usage::Storage)
+        .write(io.visibility, graph::Usage::Storage);
     for (const std::string& level : levels) visibility.read(level, graph::Usage::Sampled);
     visibility.execute([this, io, levels](graph::PassContext& pass) { recordVisibility(pass, io, levels); });
 }
@@ -400,8 +401,8 @@ void VsmShadow::recordVisibility(const graph::PassContext& pass, const plugin::L
     descriptors.storageImage(0, pass.image(io.gPosition))
         .storageImage(1, out)
         .storageBuffer(2, shadowMap_.buffer())
+        .storageImage(3, pass.image(io.gNormal))
         .sampledImages(4, images, linearSampler_, pass.layout(levels.front()));
-    if (settings_.mips()) descriptors.storageImage(3, pass.image(io.gNormal));
     descriptors.push(context_, cmd, visibility_);
     const VisibilityPush push{settings_.exponents, settings_.minVariance, settings_.bleedingReduction,
                               settings_.lodBias, settings_.maxAnisotropy};

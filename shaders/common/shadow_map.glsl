@@ -23,10 +23,68 @@ layout(std430, binding = SHADOW_MAP_BINDING) readonly buffer ShadowMapBuffer {
     vec4 light;       // xyz position (w = 1) or unit direction towards the light (w = 0)
     uint faceCount;   // 1, or 6 cube faces in a 3 x 2 atlas
     float faceTexels; // texels per face side
+    uint lightType;   // scene::LightType: 0 directional, 1 spot, 2 point, 3 rect, 4 disk
     uint pad0;
-    uint pad1;
+    vec4 lightAxis;     // xyz unit emitting normal (rect, disk); w: rect half width, disk or
+                        // sphere radius, sine of a directional light's angular radius
+    vec4 lightTangent;  // rect: xyz unit width axis, w half height
     ShadowFace faces[6];
 } shadowMapData;
+
+// The area fraction of a unit disk on the far side of a line at signed distance h from
+// its centre (h = 1: the whole disk, 0: half, -1: none).
+float shadowCircularSegment(float h)
+{
+    h = clamp(h, -1.0, 1.0);
+    return (acos(-h) + h * sqrt(max(1.0 - h * h, 0.0))) / 3.14159265358979;
+}
+
+// P(b u + c v > -a) for u, v uniform in [-1, 1]: the area fraction of a square above a
+// line (the sum of two uniforms has a trapezoidal CDF).
+float shadowSquareAboveLine(float a, float b, float c)
+{
+    float p = max(abs(b), abs(c)), q = min(abs(b), abs(c));
+    if (!(p > 1e-6 * abs(a))) return a > 0.0 ? 1.0 : 0.0;  // the line misses the square's scale
+    if (q < 1e-3 * p) return clamp((a + p) / (2.0 * p), 0.0, 1.0);  // one axis: a uniform's CDF
+    // F(x) = [R(x+p+q) - R(x+p-q) - R(x-p+q) + R(x-p-q)] / (8 p q), R(t) = max(t, 0)^2.
+    float x = -a;
+    vec4 t = max(vec4(x + p + q, x + p - q, x - p + q, x - p - q), vec4(0.0));
+    t *= t;
+    float below = (t.x - t.y - t.z + t.w) / (8.0 * p * q);  // p >= q >= 1e-3 p > 0
+    return clamp(1.0 - below, 0.0, 1.0);
+}
+
+// The part of the light above the tangent plane of a receiver at p with unit normal n
+// (the G-buffer's, facing the camera): light from below it is blocked by the surface
+// itself, so V counts only this part (shaders/common/visibility.glsl). In the reference's
+// measure: exact for rect and disk lights (area), for sphere and directional lights
+// (solid angle) the cap is taken as a flat disk of the same angular radius, exact to
+// first order in that radius. n = 0 (no normal): 1.
+float shadowLightAboveHorizon(vec3 p, vec3 n)
+{
+    if (!(dot(n, n) > 0.0)) return 1.0;
+    vec4 axis = shadowMapData.lightAxis;
+    uint type = shadowMapData.lightType;
+    if (type == 0u) {  // directional: light.xyz is the unit direction towards it
+        float sinElevation = dot(n, shadowMapData.light.xyz);
+        return axis.w > 0.0 ? shadowCircularSegment(sinElevation / axis.w) : (sinElevation > 0.0 ? 1.0 : 0.0);
+    }
+    // a: the light's centre above the plane; the light's points lie at a + (their offset
+    // from the centre) . n.
+    float a = dot(n, shadowMapData.light.xyz - p);
+    if (type == 3u)
+        return shadowSquareAboveLine(a, axis.w * dot(n, shadowMapData.lightTangent.xyz),
+                                     shadowMapData.lightTangent.w * dot(n, cross(axis.xyz, shadowMapData.lightTangent.xyz)));
+    if (type == 4u) {
+        // The disk's points: the centre plus up to radius along the plane's normal
+        // projected into the disk's plane, |m| of it.
+        vec3 m = n - axis.xyz * dot(n, axis.xyz);
+        float reach = axis.w * length(m);
+        return reach > 1e-6 * abs(a) ? shadowCircularSegment(a / reach) : (a > 0.0 ? 1.0 : 0.0);
+    }
+    if (type == 2u && axis.w > 0.0) return shadowCircularSegment(a / axis.w);  // a sphere: sin(elev) / sin(radius)
+    return a > 0.0 ? 1.0 : 0.0;  // spot, point without radius
+}
 
 // Face order +X -X +Y -Y +Z -Z, as render/Projection.cpp builds them.
 uint shadowCubeFace(vec3 d)

@@ -7,7 +7,8 @@
 //                         1 normal offset (Holbert 2011)
 //                         2 receiver plane depth bias (Isidoro 2006)
 //                         (render::ReceiverBias in render/ShadowMap.h)
-// and declares `gNormal` (GBUFFER_NORMAL_FORMAT, readonly image2D) for biases 1 and 2,
+// and declares `gNormal` (GBUFFER_NORMAL_FORMAT, readonly image2D: every technique
+// weighs V by the part of the light above the receiver's horizon, shadowReceiverNormal),
 // `gPosition` (GBUFFER_POSITION_FORMAT, readonly image2D) for bias 2 (and for
 // SHADOW_SURFACE_NEIGHBOURS, below).
 #ifndef PENUMBRA_SHADOW_RECEIVER_GLSL
@@ -235,6 +236,14 @@ void shadowReceiverPlane(ivec2 pixel, vec3 p, vec3 n, float texelWorld, inout Sh
 }
 #endif
 
+// The G-buffer's unit normal at `pixel` (facing the camera), or 0 where it has none.
+vec3 shadowReceiverNormal(ivec2 pixel)
+{
+    vec3 n = imageLoad(gNormal, pixel).xyz;
+    float nLength = length(n);
+    return nLength > 1e-6 ? n / nLength : vec3(0.0);
+}
+
 // The receiver seen in `pixel` at world position `p`. False where the map has nothing to
 // say (behind the light, outside the map): V = 1 there by contract, the light's own cone
 // gives zero light in shading. `normalOffsetTexels` is read with bias 1 only.
@@ -245,9 +254,7 @@ bool makeShadowReceiver(ivec2 pixel, vec3 p, float normalOffsetTexels, out Shado
     r.depth = 0.0;
     r.w = 0.0;
 #if SHADOW_RECEIVER_BIAS != SHADOW_RECEIVER_BIAS_NONE
-    vec3 n = imageLoad(gNormal, pixel).xyz;
-    float nLength = length(n);
-    n = nLength > 1e-6 ? n / nLength : vec3(0.0);  // no normal: no receiver-side bias
+    vec3 n = shadowReceiverNormal(pixel);  // no normal: no receiver-side bias
 #endif
     vec3 uvDepth;
     float w;

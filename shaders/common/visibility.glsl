@@ -2,6 +2,12 @@
 // a screen-space image V_l, one float per pixel, holding the fraction of that light that
 // reaches the surface seen in the pixel: 1 lit, 0 umbra, in between for penumbrae and
 // translucent casters. Pixels that see no geometry hold 1. Stored as R32F.
+//
+// Light from below the surface's tangent plane (the G-buffer normal's, facing the
+// camera) counts as blocked: the surface itself stands in its way. So a surface facing
+// away from the whole light holds 0, whatever the casters, and one that a rect light
+// straddles holds at most the part of the light above it (shadowLightAboveHorizon in
+// common/shadow_map.glsl; the reference tests every sample).
 #ifndef PENUMBRA_VISIBILITY_GLSL
 #define PENUMBRA_VISIBILITY_GLSL
 

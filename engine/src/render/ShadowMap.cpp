@@ -128,6 +128,24 @@ void ShadowMap::update(const scene::Light& light, const scene::Aabb& sceneBounds
     } else {
         data_.light = glm::vec4(light.position, 1.0f);
     }
+    data_.lightType = uint32_t(light.type);
+    data_.lightAxis = data_.lightTangent = glm::vec4(0.0f);
+    switch (light.type) {
+    case scene::LightType::Rect:
+        data_.lightAxis = glm::vec4(light.direction, 0.5f * light.sizeWorld.x);
+        data_.lightTangent = glm::vec4(light.tangent, 0.5f * light.sizeWorld.y);
+        break;
+    case scene::LightType::Disk:
+    case scene::LightType::Point:
+        data_.lightAxis = glm::vec4(light.direction, light.radiusWorld);
+        break;
+    case scene::LightType::Directional:
+        data_.lightAxis = glm::vec4(0.0f, 0.0f, 0.0f,
+                                    std::sin(glm::radians(std::clamp(0.5f * light.angularDiameterDeg, 0.0f, 90.0f))));
+        break;
+    case scene::LightType::Spot:
+        break;
+    }
     std::memcpy(buffer_.mapped(), &data_, sizeof(data_));
 }
 

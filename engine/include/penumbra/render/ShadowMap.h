@@ -70,10 +70,17 @@ struct ShadowMapData {
     glm::vec4 light{0.0f};     // xyz position (w = 1), or unit direction towards the light (w = 0)
     uint32_t faceCount = 1;    // 1, or 6 cube faces in a 3 x 2 atlas
     float faceTexels = 0.0f;   // texels per face side
-    uint32_t pad0 = 0, pad1 = 0;
+    uint32_t lightType = 0;    // scene::LightType
+    uint32_t pad0 = 0;
+    // The light's extent, for the part of it above a receiver's horizon
+    // (shadowLightAboveHorizon in shadow_map.glsl). xyz: the unit emitting normal (rect,
+    // disk), w: the rect's half width, the disk's or sphere's radius, the sine of a
+    // directional light's angular radius; 0 for a light without extent.
+    glm::vec4 lightAxis{0.0f};
+    glm::vec4 lightTangent{0.0f};  // rect: xyz the unit width axis, w the half height
     ShadowFaceData faces[kMaxShadowFaces];
 };
-static_assert(sizeof(ShadowFaceData) == 96 && sizeof(ShadowMapData) == 32 + 6 * 96, "std430 layout of shadow_map.glsl");
+static_assert(sizeof(ShadowFaceData) == 96 && sizeof(ShadowMapData) == 64 + 6 * 96, "std430 layout of shadow_map.glsl");
 
 // The rasterizer's depth bias, positive "away from the light" (the depth pass negates it
 // for reversed-Z).
