@@ -67,11 +67,11 @@ float shadowCompareTap(sampler2DShadow map, ShadowReceiver r, vec2 offsetTexels)
 // Left-over error once a receiver-side bias has done its work (fp32 positions, the
 // rasterizer's depth interpolation, texel-centre rounding), in texels so that it scales
 // with the map; the receiver plane's margin is this part of a texel along the light and
-// along the plane's slope. Measured on the box sides of config/pcss.json, lit at 87
-// degrees from their normal (hard, receiver plane, 2048 texels, 480 x 270): 1/16 of a
-// texel left acne on 0.70% of the pixels, 1/8 on 0.44%, 1/4 on 0.17%, 1/2 on 0.06%
-// (those at the boxes' edges). Half a texel is what a slope-scaled bias of 0.5 would
-// shift shadows by: contact shadows stay (tests/test_pcss_plugin.cpp,
+// along the plane's slope. Measured on the default scene's box sides, lit at 87 degrees
+// from their normal by its light as a spot (hard, receiver plane, 2048 texels, 480 x
+// 270): 1/16 of a texel left acne on 0.70% of the pixels, 1/8 on 0.44%, 1/4 on 0.17%,
+// 1/2 on 0.06% (those at the boxes' edges). Half a texel is what a slope-scaled bias of
+// 0.5 would shift shadows by: contact shadows stay (tests/test_pcss_plugin.cpp,
 // BlockerTouchingTheReceiverCastsAHardShadow).
 const float kShadowRoundingTexels = 1.0 / 2.0;
 // Beyond 88 degrees between a receiver and the map's iso-depth surface the bias a
