@@ -5,6 +5,7 @@
 // (or takes V from the disk cache), and a transfer pass uploads V into V_l.
 #include "Digest.h"
 #include "LightSampling.h"
+#include "RasterReference.h"
 #include "ReferenceStats.h"
 #include "SceneTracer.h"
 #include "VisibilityCache.h"
@@ -41,15 +42,16 @@ namespace {
 
 using plugin::ParamType;
 
-// One mode today; the brute-force average of N hard shadow maps from light samples
-// (the rasterised reference of the papers) is the second, to come (README.md).
-enum class Mode : uint32_t { RayTraced };
-const char* const kModeNames[] = {"ray_traced"};
+// Two ways to the same V: shadow rays traced on the CPU (this file), and the average of
+// hard shadow maps rendered from light samples on the GPU (RasterReference.h).
+enum class Mode : uint32_t { RayTraced, BruteForce };
+const char* const kModeNames[] = {"ray_traced", "brute_force"};
 
 const plugin::ParamSpec kParams[] = {
     {"mode", ParamType::Enum, double(Mode::RayTraced), 0, 0, "",
-     "ray_traced: Embree shadow rays from every pixel to stratified points of the light", kModeNames,
-     uint32_t(std::size(kModeNames))},
+     "ray_traced: Embree shadow rays from every pixel to stratified points of the light; brute_force: N hard shadow "
+     "maps from the light samples, averaged: the rasterised reference of the papers",
+     kModeNames, uint32_t(std::size(kModeNames))},
     {"samples", ParamType::Int, 256, 1, 65536, "rays/pixel",
      "light samples per pixel, stratified (correlated multi-jittered); lights without extent take 1"},
     {"seed", ParamType::Int, 1, 0, 2147483647, "",
@@ -58,6 +60,9 @@ const plugin::ParamSpec kParams[] = {
      "reuse V from the disk cache ($PENUMBRA_CACHE_DIR, else $XDG_CACHE_HOME/penumbra, else ~/.cache/penumbra) "
      "when scene, G-buffer, light and parameters are unchanged"},
     {"threads", ParamType::Int, 0, 0, 1024, "", "tracing threads; 0: one per hardware thread"},
+    {"map_resolution", ParamType::Int, 512, 16, 8192, "texels",
+     "brute_force: texels per side of each face of each sample's shadow map (point, rect, disk and sphere lights: "
+     "six faces in a 3 x 2 atlas); brute_force is not cached (cache and threads do not apply)"},
 };
 
 // The version of what a cached image means: raise it whenever the tracing changes the
@@ -76,6 +81,7 @@ struct Settings {
     uint32_t seed = 1;
     bool cache = true;
     uint32_t threads = 0;
+    uint32_t mapResolution = 512;
 };
 
 Settings readSettings(const plugin::ParamValues& params)
@@ -86,6 +92,7 @@ Settings readSettings(const plugin::ParamValues& params)
     s.seed = uint32_t(params.getInt("seed"));
     s.cache = params.getBool("cache");
     s.threads = uint32_t(params.getInt("threads"));
+    s.mapResolution = uint32_t(params.getInt("map_resolution"));
     return s;
 }
 
@@ -384,7 +391,13 @@ private:
     bool storeWarned_ = false;
 };
 
-plugin::Technique* createReferenceShadow(const plugin::TechniqueSetup& setup) { return new ReferenceShadow(setup); }
+plugin::Technique* createReferenceShadow(const plugin::TechniqueSetup& setup)
+{
+    const Settings settings = readSettings(setup.params);
+    if (settings.mode == Mode::BruteForce)
+        return new RasterReference(setup, {settings.samples, settings.seed, settings.mapResolution});
+    return new ReferenceShadow(setup);
+}
 
 } // namespace
 } // namespace penumbra::reference

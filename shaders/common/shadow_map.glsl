@@ -5,7 +5,8 @@
 // nothing was drawn.
 //
 // The including shader defines SHADOW_MAP_BINDING, the binding of the storage buffer
-// ShadowMap::buffer() (ShadowMapData), before including this file.
+// ShadowMap::buffer() (ShadowMapData), before including this file; with SHADOW_MAP_ARRAY
+// also defined, the buffer is an array of ShadowMapData (below).
 #ifndef PENUMBRA_SHADOW_MAP_GLSL
 #define PENUMBRA_SHADOW_MAP_GLSL
 
@@ -19,6 +20,25 @@ struct ShadowFace {
     vec4 depthRange;  // x near, y far: distances along the face's axis; z: 1 orthographic
 };
 
+#ifdef SHADOW_MAP_ARRAY
+// Several maps of one light's shape (the reference's rasterised light samples): the
+// buffer holds one render::ShadowMapData per map (std430 array stride 608, as its
+// sizeof), and every function below reads the map that `shadowMapIndex` names: set it
+// before calling them.
+struct ShadowMapInfo {
+    vec4 light;
+    uint faceCount;
+    float faceTexels;
+    uint pad0;
+    uint pad1;
+    ShadowFace faces[6];
+};
+layout(std430, binding = SHADOW_MAP_BINDING) readonly buffer ShadowMapArrayBuffer {
+    ShadowMapInfo maps[];
+} shadowMapArray;
+uint shadowMapIndex = 0u;
+#define shadowMapData shadowMapArray.maps[shadowMapIndex]
+#else
 layout(std430, binding = SHADOW_MAP_BINDING) readonly buffer ShadowMapBuffer {
     vec4 light;       // xyz position (w = 1) or unit direction towards the light (w = 0)
     uint faceCount;   // 1, or 6 cube faces in a 3 x 2 atlas
@@ -27,6 +47,7 @@ layout(std430, binding = SHADOW_MAP_BINDING) readonly buffer ShadowMapBuffer {
     uint pad1;
     ShadowFace faces[6];
 } shadowMapData;
+#endif
 
 // Face order +X -X +Y -Y +Z -Z, as render/Projection.cpp builds them.
 uint shadowCubeFace(vec3 d)
