@@ -527,6 +527,173 @@ TEST_F(ReferencePlugin, ParametersAreReflectedWithRanges)
     EXPECT_THROW(params.set("samples", 0, "test"), ConfigError);
     EXPECT_THROW(params.set("threads", -1, "test"), ConfigError);
     EXPECT_THROW(params.set("mode", "shadow_maps", "test"), ConfigError);
+    EXPECT_EQ(params.getInt("map_resolution"), 512);
+    params.set("mode", "brute_force", "test");
+    EXPECT_EQ(params.getEnum("mode"), "brute_force");
+}
+
+// ---------------------------------------------------------------------------------------
+// mode brute_force: the rasterised reference (RasterReference.h)
+
+// The same frame with the hard plugin: one nearest compare with receiver plane bias,
+// the map at `resolution` texels per face.
+config::RenderConfig hardConfig(config::RenderConfig cfg, uint32_t resolution)
+{
+    config::ShadowSettings& shadow = cfg.lights.at(0).shadow;
+    shadow = {};
+    shadow.technique = "hard";
+    shadow.required = true;
+    shadow.setParam("bias_mode", "receiver_plane", "test");
+    shadow.setParam("filter", "none", "test");
+    shadow.setParam("resolution", resolution, "test");
+    return cfg;
+}
+
+// Whether pixel i of a width-wide image lies at a shadow edge of v: a pixel of its 3 x 3
+// neighbourhood has another value.
+bool atShadowEdge(const std::vector<float>& v, size_t i, size_t width)
+{
+    const auto x = ptrdiff_t(i % width), y = ptrdiff_t(i / width), height = ptrdiff_t(v.size() / width);
+    for (ptrdiff_t dy = -1; dy <= 1; ++dy)
+        for (ptrdiff_t dx = -1; dx <= 1; ++dx) {
+            const ptrdiff_t nx = x + dx, ny = y + dy;
+            if (nx < 0 || ny < 0 || nx >= ptrdiff_t(width) || ny >= height) continue;
+            if (v[size_t(ny) * width + size_t(nx)] != v[i]) return true;
+        }
+    return false;
+}
+
+// A point light has one sample, so brute_force is one hard shadow map: exactly the hard
+// plugin's nearest compare with receiver plane bias at the same resolution (same map,
+// same bias, same compare), and the ray-traced image except at shadow edges, where a
+// texel of the map (about a third of a pixel here) moves the edge: at most 2 % of the
+// pixels, every one beside an edge of the traced image.
+TEST_F(ReferencePlugin, BruteForcePointLightIsTheHardShadowAndTheTracedOneButAtEdges)
+{
+    scene::PenumbraParams params = analyticParams(1.0f);
+    params.occluderThickness = 0.05f;
+    scene::Light light;
+    light.type = scene::LightType::Point;
+    light.position = {0.3f, 4.0f, 0.2f};
+    const config::RenderConfig traced =
+        referenceConfig(64, 48, lookDown({-1.2f, 5.0f, -0.9f}, {0.0f, 0.0f, 0.0f}, 40.0f), light);
+    config::RenderConfig raster = traced;
+    raster.lights[0].shadow.setParam("mode", "brute_force", "test");
+    raster.lights[0].shadow.setParam("map_resolution", 512, "test");
+    const std::vector<float> expected = render(traced, scene::generatePenumbra(params)).visibility;
+    const std::vector<float> brute = render(raster, scene::generatePenumbra(params)).visibility;
+    const std::vector<float> hard = render(hardConfig(traced, 512), scene::generatePenumbra(params)).visibility;
+    EXPECT_EQ(brute, hard);
+    size_t differing = 0, shadowed = 0;
+    for (size_t i = 0; i < brute.size(); ++i) {
+        ASSERT_TRUE(brute[i] == 0.0f || brute[i] == 1.0f) << "pixel " << i << ": V = " << brute[i];
+        if (brute[i] == 0.0f) ++shadowed;
+        if (brute[i] == expected[i]) continue;
+        ++differing;
+        EXPECT_TRUE(atShadowEdge(expected, i, 64)) << "pixel " << i << " differs away from an edge";
+    }
+    EXPECT_GT(shadowed, 100u);
+    EXPECT_LE(differing, brute.size() / 50);
+    RecordProperty("differing_pixels", int(differing));
+}
+
+// RMSEs over the penumbra pixels of the analytic scene (0 < V < 1 in closed form).
+struct PenumbraErrors {
+    double bruteVsTraced = 0.0, bruteVsAnalytic = 0.0, tracedVsAnalytic = 0.0;
+    size_t pixels = 0;
+};
+
+class ReferenceBruteForce : public ReferencePlugin {
+protected:
+    // The analytic rect-light scene of RectLightMatchesTheAnalyticPenumbra at scale 1:
+    // brute_force with `samples` maps against ray_traced with as many rays per pixel,
+    // and both against penumbraVisibility().
+    PenumbraErrors rectPenumbraErrors(uint32_t samples, uint32_t mapResolution)
+    {
+        const scene::PenumbraParams params = analyticParams(1.0f);
+        scene::Light light;
+        light.type = scene::LightType::Rect;
+        light.position = {0.0f, 4.0f, 0.0f};
+        light.direction = {0.0f, -1.0f, 0.0f};
+        light.tangent = {1.0f, 0.0f, 0.0f};
+        light.sizeWorld = {0.8f, 0.5f};
+        const scene::Camera camera = lookDown({1.2f, 5.0f, 0.9f}, {0.3f, 0.0f, 0.2f}, 36.0f);
+        const config::RenderConfig traced = referenceConfig(96, 72, camera, light, {{"samples", samples}});
+        config::RenderConfig raster = traced;
+        raster.lights[0].shadow.setParam("mode", "brute_force", "test");
+        raster.lights[0].shadow.setParam("map_resolution", mapResolution, "test");
+        const Frame& t = render(traced, scene::generatePenumbra(params));
+        const Frame& b = render(raster, scene::generatePenumbra(params));
+        const scene::RectAreaLight analyticLight{light.position, light.sizeWorld};
+        double bt = 0.0, ba = 0.0, ta = 0.0;
+        PenumbraErrors e;
+        for (size_t i = 0; i < b.pixels(); ++i) {
+            if (!b.hasGeometry(i) || b.position(i).y > 0.5 * params.occluderHeight) continue;
+            const glm::dvec3 p = b.position(i);
+            const double expected = scene::penumbraVisibility(params, analyticLight, glm::vec2(p.x, p.z));
+            if (expected <= 0.0 || expected >= 1.0) continue;
+            const double vb = b.visibility[i], vt = t.visibility[i];
+            bt += (vb - vt) * (vb - vt);
+            ba += (vb - expected) * (vb - expected);
+            ta += (vt - expected) * (vt - expected);
+            ++e.pixels;
+        }
+        if (e.pixels == 0) return e;
+        e.bruteVsTraced = std::sqrt(bt / double(e.pixels));
+        e.bruteVsAnalytic = std::sqrt(ba / double(e.pixels));
+        e.tracedVsAnalytic = std::sqrt(ta / double(e.pixels));
+        RecordProperty("rmse_brute_force_vs_ray_traced", fmt::format("{:.5f}", e.bruteVsTraced));
+        RecordProperty("rmse_brute_force_vs_analytic", fmt::format("{:.5f}", e.bruteVsAnalytic));
+        RecordProperty("rmse_ray_traced_vs_analytic", fmt::format("{:.5f}", e.tracedVsAnalytic));
+        return e;
+    }
+};
+
+// 64 maps against 64 rays per pixel and the closed form, over the penumbra pixels.
+// Measured (lavapipe): 0.0169 against the rays, 0.0159 against the closed form (the rays:
+// 0.0070). One pattern shared by every pixel leaves steps of 1/64 across the penumbra
+// where the rays' per-pixel patterns leave noise: bounds 0.03.
+TEST_F(ReferenceBruteForce, RectLightMatchesTheTracedAndTheAnalyticPenumbra)
+{
+    const PenumbraErrors e = rectPenumbraErrors(64, 512);
+    ASSERT_GT(e.pixels, 200u);
+    EXPECT_LE(e.bruteVsTraced, 0.03);
+    EXPECT_LE(e.bruteVsAnalytic, 0.03);
+}
+
+// The rasterised 256-map reference against 256 rays per pixel, the figure the issue
+// asks for. Measured (lavapipe): 0.0047 against the rays, 0.0041 against the closed form
+// (the rays: 0.0022): bounds 0.01, the traced reference's own bound against the closed
+// form.
+TEST_F(ReferenceBruteForce, With256MapsIsWithinTheBoundOfTheTracedReference)
+{
+    const PenumbraErrors e = rectPenumbraErrors(256, 512);
+    ASSERT_GT(e.pixels, 200u);
+    EXPECT_LE(e.bruteVsTraced, 0.01);
+    EXPECT_LE(e.bruteVsAnalytic, 0.01);
+}
+
+// A map too large for the device is refused with the plugin's parameter named.
+TEST_F(ReferencePlugin, BruteForceMapTooLargeForTheDeviceNamesTheParameter)
+{
+    scene::Light light;
+    light.type = scene::LightType::Rect;
+    light.position = {0.0f, 4.0f, 0.0f};
+    light.direction = {0.0f, -1.0f, 0.0f};
+    light.tangent = {1.0f, 0.0f, 0.0f};
+    light.sizeWorld = {0.8f, 0.5f};
+    const uint32_t maxDimension = context->properties().limits.maxImageDimension2D;
+    const uint32_t tooLarge = maxDimension / 3 + 1;  // a cube atlas is 3 faces wide
+    ASSERT_LE(tooLarge, 8192u) << "this device's images are larger than map_resolution's range";
+    config::RenderConfig cfg = referenceConfig(32, 24, lookDown({0.0f, 5.0f, 0.1f}, {0.0f, 0.0f, 0.0f}, 40.0f), light,
+                                               {{"mode", "brute_force"}, {"map_resolution", tooLarge}});
+    try {
+        render(cfg, scene::generatePenumbra(analyticParams(1.0f)));
+        ADD_FAILURE() << "no error for map_resolution " << tooLarge;
+    } catch (const std::exception& e) {
+        EXPECT_NE(std::string(e.what()).find("reference"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("map_resolution"), std::string::npos) << e.what();
+    }
 }
 
 } // namespace

@@ -44,10 +44,8 @@ struct AccumulatePush {
     uint32_t sampleCount = 0;
     uint32_t gridColumns = 1;
     uint32_t gridRows = 1;
-    uint32_t initialise = 0;  // 1: the first batch, which starts the sums from zero
-    uint32_t pad[3] = {};
 };
-static_assert(sizeof(AccumulatePush) == 48);
+static_assert(sizeof(AccumulatePush) == 32);
 
 // The light that renders sample `point` of `light`'s hard shadow: a point light at a
 // point of a rect, disk or sphere (its cube atlas has the light's face count, 6), the
@@ -124,6 +122,13 @@ RasterReference::RasterReference(const plugin::TechniqueSetup& setup, const Rast
                   {kBindingSampleMaps, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
     c.pushConstantBytes = sizeof(AccumulatePush);
     accumulate_ = gpu::Pipeline(context_, setup.shaders, c);
+    // The first batch has no sums to read: a variant without that binding (binding its
+    // own output there instead would be a read the graph's barriers do not order).
+    c.name += ".first";
+    c.defines = {{"FIRST_BATCH", "1"}};
+    std::erase_if(c.bindings, [](const gpu::Binding& b) { return b.binding == kBindingPrevious; });
+    accumulateFirst_ = gpu::Pipeline(context_, setup.shaders, c);
+    c.defines.clear();
 
     c.name = fmt::format("light{}.reference.resolve", lightIndex_);
     c.shader = "resolve.comp";
@@ -214,17 +219,16 @@ void RasterReference::recordAccumulate(const graph::PassContext& pass, const plu
 {
     VkCommandBuffer cmd = pass.cmd();
     const gpu::Image& out = pass.image(sums);
-    accumulate_.bind(cmd);
-    // The first batch has no sums to read: its own output stands in for the binding and
-    // is not read (push.initialise).
-    gpu::DescriptorPush()
-        .storageImage(kBindingPosition, pass.image(io.gPosition))
+    const gpu::Pipeline& pipeline = previous.empty() ? accumulateFirst_ : accumulate_;
+    pipeline.bind(cmd);
+    gpu::DescriptorPush descriptors;
+    descriptors.storageImage(kBindingPosition, pass.image(io.gPosition))
         .storageImage(kBindingNormal, pass.image(io.gNormal))
         .sampledImage(kBindingMaps, pass.image(maps), compareSampler_, pass.layout(maps))
-        .storageImage(kBindingPrevious, previous.empty() ? out : pass.image(previous))
         .storageImage(kBindingSums, out)
-        .storageBuffer(kBindingSampleMaps, sampleMaps_)
-        .push(context_, cmd, accumulate_);
+        .storageBuffer(kBindingSampleMaps, sampleMaps_);
+    if (!previous.empty()) descriptors.storageImage(kBindingPrevious, pass.image(previous));
+    descriptors.push(context_, cmd, pipeline);
     AccumulatePush push;
     if (light_.type == scene::LightType::Point && light_.radiusWorld > 0.0f)
         push.sphere = glm::vec4(light_.position, light_.radiusWorld);
@@ -232,8 +236,7 @@ void RasterReference::recordAccumulate(const graph::PassContext& pass, const plu
     push.sampleCount = batch.count;
     push.gridColumns = gridColumns_;
     push.gridRows = batch.rows;
-    push.initialise = previous.empty() ? 1u : 0u;
-    accumulate_.pushConstants(cmd, &push, sizeof(push));
+    pipeline.pushConstants(cmd, &push, sizeof(push));
     vkCmdDispatch(cmd, (out.desc().width + 7) / 8, (out.desc().height + 7) / 8, 1);
 }
 

@@ -65,7 +65,8 @@ private:
     // (for the compares; shaders/common/shadow_map.glsl SHADOW_MAP_ARRAY).
     std::vector<std::vector<render::LightFrustum>> sampleFrusta_;
     gpu::Buffer sampleMaps_;
-    gpu::Pipeline accumulate_;
+    gpu::Pipeline accumulate_;       // adds a batch to the sums before
+    gpu::Pipeline accumulateFirst_;  // the first batch: starts the sums
     gpu::Pipeline resolve_;
     gpu::Sampler compareSampler_;
 };

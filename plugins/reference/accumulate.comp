@@ -26,7 +26,9 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(binding = 0, GBUFFER_POSITION_FORMAT) uniform readonly image2D gPosition;
 layout(binding = 1, GBUFFER_NORMAL_FORMAT) uniform readonly image2D gNormal;
 layout(binding = 2) uniform sampler2DShadow sampleMaps;
-layout(binding = 3, rg32f) uniform readonly image2D previousSums;
+#ifndef FIRST_BATCH
+layout(binding = 3, rg32f) uniform readonly image2D previousSums;  // the first batch starts from zero
+#endif
 layout(binding = 4, rg32f) uniform writeonly image2D sums;
 
 #define SHADOW_MAP_BINDING 5
@@ -40,7 +42,6 @@ layout(push_constant) uniform Push {
     uint sampleCount;
     uint gridColumns;
     uint gridRows;
-    uint initialise;  // 1: the first batch, no sums before
 } pc;
 
 // The solid angle weight of the current sample (shadowMapIndex) at receiver p.
@@ -69,7 +70,11 @@ void main()
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(pixel, imageSize(sums)))) return;
 
-    vec2 sum = pc.initialise != 0u ? vec2(0.0) : imageLoad(previousSums, pixel).xy;
+#ifdef FIRST_BATCH
+    vec2 sum = vec2(0.0);
+#else
+    vec2 sum = imageLoad(previousSums, pixel).xy;
+#endif
     vec4 position = imageLoad(gPosition, pixel);
     if (position.w != 0.0) {
         vec3 p = position.xyz;
