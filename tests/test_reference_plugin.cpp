@@ -708,8 +708,51 @@ TEST_F(ReferenceBruteForce, SphereAndSunMatchTheTracedOnes)
     }
 }
 
-// A map too large for the device is refused with the plugin's parameter named.
-TEST_F(ReferencePlugin, BruteForceMapTooLargeForTheDeviceNamesTheParameter)
+// Translucent casters in the raster path: alpha-masked holes are cut in every map, as
+// traced; an alpha-blended pane (alpha 0.3) is opaque in a depth map, so behind it V is
+// 0 where the rays give 0.7 (README.md, "What it cannot do that the rays do").
+TEST_F(ReferenceBruteForce, MaskHolesLetLightThroughAndBlendedCastersAreOpaque)
+{
+    const config::RenderConfig masked = test::halfMaskedQuadConfig();
+    config::RenderConfig cfg = referenceConfig(64, 48, masked.camera, masked.lights[0].light, {{"mode", "brute_force"}});
+    const Frame& m = render(cfg, test::halfMaskedQuadScene());
+    size_t throughHoles = 0, behindOpaque = 0;
+    for (size_t i = 0; i < m.pixels(); ++i) {
+        const glm::dvec3 p = m.position(i);
+        if (!m.hasGeometry(i) || p.y > 0.1 || std::abs(p.z) > 1.8) continue;
+        if (p.x > -0.85 && p.x < 0.85) {
+            EXPECT_EQ(m.visibility[i], 1.0f) << "pixel " << i << " at x = " << p.x;
+            ++throughHoles;
+        } else if (p.x > 1.15 && p.x < 2.85) {
+            EXPECT_EQ(m.visibility[i], 0.0f) << "pixel " << i << " at x = " << p.x;
+            ++behindOpaque;
+        }
+    }
+    EXPECT_GT(throughHoles, 30u);
+    EXPECT_GT(behindOpaque, 30u);
+
+    scene::Light light;
+    light.type = scene::LightType::Point;
+    light.position = {3.0f, 4.0f, 0.0f};
+    const Frame& g = render(referenceConfig(64, 48, lookDown({-2.5f, 6.0f, 0.001f}, {-2.5f, 0.0f, 0.0f}, 40.0f), light,
+                                            {{"mode", "brute_force"}}),
+                            glassScene({1.0f}));
+    size_t behindPane = 0;
+    for (size_t i = 0; i < g.pixels(); ++i) {
+        const glm::dvec3 p = g.position(i);
+        if (!g.hasGeometry(i) || p.y > 0.1) continue;
+        const glm::dvec3 at = p + (glm::dvec3(light.position) - p) * (1.0 / light.position.y);
+        const double inside = 1.0 - std::max(std::abs(at.x), std::abs(at.z));
+        if (inside < 0.03) continue;
+        EXPECT_EQ(g.visibility[i], 0.0f) << "pixel " << i;
+        ++behindPane;
+    }
+    EXPECT_GT(behindPane, 50u);
+}
+
+// Bad input names the plugin and the parameter: a map too large for the device, more
+// maps than brute_force takes, a resolution out of the declared range.
+TEST_F(ReferencePlugin, BruteForceBadInputNamesThePluginAndTheParameter)
 {
     scene::Light light;
     light.type = scene::LightType::Rect;
@@ -720,14 +763,26 @@ TEST_F(ReferencePlugin, BruteForceMapTooLargeForTheDeviceNamesTheParameter)
     const uint32_t maxDimension = context->properties().limits.maxImageDimension2D;
     const uint32_t tooLarge = maxDimension / 3 + 1;  // a cube atlas is 3 faces wide
     ASSERT_LE(tooLarge, 8192u) << "this device's images are larger than map_resolution's range";
-    config::RenderConfig cfg = referenceConfig(32, 24, lookDown({0.0f, 5.0f, 0.1f}, {0.0f, 0.0f, 0.0f}, 40.0f), light,
-                                               {{"mode", "brute_force"}, {"map_resolution", tooLarge}});
+    const scene::Camera camera = lookDown({0.0f, 5.0f, 0.1f}, {0.0f, 0.0f, 0.0f}, 40.0f);
+    const std::pair<nlohmann::json, std::string> cases[] = {
+        {{{"mode", "brute_force"}, {"map_resolution", tooLarge}}, "map_resolution"},
+        {{{"mode", "brute_force"}, {"samples", 5000}}, "samples"},
+    };
+    for (const auto& [params, name] : cases) {
+        try {
+            render(referenceConfig(32, 24, camera, light, params), scene::generatePenumbra(analyticParams(1.0f)));
+            ADD_FAILURE() << "no error for " << params.dump();
+        } catch (const std::exception& e) {
+            EXPECT_NE(std::string(e.what()).find("reference"), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+        }
+    }
+    plugin::ParamValues values = test::plugins().load("reference").defaultParams();
     try {
-        render(cfg, scene::generatePenumbra(analyticParams(1.0f)));
-        ADD_FAILURE() << "no error for map_resolution " << tooLarge;
-    } catch (const std::exception& e) {
-        EXPECT_NE(std::string(e.what()).find("reference"), std::string::npos) << e.what();
-        EXPECT_NE(std::string(e.what()).find("map_resolution"), std::string::npos) << e.what();
+        values.set("map_resolution", 8, "--set reference.map_resolution");
+        ADD_FAILURE() << "map_resolution 8 accepted";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("reference.map_resolution"), std::string::npos) << e.what();
     }
 }
 

@@ -22,6 +22,10 @@ namespace {
 // budget below bounds that block: 2^24 texels (64 MiB of D32), ten 512-texel cube atlases.
 constexpr uint64_t kBatchTexels = uint64_t(1) << 24;
 
+// A map per sample: beyond a few thousand the graph's passes (two per batch) and the
+// frame's time grow past any use; the ray tracer takes up to 65536.
+constexpr uint32_t kMaxSamples = 4096;
+
 // The rasterizer's constant bias in r (minimum resolvable depth differences), the hard
 // plugin's default; the receiver plane bias does the real work (no slope-scaled term: it
 // would push shadows away from their casters, which a reference must not).
@@ -93,6 +97,11 @@ RasterReference::RasterReference(const plugin::TechniqueSetup& setup, const Rast
       shape_(setup, checkedMapResolution(setup, settings.mapResolution), "reference"),
       light_(setup.light)
 {
+    if (sampleCount_ > kMaxSamples) {
+        throw ConfigError(fmt::format("reference: samples: brute_force renders one shadow map per sample and takes at "
+                                      "most {}, got {}; use mode ray_traced for more",
+                                      kMaxSamples, sampleCount_));
+    }
     // Batches: as many maps as the texel budget allows (at least one), in a grid no wider
     // or taller than the device's largest image (one map fits: checked above).
     const uint32_t maxDimension = context_.properties().limits.maxImageDimension2D;

@@ -53,7 +53,8 @@ const plugin::ParamSpec kParams[] = {
      "maps from the light samples, averaged: the rasterised reference of the papers",
      kModeNames, uint32_t(std::size(kModeNames))},
     {"samples", ParamType::Int, 256, 1, 65536, "rays/pixel",
-     "light samples per pixel, stratified (correlated multi-jittered); lights without extent take 1"},
+     "light samples per pixel, stratified (correlated multi-jittered); brute_force: shadow maps, at most 4096; "
+     "lights without extent take 1"},
     {"seed", ParamType::Int, 1, 0, 2147483647, "",
      "jitter of the sample patterns; the same seed gives a bit-identical image on any thread count"},
     {"cache", ParamType::Bool, 1, 0, 1, "",
