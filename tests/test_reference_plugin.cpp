@@ -29,6 +29,7 @@
 #include <functional>
 #include <memory>
 #include <numbers>
+#include <tuple>
 
 using namespace penumbra;
 namespace fs = std::filesystem;
@@ -711,6 +712,41 @@ TEST_F(ReferenceBruteForce, SphereAndSunMatchTheTracedOnes)
         EXPECT_GT(soft, 60u) << name;
         EXPECT_LE(rmse, 0.015) << name;
     }
+}
+
+// The horizon: a light sample below the receiver's tangent plane counts as blocked,
+// even where no caster lies between: a ground lit from below only is its own nearest
+// caster in every map, which a depth compare alone calls lit; V = 0. A vertical rect
+// light centred in the ground's plane has 32 of its 64 samples above the ground: V is
+// 32 / 64 at most, and less by the samples that graze the ground (within about 2
+// degrees, where receiver plane bias gives up: README.md), measured 2 to 8 of them.
+TEST_F(ReferenceBruteForce, SamplesBelowTheHorizonAreBlocked)
+{
+    const scene::Camera camera = lookDown({0.0f, 6.0f, 0.001f}, {0.0f, 0.0f, 0.0f}, 30.0f);
+    scene::Light straddling;
+    straddling.type = scene::LightType::Rect;
+    straddling.position = {4.0f, 0.0f, 0.0f};
+    straddling.direction = {-1.0f, 0.0f, 0.0f};
+    straddling.tangent = {0.0f, 0.0f, 1.0f};  // the other side, along y, is cut in half by the ground
+    straddling.sizeWorld = {1.0f, 1.0f};
+    scene::Light below = straddling;
+    below.position = {4.0f, -1.0f, 0.0f};
+    for (const auto& [light, lowest, highest] : {std::tuple{straddling, 0.5f - 12.0f / 64.0f, 0.5f},
+                                                 std::tuple{below, 0.0f, 0.0f}}) {
+        const Frame& f = render(referenceConfig(32, 24, camera, light, {{"mode", "brute_force"}, {"samples", 64}}),
+                                test::planeScene());
+        size_t ground = 0;
+        for (size_t i = 0; i < f.pixels(); ++i) {
+            if (!f.hasGeometry(i)) continue;
+            EXPECT_GE(f.visibility[i], lowest) << "pixel " << i << ", light at y = " << light.position.y;
+            EXPECT_LE(f.visibility[i], highest) << "pixel " << i << ", light at y = " << light.position.y;
+            ++ground;
+        }
+        EXPECT_GT(ground, 500u);
+    }
+    // The rays: exactly half of the straddling light's samples (stratified in y) are above.
+    const Frame& traced = render(referenceConfig(32, 24, camera, straddling, {{"samples", 64}}), test::planeScene());
+    for (size_t i = 0; i < traced.pixels(); ++i) EXPECT_EQ(traced.visibility[i], 0.5f) << "pixel " << i;
 }
 
 // Translucent casters in the raster path: alpha-masked holes are cut in every map, as
