@@ -172,6 +172,11 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
         if (map.frusta.size() > faceCount_)
             throw Error(fmt::format("{}: a map of {} faces does not fit this shadow map's {} face(s)", name_,
                                     map.frusta.size(), faceCount_));
+        if (map.origin.x < 0 || map.origin.y < 0 ||
+            uint64_t(map.origin.x) + atlasWidth() > target.desc().width ||
+            uint64_t(map.origin.y) + atlasHeight() > target.desc().height)
+            throw Error(fmt::format("{}: a map at ({}, {}) does not fit in '{}' ({} x {})", name_, map.origin.x,
+                                    map.origin.y, image, target.desc().width, target.desc().height));
         for (uint32_t face = 0; face < map.frusta.size(); ++face) {
             // Each face draws into its own cell of the map's atlas (the scissor keeps it
             // there).
