@@ -409,7 +409,8 @@ PENUMBRA_PLUGIN_EXPORT const PenumbraPluginInfo* penumbra_plugin_entry()
                                          "reference",
                                          "1.0.0",
                                          "exact area-light visibility: stratified shadow rays traced with Embree on the "
-                                         "CPU, translucent casters included, cached on disk",
+                                         "CPU, translucent casters included, cached on disk; or (mode brute_force) the "
+                                         "mean of hard shadow maps from light samples on the GPU",
                                          penumbra::reference::kParams,
                                          uint32_t(std::size(penumbra::reference::kParams)),
                                          &penumbra::reference::createReferenceShadow,
