@@ -757,6 +757,34 @@ TEST_F(ReferenceBruteForce, SamplesBelowTheHorizonAreBlocked)
     for (size_t i = 0; i < traced.pixels(); ++i) EXPECT_EQ(traced.visibility[i], 0.5f) << "pixel " << i;
 }
 
+// An animated frame: the maps follow a moving light (Technique::update rewrites every
+// sample's frusta and data) and moved casters (drawn where they are now), giving the
+// image a fresh renderer gives.
+TEST_F(ReferenceBruteForce, FollowsAMovingLightAndMovedCasters)
+{
+    const config::RenderConfig cfg = smallRectConfig({{"mode", "brute_force"}, {"samples", 16}});
+    Frame& frame = render(cfg, scene::generatePenumbra({}));
+    std::vector<float> before = frame.visibility;
+    frame.config.lights[0].light.position.x += 0.5f;
+    frame.renderer.update(frame.config, frame.scene, {});
+    frame.render();
+    EXPECT_NE(frame.visibility, before);
+    EXPECT_EQ(render(frame.config, frame.scene).visibility, frame.visibility);
+
+    before = frame.visibility;
+    uint32_t occluder = 0;
+    for (const scene::Instance& instance : frame.scene.instances)
+        if (frame.scene.meshes[instance.mesh].name == "occluder") occluder = instance.node;
+    frame.scene.graph.setLocal(occluder, glm::translate(glm::mat4(1.0f), glm::vec3(0.4f, 0.0f, 0.0f)) *
+                                             frame.scene.graph.local(occluder));
+    const std::vector<uint32_t> moved = frame.scene.updateTransforms();
+    ASSERT_EQ(moved.size(), 1u);
+    frame.renderer.update(frame.config, frame.scene, moved);
+    frame.render();
+    EXPECT_NE(frame.visibility, before);
+    EXPECT_EQ(render(frame.config, frame.scene).visibility, frame.visibility);
+}
+
 // Translucent casters in the raster path: alpha-masked holes are cut in every map, as
 // traced; an alpha-blended pane (alpha 0.3) is opaque in a depth map, so behind it V is
 // 0 where the rays give 0.7 (README.md, "What it cannot do that the rays do").
