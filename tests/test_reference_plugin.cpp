@@ -29,6 +29,7 @@
 #include <functional>
 #include <memory>
 #include <numbers>
+#include <tuple>
 
 using namespace penumbra;
 namespace fs = std::filesystem;
@@ -317,7 +318,7 @@ TEST_F(ReferencePlugin, LightSizeZeroEqualsThePointLightAndSizedLightsSoften)
     scene::Light sun;
     sun.type = scene::LightType::Directional;
     sun.direction = glm::normalize(glm::vec3(0.2f, -1.0f, 0.1f));
-    sun.angularDiameterDeg = 8.0f;
+    sun.angularDiameterDeg = 12.0f;
     sphere.radiusWorld = 0.3f;
     for (const scene::Light& light : {sphere, sun}) {
         SCOPED_TRACE(scene::lightTypeName(light.type));
@@ -531,6 +532,345 @@ TEST_F(ReferencePlugin, ParametersAreReflectedWithRanges)
     EXPECT_THROW(params.set("samples", 0, "test"), ConfigError);
     EXPECT_THROW(params.set("threads", -1, "test"), ConfigError);
     EXPECT_THROW(params.set("mode", "shadow_maps", "test"), ConfigError);
+    EXPECT_EQ(params.getInt("map_resolution"), 512);
+    params.set("mode", "brute_force", "test");
+    EXPECT_EQ(params.getEnum("mode"), "brute_force");
+}
+
+// ---------------------------------------------------------------------------------------
+// mode brute_force: the rasterised reference (RasterReference.h)
+
+// The same frame with the hard plugin: one nearest compare with receiver plane bias,
+// the map at `resolution` texels per face.
+config::RenderConfig hardConfig(config::RenderConfig cfg, uint32_t resolution)
+{
+    config::ShadowSettings& shadow = cfg.lights.at(0).shadow;
+    shadow = {};
+    shadow.technique = "hard";
+    shadow.required = true;
+    shadow.setParam("bias_mode", "receiver_plane", "test");
+    shadow.setParam("filter", "none", "test");
+    shadow.setParam("resolution", resolution, "test");
+    return cfg;
+}
+
+// Whether pixel i of a width-wide image lies at a shadow edge of v: a pixel of its 3 x 3
+// neighbourhood has another value.
+bool atShadowEdge(const std::vector<float>& v, size_t i, size_t width)
+{
+    const auto x = ptrdiff_t(i % width), y = ptrdiff_t(i / width), height = ptrdiff_t(v.size() / width);
+    for (ptrdiff_t dy = -1; dy <= 1; ++dy)
+        for (ptrdiff_t dx = -1; dx <= 1; ++dx) {
+            const ptrdiff_t nx = x + dx, ny = y + dy;
+            if (nx < 0 || ny < 0 || nx >= ptrdiff_t(width) || ny >= height) continue;
+            if (v[size_t(ny) * width + size_t(nx)] != v[i]) return true;
+        }
+    return false;
+}
+
+// A point light has one sample, so brute_force is one hard shadow map: exactly the hard
+// plugin's nearest compare with receiver plane bias at the same resolution (same map,
+// same bias, same compare), and the ray-traced image except at shadow edges, where a
+// texel of the map (about a third of a pixel here) moves the edge: at most 2 % of the
+// pixels, every one beside an edge of the traced image. A spot light likewise (its own
+// perspective map; outside its cone V = 1, as the rays see it).
+TEST_F(ReferencePlugin, BruteForcePointLightIsTheHardShadowAndTheTracedOneButAtEdges)
+{
+    scene::PenumbraParams params = analyticParams(1.0f);
+    params.occluderThickness = 0.05f;
+    scene::Light point;
+    point.type = scene::LightType::Point;
+    point.position = {0.3f, 4.0f, 0.2f};
+    scene::Light spot = point;
+    spot.type = scene::LightType::Spot;
+    spot.direction = {0.0f, -1.0f, 0.0f};
+    spot.outerConeDeg = 15.0f;  // the view sees beyond the cone
+    for (const scene::Light& light : {point, spot}) {
+        const std::string name = scene::lightTypeName(light.type);
+        const config::RenderConfig traced =
+            referenceConfig(64, 48, lookDown({-1.2f, 5.0f, -0.9f}, {0.0f, 0.0f, 0.0f}, 40.0f), light);
+        config::RenderConfig raster = traced;
+        raster.lights[0].shadow.setParam("mode", "brute_force", "test");
+        raster.lights[0].shadow.setParam("map_resolution", 512, "test");
+        const std::vector<float> expected = render(traced, scene::generatePenumbra(params)).visibility;
+        const std::vector<float> brute = render(raster, scene::generatePenumbra(params)).visibility;
+        const std::vector<float> hard = render(hardConfig(traced, 512), scene::generatePenumbra(params)).visibility;
+        EXPECT_EQ(brute, hard) << name;
+        size_t differing = 0, shadowed = 0;
+        for (size_t i = 0; i < brute.size(); ++i) {
+            ASSERT_TRUE(brute[i] == 0.0f || brute[i] == 1.0f) << name << " pixel " << i << ": V = " << brute[i];
+            if (brute[i] == 0.0f) ++shadowed;
+            if (brute[i] == expected[i]) continue;
+            ++differing;
+            EXPECT_TRUE(atShadowEdge(expected, i, 64)) << name << " pixel " << i << " differs away from an edge";
+        }
+        EXPECT_GT(shadowed, 100u) << name;
+        EXPECT_LE(differing, brute.size() / 50) << name;
+        RecordProperty("differing_pixels_" + name, int(differing));
+    }
+}
+
+// RMSEs over the penumbra pixels of the analytic scene (0 < V < 1 in closed form).
+struct PenumbraErrors {
+    double bruteVsTraced = 0.0, bruteVsAnalytic = 0.0, tracedVsAnalytic = 0.0;
+    size_t pixels = 0;
+};
+
+class ReferenceBruteForce : public ReferencePlugin {
+protected:
+    // The analytic rect-light scene of RectLightMatchesTheAnalyticPenumbra at `scale`:
+    // brute_force with `samples` maps against ray_traced with as many rays per pixel,
+    // and both against penumbraVisibility().
+    PenumbraErrors rectPenumbraErrors(uint32_t samples, uint32_t mapResolution, float scale = 1.0f)
+    {
+        const scene::PenumbraParams params = analyticParams(scale);
+        scene::Light light;
+        light.type = scene::LightType::Rect;
+        light.position = glm::vec3(0.0f, 4.0f, 0.0f) * scale;
+        light.direction = {0.0f, -1.0f, 0.0f};
+        light.tangent = {1.0f, 0.0f, 0.0f};
+        light.sizeWorld = glm::vec2(0.8f, 0.5f) * scale;
+        const scene::Camera camera =
+            lookDown(glm::vec3(1.2f, 5.0f, 0.9f) * scale, glm::vec3(0.3f, 0.0f, 0.2f) * scale, 36.0f);
+        const config::RenderConfig traced = referenceConfig(96, 72, camera, light, {{"samples", samples}});
+        config::RenderConfig raster = traced;
+        raster.lights[0].shadow.setParam("mode", "brute_force", "test");
+        raster.lights[0].shadow.setParam("map_resolution", mapResolution, "test");
+        const Frame& t = render(traced, scene::generatePenumbra(params));
+        const Frame& b = render(raster, scene::generatePenumbra(params));
+        const scene::RectAreaLight analyticLight{light.position, light.sizeWorld};
+        double bt = 0.0, ba = 0.0, ta = 0.0;
+        PenumbraErrors e;
+        for (size_t i = 0; i < b.pixels(); ++i) {
+            if (!b.hasGeometry(i) || b.position(i).y > 0.5 * params.occluderHeight) continue;
+            const glm::dvec3 p = b.position(i);
+            const double expected = scene::penumbraVisibility(params, analyticLight, glm::vec2(p.x, p.z));
+            if (expected <= 0.0 || expected >= 1.0) continue;
+            const double vb = b.visibility[i], vt = t.visibility[i];
+            bt += (vb - vt) * (vb - vt);
+            ba += (vb - expected) * (vb - expected);
+            ta += (vt - expected) * (vt - expected);
+            ++e.pixels;
+        }
+        if (e.pixels == 0) return e;
+        e.bruteVsTraced = std::sqrt(bt / double(e.pixels));
+        e.bruteVsAnalytic = std::sqrt(ba / double(e.pixels));
+        e.tracedVsAnalytic = std::sqrt(ta / double(e.pixels));
+        const std::string at = fmt::format("_{}_maps_scale_{:g}", samples, scale);
+        RecordProperty("rmse_brute_force_vs_ray_traced" + at, fmt::format("{:.5f}", e.bruteVsTraced));
+        RecordProperty("rmse_brute_force_vs_analytic" + at, fmt::format("{:.5f}", e.bruteVsAnalytic));
+        RecordProperty("rmse_ray_traced_vs_analytic" + at, fmt::format("{:.5f}", e.tracedVsAnalytic));
+        return e;
+    }
+};
+
+// 64 maps against 64 rays per pixel and the closed form, over the penumbra pixels, at
+// scene scales 1e-3, 1 and 1e5.
+// Measured (lavapipe): 0.0169 against the rays, 0.0159 against the closed form (the rays:
+// 0.0070). One pattern shared by every pixel leaves steps of 1/64 across the penumbra
+// where the rays' per-pixel patterns leave noise: bounds 0.03.
+TEST_F(ReferenceBruteForce, RectLightMatchesTheTracedAndTheAnalyticPenumbra)
+{
+    for (const float scale : {1e-3f, 1.0f, 1e5f}) {
+        const PenumbraErrors e = rectPenumbraErrors(64, 512, scale);
+        ASSERT_GT(e.pixels, 200u) << "scale " << scale;
+        EXPECT_LE(e.bruteVsTraced, 0.03) << "scale " << scale;
+        EXPECT_LE(e.bruteVsAnalytic, 0.03) << "scale " << scale;
+    }
+}
+
+// The rasterised 256-map reference against 256 rays per pixel, the figure the issue
+// asks for. Measured (lavapipe): 0.0047 against the rays, 0.0041 against the closed form
+// (the rays: 0.0022): bounds 0.01, the traced reference's own bound against the closed
+// form.
+TEST_F(ReferenceBruteForce, With256MapsIsWithinTheBoundOfTheTracedReference)
+{
+    const PenumbraErrors e = rectPenumbraErrors(256, 512);
+    ASSERT_GT(e.pixels, 200u);
+    EXPECT_LE(e.bruteVsTraced, 0.01);
+    EXPECT_LE(e.bruteVsAnalytic, 0.01);
+}
+
+// Spheres, the sun and disks: brute_force with 256 samples against ray_traced with 256,
+// RMSE over every pixel of the analytic scene. A sphere's samples cover its surface,
+// weighed by solid angle at each receiver; the sun's are the traced cone's directions; a
+// disk's the traced points. Measured (lavapipe): sphere 0.0036, sun 0.0033, disk 0.0015:
+// bound 0.015.
+TEST_F(ReferenceBruteForce, SphereSunAndDiskMatchTheTracedOnes)
+{
+    const scene::Camera camera = lookDown({1.0f, 5.0f, 0.7f}, {0.0f, 0.0f, 0.0f}, 40.0f);
+    scene::Light sphere;
+    sphere.type = scene::LightType::Point;
+    sphere.position = {0.2f, 4.0f, 0.1f};
+    sphere.radiusWorld = 0.4f;
+    scene::Light sun;
+    sun.type = scene::LightType::Directional;
+    sun.direction = glm::normalize(glm::vec3(0.2f, -1.0f, 0.1f));
+    sun.angularDiameterDeg = 12.0f;
+    scene::Light disk;
+    disk.type = scene::LightType::Disk;
+    disk.position = {0.2f, 4.0f, 0.1f};
+    disk.direction = {0.0f, -1.0f, 0.0f};
+    disk.radiusWorld = 0.4f;
+    for (const scene::Light& light : {sphere, sun, disk}) {
+        const config::RenderConfig traced = referenceConfig(64, 48, camera, light, {{"samples", 256}});
+        config::RenderConfig raster = traced;
+        raster.lights[0].shadow.setParam("mode", "brute_force", "test");
+        const std::vector<float> t = render(traced, scene::generatePenumbra(analyticParams(1.0f))).visibility;
+        const std::vector<float> b = render(raster, scene::generatePenumbra(analyticParams(1.0f))).visibility;
+        double squared = 0.0;
+        size_t soft = 0;
+        for (size_t i = 0; i < t.size(); ++i) {
+            squared += (b[i] - t[i]) * (b[i] - t[i]);
+            if (t[i] > 0.0f && t[i] < 1.0f) ++soft;
+        }
+        const double rmse = std::sqrt(squared / double(t.size()));
+        const std::string name = scene::lightTypeName(light.type);
+        RecordProperty("rmse_" + name, fmt::format("{:.5f}", rmse));
+        EXPECT_GT(soft, 60u) << name;
+        EXPECT_LE(rmse, 0.015) << name;
+    }
+}
+
+// The horizon: a light sample below the receiver's tangent plane counts as blocked,
+// even where no caster lies between: a ground lit from below only is its own nearest
+// caster in every map, which a depth compare alone calls lit; V = 0. A vertical rect
+// light centred in the ground's plane has 32 of its 64 samples above the ground: V is
+// 32 / 64 at most, and less by the samples that graze the ground (within about 2
+// degrees, where receiver plane bias gives up: README.md), measured 2 to 8 of them.
+TEST_F(ReferenceBruteForce, SamplesBelowTheHorizonAreBlocked)
+{
+    const scene::Camera camera = lookDown({0.0f, 6.0f, 0.001f}, {0.0f, 0.0f, 0.0f}, 30.0f);
+    scene::Light straddling;
+    straddling.type = scene::LightType::Rect;
+    straddling.position = {4.0f, 0.0f, 0.0f};
+    straddling.direction = {-1.0f, 0.0f, 0.0f};
+    straddling.tangent = {0.0f, 0.0f, 1.0f};  // the other side, along y, is cut in half by the ground
+    straddling.sizeWorld = {1.0f, 1.0f};
+    scene::Light below = straddling;
+    below.position = {4.0f, -1.0f, 0.0f};
+    for (const auto& [light, lowest, highest] : {std::tuple{straddling, 0.5f - 12.0f / 64.0f, 0.5f},
+                                                 std::tuple{below, 0.0f, 0.0f}}) {
+        const Frame& f = render(referenceConfig(32, 24, camera, light, {{"mode", "brute_force"}, {"samples", 64}}),
+                                test::planeScene());
+        size_t ground = 0;
+        for (size_t i = 0; i < f.pixels(); ++i) {
+            if (!f.hasGeometry(i)) continue;
+            EXPECT_GE(f.visibility[i], lowest) << "pixel " << i << ", light at y = " << light.position.y;
+            EXPECT_LE(f.visibility[i], highest) << "pixel " << i << ", light at y = " << light.position.y;
+            ++ground;
+        }
+        EXPECT_GT(ground, 500u);
+    }
+    // The rays: exactly half of the straddling light's samples (stratified in y) are above.
+    const Frame& traced = render(referenceConfig(32, 24, camera, straddling, {{"samples", 64}}), test::planeScene());
+    for (size_t i = 0; i < traced.pixels(); ++i) EXPECT_EQ(traced.visibility[i], 0.5f) << "pixel " << i;
+}
+
+// An animated frame: the maps follow a moving light (Technique::update rewrites every
+// sample's frusta and data) and moved casters (drawn where they are now), giving the
+// image a fresh renderer gives.
+TEST_F(ReferenceBruteForce, FollowsAMovingLightAndMovedCasters)
+{
+    const config::RenderConfig cfg = smallRectConfig({{"mode", "brute_force"}, {"samples", 16}});
+    Frame& frame = render(cfg, scene::generatePenumbra({}));
+    std::vector<float> before = frame.visibility;
+    frame.config.lights[0].light.position.x += 0.5f;
+    frame.renderer.update(frame.config, frame.scene, {});
+    frame.render();
+    EXPECT_NE(frame.visibility, before);
+    EXPECT_EQ(render(frame.config, frame.scene).visibility, frame.visibility);
+
+    before = frame.visibility;
+    uint32_t occluder = 0;
+    for (const scene::Instance& instance : frame.scene.instances)
+        if (frame.scene.meshes[instance.mesh].name == "occluder") occluder = instance.node;
+    frame.scene.graph.setLocal(occluder, glm::translate(glm::mat4(1.0f), glm::vec3(0.4f, 0.0f, 0.0f)) *
+                                             frame.scene.graph.local(occluder));
+    const std::vector<uint32_t> moved = frame.scene.updateTransforms();
+    ASSERT_EQ(moved.size(), 1u);
+    frame.renderer.update(frame.config, frame.scene, moved);
+    frame.render();
+    EXPECT_NE(frame.visibility, before);
+    EXPECT_EQ(render(frame.config, frame.scene).visibility, frame.visibility);
+}
+
+// Translucent casters in the raster path: alpha-masked holes are cut in every map, as
+// traced; an alpha-blended pane (alpha 0.3) is opaque in a depth map, so behind it V is
+// 0 where the rays give 0.7 (README.md, "What it cannot do that the rays do").
+TEST_F(ReferenceBruteForce, MaskHolesLetLightThroughAndBlendedCastersAreOpaque)
+{
+    const config::RenderConfig masked = test::halfMaskedQuadConfig();
+    config::RenderConfig cfg = referenceConfig(64, 48, masked.camera, masked.lights[0].light, {{"mode", "brute_force"}});
+    const Frame& m = render(cfg, test::halfMaskedQuadScene());
+    size_t throughHoles = 0, behindOpaque = 0;
+    for (size_t i = 0; i < m.pixels(); ++i) {
+        const glm::dvec3 p = m.position(i);
+        if (!m.hasGeometry(i) || p.y > 0.1 || std::abs(p.z) > 1.8) continue;
+        if (p.x > -0.85 && p.x < 0.85) {
+            EXPECT_EQ(m.visibility[i], 1.0f) << "pixel " << i << " at x = " << p.x;
+            ++throughHoles;
+        } else if (p.x > 1.15 && p.x < 2.85) {
+            EXPECT_EQ(m.visibility[i], 0.0f) << "pixel " << i << " at x = " << p.x;
+            ++behindOpaque;
+        }
+    }
+    EXPECT_GT(throughHoles, 30u);
+    EXPECT_GT(behindOpaque, 30u);
+
+    scene::Light light;
+    light.type = scene::LightType::Point;
+    light.position = {3.0f, 4.0f, 0.0f};
+    const Frame& g = render(referenceConfig(64, 48, lookDown({-2.5f, 6.0f, 0.001f}, {-2.5f, 0.0f, 0.0f}, 40.0f), light,
+                                            {{"mode", "brute_force"}}),
+                            glassScene({1.0f}));
+    size_t behindPane = 0;
+    for (size_t i = 0; i < g.pixels(); ++i) {
+        const glm::dvec3 p = g.position(i);
+        if (!g.hasGeometry(i) || p.y > 0.1) continue;
+        const glm::dvec3 at = p + (glm::dvec3(light.position) - p) * (1.0 / light.position.y);
+        const double inside = 1.0 - std::max(std::abs(at.x), std::abs(at.z));
+        if (inside < 0.03) continue;
+        EXPECT_EQ(g.visibility[i], 0.0f) << "pixel " << i;
+        ++behindPane;
+    }
+    EXPECT_GT(behindPane, 50u);
+}
+
+// Bad input names the plugin and the parameter: a map too large for the device, more
+// maps than brute_force takes, a resolution out of the declared range.
+TEST_F(ReferencePlugin, BruteForceBadInputNamesThePluginAndTheParameter)
+{
+    scene::Light light;
+    light.type = scene::LightType::Rect;
+    light.position = {0.0f, 4.0f, 0.0f};
+    light.direction = {0.0f, -1.0f, 0.0f};
+    light.tangent = {1.0f, 0.0f, 0.0f};
+    light.sizeWorld = {0.8f, 0.5f};
+    const uint32_t maxDimension = context->properties().limits.maxImageDimension2D;
+    const uint32_t tooLarge = maxDimension / 3 + 1;  // a cube atlas is 3 faces wide
+    ASSERT_LE(tooLarge, 8192u) << "this device's images are larger than map_resolution's range";
+    const scene::Camera camera = lookDown({0.0f, 5.0f, 0.1f}, {0.0f, 0.0f, 0.0f}, 40.0f);
+    const std::pair<nlohmann::json, std::string> cases[] = {
+        {{{"mode", "brute_force"}, {"map_resolution", tooLarge}}, "map_resolution"},
+        {{{"mode", "brute_force"}, {"samples", 5000}}, "samples"},
+    };
+    for (const auto& [params, name] : cases) {
+        try {
+            render(referenceConfig(32, 24, camera, light, params), scene::generatePenumbra(analyticParams(1.0f)));
+            ADD_FAILURE() << "no error for " << params.dump();
+        } catch (const std::exception& e) {
+            EXPECT_NE(std::string(e.what()).find("reference"), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+        }
+    }
+    plugin::ParamValues values = test::plugins().load("reference").defaultParams();
+    try {
+        values.set("map_resolution", 8, "--set reference.map_resolution");
+        ADD_FAILURE() << "map_resolution 8 accepted";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("reference.map_resolution"), std::string::npos) << e.what();
+    }
 }
 
 } // namespace

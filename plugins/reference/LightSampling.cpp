@@ -186,16 +186,40 @@ ShadowRay LightSampler::sample(const glm::dvec3& origin, glm::vec2 u) const
         const double across2 = std::max(0.0, radius * radius - (d * d - along * along));
         return {dir, std::max(0.0, along - std::sqrt(across2))};
     }
-    case scene::LightType::Rect: {
-        const glm::dvec2 offset = (glm::dvec2(u) - 0.5) * glm::dvec2(light_.sizeWorld);
-        return towards(origin, centre + offset.x * tangent_ + offset.y * bitangent_);
-    }
-    case scene::LightType::Disk: {
-        const glm::dvec2 offset = concentricDisk(u) * double(light_.radiusWorld);
-        return towards(origin, centre + offset.x * tangent_ + offset.y * bitangent_);
-    }
+    case scene::LightType::Rect:
+    case scene::LightType::Disk: return towards(origin, areaPoint(u));
     }
     return towards(origin, centre);
+}
+
+glm::dvec3 LightSampler::areaPoint(glm::vec2 u) const
+{
+    const glm::dvec2 offset = light_.type == scene::LightType::Rect
+                                  ? (glm::dvec2(u) - 0.5) * glm::dvec2(light_.sizeWorld)
+                                  : concentricDisk(u) * double(light_.radiusWorld);
+    return glm::dvec3(light_.position) + offset.x * tangent_ + offset.y * bitangent_;
+}
+
+LightPoint LightSampler::fixedSample(glm::vec2 u) const
+{
+    const glm::dvec3 centre(light_.position);
+    switch (light_.type) {
+    case scene::LightType::Spot: return {centre, false};
+    case scene::LightType::Directional:
+        if (!extended_) return {axis_, true};
+        return {sampleCone(axis_, tangent_, bitangent_, oneMinusCosSun_, u), true};
+    case scene::LightType::Point: {
+        if (!extended_) return {centre, false};
+        // Uniform on the sphere by area: z uniform in [-1, 1] (Archimedes' hat-box).
+        const double z = 1.0 - 2.0 * double(u.x);
+        const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+        const double phi = 2.0 * std::numbers::pi * double(u.y);
+        return {centre + double(light_.radiusWorld) * glm::dvec3(r * std::cos(phi), r * std::sin(phi), z), false};
+    }
+    case scene::LightType::Rect:
+    case scene::LightType::Disk: return {areaPoint(u), false};
+    }
+    return {centre, false};
 }
 
 } // namespace penumbra::reference

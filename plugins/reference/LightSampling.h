@@ -29,6 +29,14 @@ struct ShadowRay {
                                 // separated from the receiver, counted as unoccluded)
 };
 
+// A light sample shared by every receiver (the rasterised reference renders one shadow
+// map from each): a point of the light, or for a directional light a unit direction
+// towards it.
+struct LightPoint {
+    glm::dvec3 value{0.0};
+    bool isDirection = false;
+};
+
 class LightSampler {
 public:
     explicit LightSampler(const scene::Light& light);
@@ -42,7 +50,18 @@ public:
     // square) maps to. Uniform `u` gives the uniform measure described above.
     ShadowRay sample(const glm::dvec3& origin, glm::vec2 u) const;
 
+    // The light sample that `u` maps to, the same for every receiver: rect and disk the
+    // point sample() aims at (uniform by area); directional the direction of the cone
+    // (uniform by solid angle); a sphere (point with radius) a point of its surface,
+    // uniform by area, which a receiver weights by the solid angle that piece of the
+    // surface subtends (the rasterised reference does); lights without extent their
+    // centre (or direction).
+    LightPoint fixedSample(glm::vec2 u) const;
+
 private:
+    // Rect and disk: the point of the light that `u` maps to.
+    glm::dvec3 areaPoint(glm::vec2 u) const;
+
     scene::Light light_;
     bool extended_ = false;
     glm::dvec3 axis_{0.0};  // rect, disk: emitting normal; directional: towards the light

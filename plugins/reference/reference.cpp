@@ -5,6 +5,7 @@
 // (or takes V from the disk cache), and a transfer pass uploads V into V_l.
 #include "Digest.h"
 #include "LightSampling.h"
+#include "RasterReference.h"
 #include "ReferenceStats.h"
 #include "SceneTracer.h"
 #include "VisibilityCache.h"
@@ -41,23 +42,28 @@ namespace {
 
 using plugin::ParamType;
 
-// One mode today; the brute-force average of N hard shadow maps from light samples
-// (the rasterised reference of the papers) is the second, to come (README.md).
-enum class Mode : uint32_t { RayTraced };
-const char* const kModeNames[] = {"ray_traced"};
+// Two ways to the same V: shadow rays traced on the CPU (this file), and the average of
+// hard shadow maps rendered from light samples on the GPU (RasterReference.h).
+enum class Mode : uint32_t { RayTraced, BruteForce };
+const char* const kModeNames[] = {"ray_traced", "brute_force"};
 
 const plugin::ParamSpec kParams[] = {
     {"mode", ParamType::Enum, double(Mode::RayTraced), 0, 0, "",
-     "ray_traced: Embree shadow rays from every pixel to stratified points of the light", kModeNames,
-     uint32_t(std::size(kModeNames))},
+     "ray_traced: Embree shadow rays from every pixel to stratified points of the light; brute_force: N hard shadow "
+     "maps from the light samples, averaged: the rasterised reference of the papers",
+     kModeNames, uint32_t(std::size(kModeNames))},
     {"samples", ParamType::Int, 256, 1, 65536, "rays/pixel",
-     "light samples per pixel, stratified (correlated multi-jittered); lights without extent take 1"},
+     "light samples per pixel, stratified (correlated multi-jittered); brute_force: shadow maps, at most 4096; "
+     "lights without extent take 1"},
     {"seed", ParamType::Int, 1, 0, 2147483647, "",
      "jitter of the sample patterns; the same seed gives a bit-identical image on any thread count"},
     {"cache", ParamType::Bool, 1, 0, 1, "",
      "reuse V from the disk cache ($PENUMBRA_CACHE_DIR, else $XDG_CACHE_HOME/penumbra, else ~/.cache/penumbra) "
      "when scene, G-buffer, light and parameters are unchanged"},
     {"threads", ParamType::Int, 0, 0, 1024, "", "tracing threads; 0: one per hardware thread"},
+    {"map_resolution", ParamType::Int, 512, 16, 8192, "texels",
+     "brute_force: texels per side of each face of each sample's shadow map (point, rect, disk and sphere lights: "
+     "six faces in a 3 x 2 atlas); brute_force is not cached (cache and threads do not apply)"},
 };
 
 // The version of what a cached image means: raise it whenever the tracing changes the
@@ -76,6 +82,7 @@ struct Settings {
     uint32_t seed = 1;
     bool cache = true;
     uint32_t threads = 0;
+    uint32_t mapResolution = 512;
 };
 
 Settings readSettings(const plugin::ParamValues& params)
@@ -86,6 +93,7 @@ Settings readSettings(const plugin::ParamValues& params)
     s.seed = uint32_t(params.getInt("seed"));
     s.cache = params.getBool("cache");
     s.threads = uint32_t(params.getInt("threads"));
+    s.mapResolution = uint32_t(params.getInt("map_resolution"));
     return s;
 }
 
@@ -361,9 +369,15 @@ private:
                 continue;
             }
             const glm::vec3 dir(ray.direction);
-            // Below the surface's tangent plane: the surface itself blocks the sample
-            // (shaders/common/visibility.glsl).
-            if (hasNormal && !(glm::dot(n, dir) > 0.0f)) continue;
+            // Below the surface's tangent plane through p (not through the offset origin):
+            // the surface itself blocks the sample (shaders/common/visibility.glsl).
+            if (hasNormal) {
+                const glm::dvec3 nd(n);
+                const double above = std::isinf(ray.length)
+                                         ? glm::dot(nd, ray.direction)
+                                         : glm::dot(nd, glm::dvec3(origin - p) + ray.direction * ray.length);
+                if (!(above > 0.0)) continue;
+            }
             const glm::vec3 start = hasNormal ? origin : origin + offset * dir;
             sum += double(tracer_.transmittance(start, dir, std::isinf(length) ? std::numeric_limits<float>::infinity()
                                                                                 : float(length),
@@ -387,7 +401,13 @@ private:
     bool storeWarned_ = false;
 };
 
-plugin::Technique* createReferenceShadow(const plugin::TechniqueSetup& setup) { return new ReferenceShadow(setup); }
+plugin::Technique* createReferenceShadow(const plugin::TechniqueSetup& setup)
+{
+    const Settings settings = readSettings(setup.params);
+    if (settings.mode == Mode::BruteForce)
+        return new RasterReference(setup, {settings.samples, settings.seed, settings.mapResolution});
+    return new ReferenceShadow(setup);
+}
 
 } // namespace
 } // namespace penumbra::reference
@@ -398,7 +418,8 @@ PENUMBRA_PLUGIN_EXPORT const PenumbraPluginInfo* penumbra_plugin_entry()
                                          "reference",
                                          "1.0.0",
                                          "exact area-light visibility: stratified shadow rays traced with Embree on the "
-                                         "CPU, translucent casters included, cached on disk",
+                                         "CPU, translucent casters included, cached on disk; or (mode brute_force) the "
+                                         "mean of hard shadow maps from light samples on the GPU",
                                          penumbra::reference::kParams,
                                          uint32_t(std::size(penumbra::reference::kParams)),
                                          &penumbra::reference::createReferenceShadow,

@@ -5,7 +5,8 @@
 // nothing was drawn.
 //
 // The including shader defines SHADOW_MAP_BINDING, the binding of the storage buffer
-// ShadowMap::buffer() (ShadowMapData), before including this file.
+// ShadowMap::buffer() (ShadowMapData), before including this file; with SHADOW_MAP_ARRAY
+// also defined, the buffer is an array of ShadowMapData (below).
 #ifndef PENUMBRA_SHADOW_MAP_GLSL
 #define PENUMBRA_SHADOW_MAP_GLSL
 
@@ -19,7 +20,8 @@ struct ShadowFace {
     vec4 depthRange;  // x near, y far: distances along the face's axis; z: 1 orthographic
 };
 
-layout(std430, binding = SHADOW_MAP_BINDING) readonly buffer ShadowMapBuffer {
+// render::ShadowMapData (std430, 640 bytes: its sizeof).
+struct ShadowMapInfo {
     vec4 light;       // xyz position (w = 1) or unit direction towards the light (w = 0)
     uint faceCount;   // 1, or 6 cube faces in a 3 x 2 atlas
     float faceTexels; // texels per face side
@@ -29,7 +31,23 @@ layout(std430, binding = SHADOW_MAP_BINDING) readonly buffer ShadowMapBuffer {
                         // sphere radius, sine of a directional light's angular radius
     vec4 lightTangent;  // rect: xyz unit width axis, w half height
     ShadowFace faces[6];
-} shadowMapData;
+};
+
+#ifdef SHADOW_MAP_ARRAY
+// Several maps of one light's shape (the reference's rasterised light samples): the
+// buffer holds one render::ShadowMapData per map, and every function below reads the
+// map that `shadowMapIndex` names: set it before calling them.
+layout(std430, binding = SHADOW_MAP_BINDING) readonly buffer ShadowMapArrayBuffer {
+    ShadowMapInfo maps[];
+} shadowMapArray;
+uint shadowMapIndex = 0u;
+#define shadowMapData shadowMapArray.maps[shadowMapIndex]
+#else
+layout(std430, binding = SHADOW_MAP_BINDING) readonly buffer ShadowMapBuffer {
+    ShadowMapInfo map;
+} shadowMapBuffer;
+#define shadowMapData shadowMapBuffer.map
+#endif
 
 // The area fraction of a unit disk on the far side of a line at signed distance h from
 // its centre (h = 1: the whole disk, 0: half, -1: none).

@@ -156,10 +156,14 @@ void ShadowMap::addDepthPass(graph::RenderGraph& graph, const std::string& image
     graph.declareImage({image, atlasWidth(), atlasHeight(), kShadowDepthFormat});
     graph.addPass(image, graph::QueueKind::Graphics)
         .write(image, graph::Usage::DepthAttachment)
-        .execute([this, image, bias](graph::PassContext& pass) { recordDepth(pass, image, bias); });
+        .execute([this, image, bias](graph::PassContext& pass) {
+            const ShadowMapPlacement own{frusta_, {0, 0}, 0};
+            recordDepthMaps(pass, image, bias, {&own, 1});
+        });
 }
 
-void ShadowMap::recordDepth(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias) const
+void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
+                                std::span<const ShadowMapPlacement> maps) const
 {
     VkCommandBuffer cmd = pass.cmd();
     const gpu::Image& target = pass.image(image);
@@ -181,31 +185,45 @@ void ShadowMap::recordDepth(const graph::PassContext& pass, const std::string& i
 
     const uint32_t size = resolution_;
     const bool masked = casters_.hasAlphaMasked();
-    for (uint32_t face = 0; face < frusta_.size(); ++face) {
-        // Each face draws into its own cell of the atlas (the scissor keeps it there).
-        const int32_t x = int32_t((face % 3) * size), y = int32_t((face / 3) * size);
-        const VkViewport viewport{float(x), float(y), float(size), float(size), 0.0f, 1.0f};
-        const VkRect2D scissor{{x, y}, {size, size}};
-        vkCmdSetViewport(cmd, 0, 1, &viewport);
-        vkCmdSetScissor(cmd, 0, 1, &scissor);
-        const CasterView view{frusta_[face].viewProj, lightIndex_, face};
-        // The solid pipeline stays bound across faces unless the masked one replaced it.
-        if (face == 0 || masked) {
-            depth_.bind(cmd);
-            gpu::DescriptorPush().storageBuffer(0, casters_.instanceBuffer()).push(context_, cmd, depth_);
+    bool solidBound = false;
+    for (const ShadowMapPlacement& map : maps) {
+        if (map.frusta.size() > faceCount_)
+            throw Error(fmt::format("{}: a map of {} faces does not fit this shadow map's {} face(s)", name_,
+                                    map.frusta.size(), faceCount_));
+        if (map.origin.x < 0 || map.origin.y < 0 ||
+            uint64_t(map.origin.x) + atlasWidth() > target.desc().width ||
+            uint64_t(map.origin.y) + atlasHeight() > target.desc().height)
+            throw Error(fmt::format("{}: a map at ({}, {}) does not fit in '{}' ({} x {})", name_, map.origin.x,
+                                    map.origin.y, image, target.desc().width, target.desc().height));
+        for (uint32_t face = 0; face < map.frusta.size(); ++face) {
+            // Each face draws into its own cell of the map's atlas (the scissor keeps it
+            // there).
+            const int32_t x = map.origin.x + int32_t((face % 3) * size), y = map.origin.y + int32_t((face / 3) * size);
+            const VkViewport viewport{float(x), float(y), float(size), float(size), 0.0f, 1.0f};
+            const VkRect2D scissor{{x, y}, {size, size}};
+            vkCmdSetViewport(cmd, 0, 1, &viewport);
+            vkCmdSetScissor(cmd, 0, 1, &scissor);
+            const CasterView view{map.frusta[face].viewProj, lightIndex_, map.firstView + face};
+            // The solid pipeline stays bound across faces unless the masked one replaced it.
+            if (!solidBound) {
+                depth_.bind(cmd);
+                gpu::DescriptorPush().storageBuffer(0, casters_.instanceBuffer()).push(context_, cmd, depth_);
+                solidBound = true;
+            }
+            depth_.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
+            casters_.draw(cmd, view, DrawFilter::Solid);
+            if (!masked) continue;
+            depthMasked_.bind(cmd);
+            depthMasked_.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
+            casters_.draw(cmd, view, DrawFilter::AlphaMasked, [&](const gpu::Image& texture) {
+                gpu::DescriptorPush()
+                    .storageBuffer(0, casters_.instanceBuffer())
+                    .storageBuffer(1, casters_.materialBuffer())
+                    .sampledImage(2, texture, casters_.textureSampler())
+                    .push(context_, cmd, depthMasked_);
+            });
+            solidBound = false;
         }
-        depth_.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
-        casters_.draw(cmd, view, DrawFilter::Solid);
-        if (!masked) continue;
-        depthMasked_.bind(cmd);
-        depthMasked_.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
-        casters_.draw(cmd, view, DrawFilter::AlphaMasked, [&](const gpu::Image& texture) {
-            gpu::DescriptorPush()
-                .storageBuffer(0, casters_.instanceBuffer())
-                .storageBuffer(1, casters_.materialBuffer())
-                .sampledImage(2, texture, casters_.textureSampler())
-                .push(context_, cmd, depthMasked_);
-        });
     }
     vkCmdEndRendering(cmd);
 }

@@ -26,6 +26,7 @@
 #include <glm/glm.hpp>
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -93,6 +94,15 @@ struct ShadowDepthBias {
 // Receiver-side bias of shadow_receiver.glsl (its SHADOW_RECEIVER_BIAS define).
 enum class ReceiverBias : uint32_t { None = 0, NormalOffset = 1, Plane = 2 };
 
+// Where recordDepthMaps draws one map of the light's shape: its faces' frusta (as
+// shadowFrusta gives them, at most faceCount()), the top-left texel of its atlas in the
+// depth image, and the CasterView::view of its first face (the others follow).
+struct ShadowMapPlacement {
+    std::span<const LightFrustum> frusta;
+    VkOffset2D origin{0, 0};
+    uint32_t firstView = 0;
+};
+
 // One light's shadow map: its frusta, a host-visible buffer of ShadowMapData for the
 // shaders, and the depth pass. Owned by the technique (one per light).
 class ShadowMap {
@@ -115,6 +125,15 @@ public:
     // every face's casters with `bias`. Readers declare it as Usage::Sampled.
     void addDepthPass(graph::RenderGraph& graph, const std::string& image, ShadowDepthBias bias) const;
 
+    // Records, in a graphics pass that writes `image` as Usage::DepthAttachment, the clear
+    // of the whole image and the casters of every map of `maps` into its atlas at its
+    // origin, with `bias`: the depth pass of addDepthPass for one map, and for a technique
+    // that packs the maps of several views of the light's shape into one image with the
+    // pipelines created once (the reference's rasterised light samples). Each map's atlas
+    // (atlasWidth() x atlasHeight() from its origin) must lie inside the image.
+    void recordDepthMaps(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
+                         std::span<const ShadowMapPlacement> maps) const;
+
     uint32_t faceCount() const { return faceCount_; }
     uint32_t resolution() const { return resolution_; }
     uint32_t atlasWidth() const { return resolution_ * (faceCount_ == kMaxShadowFaces ? 3u : 1u); }
@@ -125,8 +144,6 @@ public:
     const std::vector<LightFrustum>& frusta() const { return frusta_; }
 
 private:
-    void recordDepth(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias) const;
-
     gpu::Context& context_;
     const Casters& casters_;
     const uint32_t lightIndex_;
