@@ -78,8 +78,8 @@ void main()
     vec4 position = imageLoad(gPosition, pixel);
     if (position.w != 0.0) {
         vec3 p = position.xyz;
-        vec3 n = imageLoad(gNormal, pixel).xyz;
-        bool hasNormal = length(n) > 1e-6;
+        vec3 n = shadowReceiverNormal(pixel);
+        bool hasNormal = dot(n, n) > 0.0;
         for (uint k = 0u; k < pc.sampleCount; ++k) {
             shadowMapIndex = pc.firstSample + k;
             float weight = sampleWeight(p);

@@ -358,6 +358,9 @@ private:
         const bool hasNormal = std::isfinite(nLength) && nLength > 0.5f;
         const glm::vec3 origin = hasNormal ? p + (offset / nLength) * n : p;
         const uint32_t pattern = mixBits(uint32_t(pixel) ^ mixBits(settings_.seed + 0x9e3779b9u));
+        // The horizon test's normal, and the offset origin's lift off the surface: the
+        // tangent plane is p's, not the origin's.
+        const glm::dvec3 normal(n), lift(origin - p);
         double sum = 0.0;
         for (uint32_t s = 0; s < count; ++s) {
             const ShadowRay ray = sampler_.sample(glm::dvec3(origin), stratifiedSample(s, count, pattern));
@@ -372,10 +375,8 @@ private:
             // Below the surface's tangent plane through p (not through the offset origin):
             // the surface itself blocks the sample (shaders/common/visibility.glsl).
             if (hasNormal) {
-                const glm::dvec3 nd(n);
-                const double above = std::isinf(ray.length)
-                                         ? glm::dot(nd, ray.direction)
-                                         : glm::dot(nd, glm::dvec3(origin - p) + ray.direction * ray.length);
+                const double above = std::isinf(ray.length) ? glm::dot(normal, ray.direction)
+                                                            : glm::dot(normal, lift + ray.direction * ray.length);
                 if (!(above > 0.0)) continue;
             }
             const glm::vec3 start = hasNormal ? origin : origin + offset * dir;

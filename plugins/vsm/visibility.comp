@@ -137,10 +137,8 @@ void footprint(ivec2 pixel, vec3 p, ShadowReceiver r, out vec2 dx, out vec2 dy)
 {
     dx = vec2(0.0);
     dy = vec2(0.0);
-    vec3 n = imageLoad(gNormal, pixel).xyz;
-    float nLength = length(n);
-    if (!(nLength > 1e-6)) return;
-    n /= nLength;
+    vec3 n = shadowReceiverNormal(pixel);
+    if (dot(n, n) == 0.0) return;
     vec3 q, a;
     float w;
     if (shadowSurfaceNeighbour(pixel, ivec2(1, 0), p, n, q) && shadowProject(r.face, q, a, w))
