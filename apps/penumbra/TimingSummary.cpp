@@ -67,4 +67,40 @@ void printTimings(const TimingSummary& summary)
     fmt::print("  {:<28} {:>10.3f}\n", "frame wall clock (CPU)", summary.frameWallMs);
 }
 
+render::CullingStats medianCulling(const std::vector<render::FrameTimings>& frames)
+{
+    const auto med = [&](auto field) {
+        std::vector<double> v;
+        for (const render::FrameTimings& f : frames) v.push_back(double(f.culling.*field));
+        return median(std::move(v));
+    };
+    render::CullingStats s;
+    s.nodesVisited = uint64_t(med(&render::CullingStats::nodesVisited));
+    s.queriesIssued = uint64_t(med(&render::CullingStats::queriesIssued));
+    s.queryRounds = uint64_t(med(&render::CullingStats::queryRounds));
+    s.receivers = uint64_t(med(&render::CullingStats::receivers));
+    s.views = uint64_t(med(&render::CullingStats::views));
+    s.castersDrawn = uint64_t(med(&render::CullingStats::castersDrawn));
+    s.trianglesDrawn = uint64_t(med(&render::CullingStats::trianglesDrawn));
+    s.cameraMs = med(&render::CullingStats::cameraMs);
+    s.maskMs = med(&render::CullingStats::maskMs);
+    s.casterCullMs = med(&render::CullingStats::casterCullMs);
+    return s;
+}
+
+void printCulling(const render::CullingStats& s, std::string_view mode)
+{
+    fmt::print("culling {} (median per frame)\n", mode);
+    fmt::print("  receivers (instances the camera sees)  {}\n", s.receivers);
+    fmt::print("  light views culled                     {}\n", s.views);
+    fmt::print("  casters drawn (instance draws)         {}\n", s.castersDrawn);
+    fmt::print("  triangles drawn in caster passes       {}\n", s.trianglesDrawn);
+    fmt::print("  BVH nodes visited                      {}\n", s.nodesVisited);
+    fmt::print("  occlusion queries issued               {}\n", s.queriesIssued);
+    fmt::print("  query rounds (submissions waited for)  {}\n", s.queryRounds);
+    fmt::print("  camera culling ms                      {:.2f}\n", s.cameraMs);
+    fmt::print("  receiver masks ms                      {:.2f}\n", s.maskMs);
+    fmt::print("  caster culling ms                      {:.2f}\n", s.casterCullMs);
+}
+
 } // namespace penumbra::app

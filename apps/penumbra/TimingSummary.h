@@ -44,4 +44,11 @@ TimingSummary summarizeTimings(const std::vector<render::FrameTimings>& frames, 
 // The table `render --timings` prints on stdout.
 void printTimings(const TimingSummary& summary);
 
+// Medians over the frames of the visibility service's figures (render::CullingStats),
+// each taken separately.
+render::CullingStats medianCulling(const std::vector<render::FrameTimings>& frames);
+
+// The lines `render --stats` prints on stdout.
+void printCulling(const render::CullingStats& stats, std::string_view mode);
+
 } // namespace penumbra::app

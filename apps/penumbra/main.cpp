@@ -50,6 +50,8 @@ struct RenderFlags {
     std::optional<uint32_t> frames;
     uint32_t warmup = 1;
     bool timings = false;
+    bool stats = false;
+    std::optional<std::string> culling;
     std::optional<uint32_t> width;
     std::optional<uint32_t> height;
     std::vector<std::string> settings;  // technique.param=value
@@ -99,6 +101,7 @@ int runRender(const RenderFlags& flags, const DeviceFlags& deviceFlags)
     if (flags.width) config.width = *flags.width;
     if (flags.height) config.height = *flags.height;
     if (flags.frames) config.frames = *flags.frames;
+    if (flags.culling) config.culling = penumbra::config::parseCullingMode(*flags.culling);
     // Fail on a bad output path before spending seconds rendering.
     penumbra::io::checkWritable(outputPerFrame(flags.output) ? framePath(flags.output, 0) : flags.output);
 
@@ -133,6 +136,9 @@ int runRender(const RenderFlags& flags, const DeviceFlags& deviceFlags)
         }
     }
     if (flags.timings) penumbra::app::printTimings(penumbra::app::summarizeTimings(measured));
+    if (flags.stats) {
+        penumbra::app::printCulling(penumbra::app::medianCulling(measured), penumbra::config::cullingModeName(config.culling));
+    }
 
     if (outputPerFrame(flags.output)) {
         spdlog::info("wrote {} frames: {} ... {}", config.frames, framePath(flags.output, 0),
@@ -384,6 +390,11 @@ int main(int argc, char** argv)
     render->add_option("--warmup", renderFlags.warmup, "Untimed frames before the measured ones (with --frames > 1)")
         ->capture_default_str();
     render->add_flag("--timings", renderFlags.timings, "Print the median GPU and CPU ms of every pass");
+    render->add_flag("--stats", renderFlags.stats,
+                     "Print the median per-frame culling figures: receivers, casters and triangles drawn, nodes "
+                     "visited, queries issued, ms of each step");
+    render->add_option("--culling", renderFlags.culling, "Caster culling mode (overrides the config)")
+        ->check(CLI::IsMember({"none", "frustum", "light-occlusion", "receiver-mask"}));
     render->add_option("--width", renderFlags.width, "Output width (overrides the config)")->check(CLI::Range(1u, 16384u));
     render->add_option("--height", renderFlags.height, "Output height (overrides the config)")->check(CLI::Range(1u, 16384u));
     addParamOverrideFlag(render, renderFlags.settings);

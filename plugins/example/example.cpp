@@ -130,7 +130,9 @@ private:
         gpu::DescriptorPush().storageBuffer(0, casters_.instanceBuffer()).push(context_, cmd, depthPipeline_);
         depthPipeline_.pushConstants(cmd, &lightViewProj_, sizeof(glm::mat4));
         // Alpha-masked casters are drawn solid here; plugins/hard cuts their holes.
-        casters_.draw(cmd, {lightViewProj_, lightIndex_, 0}, render::DrawFilter::All);
+        // The view's resolution lets the engine cull at exactly this map's texels; the
+        // footprint says the visibility pass reads one texel per receiver point.
+        casters_.draw(cmd, {lightViewProj_, lightIndex_, 0, resolution_, 1.0f}, render::DrawFilter::All);
         vkCmdEndRendering(cmd);
     }
 

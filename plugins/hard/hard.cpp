@@ -129,6 +129,11 @@ HardShadow::HardShadow(const plugin::TechniqueSetup& setup)
       settings_(readSettings(setup.params)),
       shadowMap_(setup, settings_.resolution, "hard")
 {
+    // The filter's half width, and the normal offset that moves the lookup (scaled by the
+    // filter width, as in shadow_receiver.glsl).
+    const float width = footprintWidthTexels(settings_);
+    shadowMap_.setFootprint(0.5f * width +
+                            (settings_.variant.bias == BiasMode::NormalOffset ? settings_.normalOffsetTexels * width : 0.0f));
     gpu::ComputePipelineDesc c;
     c.name = fmt::format("light{}.hard.visibility", setup.lightIndex);
     c.shader = "visibility.comp";

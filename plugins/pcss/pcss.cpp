@@ -145,6 +145,9 @@ PcssShadow::PcssShadow(const plugin::TechniqueSetup& setup)
       settings_(readSettings(setup.params)),
       shadowMap_(setup, settings_.resolution, "pcss")
 {
+    // The blocker search and the filter are clamped to these radii; one texel more for the
+    // taps' rounding.
+    shadowMap_.setFootprint(std::max(settings_.maxSearchTexels, settings_.maxFilterTexels) + 1.0f);
     gpu::ComputePipelineDesc c;
     c.name = fmt::format("light{}.pcss.visibility", setup.lightIndex);
     c.shader = "visibility.comp";

@@ -229,6 +229,10 @@ VsmShadow::VsmShadow(const plugin::TechniqueSetup& setup)
       levels_(levelCount(settings_)),
       shadowMap_(setup, settings_.resolution, "vsm")
 {
+    // A blurred map is read bilinearly (one texel) after a blur of blur_radius texels; a
+    // mip chain may be read at any level, so every texel can matter.
+    shadowMap_.setFootprint(settings_.mips() ? render::CasterView::kWholeView
+                                             : float(settings_.blurs() ? settings_.blurRadius : 0) + 1.0f);
     checkFormat("a storage image read with bilinear filtering",
                 VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT);
     const std::string name = fmt::format("light{}.vsm.", setup.lightIndex);

@@ -492,6 +492,17 @@ glm::mat4 composeTrs(const glm::vec3& t, const glm::quat& r, const glm::vec3& s)
 
 } // namespace
 
+CullingMode parseCullingMode(std::string_view name)
+{
+    for (const CullingMode m :
+         {CullingMode::None, CullingMode::Frustum, CullingMode::LightOcclusion, CullingMode::ReceiverMask}) {
+        if (name == cullingModeName(m)) return m;
+    }
+    throw ConfigError(fmt::format("culling: '{}' is not a mode; expected none, frustum, light-occlusion or "
+                                  "receiver-mask",
+                                  name));
+}
+
 const char* cullingModeName(CullingMode mode)
 {
     switch (mode) {

@@ -1,15 +1,23 @@
 #include "penumbra/render/Casters.h"
 
+#include "penumbra/render/Visibility.h"
+
 #include <cstddef>
 
 namespace penumbra::render {
 
-void Casters::draw(VkCommandBuffer cmd, const CasterView& /*view*/, DrawFilter filter,
+void Casters::draw(VkCommandBuffer cmd, const CasterView& view, DrawFilter filter,
                    const std::function<void(const gpu::Image& texture)>& bindTexture) const
 {
-    // Culling mode "none": every caster. The visibility service of issue 6 narrows the
-    // list per view here, behind this one entry point.
-    scene_->draw(cmd, filter, bindTexture);
+    if (!visibility_) {
+        scene_->draw(cmd, filter, bindTexture);
+        return;
+    }
+    // The service culls the view on its first draw of the frame (its own submissions,
+    // waited for: the caster list is exact for this frame) and keeps the list for the
+    // view's other draws.
+    const std::vector<uint8_t>* casters = visibility_->casters(view);
+    visibility_->countDraw(scene_->draw(cmd, filter, bindTexture, casters));
 }
 
 gpu::VertexLayout Casters::positionLayout() const

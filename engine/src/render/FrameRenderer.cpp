@@ -97,6 +97,8 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
     s.pushConstantBytes = sizeof(ShadingPush);
     shadingPipeline_ = gpu::Pipeline(context, compiler_, s);
     nearestSampler_ = gpu::createSampler(context, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
+    visibility_ = std::make_unique<Visibility>(context, compiler_, scene, sceneGpu_, config.culling, width_, height_);
+    casters_.setVisibility(visibility_.get());
 
     createTechniques(config, scene);
     updateLights(config, scene.bounds());
@@ -266,6 +268,7 @@ void FrameRenderer::update(const config::RenderConfig& config, const scene::Scen
     cameraViewProj_ = render::cameraViewProj(config.camera, float(width_) / float(height_));
     if (!movedInstances.empty()) {
         sceneGpu_.updateInstances(context_, scene);
+        visibility_->instancesMoved(movedInstances);
         for (LightSlot& slot : lights_)
             if (slot.instance) slot.instance->instancesMoved(movedInstances);
     }
@@ -292,8 +295,12 @@ FrameTimings FrameRenderer::renderFrame()
 {
     const auto frameStart = std::chrono::steady_clock::now();
     FrameTimings timings;
+    // Step 1 of the visibility service: the camera's receivers (the G-buffer draws them);
+    // light views are culled when their casters are first drawn.
+    visibility_->beginFrame(cameraViewProj_);
     executor_.execute(*graph_);
     timings.passes = executor_.collectTimings();
+    timings.culling = visibility_->stats();
     timings.frameCpuMs = msSince(frameStart);
     return timings;
 }
@@ -331,13 +338,16 @@ void FrameRenderer::recordGBuffer(graph::PassContext& pass)
     vkCmdSetScissor(cmd, 0, 1, &scissor);
     gbufferPipeline_.bind(cmd);
     gbufferPipeline_.pushConstants(cmd, &cameraViewProj_, sizeof(glm::mat4));
-    sceneGpu_.draw(cmd, DrawFilter::All, [&](const gpu::Image& texture) {
-        gpu::DescriptorPush()
-            .storageBuffer(0, sceneGpu_.instanceBuffer())
-            .storageBuffer(1, sceneGpu_.materialBuffer())
-            .sampledImage(2, texture, sceneGpu_.textureSampler())
-            .push(context_, cmd, gbufferPipeline_);
-    });
+    sceneGpu_.draw(
+        cmd, DrawFilter::All,
+        [&](const gpu::Image& texture) {
+            gpu::DescriptorPush()
+                .storageBuffer(0, sceneGpu_.instanceBuffer())
+                .storageBuffer(1, sceneGpu_.materialBuffer())
+                .sampledImage(2, texture, sceneGpu_.textureSampler())
+                .push(context_, cmd, gbufferPipeline_);
+        },
+        visibility_->receivers());
     vkCmdEndRendering(cmd);
 }
 

@@ -93,6 +93,12 @@ SceneGpu::SceneGpu(gpu::Context& context, const scene::Scene& scene)
         }
     }
     std::stable_sort(draws_.begin(), draws_.end(), [](const Draw& a, const Draw& b) { return a.texture < b.texture; });
+    instanceDraw_.assign(scene.instances.size(), kNoDraw);
+    instanceAlphaMasked_.assign(scene.instances.size(), 0);
+    for (uint32_t d = 0; d < draws_.size(); ++d) {
+        instanceDraw_[draws_[d].instance] = d;
+        instanceAlphaMasked_[draws_[d].instance] = draws_[d].alphaMasked ? 1 : 0;
+    }
     if (vertices.empty() || indices.empty()) {
         throw Error("scene has no triangles: nothing to render");
     }
@@ -114,24 +120,55 @@ void SceneGpu::updateInstances(gpu::Context& context, const scene::Scene& scene)
     gpu::updateBuffer(context, instances_, bytesOf(instanceTable(scene)), &instanceStaging_);
 }
 
-void SceneGpu::draw(VkCommandBuffer cmd, DrawFilter filter,
-                    const std::function<void(const gpu::Image& texture)>& bindTexture) const
+void SceneGpu::bindGeometry(VkCommandBuffer cmd) const
 {
     const VkDeviceSize offset = 0;
     const VkBuffer vb = vertices_.handle();
     vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
     vkCmdBindIndexBuffer(cmd, indices_.handle(), 0, VK_INDEX_TYPE_UINT32);
+}
+
+DrawCounts SceneGpu::draw(VkCommandBuffer cmd, DrawFilter filter,
+                          const std::function<void(const gpu::Image& texture)>& bindTexture,
+                          const std::vector<uint8_t>* instanceMask) const
+{
+    if (instanceMask && instanceMask->size() != instanceDraw_.size()) {
+        throw Error(fmt::format("SceneGpu::draw: an instance mask of {} entries for {} instances", instanceMask->size(),
+                                instanceDraw_.size()));
+    }
+    bindGeometry(cmd);
+    DrawCounts counts;
     uint32_t bound = UINT32_MAX;
     for (const Draw& d : draws_) {
         if ((filter == DrawFilter::Solid && d.alphaMasked) || (filter == DrawFilter::AlphaMasked && !d.alphaMasked)) {
             continue;
         }
+        if (instanceMask && !(*instanceMask)[d.instance]) continue;
         if (bindTexture && d.texture != bound) {
             bindTexture(textures_[d.texture]);
             bound = d.texture;
         }
         vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, d.vertexOffset, d.instance);
+        counts.instances += 1;
+        counts.triangles += d.indexCount / 3;
     }
+    return counts;
+}
+
+DrawCounts SceneGpu::drawInstances(VkCommandBuffer cmd, std::span<const uint32_t> instances, bool alphaMasked) const
+{
+    bindGeometry(cmd);
+    DrawCounts counts;
+    for (const uint32_t instance : instances) {
+        const uint32_t index = instanceDraw_.at(instance);
+        if (index == kNoDraw) continue;
+        const Draw& d = draws_[index];
+        if (d.alphaMasked != alphaMasked) continue;
+        vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, d.vertexOffset, d.instance);
+        counts.instances += 1;
+        counts.triangles += d.indexCount / 3;
+    }
+    return counts;
 }
 
 } // namespace penumbra::render

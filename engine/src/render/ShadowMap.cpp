@@ -203,7 +203,7 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
             const VkRect2D scissor{{x, y}, {size, size}};
             vkCmdSetViewport(cmd, 0, 1, &viewport);
             vkCmdSetScissor(cmd, 0, 1, &scissor);
-            const CasterView view{map.frusta[face].viewProj, lightIndex_, map.firstView + face};
+            const CasterView view{map.frusta[face].viewProj, lightIndex_, map.firstView + face, size, footprint_};
             // The solid pipeline stays bound across faces unless the masked one replaced it.
             if (!solidBound) {
                 depth_.bind(cmd);

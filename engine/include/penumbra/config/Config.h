@@ -54,6 +54,8 @@ struct LightConfig {
 // Which casters the shadow passes draw (the visibility-culling issue implements them).
 enum class CullingMode { None, Frustum, LightOcclusion, ReceiverMask };
 const char* cullingModeName(CullingMode mode);
+// "none", "frustum", "light-occlusion", "receiver-mask"; throws ConfigError otherwise.
+CullingMode parseCullingMode(std::string_view name);
 
 struct SceneSource {
     enum class Kind { Generator, Gltf };

@@ -1,9 +1,10 @@
 #pragma once
 // The caster interface: the only way a shadow technique draws scene geometry. A
 // technique asks for "the casters of this light seen through this light-view
-// projection" and the engine draws them; the visibility service (issue 6: frustum,
-// light-space occlusion and receiver-mask culling) decides which casters that is, for
-// every technique at once, so that no plugin implements culling itself.
+// projection" and the engine draws them; the visibility service (render/Visibility.h:
+// frustum, light-space occlusion and receiver-mask culling, per the config's "culling")
+// decides which casters that is, for every technique at once, so that no plugin
+// implements culling itself.
 #include "penumbra/gpu/Pipeline.h"
 #include "penumbra/render/SceneGpu.h"
 
@@ -19,11 +20,29 @@ struct CasterView {
     glm::mat4 viewProj{1.0f};  // world -> the view's clip space (reversed-Z)
     uint32_t light = 0;        // the light's index in the config
     uint32_t view = 0;         // the technique's index for this view (cube face, sub-light)
+    // Texels per side of the square viewport the view is drawn into. The culling passes
+    // rasterise at exactly this resolution, so that a caster they find covering no texel
+    // centre covers none in the technique's map either. 0: unknown; the view is then
+    // culled against its frustum only.
+    uint32_t resolution = 0;
+    // How far, in texels of this view, the technique's lookups for one receiver point
+    // reach beyond the texel the point projects to (filter kernel, blocker search, blur,
+    // normal offset). Receiver-mask culling keeps every caster that covers a texel within
+    // this distance of a visible receiver. kWholeView: lookups may reach anywhere (mip
+    // chains), so the mask covers the whole view.
+    float footprintTexels = 0.0f;
+    static constexpr float kWholeView = 1e30f;
 };
+
+class Visibility;
 
 class Casters {
 public:
     explicit Casters(const SceneGpu& scene) : scene_(&scene) {}
+
+    // The engine's visibility service, which narrows every draw to the casters that can
+    // shadow a visible receiver; none (tests, tools): every caster is drawn.
+    void setVisibility(Visibility* visibility) { visibility_ = visibility; }
 
     // Binds the scene's vertex and index buffers and draws the casters for `view` that
     // pass `filter`; before each group of draws that share a base-colour texture it calls
@@ -50,6 +69,7 @@ public:
 
 private:
     const SceneGpu* scene_;
+    Visibility* visibility_ = nullptr;
 };
 
 } // namespace penumbra::render

@@ -15,6 +15,7 @@
 #include "penumbra/render/Casters.h"
 #include "penumbra/render/Projection.h"
 #include "penumbra/render/SceneGpu.h"
+#include "penumbra/render/Visibility.h"
 
 #include <map>
 #include <memory>
@@ -28,6 +29,7 @@ using PassTiming = graph::PassTiming;
 struct FrameTimings {
     std::vector<PassTiming> passes;  // the executed passes, in execution order
     double frameCpuMs = 0.0;         // record + submit + wait (+ host passes), wall clock
+    CullingStats culling;            // the visibility service's figures for the frame
 };
 
 class FrameRenderer {
@@ -73,6 +75,7 @@ public:
     // with sizes and aliasing), and the executor that allocated its memory.
     const graph::CompiledGraph& compiledGraph();
     const graph::GraphExecutor& executor() const { return executor_; }
+    const Visibility& visibility() const { return *visibility_; }
 
     // Read-back after renderFrame(): sRGB RGBA8 rows, top row first.
     std::vector<uint8_t> readColor() const;
@@ -115,6 +118,7 @@ private:
 
     SceneGpu sceneGpu_;
     Casters casters_;
+    std::unique_ptr<Visibility> visibility_;
     gpu::Buffer lightBuffer_;
     gpu::Pipeline gbufferPipeline_;
     gpu::Pipeline shadingPipeline_;

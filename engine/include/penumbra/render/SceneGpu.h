@@ -9,6 +9,7 @@
 #include "penumbra/scene/Scene.h"
 
 #include <functional>
+#include <span>
 #include <vector>
 
 namespace penumbra::render {
@@ -18,6 +19,12 @@ namespace penumbra::render {
 // surfaces by the G-buffer and hard shadows (their translucency is the deep-shadow
 // technique's subject).
 enum class DrawFilter { All, Solid, AlphaMasked };
+
+// What one draw call of SceneGpu::draw issued.
+struct DrawCounts {
+    uint64_t instances = 0;
+    uint64_t triangles = 0;
+};
 
 class SceneGpu {
 public:
@@ -33,12 +40,22 @@ public:
     const gpu::Buffer& materialBuffer() const { return materials_; }
     VkSampler textureSampler() const { return sampler_; }
 
-    // Binds vertex and index buffers and draws the instances that pass `filter`; before
+    // Binds vertex and index buffers and draws the instances that pass `filter` (and,
+    // when `instanceMask` is given, have a non-zero entry in it: one per instance); before
     // each group of draws that share a base-colour texture, calls `bindTexture` (when
     // given) with it (a 1x1 white texture for untextured materials).
-    void draw(VkCommandBuffer cmd, DrawFilter filter,
-              const std::function<void(const gpu::Image& texture)>& bindTexture = {}) const;
+    DrawCounts draw(VkCommandBuffer cmd, DrawFilter filter,
+                    const std::function<void(const gpu::Image& texture)>& bindTexture = {},
+                    const std::vector<uint8_t>* instanceMask = nullptr) const;
+    // Draws the given instances (any order, no texture binding) with the bound pipeline:
+    // the occlusion-culling passes, which only need positions. Alpha-masked instances are
+    // drawn when `alphaMasked` is true, solid ones otherwise.
+    DrawCounts drawInstances(VkCommandBuffer cmd, std::span<const uint32_t> instances, bool alphaMasked) const;
     bool hasAlphaMasked() const;
+    bool isAlphaMasked(uint32_t instance) const { return instanceAlphaMasked_.at(instance) != 0; }
+    // Triangles of one instance's mesh.
+    uint64_t instanceTriangles(uint32_t instance) const { return instanceDraw_.at(instance) == kNoDraw ? 0 : draws_[instanceDraw_[instance]].indexCount / 3; }
+    size_t instanceCount() const { return instanceDraw_.size(); }
 
     uint32_t vertexStride() const { return sizeof(scene::Vertex); }
     size_t triangleCount() const { return triangles_; }
@@ -59,7 +76,11 @@ private:
     gpu::Buffer materials_;
     std::vector<gpu::Image> textures_;
     gpu::Sampler sampler_;
+    static constexpr uint32_t kNoDraw = UINT32_MAX;
+    void bindGeometry(VkCommandBuffer cmd) const;
     std::vector<Draw> draws_;  // sorted by texture
+    std::vector<uint32_t> instanceDraw_;        // instance -> index into draws_ (kNoDraw: no triangles)
+    std::vector<uint8_t> instanceAlphaMasked_;  // instance -> its material is alpha-masked
     size_t triangles_ = 0;
 };
 

@@ -134,6 +134,13 @@ public:
     void recordDepthMaps(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
                          std::span<const ShadowMapPlacement> maps) const;
 
+    // How far, in texels, the technique's lookups for one receiver point reach beyond
+    // the texel it projects to (CasterView::footprintTexels; kWholeView for mip chains):
+    // the visibility service keeps the casters within that reach of a visible receiver.
+    // 0 (a single nearest compare) until set.
+    void setFootprint(float texels) { footprint_ = texels; }
+    float footprint() const { return footprint_; }
+
     uint32_t faceCount() const { return faceCount_; }
     uint32_t resolution() const { return resolution_; }
     uint32_t atlasWidth() const { return resolution_ * (faceCount_ == kMaxShadowFaces ? 3u : 1u); }
@@ -155,6 +162,7 @@ private:
     gpu::Buffer buffer_;         // data_ for the shaders, host-visible
     ShadowMapData data_;
     std::vector<LightFrustum> frusta_;
+    float footprint_ = 0.0f;
 };
 
 } // namespace penumbra::render

@@ -135,6 +135,22 @@ public:
 
     size_t instanceCount() const { return order_.size(); }
     size_t nodeCount() const { return nodes_.size(); }
+
+    // The nodes themselves, for traversals that keep per-node state across frames
+    // (hierarchical occlusion culling). `node` < nodeCount(); parents come before their
+    // children, so a loop from the last node to the first sees every child before its
+    // parent.
+    const Aabb& nodeBounds(uint32_t node) const { return nodes_.at(node).bounds; }
+    bool isLeafNode(uint32_t node) const { return isLeaf(nodes_.at(node)); }
+    // An inner node's two children (the second is the first + 1); a leaf has none.
+    uint32_t firstChild(uint32_t node) const { return nodes_.at(node).first; }
+    uint32_t parentNode(uint32_t node) const { return parents_.at(node); }
+    // A leaf's instances; empty for an inner node.
+    std::span<const uint32_t> leafInstances(uint32_t node) const
+    {
+        const Node& n = nodes_.at(node);
+        return isLeaf(n) ? std::span<const uint32_t>(order_).subspan(n.first, n.count) : std::span<const uint32_t>();
+    }
     // Expected box tests per random ray, the surface area heuristic (MacDonald & Booth
     // 1990): the sum over nodes of area(node) / area(root), weighted by the instance count
     // for a leaf. 0 for an empty tree or one whose root box has no area.

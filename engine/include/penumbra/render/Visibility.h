@@ -1,0 +1,142 @@
+#pragma once
+// The visibility service (DESIGN.md "visibility"; Mattausch, Bittner, Silvennoinen,
+// Scherzer, Wimmer, "Efficient Online Visibility for Shadow Maps",
+// ../shared/papers/online-visibility-for-shadow-maps.txt): which instances the camera
+// sees, and which casters each light view must draw so that every visible receiver gets
+// the shadow it would get with every caster drawn. Plugins never see it: render::Casters
+// asks it for the casters of each CasterView.
+//
+// Modes (config "culling"):
+//   none             every instance, everywhere
+//   frustum          camera and light views: instances whose box meets the view frustum
+//   light-occlusion  camera: hierarchical occlusion culling (below); light views: the same
+//                    occlusion culling from the light (the paper's REF)
+//   receiver-mask    camera: hierarchical occlusion culling; light views: the visible
+//                    receivers are rasterised from the light with the reverse shadow test
+//                    against the camera depth into a receiver mask, dilated by the view's
+//                    footprint, and casters are kept only where a hierarchical occlusion
+//                    query that discards fragments outside the mask finds samples in
+//                    front of the receivers (the paper's method, steps 1-3)
+//
+// Hierarchical occlusion culling (CHC++, Mattausch, Bittner and Wimmer 2008) over the
+// scene's instance BVH, with occlusion queries that are waited for within the frame, so
+// that the result is exact for the frame and never a frame late: the traversal runs in
+// rounds, each one submission. Round 0 walks the tree front to back, draws the leaves
+// visible last frame at once (temporal coherence: no waiting for them; their own draw is
+// their query for the next frame) and queries the boxes of nodes that were invisible
+// (nodes invisible for several frames share one multi-query per batch). Each later round
+// draws the leaves and queries the children of the nodes whose queries found samples,
+// until no query is pending. A query that finds no samples proves its node hidden behind
+// geometry already drawn, so nothing visible is ever culled.
+#include "penumbra/config/Config.h"
+#include "penumbra/gpu/Pipeline.h"
+#include "penumbra/gpu/Resources.h"
+#include "penumbra/render/Casters.h"
+#include "penumbra/render/SceneGpu.h"
+#include "penumbra/scene/Bvh.h"
+
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <span>
+#include <utility>
+#include <vector>
+
+namespace penumbra::gpu {
+class Context;
+class ShaderCompiler;
+}
+
+namespace penumbra::render {
+
+// Per frame, summed over the camera and every light view.
+struct CullingStats {
+    uint64_t nodesVisited = 0;      // BVH nodes the traversals looked at
+    uint64_t queriesIssued = 0;     // occlusion queries (boxes, multi-queries, leaf draws)
+    uint64_t queryRounds = 0;       // submissions waited for
+    uint64_t receivers = 0;         // instances the camera sees (the G-buffer draws them)
+    uint64_t views = 0;             // light views culled
+    uint64_t castersDrawn = 0;      // instance draws through Casters::draw
+    uint64_t trianglesDrawn = 0;    // their triangles
+    double cameraMs = 0.0;          // step 1: camera culling (wall clock, GPU work waited for)
+    double maskMs = 0.0;            // step 2: receiver masks
+    double casterCullMs = 0.0;      // step 3: caster culling (queries, or frustum tests)
+};
+
+class Visibility {
+public:
+    // `scene` and `sceneGpu` must outlive the service; `width` x `height` is the camera's
+    // output.
+    Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders, const scene::Scene& scene,
+               const SceneGpu& sceneGpu, config::CullingMode mode, uint32_t width, uint32_t height);
+    ~Visibility();
+    Visibility(const Visibility&) = delete;
+    Visibility& operator=(const Visibility&) = delete;
+
+    config::CullingMode mode() const { return mode_; }
+
+    // Instances moved (Scene::updateTransforms): refits the BVH.
+    void instancesMoved(std::span<const uint32_t> moved);
+
+    // Starts a frame: forgets the last frame's caster lists and culls the camera view.
+    void beginFrame(const glm::mat4& cameraViewProj);
+
+    // The instances the camera sees, one entry per instance (non-zero: visible), or null
+    // for all (mode none).
+    const std::vector<uint8_t>* receivers() const { return mode_ == config::CullingMode::None ? nullptr : &receivers_; }
+
+    // The casters `view` must draw this frame, or null for all. Culls the view on its
+    // first call in the frame and keeps the list for the frame.
+    const std::vector<uint8_t>* casters(const CasterView& view);
+    void countDraw(const DrawCounts& counts);
+
+    // This frame's figures so far.
+    const CullingStats& stats() const { return stats_; }
+
+private:
+    struct Traversal;
+    struct ViewState;
+    struct Target;
+
+    void cullFrustum(const glm::mat4& viewProj, std::vector<uint8_t>& visible) const;
+    void occlusionCull(Target& target, std::vector<uint8_t>& nodeVisible, std::vector<uint16_t>& hidden,
+                       std::vector<uint8_t>& visible);
+    void cullLightView(const CasterView& view, ViewState& state);
+    Target& lightTarget(uint32_t resolution);
+
+    gpu::Context& context_;
+    const scene::Scene& scene_;
+    const SceneGpu& sceneGpu_;
+    const config::CullingMode mode_;
+    const uint32_t width_;
+    const uint32_t height_;
+    scene::InstanceBvh bvh_;
+
+    std::unique_ptr<Target> camera_;
+    std::map<uint32_t, std::unique_ptr<Target>> lightTargets_;  // by resolution
+    std::vector<uint8_t> cameraNodes_;    // per BVH node: visible last frame
+    std::vector<uint16_t> cameraHidden_;  // per BVH node: frames invisible in a row
+    std::vector<uint8_t> receivers_;
+    std::vector<uint32_t> receiverList_;
+    glm::mat4 cameraViewProj_{1.0f};
+    std::map<std::pair<uint32_t, uint32_t>, std::unique_ptr<ViewState>> views_;  // by (light, view)
+    uint64_t frame_ = 0;
+    CullingStats stats_;
+
+    // Pipelines: depth-only leaf draws (writing depth, or only counting samples for
+    // alpha-masked instances), box queries; the same behind the receiver mask; the
+    // receiver pass; the mask dilation.
+    gpu::Pipeline leafDepth_, leafCount_, box_;
+    gpu::Pipeline maskLeafDepth_, maskLeafCount_, maskBox_;
+    gpu::Pipeline receiverDepth_, receiverCount_;
+    gpu::Pipeline dilate_;
+    gpu::Sampler nearest_;
+    gpu::Buffer boxes_;
+    gpu::Buffer cameraData_;  // the reverse shadow test's camera
+    VkQueryPool queries_ = VK_NULL_HANDLE;
+    uint32_t queryCapacity_ = 0;
+};
+
+} // namespace penumbra::render

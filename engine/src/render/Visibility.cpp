@@ -1,0 +1,701 @@
+#include "penumbra/render/Visibility.h"
+
+#include "penumbra/core/Error.h"
+#include "penumbra/gpu/Barrier.h"
+#include "penumbra/gpu/Check.h"
+#include "penumbra/gpu/Context.h"
+#include "penumbra/gpu/ShaderCompiler.h"
+
+#include <glm/gtc/matrix_inverse.hpp>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+namespace penumbra::render {
+namespace {
+
+constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
+constexpr VkFormat kMaskFormat = VK_FORMAT_R8_UNORM;
+
+// The reverse shadow test's relative depth tolerance (receiver_mask.frag): a receiver
+// point counts as seen by the camera when it lies at most 1 % behind the camera depth.
+// Relative, so it holds at every scene scale; wide, since a receiver dropped from the mask
+// loses casters while one kept in excess only costs culling.
+constexpr float kReverseTestTolerance = 0.01f;
+// Texels added to every view's footprint in the mask: a visible point's own texel need
+// not be covered by the receiver fragment at its centre (1), and receiver bias (normal
+// offset, receiver plane) moves the lookup by up to about a texel (1).
+constexpr float kMaskSafetyTexels = 2.0f;
+// Light-view culling depth is pushed away from the light by more than the techniques'
+// default rasterizer bias (hard: 4 r + 2 x slope), so that a caster culled as lying
+// behind an occluder would lie behind it in the technique's biased map too.
+constexpr float kCullBiasConstant = 64.0f;
+constexpr float kCullBiasSlope = 8.0f;
+// lavapipe (PLATFORM.md): in a long run of queries inside one rendering instance about
+// one in 1,000 over-counts; ending and resuming rendering every few hundred keeps them
+// exact. (An over-count only costs culling; it is never wrong.)
+constexpr uint32_t kQueriesPerRendering = 256;
+// CHC++ multi-queries: nodes invisible for this many frames in a row are queried in
+// batches of up to kMultiQueryBatch; a batch that finds samples is queried node by node
+// in the next round.
+constexpr uint16_t kMultiQueryAfterFrames = 2;
+constexpr uint32_t kMultiQueryBatch = 8;
+
+double msSince(std::chrono::steady_clock::time_point start)
+{
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+struct GpuBox {
+    glm::vec4 lo;
+    glm::vec4 hi;
+};
+
+struct CameraData {  // receiver_mask.frag Camera
+    glm::mat4 viewProj;
+    glm::vec4 params;
+};
+
+bool outside(const scene::Frustum& f, const scene::Aabb& box)
+{
+    for (uint32_t i = 0; i < f.planeCount; ++i) {
+        const glm::vec4& p = f.planes[i];
+        const glm::vec3 far(p.x >= 0 ? box.max.x : box.min.x, p.y >= 0 ? box.max.y : box.min.y,
+                            p.z >= 0 ? box.max.z : box.min.z);
+        if (glm::dot(glm::vec3(p), far) + p.w < 0.0f) return true;
+    }
+    return false;
+}
+
+// Whether any part of the box lies in front of the view's near plane (or behind the
+// eye). Its proxy would be clipped there, and the query could miss geometry inside it
+// that the view does see: such a node is treated as visible without a query.
+bool reachesNearPlane(const glm::mat4& viewProj, const scene::Aabb& box)
+{
+    for (int c = 0; c < 8; ++c) {
+        const glm::vec4 clip = viewProj * glm::vec4((c & 1) ? box.max.x : box.min.x, (c & 2) ? box.max.y : box.min.y,
+                                                    (c & 4) ? box.max.z : box.min.z, 1.0f);
+        // Reversed-Z: depth z / w > 1 is in front of the near plane.
+        if (!(clip.w > 0.0f) || clip.z > clip.w) return true;
+    }
+    return false;
+}
+
+// A box a little larger than `box`, so that no rasterization tie rule lets geometry on
+// its faces produce a sample that the box does not.
+GpuBox inflated(const scene::Aabb& box)
+{
+    const glm::vec3 extent = box.max - box.min;
+    const float scale = std::max({extent.x, extent.y, extent.z, glm::length(box.min), glm::length(box.max)});
+    const glm::vec3 pad(1e-3f * std::max({extent.x, extent.y, extent.z}) + 1e-6f * scale);
+    return {glm::vec4(box.min - pad, 1.0f), glm::vec4(box.max + pad, 1.0f)};
+}
+
+float distanceSq(const glm::vec3& p, const scene::Aabb& box)
+{
+    const glm::vec3 d = glm::max(glm::max(box.min - p, p - box.max), glm::vec3(0.0f));
+    return glm::dot(d, d);
+}
+
+// Where a front-to-back traversal of a view starts: the eye of a perspective view; for an
+// orthographic one a point far behind the near plane's centre, so that distance from it
+// orders boxes nearly as depth does.
+glm::vec3 traversalOrigin(const glm::mat4& viewProj, float sceneRadius)
+{
+    const glm::mat4 inv = glm::inverse(viewProj);
+    const glm::vec4 eye = inv * glm::vec4(0.0f, 0.0f, 1.0f, 0.0f);
+    const glm::vec4 nearCentre = inv * glm::vec4(0.0f, 0.0f, 1.0f, 1.0f);
+    const glm::vec3 centre = glm::vec3(nearCentre) / nearCentre.w;
+    const float scale = std::max(glm::length(glm::vec3(eye)), 1e-30f);
+    if (std::abs(eye.w) > 1e-6f * scale) return glm::vec3(eye) / eye.w;
+    return centre + glm::normalize(glm::vec3(eye)) * (4.0f * std::max(sceneRadius, 1e-6f));
+}
+
+} // namespace
+
+// One depth target the traversals draw into: the camera's (sampled by the receiver
+// pass) or a light view's at its resolution, with its receiver masks.
+struct Visibility::Target {
+    uint32_t width = 0, height = 0;
+    gpu::Image depth;
+    VkImageLayout depthLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    gpu::Image mask, maskRows, maskDilated;  // light targets in receiver-mask mode
+    // The traversal's view.
+    glm::mat4 viewProj{1.0f};
+    bool clearDepth = true;  // false: keep what the receiver pass drew
+    bool useMask = false;
+    bool lightView = false;  // culling depth biased away from the light
+};
+
+// Per (light, view): last frame's node visibility and this frame's caster list.
+struct Visibility::ViewState {
+    uint64_t frame = UINT64_MAX;
+    glm::mat4 viewProj{0.0f};
+    uint32_t resolution = 0;
+    float footprint = -1.0f;
+    std::vector<uint8_t> nodes;
+    std::vector<uint16_t> hidden;
+    std::vector<uint8_t> casters;
+};
+
+Visibility::Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders, const scene::Scene& scene,
+                       const SceneGpu& sceneGpu, config::CullingMode mode, uint32_t width, uint32_t height)
+    : context_(context),
+      scene_(scene),
+      sceneGpu_(sceneGpu),
+      mode_(mode),
+      width_(width),
+      height_(height),
+      bvh_(scene::instanceWorldBounds(scene.instances))
+{
+    receivers_.assign(scene.instances.size(), 1);
+    if (mode_ == config::CullingMode::None || mode_ == config::CullingMode::Frustum) return;
+
+    // Only what the mode needs: occlusion modes get the query pipelines, receiver-mask
+    // mode the mask pipelines too.
+    const gpu::VertexLayout positions{sceneGpu_.vertexStride(),
+                                      {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(scene::Vertex, position)}}};
+    gpu::GraphicsPipelineDesc d;
+    d.vertexShader = "engine/shadow_depth.vert";
+    d.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
+    d.pushConstantBytes = sizeof(glm::mat4);
+    d.vertexLayout = positions;
+    d.depthFormat = kDepthFormat;
+    d.depthCompare = VK_COMPARE_OP_GREATER_OR_EQUAL;
+    d.depthBias = true;
+    d.cullMode = VK_CULL_MODE_NONE;
+    const auto make = [&](const char* name, bool depthWrite) {
+        d.name = std::string("visibility.") + name;
+        d.depthWrite = depthWrite;
+        return gpu::Pipeline(context_, shaders, d);
+    };
+    leafDepth_ = make("leaf", true);
+    leafCount_ = make("leaf_count", false);
+    gpu::GraphicsPipelineDesc boxDesc = d;
+    boxDesc.vertexShader = "engine/occlusion_box.vert";
+    boxDesc.vertexLayout = {};
+    boxDesc.name = "visibility.box";
+    boxDesc.depthWrite = false;
+    box_ = gpu::Pipeline(context_, shaders, boxDesc);
+    if (mode_ == config::CullingMode::ReceiverMask) {
+        d.fragmentShader = "engine/culling_mask.frag";
+        d.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}, {1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}};
+        maskLeafDepth_ = make("mask_leaf", true);
+        maskLeafCount_ = make("mask_leaf_count", false);
+        boxDesc.fragmentShader = d.fragmentShader;
+        boxDesc.bindings = d.bindings;
+        boxDesc.name = "visibility.mask_box";
+        maskBox_ = gpu::Pipeline(context_, shaders, boxDesc);
+        d.vertexShader = "engine/receiver_mask.vert";
+        d.fragmentShader = "engine/receiver_mask.frag";
+        d.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                      {1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+                      {2, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                      {3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
+        receiverDepth_ = make("receivers", true);
+        receiverCount_ = make("receivers_count", false);
+        gpu::ComputePipelineDesc c;
+        c.name = "visibility.dilate";
+        c.shader = "engine/mask_dilate.comp";
+        c.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}, {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
+        c.pushConstantBytes = 3 * sizeof(int32_t);
+        dilate_ = gpu::Pipeline(context_, shaders, c);
+        nearest_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
+        cameraData_ = gpu::Buffer(context_, sizeof(CameraData), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true,
+                                  "visibility.camera");
+    }
+
+    // A node is queried at most three times in one traversal (in a multi-query, alone,
+    // and as a drawn leaf); a tree over n instances has fewer than 2 n nodes.
+    const uint64_t maxNodes = 2 * uint64_t(std::max<size_t>(scene.instances.size(), 1));
+    queryCapacity_ = uint32_t(std::min<uint64_t>(3 * maxNodes + 64, UINT32_MAX));
+    VkQueryPoolCreateInfo q{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+    q.queryType = VK_QUERY_TYPE_OCCLUSION;
+    q.queryCount = queryCapacity_;
+    PENUMBRA_VK(vkCreateQueryPool(context_.device(), &q, nullptr, &queries_));
+    boxes_ = gpu::Buffer(context_, (maxNodes + 64) * sizeof(GpuBox), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true,
+                         "visibility.boxes");
+
+    camera_ = std::make_unique<Target>();
+    camera_->width = width_;
+    camera_->height = height_;
+    camera_->depth = gpu::Image(context_, {width_, height_, kDepthFormat,
+                                           VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                                           "visibility.camera_depth"});
+}
+
+Visibility::~Visibility()
+{
+    if (queries_) vkDestroyQueryPool(context_.device(), queries_, nullptr);
+}
+
+void Visibility::instancesMoved(std::span<const uint32_t> moved)
+{
+    const std::vector<scene::Aabb> bounds = scene::instanceWorldBounds(scene_.instances);
+    if (bvh_.refitOrRebuild(bounds, moved).action == scene::RefitAction::Rebuilt) {
+        // Node indices changed: last frame's visibility no longer names the same nodes.
+        cameraNodes_.clear();
+        cameraHidden_.clear();
+        for (auto& [key, view] : views_) {
+            view->nodes.clear();
+            view->hidden.clear();
+        }
+    }
+}
+
+void Visibility::cullFrustum(const glm::mat4& viewProj, std::vector<uint8_t>& visible) const
+{
+    std::vector<uint32_t> inside;
+    bvh_.cullFrustum(scene::frustumFromViewProj(viewProj), inside);
+    visible.assign(scene_.instances.size(), 0);
+    for (const uint32_t i : inside) visible[i] = 1;
+}
+
+void Visibility::beginFrame(const glm::mat4& cameraViewProj)
+{
+    ++frame_;
+    stats_ = {};
+    cameraViewProj_ = cameraViewProj;
+    const auto start = std::chrono::steady_clock::now();
+    switch (mode_) {
+    case config::CullingMode::None: receivers_.assign(scene_.instances.size(), 1); break;
+    case config::CullingMode::Frustum: cullFrustum(cameraViewProj, receivers_); break;
+    case config::CullingMode::LightOcclusion:
+    case config::CullingMode::ReceiverMask: {
+        Target& t = *camera_;
+        t.viewProj = cameraViewProj;
+        t.clearDepth = true;
+        t.useMask = false;
+        t.lightView = false;
+        occlusionCull(t, cameraNodes_, cameraHidden_, receivers_);
+        if (mode_ == config::CullingMode::ReceiverMask) {
+            // The receiver passes sample the camera depth.
+            context_.submitAndWait([&](VkCommandBuffer cmd) {
+                gpu::transition(cmd, t.depth, {t.depthLayout, gpu::access::kDepthAttachment.stage,
+                                               gpu::access::kDepthAttachment.access},
+                                {VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+                                 VK_ACCESS_2_SHADER_SAMPLED_READ_BIT});
+            });
+            t.depthLayout = VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL;
+            CameraData data{cameraViewProj, glm::vec4(float(width_), float(height_), kReverseTestTolerance, 0.0f)};
+            std::memcpy(cameraData_.mapped(), &data, sizeof(data));
+        }
+        break;
+    }
+    }
+    receiverList_.clear();
+    for (uint32_t i = 0; i < receivers_.size(); ++i)
+        if (receivers_[i]) receiverList_.push_back(i);
+    stats_.receivers = receiverList_.size();
+    stats_.cameraMs = msSince(start);
+}
+
+void Visibility::countDraw(const DrawCounts& counts)
+{
+    stats_.castersDrawn += counts.instances;
+    stats_.trianglesDrawn += counts.triangles;
+}
+
+const std::vector<uint8_t>* Visibility::casters(const CasterView& view)
+{
+    if (mode_ == config::CullingMode::None) return nullptr;
+    std::unique_ptr<ViewState>& state = views_[{view.light, view.view}];
+    if (!state) state = std::make_unique<ViewState>();
+    ViewState& s = *state;
+    if (s.frame != frame_ || s.viewProj != view.viewProj || s.resolution != view.resolution ||
+        s.footprint != view.footprintTexels) {
+        cullLightView(view, s);
+        s.frame = frame_;
+        s.viewProj = view.viewProj;
+        s.resolution = view.resolution;
+        s.footprint = view.footprintTexels;
+    }
+    return &s.casters;
+}
+
+Visibility::Target& Visibility::lightTarget(uint32_t resolution)
+{
+    std::unique_ptr<Target>& t = lightTargets_[resolution];
+    if (t) return *t;
+    t = std::make_unique<Target>();
+    t->width = t->height = resolution;
+    const std::string name = fmt::format("visibility.light{}", resolution);
+    t->depth = gpu::Image(context_, {resolution, resolution, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT,
+                                     name + ".depth"});
+    if (mode_ == config::CullingMode::ReceiverMask) {
+        const VkImageUsageFlags usage =
+            VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+        t->mask = gpu::Image(context_, {resolution, resolution, kMaskFormat, usage, name + ".mask"});
+        t->maskRows = gpu::Image(context_, {resolution, resolution, kMaskFormat, usage, name + ".mask_rows"});
+        t->maskDilated = gpu::Image(context_, {resolution, resolution, kMaskFormat, usage, name + ".mask_dilated"});
+        context_.submitAndWait([&](VkCommandBuffer cmd) {
+            for (const gpu::Image* image : {&t->mask, &t->maskRows, &t->maskDilated})
+                gpu::transition(cmd, *image, gpu::access::kUndefined,
+                                {VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0});
+        });
+    }
+    return *t;
+}
+
+void Visibility::cullLightView(const CasterView& view, ViewState& s)
+{
+    ++stats_.views;
+    auto start = std::chrono::steady_clock::now();
+    if (mode_ == config::CullingMode::Frustum || view.resolution == 0) {
+        cullFrustum(view.viewProj, s.casters);
+        stats_.casterCullMs += msSince(start);
+        return;
+    }
+    Target& t = lightTarget(view.resolution);
+    t.viewProj = view.viewProj;
+    t.lightView = true;
+    if (mode_ == config::CullingMode::LightOcclusion) {
+        t.clearDepth = true;
+        t.useMask = false;
+        occlusionCull(t, s.nodes, s.hidden, s.casters);
+        stats_.casterCullMs += msSince(start);
+        return;
+    }
+
+    // Step 2: the receiver mask. The camera's receivers inside this view are rasterised
+    // from the light (their depth, and the mask texels the camera sees), and the mask is
+    // dilated by the view's footprint.
+    std::vector<uint8_t> inView;
+    cullFrustum(view.viewProj, inView);
+    std::vector<uint32_t> solid, masked;
+    for (const uint32_t i : receiverList_) {
+        if (!inView[i]) continue;
+        (sceneGpu_.isAlphaMasked(i) ? masked : solid).push_back(i);
+    }
+    const uint32_t size = view.resolution;
+    const float reach = std::min(view.footprintTexels, float(size)) + kMaskSafetyTexels;
+    const auto radius = int32_t(std::min(std::ceil(std::max(reach, 0.0f)), float(size)));
+    context_.submitAndWait([&](VkCommandBuffer cmd) {
+        // The previous submission's reads and writes of these images (the last view).
+        gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT},
+                           {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT});
+        const VkClearColorValue zero{{0.0f, 0.0f, 0.0f, 0.0f}};
+        const VkImageSubresourceRange colorRange{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+        vkCmdClearColorImage(cmd, t.mask.handle(), VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &colorRange);
+        gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT},
+                           {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT});
+        gpu::transition(cmd, t.depth, {t.depthLayout, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT},
+                        gpu::access::kDepthAttachment);
+        t.depthLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
+        VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+        depth.imageView = t.depth.view();
+        depth.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
+        depth.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+        depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+        depth.clearValue.depthStencil = {0.0f, 0};
+        VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+        info.renderArea = {{0, 0}, {size, size}};
+        info.layerCount = 1;
+        info.pDepthAttachment = &depth;
+        vkCmdBeginRendering(cmd, &info);
+        const VkViewport viewport{0.0f, 0.0f, float(size), float(size), 0.0f, 1.0f};
+        const VkRect2D scissor{{0, 0}, {size, size}};
+        vkCmdSetViewport(cmd, 0, 1, &viewport);
+        vkCmdSetScissor(cmd, 0, 1, &scissor);
+        vkCmdSetDepthBias(cmd, -kCullBiasConstant, 0.0f, -kCullBiasSlope);
+        for (const gpu::Pipeline* p : {&receiverDepth_, &receiverCount_}) {
+            const std::vector<uint32_t>& list = p == &receiverDepth_ ? solid : masked;
+            if (list.empty()) continue;
+            p->bind(cmd);
+            gpu::DescriptorPush()
+                .storageBuffer(0, sceneGpu_.instanceBuffer())
+                .sampledImage(1, camera_->depth, nearest_, VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL)
+                .storageImage(2, t.mask)
+                .storageBuffer(3, cameraData_)
+                .push(context_, cmd, *p);
+            p->pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
+            // Alpha-masked receivers mark the mask but write no depth: their holes must
+            // not hide the casters behind them.
+            sceneGpu_.drawInstances(cmd, list, p == &receiverCount_);
+        }
+        vkCmdEndRendering(cmd);
+
+        const gpu::MemoryAccess stores{VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                                       VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
+        const gpu::MemoryAccess loads{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+                                      VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
+                                          VK_ACCESS_2_SHADER_SAMPLED_READ_BIT};
+        gpu::memoryBarrier(cmd, stores, loads);
+        dilate_.bind(cmd);
+        const gpu::Image* passes[2][2] = {{&t.mask, &t.maskRows}, {&t.maskRows, &t.maskDilated}};
+        for (int32_t vertical = 0; vertical < 2; ++vertical) {
+            gpu::DescriptorPush()
+                .storageImage(0, *passes[vertical][0])
+                .storageImage(1, *passes[vertical][1])
+                .push(context_, cmd, dilate_);
+            const int32_t push[3] = {int32_t(size), radius, vertical};
+            dilate_.pushConstants(cmd, push, sizeof(push));
+            vkCmdDispatch(cmd, (size + 63) / 64, 1, 1);
+            gpu::memoryBarrier(cmd, stores, loads);
+        }
+    });
+    stats_.maskMs += msSince(start);
+
+    // Step 3: casters against the mask, with the receivers' depth kept.
+    start = std::chrono::steady_clock::now();
+    t.clearDepth = false;
+    t.useMask = true;
+    occlusionCull(t, s.nodes, s.hidden, s.casters);
+    // The receivers are drawn whatever the queries say: their depth is what the queries
+    // were tested against.
+    for (const uint32_t i : solid) s.casters[i] = 1;
+    for (const uint32_t i : masked) s.casters[i] = 1;
+    stats_.casterCullMs += msSince(start);
+}
+
+void Visibility::occlusionCull(Target& t, std::vector<uint8_t>& nodeVisible, std::vector<uint16_t>& hidden,
+                               std::vector<uint8_t>& visible)
+{
+    const size_t nodeCount = bvh_.nodeCount();
+    visible.assign(scene_.instances.size(), 0);
+    if (nodeVisible.size() != nodeCount) {
+        // First frame, or a rebuilt tree: nothing is known, so the root is queried.
+        nodeVisible.assign(nodeCount, 0);
+        hidden.assign(nodeCount, 0);
+    }
+    if (nodeCount == 0) return;
+
+    const scene::Frustum frustum = scene::frustumFromViewProj(t.viewProj);
+    const glm::vec3 origin = traversalOrigin(t.viewProj, scene_.bounds().radius());
+    std::vector<uint8_t> nextVisible(nodeCount, 0);
+
+    enum class Kind { Box, Batch, Leaf };
+    struct Query {
+        Kind kind;
+        uint32_t node;        // Box, Leaf
+        uint32_t batchFirst;  // Batch: range in batchNodes
+        uint32_t batchCount;
+    };
+    struct Seed {
+        uint32_t node;
+        bool alone;  // queried on its own (a multi-query that found samples)
+    };
+    std::vector<Query> issued;
+    std::vector<uint32_t> batchNodes;
+    std::vector<Seed> seeds{{0, false}};
+    std::vector<uint32_t> leavesToDraw;
+    auto* boxes = static_cast<GpuBox*>(boxes_.mapped());
+    const size_t boxCapacity = boxes_.size() / sizeof(GpuBox);
+    uint32_t queryBase = 0;
+    bool firstRound = true;
+    const gpu::MemoryAccess anyWrite{VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT};
+    const gpu::MemoryAccess anyAccess{VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                                      VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT};
+
+    while (!seeds.empty() || !leavesToDraw.empty()) {
+        issued.clear();
+        batchNodes.clear();
+        context_.submitAndWait([&](VkCommandBuffer cmd) {
+            // The previous submission's writes (last round, last view, last frame).
+            gpu::memoryBarrier(cmd, anyWrite, anyAccess);
+            if (firstRound) vkCmdResetQueryPool(cmd, queries_, 0, queryCapacity_);
+            if (t.depthLayout != VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL) {
+                gpu::transition(cmd, t.depth,
+                                {t.depthLayout, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT},
+                                gpu::access::kDepthAttachment);
+                t.depthLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
+            }
+            VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+            depth.imageView = t.depth.view();
+            depth.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
+            depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+            depth.clearValue.depthStencil = {0.0f, 0};
+            VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+            info.renderArea = {{0, 0}, {t.width, t.height}};
+            info.layerCount = 1;
+            info.pDepthAttachment = &depth;
+            const gpu::Pipeline* bound = nullptr;
+            uint32_t inRendering = 0;
+            const auto begin = [&](bool clear) {
+                depth.loadOp = clear ? VK_ATTACHMENT_LOAD_OP_CLEAR : VK_ATTACHMENT_LOAD_OP_LOAD;
+                vkCmdBeginRendering(cmd, &info);
+                const VkViewport viewport{0.0f, 0.0f, float(t.width), float(t.height), 0.0f, 1.0f};
+                const VkRect2D scissor{{0, 0}, {t.width, t.height}};
+                vkCmdSetViewport(cmd, 0, 1, &viewport);
+                vkCmdSetScissor(cmd, 0, 1, &scissor);
+                if (t.lightView)
+                    vkCmdSetDepthBias(cmd, -kCullBiasConstant, 0.0f, -kCullBiasSlope);
+                else
+                    vkCmdSetDepthBias(cmd, 0.0f, 0.0f, 0.0f);
+                bound = nullptr;
+                inRendering = 0;
+            };
+            begin(firstRound && t.clearDepth);
+            const auto use = [&](const gpu::Pipeline& p, bool boxPipeline) {
+                if (bound == &p) return;
+                p.bind(cmd);
+                gpu::DescriptorPush push;
+                push.storageBuffer(0, boxPipeline ? boxes_ : sceneGpu_.instanceBuffer());
+                if (t.useMask) push.sampledImage(1, t.maskDilated, nearest_, VK_IMAGE_LAYOUT_GENERAL);
+                push.push(context_, cmd, p);
+                p.pushConstants(cmd, &t.viewProj, sizeof(glm::mat4));
+                bound = &p;
+            };
+            const auto beginQuery = [&]() {
+                if (inRendering == kQueriesPerRendering) {
+                    vkCmdEndRendering(cmd);
+                    gpu::memoryBarrier(cmd,
+                                       {VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
+                                        VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT},
+                                       {VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT |
+                                            VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
+                                        VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT |
+                                            VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT});
+                    begin(false);
+                }
+                const uint32_t index = queryBase + uint32_t(issued.size());
+                if (index >= queryCapacity_) throw Error("visibility: occlusion query pool exhausted");
+                vkCmdBeginQuery(cmd, queries_, index, 0);
+                ++inRendering;
+                ++stats_.queriesIssued;
+            };
+            const auto endQuery = [&](const Query& q) {
+                vkCmdEndQuery(cmd, queries_, queryBase + uint32_t(issued.size()));
+                issued.push_back(q);
+            };
+            uint32_t boxCount = 0;
+            const auto pushBox = [&](uint32_t node) {
+                if (boxCount >= boxCapacity) throw Error("visibility: box buffer exhausted");
+                boxes[boxCount] = inflated(bvh_.nodeBounds(node));
+                return boxCount++;
+            };
+            const auto drawLeaf = [&](uint32_t node) {
+                const std::span<const uint32_t> instances = bvh_.leafInstances(node);
+                beginQuery();
+                for (const bool alphaMasked : {false, true}) {
+                    // Alpha-masked instances are counted but write no depth: their holes
+                    // must not occlude.
+                    const gpu::Pipeline& p = t.useMask ? (alphaMasked ? maskLeafCount_ : maskLeafDepth_)
+                                                       : (alphaMasked ? leafCount_ : leafDepth_);
+                    use(p, false);
+                    sceneGpu_.drawInstances(cmd, instances, alphaMasked);
+                }
+                endQuery({Kind::Leaf, node, 0, 0});
+                for (const uint32_t i : instances) visible[i] = 1;
+            };
+            std::vector<uint32_t> batch;
+            const auto flushBatch = [&]() {
+                if (batch.empty()) return;
+                if (batch.size() == 1) {
+                    const uint32_t b = pushBox(batch[0]);
+                    use(t.useMask ? maskBox_ : box_, true);
+                    beginQuery();
+                    vkCmdDraw(cmd, 36, 1, 0, b);
+                    endQuery({Kind::Box, batch[0], 0, 0});
+                } else {
+                    const uint32_t firstBox = boxCount;
+                    for (const uint32_t n : batch) pushBox(n);
+                    use(t.useMask ? maskBox_ : box_, true);
+                    beginQuery();
+                    vkCmdDraw(cmd, 36, uint32_t(batch.size()), 0, firstBox);
+                    endQuery({Kind::Batch, 0, uint32_t(batchNodes.size()), uint32_t(batch.size())});
+                    batchNodes.insert(batchNodes.end(), batch.begin(), batch.end());
+                }
+                batch.clear();
+            };
+            const auto queryBox = [&](uint32_t node, bool alone) {
+                if (!alone && hidden[node] >= kMultiQueryAfterFrames) {
+                    batch.push_back(node);
+                    if (batch.size() == kMultiQueryBatch) flushBatch();
+                    return;
+                }
+                const uint32_t b = pushBox(node);
+                use(t.useMask ? maskBox_ : box_, true);
+                beginQuery();
+                vkCmdDraw(cmd, 36, 1, 0, b);
+                endQuery({Kind::Box, node, 0, 0});
+            };
+
+            // Leaves found visible in the last round are drawn first: they occlude.
+            for (const uint32_t leaf : leavesToDraw) drawLeaf(leaf);
+
+            // Front to back from the seeds (CHC++'s traversal queue).
+            struct Entry {
+                float distanceSq;
+                uint32_t node;
+                bool alone;
+            };
+            const auto farther = [](const Entry& a, const Entry& b) {
+                return a.distanceSq > b.distanceSq || (a.distanceSq == b.distanceSq && a.node > b.node);
+            };
+            std::vector<Entry> heap;
+            const auto push = [&](uint32_t node, bool alone) {
+                const scene::Aabb& box = bvh_.nodeBounds(node);
+                if (box.empty()) return;
+                heap.push_back({distanceSq(origin, box), node, alone});
+                std::push_heap(heap.begin(), heap.end(), farther);
+            };
+            for (const Seed& s : seeds) push(s.node, s.alone);
+            while (!heap.empty()) {
+                std::pop_heap(heap.begin(), heap.end(), farther);
+                const Entry e = heap.back();
+                heap.pop_back();
+                ++stats_.nodesVisited;
+                const scene::Aabb& box = bvh_.nodeBounds(e.node);
+                if (outside(frustum, box)) continue;
+                const bool known = nodeVisible[e.node] != 0 || reachesNearPlane(t.viewProj, box);
+                if (bvh_.isLeafNode(e.node)) {
+                    if (known)
+                        drawLeaf(e.node);
+                    else
+                        queryBox(e.node, e.alone);
+                } else if (known) {
+                    push(bvh_.firstChild(e.node), false);
+                    push(bvh_.firstChild(e.node) + 1, false);
+                } else {
+                    queryBox(e.node, e.alone);
+                }
+            }
+            flushBatch();
+            vkCmdEndRendering(cmd);
+        });
+        ++stats_.queryRounds;
+        firstRound = false;
+
+        // The round's results: what to draw and query next.
+        std::vector<uint64_t> samples(issued.size(), 0);
+        if (!issued.empty()) {
+            PENUMBRA_VK(vkGetQueryPoolResults(context_.device(), queries_, queryBase, uint32_t(issued.size()),
+                                                    samples.size() * sizeof(uint64_t), samples.data(), sizeof(uint64_t),
+                                                    VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+        }
+        queryBase += uint32_t(issued.size());
+        seeds.clear();
+        leavesToDraw.clear();
+        for (size_t i = 0; i < issued.size(); ++i) {
+            const Query& q = issued[i];
+            if (samples[i] == 0) continue;
+            switch (q.kind) {
+            case Kind::Leaf: nextVisible[q.node] = 1; break;
+            case Kind::Box:
+                if (bvh_.isLeafNode(q.node)) {
+                    leavesToDraw.push_back(q.node);
+                } else {
+                    seeds.push_back({bvh_.firstChild(q.node), false});
+                    seeds.push_back({bvh_.firstChild(q.node) + 1, false});
+                }
+                break;
+            case Kind::Batch:
+                for (uint32_t k = 0; k < q.batchCount; ++k) seeds.push_back({batchNodes[q.batchFirst + k], true});
+                break;
+            }
+        }
+    }
+
+    // Visibility pulled up the tree for the next frame (children come after parents).
+    for (size_t n = nodeCount; n-- > 1;)
+        if (nextVisible[n]) nextVisible[bvh_.parentNode(uint32_t(n))] = 1;
+    for (size_t n = 0; n < nodeCount; ++n) hidden[n] = nextVisible[n] ? 0 : uint16_t(std::min(hidden[n] + 1, 0xffff));
+    nodeVisible.swap(nextVisible);
+}
+
+} // namespace penumbra::render

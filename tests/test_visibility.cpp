@@ -1,0 +1,285 @@
+// The visibility service (render/Visibility.h): every culling mode gives the visibility
+// image that drawing every caster gives (max |ΔV| <= 1e-3, the issue's bound), for every
+// light type and for techniques with wide lookups, along an animated path, with a caster
+// outside the camera's frustum and thin casters seen edge-on; and culling does cull.
+#include "TestConfigs.h"
+#include "TestContext.h"
+
+#include "penumbra/config/Config.h"
+#include "penumbra/render/FrameRenderer.h"
+#include "penumbra/scene/Generators.h"
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+using namespace penumbra;
+
+namespace {
+
+using config::CullingMode;
+
+constexpr float kMaxVisibilityChange = 1e-3f;
+
+struct Frame {
+    std::vector<float> visibility;
+    std::vector<float> positions;
+    render::CullingStats stats;
+};
+
+::testing::AssertionResult sameVisibility(const std::vector<float>& expected, const std::vector<float>& actual,
+                                          uint32_t width)
+{
+    if (expected.size() != actual.size()) return ::testing::AssertionFailure() << "image sizes differ";
+    float worst = 0.0f;
+    size_t where = 0, changed = 0;
+    for (size_t i = 0; i < expected.size(); ++i) {
+        const float d = std::abs(expected[i] - actual[i]);
+        if (!(d <= kMaxVisibilityChange)) ++changed;
+        if (!(d <= worst)) {
+            worst = d;
+            where = i;
+        }
+    }
+    if (changed == 0) return ::testing::AssertionSuccess();
+    return ::testing::AssertionFailure() << changed << " pixels change by more than " << kMaxVisibilityChange
+                                         << "; the worst, " << worst << ", at (" << where % width << ", "
+                                         << where / width << "): " << expected[where] << " -> " << actual[where];
+}
+
+size_t countBelow(const std::vector<float>& v, float threshold)
+{
+    size_t n = 0;
+    for (const float x : v) n += x < threshold ? 1 : 0;
+    return n;
+}
+
+class VisibilityCulling : public test::GpuTest {
+protected:
+    Frame render(const scene::Scene& scene, config::RenderConfig cfg, CullingMode mode)
+    {
+        cfg.culling = mode;
+        render::FrameRenderer renderer(*context, scene, cfg, test::plugins());
+        const render::FrameTimings t = renderer.renderFrame();
+        return {renderer.readVisibility(0), renderer.readPositions(), t.culling};
+    }
+
+    // Renders `cfg` with every mode and expects each to give none's image.
+    void expectEveryModeMatches(const scene::Scene& scene, const config::RenderConfig& cfg)
+    {
+        const Frame all = render(scene, cfg, CullingMode::None);
+        for (const CullingMode mode : {CullingMode::Frustum, CullingMode::LightOcclusion, CullingMode::ReceiverMask}) {
+            SCOPED_TRACE(config::cullingModeName(mode));
+            const Frame culled = render(scene, cfg, mode);
+            EXPECT_TRUE(sameVisibility(all.visibility, culled.visibility, cfg.width));
+            // The G-buffer draws only the instances the camera sees: same surfaces.
+            EXPECT_EQ(all.positions, culled.positions);
+            EXPECT_LE(culled.stats.castersDrawn, all.stats.castersDrawn);
+        }
+    }
+};
+
+config::RenderConfig smallDefault(scene::LightType type, const std::string& technique, const nlohmann::json& params)
+{
+    config::RenderConfig cfg = test::defaultTestConfig();
+    cfg.width = 160;
+    cfg.height = 90;
+    test::setLightType(cfg.lights[0], type);
+    cfg.lights[0].shadow = {};
+    cfg.lights[0].shadow.technique = technique;
+    for (const auto& [name, value] : params.items()) cfg.lights[0].shadow.setParam(name, value, "test");
+    return cfg;
+}
+
+struct TechniqueCase {
+    const char* name;
+    const char* technique;
+    const char* params;  // JSON
+};
+
+// Techniques whose lookups reach from one texel (hard) to wide kernels (PCF 7 x 7, PCSS's
+// blocker search, VSM's blur) and to the whole map (a mip chain).
+const TechniqueCase kTechniques[] = {
+    {"hard", "hard", R"({"resolution": 512})"},
+    {"pcf7", "hard", R"({"resolution": 512, "filter": "pcf", "pcf_kernel": 7})"},
+    {"pcss", "pcss", R"({"resolution": 512})"},
+    {"vsm_blur", "vsm", R"({"resolution": 512, "blur_radius": 4})"},
+    {"vsm_mips", "vsm", R"({"resolution": 512, "filter": "trilinear"})"},
+};
+
+class CullingPerTechnique : public VisibilityCulling,
+                            public ::testing::WithParamInterface<std::tuple<TechniqueCase, scene::LightType>> {};
+
+TEST_P(CullingPerTechnique, EveryModeGivesTheImageOfAllCasters)
+{
+    const auto& [technique, type] = GetParam();
+    config::RenderConfig cfg = smallDefault(type, technique.technique, nlohmann::json::parse(technique.params));
+    scene::Scene scene = config::buildScene(cfg);
+    expectEveryModeMatches(scene, cfg);
+}
+
+INSTANTIATE_TEST_SUITE_P(Visibility, CullingPerTechnique,
+                         ::testing::Combine(::testing::ValuesIn(kTechniques),
+                                            ::testing::Values(scene::LightType::Directional, scene::LightType::Spot,
+                                                              scene::LightType::Point, scene::LightType::Rect)),
+                         [](const auto& info) {
+                             return std::string(std::get<0>(info.param).name) + "_" +
+                                    scene::lightTypeName(std::get<1>(info.param));
+                         });
+
+// A tall box behind the camera, outside its frustum, shadows the ground the camera looks
+// at: its shadow must survive every mode (it is drawn because it covers masked texels,
+// not because the camera sees it).
+TEST_F(VisibilityCulling, ACasterOutsideTheViewShadowsAVisibleReceiver)
+{
+    scene::Scene scene = test::planeScene();
+    scene::Mesh box = scene::makeBox("tower");
+    box.computeBounds();
+    scene.meshes.push_back(box);
+    scene.addInstance(1, scene.graph.addNode("tower", scene::kNoParent,
+                                             glm::scale(glm::translate(glm::mat4(1.0f), {-6.0f, 4.0f, 0.0f}),
+                                                        glm::vec3(1.0f, 8.0f, 1.0f))));
+    config::RenderConfig cfg = smallDefault(scene::LightType::Directional, "hard", {{"resolution", 512}});
+    cfg.camera.position = {2.0f, 3.0f, 0.0f};
+    cfg.camera.target = {6.0f, 0.0f, 0.0f};
+    cfg.camera.up = {0.0f, 1.0f, 0.0f};
+    cfg.lights[0].light.direction = glm::normalize(glm::vec3(1.0f, -0.7f, 0.0f));
+    // The tower is outside the camera's view.
+    const glm::mat4 viewProj = render::cameraViewProj(cfg.camera, float(cfg.width) / float(cfg.height));
+    const glm::vec4 tower = viewProj * glm::vec4(-6.0f, 4.0f, 0.0f, 1.0f);
+    ASSERT_TRUE(tower.w < 0.0f || std::abs(tower.x) > tower.w || std::abs(tower.y) > tower.w);
+
+    const Frame all = render(scene, cfg, CullingMode::None);
+    ASSERT_GT(countBelow(all.visibility, 0.5f), cfg.width * cfg.height / 50) << "the tower's shadow is in view";
+    for (const CullingMode mode : {CullingMode::Frustum, CullingMode::LightOcclusion, CullingMode::ReceiverMask}) {
+        SCOPED_TRACE(config::cullingModeName(mode));
+        const Frame culled = render(scene, cfg, mode);
+        EXPECT_TRUE(sameVisibility(all.visibility, culled.visibility, cfg.width));
+        // The frustum leaves the tower out of the G-buffer; the occlusion modes cull per
+        // BVH leaf, and one leaf holds both instances.
+        if (mode == CullingMode::Frustum) EXPECT_EQ(culled.stats.receivers, 1u) << "the camera sees only the ground";
+        EXPECT_EQ(culled.stats.castersDrawn, 2u) << "ground and tower";
+    }
+}
+
+// Thin casters (zero-thickness quads) seen edge-on from the light, and from the camera:
+// a slat that covers few texel centres of the map must be culled only when it covers
+// none, as in the technique's own map.
+TEST_F(VisibilityCulling, ThinCastersSeenEdgeOnKeepTheirShadows)
+{
+    scene::Scene scene = test::planeScene();
+    scene::Mesh slat = scene::makePlane("slat");
+    slat.computeBounds();
+    scene.meshes.push_back(slat);
+    for (int i = 0; i < 12; ++i) {
+        // Vertical unit quads (the plane turned about z) along x, each turned a little
+        // more about y, so that the light sees some of them almost exactly edge-on.
+        glm::mat4 m = glm::translate(glm::mat4(1.0f), {-5.0f + 0.9f * float(i), 1.2f, 0.0f});
+        m = glm::rotate(m, glm::radians(-4.0f + 0.7f * float(i)), glm::vec3(0, 1, 0));
+        m = glm::rotate(m, glm::radians(90.0f), glm::vec3(0, 0, 1));
+        m = glm::scale(m, glm::vec3(2.0f, 1.0f, 2.0f));
+        scene.addInstance(1, scene.graph.addNode("slat", scene::kNoParent, m));
+    }
+    scene.updateTransforms();
+    for (const char* params : {R"({"resolution": 512})", R"({"resolution": 512, "filter": "pcf", "pcf_kernel": 5})"}) {
+        SCOPED_TRACE(params);
+        config::RenderConfig cfg = smallDefault(scene::LightType::Directional, "hard", nlohmann::json::parse(params));
+        cfg.lights[0].light.direction = glm::normalize(glm::vec3(0.02f, -1.0f, 0.45f));
+        cfg.camera.position = {0.0f, 9.0f, 0.5f};  // the slats from above: edge-on to the camera too
+        cfg.camera.target = {0.0f, 0.0f, 0.0f};
+        cfg.camera.up = {0.0f, 0.0f, -1.0f};
+        const Frame all = render(scene, cfg, CullingMode::None);
+        ASSERT_GT(countBelow(all.visibility, 0.5f), 0u);
+        for (const CullingMode mode : {CullingMode::LightOcclusion, CullingMode::ReceiverMask}) {
+            SCOPED_TRACE(config::cullingModeName(mode));
+            EXPECT_TRUE(sameVisibility(all.visibility, render(scene, cfg, mode).visibility, cfg.width));
+        }
+    }
+}
+
+// An animated path: the camera walks and turns, the light swings, a box moves. Two
+// renderers follow it in lockstep; the culled one (temporal coherence: last frame's
+// visible nodes drawn without waiting) matches the other on every frame.
+TEST_F(VisibilityCulling, AnAnimatedPathKeepsEveryFrameExact)
+{
+    config::RenderConfig cfg = smallDefault(scene::LightType::Spot, "pcss", {{"resolution", 512}});
+    scene::Scene sceneAll = config::buildScene(cfg);
+    scene::Scene sceneCulled = config::buildScene(cfg);
+    ASSERT_GT(sceneAll.instances.size(), 2u);
+    config::RenderConfig culledCfg = cfg;
+    culledCfg.culling = CullingMode::ReceiverMask;
+    render::FrameRenderer all(*context, sceneAll, cfg, test::plugins());
+    render::FrameRenderer culled(*context, sceneCulled, culledCfg, test::plugins());
+    const config::RenderConfig start = cfg;
+    const uint32_t moving = uint32_t(sceneAll.instances.size() / 2);
+    const uint32_t node = sceneAll.instances[moving].node;
+    const glm::mat4 rest = sceneAll.graph.local(node);
+    for (int frame = 0; frame < 6; ++frame) {
+        SCOPED_TRACE(frame);
+        const float t = float(frame) / 5.0f;
+        config::RenderConfig c = start;
+        c.camera.position = glm::vec3(glm::rotate(glm::mat4(1.0f), 0.8f * t, glm::vec3(0, 1, 0)) *
+                                      glm::vec4(start.camera.position, 1.0f));
+        c.lights[0].light.position += glm::vec3(3.0f * t, 0.0f, -2.0f * t);
+        const glm::mat4 moved = glm::translate(glm::mat4(1.0f), {2.0f * t, 0.0f, 1.0f * t}) * rest;
+        for (scene::Scene* s : {&sceneAll, &sceneCulled}) s->graph.setLocal(node, moved);
+        config::RenderConfig cc = c;
+        cc.culling = CullingMode::ReceiverMask;
+        all.update(c, sceneAll, sceneAll.updateTransforms());
+        culled.update(cc, sceneCulled, sceneCulled.updateTransforms());
+        all.renderFrame();
+        const render::FrameTimings ct = culled.renderFrame();
+        EXPECT_TRUE(sameVisibility(all.readVisibility(0), culled.readVisibility(0), cfg.width));
+        if (frame > 0) {
+            EXPECT_GT(ct.culling.queriesIssued, 0u);
+        }
+    }
+}
+
+// In a city seen from the street the camera sees few of the instances, and the receiver
+// mask keeps fewer casters than the light's own occlusion culling, which keeps fewer
+// than its frustum: and all of them give one image.
+TEST_F(VisibilityCulling, AStreetViewOfACityCullsMostCasters)
+{
+    scene::CityParams p;
+    p.blocks = 3;
+    p.seed = 3;
+    scene::Scene scene = scene::generateCity(p);
+    config::RenderConfig cfg = smallDefault(scene::LightType::Directional, "hard", {{"resolution", 1024}});
+    cfg.camera.position = {3.0f, 1.7f, -110.0f};
+    cfg.camera.target = {-2.0f, 10.0f, 40.0f};
+    cfg.camera.nearWorld = 0.1f;
+    cfg.camera.fovYDeg = 60.0f;
+    cfg.lights[0].light.direction = glm::normalize(glm::vec3(0.6f, -0.45f, 0.35f));
+    const Frame all = render(scene, cfg, CullingMode::None);
+    const Frame frustum = render(scene, cfg, CullingMode::Frustum);
+    const Frame occlusion = render(scene, cfg, CullingMode::LightOcclusion);
+    const Frame mask = render(scene, cfg, CullingMode::ReceiverMask);
+    for (const Frame* f : {&frustum, &occlusion, &mask})
+        EXPECT_TRUE(sameVisibility(all.visibility, f->visibility, cfg.width));
+    EXPECT_LT(mask.stats.receivers, scene.instances.size() / 4) << "the camera sees few instances";
+    EXPECT_LT(mask.stats.castersDrawn, occlusion.stats.castersDrawn);
+    EXPECT_LT(occlusion.stats.castersDrawn, frustum.stats.castersDrawn);
+    EXPECT_LT(mask.stats.trianglesDrawn, all.stats.trianglesDrawn / 4);
+    EXPECT_GT(mask.stats.queriesIssued, 0u);
+    EXPECT_GT(mask.stats.nodesVisited, 0u);
+}
+
+TEST(CullingModeNames, ParseAndNameRoundTripAndBadNamesAreNamed)
+{
+    for (const CullingMode m :
+         {CullingMode::None, CullingMode::Frustum, CullingMode::LightOcclusion, CullingMode::ReceiverMask})
+        EXPECT_EQ(config::parseCullingMode(config::cullingModeName(m)), m);
+    try {
+        config::parseCullingMode("occlusion");
+        FAIL() << "expected a ConfigError";
+    } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("'occlusion'"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("receiver-mask"), std::string::npos) << e.what();
+    }
+}
+
+} // namespace
