@@ -103,6 +103,25 @@ TEST_F(Cli, TimingsListEveryPass)
     }
 }
 
+TEST_F(Cli, StatsReportWhatCullingDrew)
+{
+    const fs::path png = dir / "out.png";
+    const CliResult none = run(fmt::format("render {} -o '{}' --width 160 --height 90 --frames 2 --stats --culling none",
+                                           config("default.json"), png.string()));
+    ASSERT_EQ(none.exitCode, 0) << none.err;
+    EXPECT_NE(none.out.find("culling none"), std::string::npos) << none.out;
+    EXPECT_NE(none.out.find("triangles drawn in caster passes       9326"), std::string::npos) << none.out;
+    const CliResult mask = run(fmt::format("render {} -o '{}' --width 160 --height 90 --frames 2 --stats --culling "
+                                           "receiver-mask --validation",
+                                           config("default.json"), png.string()));
+    ASSERT_EQ(mask.exitCode, 0) << mask.err;
+    for (const char* line : {"culling receiver-mask", "occlusion queries issued", "BVH nodes visited", "receiver masks ms"})
+        EXPECT_NE(mask.out.find(line), std::string::npos) << line << "\n" << mask.out;
+    const CliResult bad = run(fmt::format("render {} -o '{}' --culling occlusion", config("default.json"), png.string()));
+    EXPECT_NE(bad.exitCode, 0);
+    EXPECT_NE(bad.err.find("--culling"), std::string::npos) << bad.err;
+}
+
 TEST_F(Cli, MissingConfig)
 {
     const CliResult r = run(fmt::format("render '{}/nope.json' -o '{}/out.png'", dir.string(), dir.string()));

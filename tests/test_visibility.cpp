@@ -160,7 +160,9 @@ TEST_F(VisibilityCulling, ACasterOutsideTheViewShadowsAVisibleReceiver)
         EXPECT_TRUE(sameVisibility(all.visibility, culled.visibility, cfg.width));
         // The frustum leaves the tower out of the G-buffer; the occlusion modes cull per
         // BVH leaf, and one leaf holds both instances.
-        if (mode == CullingMode::Frustum) EXPECT_EQ(culled.stats.receivers, 1u) << "the camera sees only the ground";
+        if (mode == CullingMode::Frustum) {
+            EXPECT_EQ(culled.stats.receivers, 1u) << "the camera sees only the ground";
+        }
         EXPECT_EQ(culled.stats.castersDrawn, 2u) << "ground and tower";
     }
 }

@@ -1,0 +1,202 @@
+// Caster culling (render/Visibility.h) on the generated city: 13 x 13 blocks (over a
+// million triangles, over 10,000 instances), a low sun shadowed by `hard` with a 2048²
+// map, seen from the street and from a bird's-eye view, in the four culling modes side by
+// side. Each iteration renders one frame; the iteration time is the frame's wall time
+// (manual time). Counters, means over the iterations:
+//   shadow_ms     the shadow depth pass on the GPU plus the culling work done for it
+//                 (receiver masks and caster queries, wall clock)
+//   depth_ms      the shadow depth pass alone (GPU)
+//   camera_ms     the camera culling (step 1) before the G-buffer
+//   triangles     triangles drawn into the shadow map
+//   oracle        triangles of the casters that really shadow a visible pixel: every
+//                 instance a shadow ray from a visible pixel towards the sun hits (CPU
+//                 ray casting over the instances' triangles, once per view)
+//   casters, queries, nodes: instance draws, occlusion queries, BVH nodes visited
+//
+//   cmake --build --preset release --target penumbra_benchmarks
+//   build/release/tests/benchmarks/penumbra_benchmarks --benchmark_filter=Culling --benchmark_min_time=1x
+//
+// Figures: docs/culling.md.
+#include "penumbra/config/Config.h"
+#include "penumbra/gpu/Context.h"
+#include "penumbra/plugin/PluginRegistry.h"
+#include "penumbra/render/FrameRenderer.h"
+#include "penumbra/scene/Bvh.h"
+#include "penumbra/scene/Generators.h"
+
+#include <benchmark/benchmark.h>
+#include <fmt/format.h>
+
+#include <cmath>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+using namespace penumbra;
+
+namespace {
+
+constexpr uint32_t kWidth = 640, kHeight = 360;
+
+gpu::Context& context()
+{
+    static gpu::Context instance(gpu::ContextOptions{{}, false});
+    return instance;
+}
+
+plugin::PluginRegistry& registry()
+{
+    static plugin::PluginRegistry instance;
+    return instance;
+}
+
+const scene::Scene& city()
+{
+    static const scene::Scene instance = [] {
+        scene::CityParams p;
+        p.blocks = 13;
+        p.seed = 7;
+        return scene::generateCity(p);
+    }();
+    return instance;
+}
+
+enum class View { Street, BirdsEye };
+
+config::RenderConfig cityConfig(View view, config::CullingMode mode)
+{
+    config::RenderConfig cfg;
+    cfg.width = kWidth;
+    cfg.height = kHeight;
+    cfg.culling = mode;
+    const scene::Aabb bounds = city().bounds();
+    const glm::vec3 c = bounds.center();
+    if (view == View::Street) {
+        cfg.camera.position = {c.x + 2.0f, 1.7f, c.z - 20.0f};
+        cfg.camera.target = {c.x - 2.0f, 12.0f, c.z + 180.0f};
+    } else {
+        cfg.camera.position = {c.x - 300.0f, 500.0f, c.z - 300.0f};
+        cfg.camera.target = c;
+    }
+    cfg.camera.fovYDeg = 60.0f;
+    cfg.camera.nearWorld = 0.1f;
+    config::LightConfig light;
+    light.name = "sun";
+    light.light.type = scene::LightType::Directional;
+    light.light.direction = glm::normalize(glm::vec3(0.6f, -0.35f, 0.35f));  // about 25° above the horizon
+    light.light.intensity = 3.0f;
+    light.shadow.technique = "hard";
+    light.shadow.required = true;
+    light.shadow.setParam("resolution", 2048, "benchmark");
+    cfg.lights.push_back(light);
+    return cfg;
+}
+
+// Möller-Trumbore, double precision; hits with t in (0, tMax).
+bool hitsTriangle(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& a, const glm::dvec3& b,
+                  const glm::dvec3& c, double tMax)
+{
+    const glm::dvec3 e1 = b - a, e2 = c - a, p = glm::cross(d, e2);
+    const double det = glm::dot(e1, p);
+    if (std::abs(det) < 1e-300) return false;
+    const double inv = 1.0 / det;
+    const glm::dvec3 s = o - a;
+    const double u = glm::dot(s, p) * inv;
+    if (u < 0.0 || u > 1.0) return false;
+    const glm::dvec3 q = glm::cross(s, e1);
+    const double v = glm::dot(d, q) * inv;
+    if (v < 0.0 || u + v > 1.0) return false;
+    const double t = glm::dot(e2, q) * inv;
+    return t > 0.0 && t < tMax;
+}
+
+// Triangles of the instances that some visible pixel's shadow ray hits.
+uint64_t oracleTriangles(View view)
+{
+    static std::map<View, uint64_t> cache;
+    if (auto it = cache.find(view); it != cache.end()) return it->second;
+    const scene::Scene& scene = city();
+    const config::RenderConfig cfg = cityConfig(view, config::CullingMode::None);
+    render::FrameRenderer renderer(context(), scene, cfg, registry());
+    renderer.renderFrame();
+    const std::vector<float> positions = renderer.readPositions();
+    const std::vector<float> normals = renderer.readNormals();
+    const scene::InstanceBvh bvh(scene::instanceWorldBounds(scene.instances));
+    const glm::dvec3 toLight = -glm::normalize(glm::dvec3(cfg.lights[0].light.direction));
+    const double offset = 1e-4 * scene.bounds().radius();
+    std::vector<uint8_t> shadows(scene.instances.size(), 0);
+    std::vector<scene::RayHit> hits;
+    for (size_t px = 0; px < size_t(kWidth) * kHeight; ++px) {
+        if (positions[4 * px + 3] == 0.0f) continue;
+        const glm::dvec3 n(normals[4 * px], normals[4 * px + 1], normals[4 * px + 2]);
+        // Faces turned away from the sun are shadowed by themselves (the horizon), not by
+        // casters.
+        if (glm::dot(n, toLight) <= 0.0) continue;
+        const glm::dvec3 o = glm::dvec3(positions[4 * px], positions[4 * px + 1], positions[4 * px + 2]) + offset * n;
+        bvh.findAllHits({glm::vec3(o), glm::vec3(toLight)}, hits);
+        for (const scene::RayHit& h : hits) {
+            if (shadows[h.instance]) continue;
+            const scene::Instance& inst = scene.instances[h.instance];
+            const scene::Mesh& mesh = scene.meshes[inst.mesh];
+            const glm::dmat4 m(scene.instanceTransform(inst));
+            for (size_t t = 0; t + 2 < mesh.indices.size() && !shadows[h.instance]; t += 3) {
+                glm::dvec3 v[3];
+                for (int k = 0; k < 3; ++k) v[k] = glm::dvec3(m * glm::dvec4(glm::dvec3(mesh.vertices[mesh.indices[t + k]].position), 1.0));
+                if (hitsTriangle(o, toLight, v[0], v[1], v[2], 1e30)) shadows[h.instance] = 1;
+            }
+        }
+    }
+    uint64_t triangles = 0;
+    for (size_t i = 0; i < shadows.size(); ++i)
+        if (shadows[i]) triangles += scene.meshes[scene.instances[i].mesh].indices.size() / 3;
+    cache[view] = triangles;
+    return triangles;
+}
+
+void BM_Culling(benchmark::State& state, View view, config::CullingMode mode)
+{
+    const scene::Scene& scene = city();
+    const config::RenderConfig cfg = cityConfig(view, mode);
+    const uint64_t oracle = oracleTriangles(view);
+    render::FrameRenderer renderer(context(), scene, cfg, registry());
+    renderer.renderFrame();  // lavapipe compiles pipelines at first use
+    const std::string depthPass = "light0.hard.shadow_map";
+    double depthMs = 0.0, shadowMs = 0.0, cameraMs = 0.0;
+    render::CullingStats last;
+    for (auto _ : state) {
+        const render::FrameTimings t = renderer.renderFrame();
+        double depth = 0.0;
+        for (const render::PassTiming& p : t.passes)
+            if (p.name == depthPass) depth += p.gpuMs;
+        depthMs += depth;
+        shadowMs += depth + t.culling.maskMs + t.culling.casterCullMs;
+        cameraMs += t.culling.cameraMs;
+        last = t.culling;
+        state.SetIterationTime(t.frameCpuMs / 1000.0);
+    }
+    const double n = double(std::max<int64_t>(state.iterations(), 1));
+    state.counters["shadow_ms"] = shadowMs / n;
+    state.counters["depth_ms"] = depthMs / n;
+    state.counters["camera_ms"] = cameraMs / n;
+    state.counters["triangles"] = double(last.trianglesDrawn);
+    state.counters["oracle"] = double(oracle);
+    state.counters["casters"] = double(last.castersDrawn);
+    state.counters["queries"] = double(last.queriesIssued);
+    state.counters["nodes"] = double(last.nodesVisited);
+    state.counters["receivers"] = double(last.receivers);
+}
+
+[[maybe_unused]] const bool registered = [] {
+    for (const View view : {View::Street, View::BirdsEye}) {
+        for (const config::CullingMode mode : {config::CullingMode::None, config::CullingMode::Frustum,
+                                               config::CullingMode::LightOcclusion, config::CullingMode::ReceiverMask}) {
+            const std::string name = fmt::format("Culling/{}/{}", view == View::Street ? "street" : "birds_eye",
+                                                 config::cullingModeName(mode));
+            benchmark::RegisterBenchmark(name.c_str(), BM_Culling, view, mode)->UseManualTime()->Unit(benchmark::kMillisecond);
+        }
+    }
+    return true;
+}();
+
+} // namespace
