@@ -988,6 +988,8 @@ TEST_F(Cli, BenchMeasuresEveryVariantAgainstOneReferenceRender)
         EXPECT_EQ(row.at("technique_ms"), row.at("technique_gpu_ms")) << "without host passes, the time is the GPU's";
         EXPECT_EQ(row.at("scene"), "box-grid");
         EXPECT_EQ(row.at("width"), "64");
+        EXPECT_EQ(row.at("culling"), "none");
+        EXPECT_EQ(row.at("triangles_drawn"), "0") << "neither the clear nor the fallback draws casters";
         for (const char* column : {"technique_ms", "technique_gpu_ms", "technique_host_ms", "technique_cpu_ms", "frame_gpu_ms",
                                    "frame_wall_ms", "ssim"}) {
             EXPECT_NO_THROW((void)std::stod(row.at(column))) << column;

@@ -397,6 +397,8 @@ BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& v
     result.width = images.width;
     result.height = images.height;
     result.frame = summarizeTimings(measured, "", hostPasses);
+    result.culling = config::cullingModeName(config.culling);
+    result.cullingStats = medianCulling(measured);
     for (size_t l = 0; l < config.lights.size(); ++l) {
         BenchLight light;
         light.index = l;

@@ -27,6 +27,21 @@ json timingJson(const TimingSummary& t)
             {"cpu_ms", t.cpuMs},   {"wall_ms", t.frameWallMs}, {"passes", std::move(passes)}};
 }
 
+json cullingJson(const std::string& mode, const render::CullingStats& s)
+{
+    return {{"mode", mode},
+            {"receivers", s.receivers},
+            {"views", s.views},
+            {"casters_drawn", s.castersDrawn},
+            {"triangles_drawn", s.trianglesDrawn},
+            {"nodes_visited", s.nodesVisited},
+            {"queries", s.queriesIssued},
+            {"query_rounds", s.queryRounds},
+            {"camera_ms", s.cameraMs},
+            {"mask_ms", s.maskMs},
+            {"caster_cull_ms", s.casterCullMs}};
+}
+
 // RFC 4180: a field with a comma, a quote or a line break is quoted, quotes doubled.
 std::string csvField(const std::string& text)
 {
@@ -45,7 +60,8 @@ std::vector<std::string> csvHeader()
                                         "params",      "scene",        "scene_params", "width",           "height",
                                         "light_index", "light",        "technique_ms", "technique_gpu_ms",
                                         "technique_host_ms", "technique_cpu_ms", "frame_gpu_ms", "frame_wall_ms",
-                                        "pass_ms", "memory_bytes"};
+                                        "pass_ms", "memory_bytes", "culling", "casters_drawn", "triangles_drawn",
+                                        "culling_queries", "culling_ms"};
     const auto statsColumns = [&](const std::string& prefix) {
         for (const char* figure : {"pixels", "rmse", "mae", "max_abs_error"}) columns.push_back(prefix + figure);
         for (size_t t = 0; t < metrics::kErrorThresholds.size(); ++t) {
@@ -88,7 +104,13 @@ std::vector<std::string> csvRow(const BenchVariant& v, const BenchLight& l)
                                        number(v.frame.gpuMs),
                                        number(v.frame.frameWallMs),
                                        passMs.dump(),
-                                       std::to_string(l.memoryBytes())};
+                                       std::to_string(l.memoryBytes()),
+                                       v.culling,
+                                       std::to_string(v.cullingStats.castersDrawn),
+                                       std::to_string(v.cullingStats.trianglesDrawn),
+                                       std::to_string(v.cullingStats.queriesIssued),
+                                       number(v.cullingStats.cameraMs + v.cullingStats.maskMs +
+                                              v.cullingStats.casterCullMs)};
     appendStats(fields, l.visibility.all);
     fields.push_back(number(l.visibility.ssim));
     for (const metrics::ErrorStats& region : l.visibility.regions) appendStats(fields, region);
@@ -220,6 +242,7 @@ json resultsJson(const BenchRun& run)
                             {"width", v.width},
                             {"height", v.height},
                             {"timing", timingJson(v.frame)},
+                            {"culling", cullingJson(v.culling, v.cullingStats)},
                             {"lights", std::move(lights)}});
     }
     return {{"config", run.config},

@@ -45,6 +45,8 @@ struct BenchVariant {
     uint32_t width = 0;
     uint32_t height = 0;
     TimingSummary frame;          // every pass of the frame
+    std::string culling;          // the config's culling mode
+    render::CullingStats cullingStats;  // medians per frame (render --stats)
     std::vector<BenchLight> lights;
 };
 

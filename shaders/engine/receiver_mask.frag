@@ -13,6 +13,10 @@ layout(location = 0) in vec3 inWorld;
 
 layout(binding = 1) uniform sampler2D cameraDepth;  // reversed-Z: near / view depth
 layout(binding = 2, r8) uniform writeonly image2D receiverMask;
+layout(push_constant) uniform Push {
+    mat4 lightViewProj;
+    int maskBlock;  // view texels per mask texel, per side
+} pc;
 layout(std430, binding = 3) readonly buffer Camera {
     mat4 viewProj;
     vec4 params;  // xy: camera image size, z: relative depth tolerance
@@ -31,5 +35,5 @@ void main()
         for (int dx = -1; dx <= 1; ++dx)
             farthest = min(farthest, texelFetch(cameraDepth, clamp(pixel + ivec2(dx, dy), ivec2(0), size - 1), 0).r);
     // Reversed-Z depth is near / d: "d_fragment <= d_camera * (1 + tolerance)".
-    if (ndc.z * (1.0 + camera.params.z) >= farthest) imageStore(receiverMask, ivec2(gl_FragCoord.xy), vec4(1.0));
+    if (ndc.z * (1.0 + camera.params.z) >= farthest) imageStore(receiverMask, ivec2(gl_FragCoord.xy) / pc.maskBlock, vec4(1.0));
 }

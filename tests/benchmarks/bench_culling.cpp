@@ -73,8 +73,10 @@ config::RenderConfig cityConfig(View view, config::CullingMode mode)
     const scene::Aabb bounds = city().bounds();
     const glm::vec3 c = bounds.center();
     if (view == View::Street) {
-        cfg.camera.position = {c.x + 2.0f, 1.7f, c.z - 20.0f};
-        cfg.camera.target = {c.x - 2.0f, 12.0f, c.z + 180.0f};
+        // On the street between the middle block and its neighbour (blocks are 60 m with
+        // 16 m streets: a street runs at 38 m from the centre), looking down it.
+        cfg.camera.position = {c.x + 40.0f, 1.7f, c.z - 300.0f};
+        cfg.camera.target = {c.x + 36.0f, 12.0f, c.z + 200.0f};
     } else {
         cfg.camera.position = {c.x - 300.0f, 500.0f, c.z - 300.0f};
         cfg.camera.target = c;

@@ -34,6 +34,12 @@ constexpr float kMaskSafetyTexels = 2.0f;
 // default rasterizer bias (hard: 4 r + 2 x slope), so that a caster culled as lying
 // behind an occluder would lie behind it in the technique's biased map too.
 constexpr float kCullBiasConstant = 64.0f;
+// The receiver mask is kept at most this many texels per side: each mask texel stands for
+// a block of the view's texels and is set when any texel of the block is (the receiver
+// pass writes gl_FragCoord / block). The queries still rasterise at the view's own
+// resolution (so coverage is the technique's), and only their mask lookup is coarse:
+// conservative, and it keeps the dilation's cost (serial sweeps per row and column) low.
+constexpr uint32_t kMaxMaskTexels = 256;
 constexpr float kCullBiasSlope = 8.0f;
 // lavapipe (PLATFORM.md): in a long run of queries inside one rendering instance about
 // one in 1,000 over-counts; ending and resuming rendering every few hundred keeps them
@@ -53,6 +59,18 @@ double msSince(std::chrono::steady_clock::time_point start)
 struct GpuBox {
     glm::vec4 lo;
     glm::vec4 hi;
+};
+
+struct ReceiverPush {  // receiver_mask.vert/.frag Push
+    glm::mat4 lightViewProj;
+    int32_t maskBlock;
+    int32_t pad[3];
+};
+
+struct CulledQueryPush {  // culling_mask.frag / occlusion_box.vert Push
+    glm::mat4 viewProj;
+    int32_t maskBlock;
+    int32_t pad[3];
 };
 
 struct CameraData {  // receiver_mask.frag Camera
@@ -124,6 +142,8 @@ struct Visibility::Target {
     gpu::Image depth;
     VkImageLayout depthLayout = VK_IMAGE_LAYOUT_UNDEFINED;
     gpu::Image mask, maskRows, maskDilated;  // light targets in receiver-mask mode
+    uint32_t maskSize = 0;   // texels per side of the masks
+    uint32_t maskBlock = 1;  // view texels per mask texel, per side
     // The traversal's view.
     glm::mat4 viewProj{1.0f};
     bool clearDepth = true;  // false: keep what the receiver pass drew
@@ -183,13 +203,16 @@ Visibility::Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders
     box_ = gpu::Pipeline(context_, shaders, boxDesc);
     if (mode_ == config::CullingMode::ReceiverMask) {
         d.fragmentShader = "engine/culling_mask.frag";
+        d.pushConstantBytes = sizeof(CulledQueryPush);
         d.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}, {1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}};
         maskLeafDepth_ = make("mask_leaf", true);
         maskLeafCount_ = make("mask_leaf_count", false);
         boxDesc.fragmentShader = d.fragmentShader;
+        boxDesc.pushConstantBytes = d.pushConstantBytes;
         boxDesc.bindings = d.bindings;
         boxDesc.name = "visibility.mask_box";
         maskBox_ = gpu::Pipeline(context_, shaders, boxDesc);
+        d.pushConstantBytes = sizeof(ReceiverPush);
         d.vertexShader = "engine/receiver_mask.vert";
         d.fragmentShader = "engine/receiver_mask.frag";
         d.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
@@ -329,9 +352,12 @@ Visibility::Target& Visibility::lightTarget(uint32_t resolution)
     if (mode_ == config::CullingMode::ReceiverMask) {
         const VkImageUsageFlags usage =
             VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-        t->mask = gpu::Image(context_, {resolution, resolution, kMaskFormat, usage, name + ".mask"});
-        t->maskRows = gpu::Image(context_, {resolution, resolution, kMaskFormat, usage, name + ".mask_rows"});
-        t->maskDilated = gpu::Image(context_, {resolution, resolution, kMaskFormat, usage, name + ".mask_dilated"});
+        t->maskBlock = (resolution + kMaxMaskTexels - 1) / kMaxMaskTexels;
+        t->maskSize = (resolution + t->maskBlock - 1) / t->maskBlock;
+        const uint32_t m = t->maskSize;
+        t->mask = gpu::Image(context_, {m, m, kMaskFormat, usage, name + ".mask"});
+        t->maskRows = gpu::Image(context_, {m, m, kMaskFormat, usage, name + ".mask_rows"});
+        t->maskDilated = gpu::Image(context_, {m, m, kMaskFormat, usage, name + ".mask_dilated"});
         context_.submitAndWait([&](VkCommandBuffer cmd) {
             for (const gpu::Image* image : {&t->mask, &t->maskRows, &t->maskDilated})
                 gpu::transition(cmd, *image, gpu::access::kUndefined,
@@ -372,8 +398,10 @@ void Visibility::cullLightView(const CasterView& view, ViewState& s)
         (sceneGpu_.isAlphaMasked(i) ? masked : solid).push_back(i);
     }
     const uint32_t size = view.resolution;
+    // The reach in mask texels: a view texel within `reach` of a marked one lies in a mask
+    // texel within ceil(reach / block) of the marked one's.
     const float reach = std::min(view.footprintTexels, float(size)) + kMaskSafetyTexels;
-    const auto radius = int32_t(std::min(std::ceil(std::max(reach, 0.0f)), float(size)));
+    const auto radius = int32_t(std::min(std::ceil(std::max(reach, 0.0f) / float(t.maskBlock)), float(t.maskSize)));
     context_.submitAndWait([&](VkCommandBuffer cmd) {
         // The previous submission's reads and writes of these images (the last view).
         gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT},
@@ -412,7 +440,8 @@ void Visibility::cullLightView(const CasterView& view, ViewState& s)
                 .storageImage(2, t.mask)
                 .storageBuffer(3, cameraData_)
                 .push(context_, cmd, *p);
-            p->pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
+            const ReceiverPush push{view.viewProj, int32_t(t.maskBlock)};
+            p->pushConstants(cmd, &push, sizeof(push));
             // Alpha-masked receivers mark the mask but write no depth: their holes must
             // not hide the casters behind them.
             sceneGpu_.drawInstances(cmd, list, p == &receiverCount_);
@@ -432,9 +461,9 @@ void Visibility::cullLightView(const CasterView& view, ViewState& s)
                 .storageImage(0, *passes[vertical][0])
                 .storageImage(1, *passes[vertical][1])
                 .push(context_, cmd, dilate_);
-            const int32_t push[3] = {int32_t(size), radius, vertical};
+            const int32_t push[3] = {int32_t(t.maskSize), radius, vertical};
             dilate_.pushConstants(cmd, push, sizeof(push));
-            vkCmdDispatch(cmd, (size + 63) / 64, 1, 1);
+            vkCmdDispatch(cmd, (t.maskSize + 63) / 64, 1, 1);
             gpu::memoryBarrier(cmd, stores, loads);
         }
     });
@@ -537,7 +566,8 @@ void Visibility::occlusionCull(Target& t, std::vector<uint8_t>& nodeVisible, std
                 push.storageBuffer(0, boxPipeline ? boxes_ : sceneGpu_.instanceBuffer());
                 if (t.useMask) push.sampledImage(1, t.maskDilated, nearest_, VK_IMAGE_LAYOUT_GENERAL);
                 push.push(context_, cmd, p);
-                p.pushConstants(cmd, &t.viewProj, sizeof(glm::mat4));
+                const CulledQueryPush constants{t.viewProj, int32_t(t.maskBlock)};
+                p.pushConstants(cmd, &constants, t.useMask ? sizeof(constants) : sizeof(glm::mat4));
                 bound = &p;
             };
             const auto beginQuery = [&]() {
