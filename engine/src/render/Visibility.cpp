@@ -21,22 +21,16 @@ namespace {
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
 constexpr VkFormat kMaskFormat = VK_FORMAT_R8_UNORM;
 
-// The reverse shadow test's relative depth tolerance (receiver_mask.frag): a receiver
-// point counts as seen by the camera when it lies at most 1 % behind the camera depth.
-// Relative, so it holds at every scene scale; wide, since a receiver dropped from the mask
-// loses casters while one kept in excess only costs culling.
-constexpr float kReverseTestTolerance = 0.01f;
-// Texels added to every view's footprint in the mask: a visible point's own texel need
-// not be covered by the receiver fragment at its centre (1), and receiver bias (normal
-// offset, receiver plane) moves the lookup by up to about a texel (1).
+// Texels added to every view's footprint in the mask: the technique's lookup texel may
+// round differently from the mask's (1), and receiver bias (normal offset, receiver
+// plane) moves the lookup by up to about a texel (1).
 constexpr float kMaskSafetyTexels = 2.0f;
 // Light-view culling depth is pushed away from the light by more than the techniques'
 // default rasterizer bias (hard: 4 r + 2 x slope), so that a caster culled as lying
 // behind an occluder would lie behind it in the technique's biased map too.
 constexpr float kCullBiasConstant = 64.0f;
 // The receiver mask is kept at most this many texels per side: each mask texel stands for
-// a block of the view's texels and is set when any texel of the block is (the receiver
-// pass writes gl_FragCoord / block). The queries still rasterise at the view's own
+// a block of the view's texels and is set when any texel of the block is. The queries still rasterise at the view's own
 // resolution (so coverage is the technique's), and only their mask lookup is coarse:
 // conservative, and it keeps the dilation's cost (serial sweeps per row and column) low.
 constexpr uint32_t kMaxMaskTexels = 256;
@@ -61,10 +55,10 @@ struct GpuBox {
     glm::vec4 hi;
 };
 
-struct ReceiverPush {  // receiver_mask.vert/.frag Push
+struct ScatterPush {  // receiver_scatter.comp Push
     glm::mat4 lightViewProj;
     int32_t maskBlock;
-    int32_t pad[3];
+    int32_t resolution;
 };
 
 struct CulledQueryPush {  // culling_mask.frag / occlusion_box.vert Push
@@ -73,9 +67,9 @@ struct CulledQueryPush {  // culling_mask.frag / occlusion_box.vert Push
     int32_t pad[3];
 };
 
-struct CameraData {  // receiver_mask.frag Camera
-    glm::mat4 viewProj;
-    glm::vec4 params;
+struct CameraData {  // receiver_scatter.comp Camera
+    glm::mat4 inverseViewProj;
+    glm::vec4 size;
 };
 
 bool outside(const scene::Frustum& f, const scene::Aabb& box)
@@ -212,16 +206,15 @@ Visibility::Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders
         boxDesc.bindings = d.bindings;
         boxDesc.name = "visibility.mask_box";
         maskBox_ = gpu::Pipeline(context_, shaders, boxDesc);
-        d.pushConstantBytes = sizeof(ReceiverPush);
-        d.vertexShader = "engine/receiver_mask.vert";
-        d.fragmentShader = "engine/receiver_mask.frag";
-        d.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                      {1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                      {2, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                      {3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
-        receiverDepth_ = make("receivers", true);
-        receiverCount_ = make("receivers_count", false);
         gpu::ComputePipelineDesc c;
+        c.name = "visibility.receiver_scatter";
+        c.shader = "engine/receiver_scatter.comp";
+        c.bindings = {{0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+                      {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                      {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
+        c.pushConstantBytes = sizeof(ScatterPush);
+        scatter_ = gpu::Pipeline(context_, shaders, c);
+        c = {};
         c.name = "visibility.dilate";
         c.shader = "engine/mask_dilate.comp";
         c.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}, {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
@@ -304,7 +297,7 @@ void Visibility::beginFrame(const glm::mat4& cameraViewProj)
                                  VK_ACCESS_2_SHADER_SAMPLED_READ_BIT});
             });
             t.depthLayout = VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL;
-            CameraData data{cameraViewProj, glm::vec4(float(width_), float(height_), kReverseTestTolerance, 0.0f)};
+            CameraData data{glm::inverse(cameraViewProj), glm::vec4(float(width_), float(height_), 0.0f, 0.0f)};
             std::memcpy(cameraData_.mapped(), &data, sizeof(data));
         }
         break;
@@ -388,8 +381,9 @@ void Visibility::cullLightView(const CasterView& view, ViewState& s)
     }
 
     // Step 2: the receiver mask. The camera's receivers inside this view are rasterised
-    // from the light (their depth, and the mask texels the camera sees), and the mask is
-    // dilated by the view's footprint.
+    // from the light (their depth), the texels the camera's pixels see are marked
+    // (receiver_scatter.comp: the reverse shadow test, from the camera's side), and the
+    // mask is dilated by the view's footprint.
     std::vector<uint8_t> inView;
     cullFrustum(view.viewProj, inView);
     std::vector<uint32_t> solid, masked;
@@ -430,23 +424,27 @@ void Visibility::cullLightView(const CasterView& view, ViewState& s)
         vkCmdSetViewport(cmd, 0, 1, &viewport);
         vkCmdSetScissor(cmd, 0, 1, &scissor);
         vkCmdSetDepthBias(cmd, -kCullBiasConstant, 0.0f, -kCullBiasSlope);
-        for (const gpu::Pipeline* p : {&receiverDepth_, &receiverCount_}) {
-            const std::vector<uint32_t>& list = p == &receiverDepth_ ? solid : masked;
-            if (list.empty()) continue;
-            p->bind(cmd);
-            gpu::DescriptorPush()
-                .storageBuffer(0, sceneGpu_.instanceBuffer())
-                .sampledImage(1, camera_->depth, nearest_, VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL)
-                .storageImage(2, t.mask)
-                .storageBuffer(3, cameraData_)
-                .push(context_, cmd, *p);
-            const ReceiverPush push{view.viewProj, int32_t(t.maskBlock)};
-            p->pushConstants(cmd, &push, sizeof(push));
-            // Alpha-masked receivers mark the mask but write no depth: their holes must
-            // not hide the casters behind them.
-            sceneGpu_.drawInstances(cmd, list, p == &receiverCount_);
+        // The receivers' depth from the light, which the caster queries are tested
+        // against. Alpha-masked receivers write none: their holes must not hide the
+        // casters behind them.
+        if (!solid.empty()) {
+            leafDepth_.bind(cmd);
+            gpu::DescriptorPush().storageBuffer(0, sceneGpu_.instanceBuffer()).push(context_, cmd, leafDepth_);
+            leafDepth_.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
+            sceneGpu_.drawInstances(cmd, solid, false);
         }
         vkCmdEndRendering(cmd);
+
+        // The texels the camera's pixels look up (receiver_scatter.comp).
+        scatter_.bind(cmd);
+        gpu::DescriptorPush()
+            .sampledImage(0, camera_->depth, nearest_, VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL)
+            .storageImage(1, t.mask)
+            .storageBuffer(2, cameraData_)
+            .push(context_, cmd, scatter_);
+        const ScatterPush scatter{view.viewProj, int32_t(t.maskBlock), int32_t(size)};
+        scatter_.pushConstants(cmd, &scatter, sizeof(scatter));
+        vkCmdDispatch(cmd, (width_ + 7) / 8, (height_ + 7) / 8, 1);
 
         const gpu::MemoryAccess stores{VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                                        VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};

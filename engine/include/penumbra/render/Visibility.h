@@ -12,11 +12,13 @@
 //   light-occlusion  camera: hierarchical occlusion culling (below); light views: the same
 //                    occlusion culling from the light (the paper's REF)
 //   receiver-mask    camera: hierarchical occlusion culling; light views: the visible
-//                    receivers are rasterised from the light with the reverse shadow test
-//                    against the camera depth into a receiver mask, dilated by the view's
-//                    footprint, and casters are kept only where a hierarchical occlusion
-//                    query that discards fragments outside the mask finds samples in
-//                    front of the receivers (the paper's method, steps 1-3)
+//                    receivers are rasterised from the light (their depth), the texels
+//                    that camera pixels see are marked in a receiver mask (the reverse
+//                    shadow test, done from the camera's side: each pixel unprojected
+//                    from the camera depth marks its texel), the mask is dilated by the
+//                    view's footprint, and casters are kept only where a hierarchical
+//                    occlusion query that discards fragments outside the mask finds
+//                    samples in front of the receivers (the paper's method, steps 1-3)
 //
 // Hierarchical occlusion culling (CHC++, Mattausch, Bittner and Wimmer 2008) over the
 // scene's instance BVH, with occlusion queries that are waited for within the frame, so
@@ -127,10 +129,10 @@ private:
 
     // Pipelines: depth-only leaf draws (writing depth, or only counting samples for
     // alpha-masked instances), box queries; the same behind the receiver mask; the
-    // receiver pass; the mask dilation.
+    // receiver mask's scatter and dilation.
     gpu::Pipeline leafDepth_, leafCount_, box_;
     gpu::Pipeline maskLeafDepth_, maskLeafCount_, maskBox_;
-    gpu::Pipeline receiverDepth_, receiverCount_;
+    gpu::Pipeline scatter_;
     gpu::Pipeline dilate_;
     gpu::Sampler nearest_;
     gpu::Buffer boxes_;
