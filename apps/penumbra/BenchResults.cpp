@@ -37,6 +37,7 @@ json cullingJson(const std::string& mode, const render::CullingStats& s)
             {"nodes_visited", s.nodesVisited},
             {"queries", s.queriesIssued},
             {"query_rounds", s.queryRounds},
+            {"mask_rejected", s.maskRejected},
             {"camera_ms", s.cameraMs},
             {"mask_ms", s.maskMs},
             {"caster_cull_ms", s.casterCullMs}};

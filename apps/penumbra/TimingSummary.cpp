@@ -78,6 +78,7 @@ render::CullingStats medianCulling(const std::vector<render::FrameTimings>& fram
     s.nodesVisited = uint64_t(med(&render::CullingStats::nodesVisited));
     s.queriesIssued = uint64_t(med(&render::CullingStats::queriesIssued));
     s.queryRounds = uint64_t(med(&render::CullingStats::queryRounds));
+    s.maskRejected = uint64_t(med(&render::CullingStats::maskRejected));
     s.receivers = uint64_t(med(&render::CullingStats::receivers));
     s.views = uint64_t(med(&render::CullingStats::views));
     s.castersDrawn = uint64_t(med(&render::CullingStats::castersDrawn));
@@ -98,6 +99,7 @@ void printCulling(const render::CullingStats& s, std::string_view mode)
     fmt::print("  BVH nodes visited                      {}\n", s.nodesVisited);
     fmt::print("  occlusion queries issued               {}\n", s.queriesIssued);
     fmt::print("  query rounds (submissions waited for)  {}\n", s.queryRounds);
+    fmt::print("  nodes culled by the mask, no query     {}\n", s.maskRejected);
     fmt::print("  camera culling ms                      {:.2f}\n", s.cameraMs);
     fmt::print("  receiver masks ms                      {:.2f}\n", s.maskMs);
     fmt::print("  caster culling ms                      {:.2f}\n", s.casterCullMs);
