@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -109,6 +110,8 @@ const TechniqueCase kTechniques[] = {
     {"vsm_blur", "vsm", R"({"resolution": 512, "blur_radius": 4})"},
     {"vsm_mips", "vsm", R"({"resolution": 512, "filter": "trilinear"})"},
 };
+
+void PrintTo(const TechniqueCase& c, std::ostream* os) { *os << c.name; }
 
 class CullingPerTechnique : public VisibilityCulling,
                             public ::testing::WithParamInterface<std::tuple<TechniqueCase, scene::LightType>> {};
