@@ -416,12 +416,8 @@ TEST_F(PcssTest, BlockerAtTheLightIsClampedNotInfinite)
     // shadow covers all the ground in view (seen from under the plate). (d_r - d_b) / d_b
     // is 3000: the radii stop at their maxima, every tap finds the plate, V = 0 exactly.
     scene::Scene s = test::planeScene();
-    scene::Mesh plate = scene::makePlane("plate");
-    plate.computeBounds();
-    s.meshes.push_back(plate);
-    s.addInstance(1, s.graph.addNode("plate", scene::kNoParent,
-                                     glm::scale(glm::translate(glm::mat4(1.0f), {0.0f, 2.999f, 0.0f}),
-                                                {0.2f, 1.0f, 0.2f})));
+    test::addInstance(s, test::addMesh(s, scene::makePlane("plate")), "plate",
+                      glm::scale(glm::translate(glm::mat4(1.0f), {0.0f, 2.999f, 0.0f}), {0.2f, 1.0f, 0.2f}));
     config::RenderConfig cfg = test::boxOnGroundConfig();
     cfg.camera.position = {0.0f, 1.0f, 0.0f};
     cfg.camera.target = {0.0f, 0.0f, 0.0f};

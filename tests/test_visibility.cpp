@@ -139,12 +139,8 @@ INSTANTIATE_TEST_SUITE_P(Visibility, CullingPerTechnique,
 TEST_F(VisibilityCulling, ACasterOutsideTheViewShadowsAVisibleReceiver)
 {
     scene::Scene scene = test::planeScene();
-    scene::Mesh box = scene::makeBox("tower");
-    box.computeBounds();
-    scene.meshes.push_back(box);
-    scene.addInstance(1, scene.graph.addNode("tower", scene::kNoParent,
-                                             glm::scale(glm::translate(glm::mat4(1.0f), {-6.0f, 4.0f, 0.0f}),
-                                                        glm::vec3(1.0f, 8.0f, 1.0f))));
+    test::addInstance(scene, test::addMesh(scene, scene::makeBox("tower")), "tower",
+                      glm::scale(glm::translate(glm::mat4(1.0f), {-6.0f, 4.0f, 0.0f}), glm::vec3(1.0f, 8.0f, 1.0f)));
     config::RenderConfig cfg = smallDefault(scene::LightType::Directional, "hard", {{"resolution", 512}});
     cfg.camera.position = {2.0f, 3.0f, 0.0f};
     cfg.camera.target = {6.0f, 0.0f, 0.0f};
@@ -176,9 +172,7 @@ TEST_F(VisibilityCulling, ACasterOutsideTheViewShadowsAVisibleReceiver)
 TEST_F(VisibilityCulling, ThinCastersSeenEdgeOnKeepTheirShadows)
 {
     scene::Scene scene = test::planeScene();
-    scene::Mesh slat = scene::makePlane("slat");
-    slat.computeBounds();
-    scene.meshes.push_back(slat);
+    const uint32_t slat = test::addMesh(scene, scene::makePlane("slat"));
     for (int i = 0; i < 12; ++i) {
         // Vertical unit quads (the plane turned about z) along x, each turned a little
         // more about y, so that the light sees some of them almost exactly edge-on.
@@ -186,7 +180,7 @@ TEST_F(VisibilityCulling, ThinCastersSeenEdgeOnKeepTheirShadows)
         m = glm::rotate(m, glm::radians(-4.0f + 0.7f * float(i)), glm::vec3(0, 1, 0));
         m = glm::rotate(m, glm::radians(90.0f), glm::vec3(0, 0, 1));
         m = glm::scale(m, glm::vec3(2.0f, 1.0f, 2.0f));
-        scene.addInstance(1, scene.graph.addNode("slat", scene::kNoParent, m));
+        test::addInstance(scene, slat, "slat", m);
     }
     scene.updateTransforms();
     for (const char* params : {R"({"resolution": 512})", R"({"resolution": 512, "filter": "pcf", "pcf_kernel": 5})"}) {

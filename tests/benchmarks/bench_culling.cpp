@@ -17,6 +17,8 @@
 //   build/release/tests/benchmarks/penumbra_benchmarks --benchmark_filter=Culling --benchmark_min_time=1x
 //
 // Figures: docs/culling.md.
+#include "BenchContext.h"
+
 #include "penumbra/config/Config.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/plugin/PluginRegistry.h"
@@ -39,17 +41,8 @@ namespace {
 
 constexpr uint32_t kWidth = 640, kHeight = 360;
 
-gpu::Context& context()
-{
-    static gpu::Context instance(gpu::ContextOptions{{}, false});
-    return instance;
-}
-
-plugin::PluginRegistry& registry()
-{
-    static plugin::PluginRegistry instance;
-    return instance;
-}
+using bench::context;
+using bench::registry;
 
 const scene::Scene& city()
 {

@@ -10,6 +10,8 @@
 //
 // The same figures for any config: penumbra render CONFIG -o out.png --frames 30 --timings.
 // Figures: see plugins/pcss/README.md and plugins/vsm/README.md.
+#include "BenchContext.h"
+
 #include "penumbra/config/Config.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/plugin/PluginRegistry.h"
@@ -48,17 +50,8 @@ const Technique kTechniques[] = {
     {"esm_gaussian2", "vsm", {{"resolution", 2048}, {"variant", "esm"}}},
 };
 
-gpu::Context& context()
-{
-    static gpu::Context instance(gpu::ContextOptions{{}, false});
-    return instance;
-}
-
-plugin::PluginRegistry& registry()
-{
-    static plugin::PluginRegistry instance;
-    return instance;
-}
+using bench::context;
+using bench::registry;
 
 void BM_ShadowTechnique(benchmark::State& state, const Technique& technique)
 {

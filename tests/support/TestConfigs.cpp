@@ -63,6 +63,18 @@ scene::Scene planeScene()
     return s;
 }
 
+uint32_t addMesh(scene::Scene& s, scene::Mesh mesh)
+{
+    mesh.computeBounds();
+    s.meshes.push_back(std::move(mesh));
+    return uint32_t(s.meshes.size() - 1);
+}
+
+uint32_t addInstance(scene::Scene& s, uint32_t mesh, const std::string& name, const glm::mat4& transform)
+{
+    return s.addInstance(mesh, s.graph.addNode(name, scene::kNoParent, transform));
+}
+
 scene::Scene boxOnGroundScene()
 {
     scene::Scene s = planeScene();

@@ -4,6 +4,11 @@
 #include "penumbra/config/Config.h"
 #include "penumbra/scene/Scene.h"
 
+#include <glm/glm.hpp>
+
+#include <cstdint>
+#include <string>
+
 namespace penumbra::test {
 
 // config/default.json at 320 x 180. Small image, full-size shadow map: the tests check
@@ -23,6 +28,11 @@ void setLightType(config::LightConfig& light, scene::LightType type);
 
 // A 20 x 20 plane alone at y = 0: a receiver with nothing to cast onto it.
 scene::Scene planeScene();
+
+// Adds `mesh` (its bounds computed) to `s`; returns its index.
+uint32_t addMesh(scene::Scene& s, scene::Mesh mesh);
+// Adds an instance of mesh `mesh` under a new root node `name` placed by `transform`.
+uint32_t addInstance(scene::Scene& s, uint32_t mesh, const std::string& name, const glm::mat4& transform);
 
 // A unit box standing on planeScene()'s ground (touching it along its whole foot),
 // centred at x = z = 0.

@@ -1,0 +1,13 @@
+#pragma once
+// What every GPU benchmark shares: one Vulkan context (validation off: it would be
+// measured too) and one plugin registry (the build tree's plugins), made on first use and
+// kept for the process.
+#include "penumbra/gpu/Context.h"
+#include "penumbra/plugin/PluginRegistry.h"
+
+namespace penumbra::bench {
+
+gpu::Context& context();
+plugin::PluginRegistry& registry();
+
+} // namespace penumbra::bench
