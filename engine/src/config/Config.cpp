@@ -579,6 +579,17 @@ RenderConfig parseConfig(const ConfigDocument& document)
         }
     }
     config.culling = readCulling(r);
+    if (const json* focus = r.find("shadow_focus")) {
+        if (!focus->is_boolean()) r.fail("/shadow_focus", fmt::format("must be true or false, got {}", focus->dump()));
+        config.shadowFocus = focus->get<bool>();
+        // Focusing needs what the camera sees: the occlusion modes' camera depth.
+        if (config.shadowFocus && config.culling != CullingMode::ReceiverMask &&
+            config.culling != CullingMode::LightOcclusion) {
+            r.fail("/shadow_focus", fmt::format("needs culling \"receiver-mask\" (or \"light-occlusion\"), which "
+                                                "find what the camera sees; culling is \"{}\"",
+                                                cullingModeName(config.culling)));
+        }
+    }
     if (const json* out = r.find("output")) {
         ObjectReader o(*out, locator, "/output");
         config.width = o.integer("width", config.width, 1, 16384);

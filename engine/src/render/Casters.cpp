@@ -20,6 +20,8 @@ void Casters::draw(VkCommandBuffer cmd, const CasterView& view, DrawFilter filte
     visibility_->countDraw(scene_->draw(cmd, filter, bindTexture, casters));
 }
 
+const scene::Aabb* Casters::focus() const { return visibility_ ? visibility_->focus() : nullptr; }
+
 gpu::VertexLayout Casters::positionLayout() const
 {
     return {scene_->vertexStride(), {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(scene::Vertex, position)}}};

@@ -97,7 +97,8 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
     s.pushConstantBytes = sizeof(ShadingPush);
     shadingPipeline_ = gpu::Pipeline(context, compiler_, s);
     nearestSampler_ = gpu::createSampler(context, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
-    visibility_ = std::make_unique<Visibility>(context, compiler_, scene, sceneGpu_, config.culling, width_, height_);
+    visibility_ = std::make_unique<Visibility>(context, compiler_, scene, sceneGpu_, config.culling, width_, height_,
+                                               config.shadowFocus);
     casters_.setVisibility(visibility_.get());
 
     createTechniques(config, scene);
@@ -282,8 +283,10 @@ void FrameRenderer::updateLights(const config::RenderConfig& config, const scene
                       int(scene::LightType::Disk) == 4,
                   "type codes in shaders/common/light.glsl");
     auto* lights = static_cast<LightData*>(lightBuffer_.mapped());
+    currentLights_.resize(config.lights.size());
     for (size_t i = 0; i < config.lights.size(); ++i) {
         const scene::Light& l = config.lights[i].light;
+        currentLights_[i] = l;
         lights[i].positionWorld = glm::vec4(l.position, float(int(l.type)));
         lights[i].direction = glm::vec4(glm::normalize(l.direction), std::cos(glm::radians(l.outerConeDeg)));
         lights[i].radiance = glm::vec4(l.color * l.intensity, std::cos(glm::radians(l.innerConeDeg)));
@@ -298,6 +301,11 @@ FrameTimings FrameRenderer::renderFrame()
     // Step 1 of the visibility service: the camera's receivers (the G-buffer draws them);
     // light views are culled when their casters are first drawn.
     visibility_->beginFrame(cameraViewProj_);
+    if (visibility_->focusing()) {
+        // The techniques refit their maps to what the camera sees this frame.
+        for (size_t i = 0; i < lights_.size(); ++i)
+            if (lights_[i].instance) lights_[i].instance->update(currentLights_[i], scene_.bounds());
+    }
     executor_.execute(*graph_);
     timings.passes = executor_.collectTimings();
     timings.culling = visibility_->stats();

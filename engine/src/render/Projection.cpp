@@ -67,7 +67,7 @@ LightFrustum perspectiveFrustum(const glm::vec3& position, const glm::vec3& dir,
 // direction. Reversed-Z like every depth buffer here: depth 1 nearest the light, 0 at
 // the far side. The box is padded by 1% of the scene radius so that no caster touches
 // the clip planes.
-LightFrustum directionalFrustum(const scene::Light& light, const scene::Aabb& bounds)
+LightFrustum directionalFrustum(const scene::Light& light, const scene::Aabb& bounds, const scene::Aabb* focus)
 {
     LightFrustum f{};
     const glm::vec3 dir = glm::normalize(light.direction);
@@ -75,6 +75,17 @@ LightFrustum directionalFrustum(const scene::Light& light, const scene::Aabb& bo
     const float radius = bounds.empty() ? 1.0f : std::max(bounds.radius(), 1e-30f);
     f.view = glm::lookAt(centre - dir * radius, centre, stableUp(dir, glm::vec3(0, 1, 0)));
     scene::Aabb box = bounds.empty() ? scene::Aabb{glm::vec3(-1.0f), glm::vec3(1.0f)} : bounds.transformed(f.view);
+    if (focus && !focus->empty() && !bounds.empty()) {
+        // Focused (Mattausch et al. 2011, §1.4): across the light, only the receivers'
+        // box; along it, from the scene's side nearest the light (every caster in front
+        // of a receiver stays in the map) to the receivers' far side.
+        const scene::Aabb r = focus->transformed(f.view);
+        const glm::vec3 lo = glm::max(box.min, r.min), hi = glm::min(box.max, r.max);
+        if (lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z) {
+            box.min = glm::vec3(lo.x, lo.y, lo.z);
+            box.max = glm::vec3(hi.x, hi.y, box.max.z);
+        }
+    }
     const float pad = 0.01f * radius;
     box.min -= pad;
     box.max += pad;
@@ -96,11 +107,11 @@ LightFrustum directionalFrustum(const scene::Light& light, const scene::Aabb& bo
 
 } // namespace
 
-std::vector<LightFrustum> shadowFrusta(const scene::Light& light, const scene::Aabb& bounds)
+std::vector<LightFrustum> shadowFrusta(const scene::Light& light, const scene::Aabb& bounds, const scene::Aabb* focus)
 {
     switch (light.type) {
     case scene::LightType::Directional:
-        return {directionalFrustum(light, bounds)};
+        return {directionalFrustum(light, bounds, focus)};
     case scene::LightType::Spot: {
         // The frustum covers the cone: its half-angle is the outer cone's (below 90° by
         // config validation).

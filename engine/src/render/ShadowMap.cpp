@@ -112,7 +112,8 @@ void ShadowMap::update(const scene::Light& light, const scene::Aabb& sceneBounds
         throw Error(fmt::format("{}: light {} changed type to {}; the shadow map was created for {} face(s)", name_,
                                 lightIndex_, scene::lightTypeName(light.type), faceCount_));
     }
-    frusta_ = shadowFrusta(light, sceneBounds);
+    // Focused on what the camera sees when the config asks for it (render/Visibility.h).
+    frusta_ = shadowFrusta(light, sceneBounds, casters_.focus());
     data_ = {};
     data_.faceCount = faceCount_;
     data_.faceTexels = float(resolution_);

@@ -194,15 +194,21 @@ struct Visibility::ViewState {
 };
 
 Visibility::Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders, const scene::Scene& scene,
-                       const SceneGpu& sceneGpu, config::CullingMode mode, uint32_t width, uint32_t height)
+                       const SceneGpu& sceneGpu, config::CullingMode mode, uint32_t width, uint32_t height,
+                       bool focus)
     : context_(context),
       scene_(scene),
       sceneGpu_(sceneGpu),
       mode_(mode),
       width_(width),
       height_(height),
-      bvh_(scene::instanceWorldBounds(scene.instances))
+      bvh_(scene::instanceWorldBounds(scene.instances)),
+      focusing_(focus)
 {
+    if (focusing_ && mode_ != config::CullingMode::LightOcclusion && mode_ != config::CullingMode::ReceiverMask) {
+        throw ConfigError(fmt::format("shadow_focus needs culling \"receiver-mask\" or \"light-occlusion\", not \"{}\"",
+                                      config::cullingModeName(mode_)));
+    }
     receivers_.assign(scene.instances.size(), 1);
     if (mode_ == config::CullingMode::None || mode_ == config::CullingMode::Frustum) return;
 
@@ -277,7 +283,8 @@ Visibility::Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders
     camera_->width = width_;
     camera_->height = height_;
     camera_->depth = gpu::Image(context_, {width_, height_, kDepthFormat,
-                                           VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT,
+                                           VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT |
+                                               VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
                                            "visibility.camera_depth"});
 }
 
@@ -324,6 +331,7 @@ void Visibility::beginFrame(const glm::mat4& cameraViewProj)
         t.useMask = false;
         t.lightView = false;
         occlusionCull(t, cameraNodes_, cameraHidden_, receivers_);
+        if (focusing_) computeFocus(cameraViewProj);
         if (mode_ == config::CullingMode::ReceiverMask) {
             // The receiver passes sample the camera depth.
             context_.submitAndWait([&](VkCommandBuffer cmd) {
@@ -344,6 +352,26 @@ void Visibility::beginFrame(const glm::mat4& cameraViewProj)
         if (receivers_[i]) receiverList_.push_back(i);
     stats_.receivers = receiverList_.size();
     stats_.cameraMs = msSince(start);
+}
+
+void Visibility::computeFocus(const glm::mat4& cameraViewProj)
+{
+    const std::vector<float> depth = gpu::readImageFloats(context_, camera_->depth, camera_->depthLayout);
+    const glm::mat4 inverse = glm::inverse(cameraViewProj);
+    focus_ = {};
+    for (uint32_t y = 0; y < height_; ++y) {
+        for (uint32_t x = 0; x < width_; ++x) {
+            const float d = depth[size_t(y) * width_ + x];
+            if (!(d > 0.0f)) continue;  // nothing drawn (reversed-Z far is 0)
+            // The pixel's corners, not its centre: the whole pixel's footprint stays in.
+            for (int corner = 0; corner < 4; ++corner) {
+                const glm::vec2 ndc((float(x) + float(corner & 1)) / float(width_) * 2.0f - 1.0f,
+                                    (float(y) + float(corner >> 1)) / float(height_) * 2.0f - 1.0f);
+                const glm::vec4 world = inverse * glm::vec4(ndc, d, 1.0f);
+                if (world.w != 0.0f) focus_.extend(glm::vec3(world) / world.w);
+            }
+        }
+    }
 }
 
 void Visibility::countDraw(const DrawCounts& counts)

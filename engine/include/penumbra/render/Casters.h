@@ -53,6 +53,11 @@ public:
 
     bool hasAlphaMasked() const { return scene_->hasAlphaMasked(); }
 
+    // The box of what the camera sees this frame when the config asks for shadow-map
+    // focusing ("shadow_focus"), else null: render::ShadowMap fits directional lights'
+    // maps to it.
+    const scene::Aabb* focus() const;
+
     // What caster pipelines bind: the instance table (shaders/common/scene.glsl
     // InstanceData, read as instances[gl_InstanceIndex]), the material table, the
     // base-colour texture sampler.

@@ -126,6 +126,7 @@ private:
     // One shader compiler per plugin: its folder first, then the engine's shaders/.
     std::map<std::string, std::unique_ptr<gpu::ShaderCompiler>> pluginShaders_;
     std::vector<LightSlot> lights_;
+    std::vector<scene::Light> currentLights_;  // as the last update() left them
     std::vector<std::string> warnings_;
     std::unique_ptr<graph::RenderGraph> graph_;
     graph::GraphExecutor executor_;

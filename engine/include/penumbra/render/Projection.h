@@ -26,6 +26,10 @@ struct LightFrustum {
     glm::mat4 viewProj;
     float nearWorld;
 };
-std::vector<LightFrustum> shadowFrusta(const scene::Light& light, const scene::Aabb& sceneBounds);
+// `focus`, when given and not empty: the box of what the camera sees. A directional
+// light's box is then fitted to it across the light and on its far side, and keeps the
+// scene's side nearest the light (shadow-map focusing); other lights ignore it.
+std::vector<LightFrustum> shadowFrusta(const scene::Light& light, const scene::Aabb& sceneBounds,
+                                       const scene::Aabb* focus = nullptr);
 
 } // namespace penumbra::render

@@ -72,8 +72,11 @@ class Visibility {
 public:
     // `scene` and `sceneGpu` must outlive the service; `width` x `height` is the camera's
     // output.
+    // `focus`: compute the box of what the camera sees every frame (focus()); needs an
+    // occlusion mode, whose camera pass leaves the camera depth.
     Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders, const scene::Scene& scene,
-               const SceneGpu& sceneGpu, config::CullingMode mode, uint32_t width, uint32_t height);
+               const SceneGpu& sceneGpu, config::CullingMode mode, uint32_t width, uint32_t height,
+               bool focus = false);
     ~Visibility();
     Visibility(const Visibility&) = delete;
     Visibility& operator=(const Visibility&) = delete;
@@ -95,6 +98,14 @@ public:
     const std::vector<uint8_t>* casters(const CasterView& view);
     void countDraw(const DrawCounts& counts);
 
+    // Shadow-map focusing (Mattausch et al. §1.4): the world box of every point the camera
+    // sees this frame (camera pixels unprojected from the camera depth), which lies in the
+    // view frustum by construction: the paper's "view frustum intersected with the
+    // visible objects' boxes", tightened to the visible surfaces. Null when focusing is
+    // off or the camera sees nothing.
+    const scene::Aabb* focus() const { return focusing_ && !focus_.empty() ? &focus_ : nullptr; }
+    bool focusing() const { return focusing_; }
+
     // This frame's figures so far.
     const CullingStats& stats() const { return stats_; }
 
@@ -104,6 +115,7 @@ private:
     struct Target;
 
     void cullFrustum(const glm::mat4& viewProj, std::vector<uint8_t>& visible) const;
+    void computeFocus(const glm::mat4& cameraViewProj);
     void occlusionCull(Target& target, std::vector<uint8_t>& nodeVisible, std::vector<uint16_t>& hidden,
                        std::vector<uint8_t>& visible);
     void cullLightView(const CasterView& view, ViewState& state);
@@ -127,6 +139,8 @@ private:
     std::map<std::pair<uint32_t, uint32_t>, std::unique_ptr<ViewState>> views_;  // by (light, view)
     uint64_t frame_ = 0;
     CullingStats stats_;
+    const bool focusing_;
+    scene::Aabb focus_;
 
     // Pipelines: depth-only leaf draws (writing depth, or only counting samples for
     // alpha-masked instances), box queries; the same behind the receiver mask; the
