@@ -338,6 +338,20 @@ TEST(Config, CullingMode)
     EXPECT_NE(errorOf(doc).find("/culling: must be one of none, frustum, light-occlusion, receiver-mask"), std::string::npos);
 }
 
+TEST(Config, ShadowFocusNeedsAnOcclusionMode)
+{
+    json doc = minimal();
+    EXPECT_FALSE(config::parseConfig(doc, "scene.json").shadowFocus);
+    doc["culling"] = "receiver-mask";
+    doc["shadow_focus"] = true;
+    EXPECT_TRUE(config::parseConfig(doc, "scene.json").shadowFocus);
+    doc["shadow_focus"] = "yes";
+    EXPECT_NE(errorOf(doc).find("/shadow_focus: must be true or false, got \"yes\""), std::string::npos) << errorOf(doc);
+    doc["shadow_focus"] = true;
+    doc["culling"] = "frustum";
+    EXPECT_NE(errorOf(doc).find("/shadow_focus: needs culling \"receiver-mask\""), std::string::npos) << errorOf(doc);
+}
+
 TEST(Config, AnimationTracksAreValidated)
 {
     json doc = minimal();
