@@ -31,12 +31,13 @@ constexpr float kMaskSafetyTexels = 2.0f;
 // default rasterizer bias (hard: 4 r + 2 x slope), so that a caster culled as lying
 // behind an occluder would lie behind it in the technique's biased map too.
 constexpr float kCullBiasConstant = 64.0f;
-// The receiver mask is kept at most this many texels per side: each mask texel stands for
-// a block of the view's texels and is set when any texel of the block is. The queries still rasterise at the view's own
-// resolution (so coverage is the technique's), and only their mask lookup is coarse:
-// conservative, and it keeps the dilation's cost (serial sweeps per row and column) low.
-constexpr uint32_t kMaxMaskTexels = 256;
 constexpr float kCullBiasSlope = 8.0f;
+// The receiver mask is kept at most this many texels per side: each mask texel stands for
+// a block of the view's texels and is set when any texel of the block is. The queries
+// still rasterise at the view's own resolution (so coverage is the technique's), and only
+// their mask lookup is coarse: conservative, and it keeps the dilation's cost (serial
+// sweeps per row and column) low.
+constexpr uint32_t kMaxMaskTexels = 256;
 // lavapipe (PLATFORM.md): in a long run of queries inside one rendering instance about
 // one in 1,000 over-counts; ending and resuming rendering every few hundred keeps them
 // exact. (An over-count only costs culling; it is never wrong.)
@@ -347,10 +348,7 @@ void Visibility::beginFrame(const glm::mat4& cameraViewProj)
         break;
     }
     }
-    receiverList_.clear();
-    for (uint32_t i = 0; i < receivers_.size(); ++i)
-        if (receivers_[i]) receiverList_.push_back(i);
-    stats_.receivers = receiverList_.size();
+    stats_.receivers = uint64_t(std::count(receivers_.begin(), receivers_.end(), uint8_t(1)));
     stats_.cameraMs = msSince(start);
 }
 

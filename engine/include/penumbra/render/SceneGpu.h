@@ -53,9 +53,6 @@ public:
     DrawCounts drawInstances(VkCommandBuffer cmd, std::span<const uint32_t> instances, bool alphaMasked) const;
     bool hasAlphaMasked() const;
     bool isAlphaMasked(uint32_t instance) const { return instanceAlphaMasked_.at(instance) != 0; }
-    // Triangles of one instance's mesh.
-    uint64_t instanceTriangles(uint32_t instance) const { return instanceDraw_.at(instance) == kNoDraw ? 0 : draws_[instanceDraw_[instance]].indexCount / 3; }
-    size_t instanceCount() const { return instanceDraw_.size(); }
 
     uint32_t vertexStride() const { return sizeof(scene::Vertex); }
     size_t triangleCount() const { return triangles_; }

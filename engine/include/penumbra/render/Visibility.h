@@ -11,14 +11,14 @@
 //   frustum          camera and light views: instances whose box meets the view frustum
 //   light-occlusion  camera: hierarchical occlusion culling (below); light views: the same
 //                    occlusion culling from the light (the paper's REF)
-//   receiver-mask    camera: hierarchical occlusion culling; light views: the visible
-//                    receivers are rasterised from the light (their depth), the texels
-//                    that camera pixels see are marked in a receiver mask (the reverse
-//                    shadow test, done from the camera's side: each pixel unprojected
-//                    from the camera depth marks its texel), the mask is dilated by the
-//                    view's footprint, and casters are kept only where a hierarchical
-//                    occlusion query that discards fragments outside the mask finds
-//                    samples in front of the receivers (the paper's method, steps 1-3)
+//   receiver-mask    camera: hierarchical occlusion culling; light views: the texels that
+//                    camera pixels see are marked in a receiver mask (the reverse shadow
+//                    test, done from the camera's side: each pixel unprojected from the
+//                    camera depth marks its texel), the mask is dilated by the view's
+//                    footprint, and casters are kept only where a hierarchical occlusion
+//                    query that discards fragments outside the mask finds samples in
+//                    front of what the traversal drew (the paper's method, steps 1-3;
+//                    docs/culling.md says where and why this differs from the paper)
 //
 // Hierarchical occlusion culling (CHC++, Mattausch, Bittner and Wimmer 2008) over the
 // scene's instance BVH, with occlusion queries that are waited for within the frame, so
@@ -71,8 +71,7 @@ struct CullingStats {
 class Visibility {
 public:
     // `scene` and `sceneGpu` must outlive the service; `width` x `height` is the camera's
-    // output.
-    // `focus`: compute the box of what the camera sees every frame (focus()); needs an
+    // output. `focus`: compute the box of what the camera sees every frame (focus()); needs an
     // occlusion mode, whose camera pass leaves the camera depth.
     Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders, const scene::Scene& scene,
                const SceneGpu& sceneGpu, config::CullingMode mode, uint32_t width, uint32_t height,
@@ -134,7 +133,6 @@ private:
     std::vector<uint8_t> cameraNodes_;    // per BVH node: visible last frame
     std::vector<uint16_t> cameraHidden_;  // per BVH node: frames invisible in a row
     std::vector<uint8_t> receivers_;
-    std::vector<uint32_t> receiverList_;
     glm::mat4 cameraViewProj_{1.0f};
     std::map<std::pair<uint32_t, uint32_t>, std::unique_ptr<ViewState>> views_;  // by (light, view)
     uint64_t frame_ = 0;
