@@ -32,6 +32,7 @@ json cullingJson(const std::string& mode, const render::CullingStats& s)
     return {{"mode", mode},
             {"receivers", s.receivers},
             {"views", s.views},
+            {"views_fell_back", s.viewsFellBack},
             {"casters_drawn", s.castersDrawn},
             {"triangles_drawn", s.trianglesDrawn},
             {"nodes_visited", s.nodesVisited},

@@ -81,6 +81,7 @@ render::CullingStats medianCulling(const std::vector<render::FrameTimings>& fram
     s.maskRejected = uint64_t(med(&render::CullingStats::maskRejected));
     s.receivers = uint64_t(med(&render::CullingStats::receivers));
     s.views = uint64_t(med(&render::CullingStats::views));
+    s.viewsFellBack = uint64_t(med(&render::CullingStats::viewsFellBack));
     s.castersDrawn = uint64_t(med(&render::CullingStats::castersDrawn));
     s.trianglesDrawn = uint64_t(med(&render::CullingStats::trianglesDrawn));
     s.cameraMs = med(&render::CullingStats::cameraMs);
@@ -94,6 +95,7 @@ void printCulling(const render::CullingStats& s, std::string_view mode)
     fmt::print("culling {} (median per frame)\n", mode);
     fmt::print("  receivers (instances the camera sees)  {}\n", s.receivers);
     fmt::print("  light views culled                     {}\n", s.views);
+    fmt::print("  of which to their frustum only         {}\n", s.viewsFellBack);
     fmt::print("  casters drawn (instance draws)         {}\n", s.castersDrawn);
     fmt::print("  triangles drawn in caster passes       {}\n", s.trianglesDrawn);
     fmt::print("  BVH nodes visited                      {}\n", s.nodesVisited);

@@ -50,6 +50,10 @@ constexpr uint32_t kMultiQueryBatch = 8;
 // Inner nodes whose projection covers more than this fraction of the view are opened
 // without a query.
 constexpr float kOpenWithoutQueryFraction = 1.0f / 64.0f;
+// A light view whose last full culling kept more than this fraction of the instances in
+// its frustum takes its frustum's instances, for up to kRecheckFrames frames.
+constexpr double kFallbackKeptFraction = 0.4;
+constexpr uint32_t kRecheckFrames = 8;
 
 double msSince(std::chrono::steady_clock::time_point start)
 {
@@ -192,6 +196,8 @@ struct Visibility::ViewState {
     std::vector<uint8_t> nodes;
     std::vector<uint16_t> hidden;
     std::vector<uint8_t> casters;
+    double keptFraction = 0.0;     // of the frustum's instances, at the last full culling
+    uint32_t framesSinceFull = 0;  // frames culled to the frustum since then
 };
 
 Visibility::Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders, const scene::Scene& scene,
@@ -428,12 +434,35 @@ Visibility::Target& Visibility::lightTarget(uint32_t resolution)
 void Visibility::cullLightView(const CasterView& view, ViewState& s)
 {
     ++stats_.views;
-    auto start = std::chrono::steady_clock::now();
+    const auto start = std::chrono::steady_clock::now();
     if (mode_ == config::CullingMode::Frustum || view.resolution == 0) {
         cullFrustum(view.viewProj, s.casters);
         stats_.casterCullMs += msSince(start);
         return;
     }
+    // Culling that cannot pay is skipped: when the last full culling of this view kept
+    // most of the instances in its frustum (a bird's-eye view, where the queries cost more
+    // than the draws they save), the view takes its frustum's instances, a superset, and
+    // is culled in full again every kRecheckFrames frames.
+    if (s.keptFraction > kFallbackKeptFraction && s.framesSinceFull < kRecheckFrames) {
+        cullFrustum(view.viewProj, s.casters);
+        ++s.framesSinceFull;
+        ++stats_.viewsFellBack;
+        stats_.casterCullMs += msSince(start);
+        return;
+    }
+    cullLightViewFully(view, s);
+    std::vector<uint8_t> inFrustum;
+    cullFrustum(view.viewProj, inFrustum);
+    const auto framed = double(std::count(inFrustum.begin(), inFrustum.end(), uint8_t(1)));
+    const auto kept = double(std::count(s.casters.begin(), s.casters.end(), uint8_t(1)));
+    s.keptFraction = framed > 0.0 ? kept / framed : 0.0;
+    s.framesSinceFull = 0;
+}
+
+void Visibility::cullLightViewFully(const CasterView& view, ViewState& s)
+{
+    auto start = std::chrono::steady_clock::now();
     Target& t = lightTarget(view.resolution);
     t.viewProj = view.viewProj;
     t.lightView = true;

@@ -61,6 +61,7 @@ struct CullingStats {
     uint64_t queryRounds = 0;       // submissions waited for
     uint64_t receivers = 0;         // instances the camera sees (the G-buffer draws them)
     uint64_t views = 0;             // light views culled
+    uint64_t viewsFellBack = 0;     // of which culled to their frustum: culling kept most last time
     uint64_t castersDrawn = 0;      // instance draws through Casters::draw
     uint64_t trianglesDrawn = 0;    // their triangles
     double cameraMs = 0.0;          // step 1: camera culling (wall clock, GPU work waited for)
@@ -118,6 +119,7 @@ private:
     void occlusionCull(Target& target, std::vector<uint8_t>& nodeVisible, std::vector<uint16_t>& hidden,
                        std::vector<uint8_t>& visible);
     void cullLightView(const CasterView& view, ViewState& state);
+    void cullLightViewFully(const CasterView& view, ViewState& state);
     Target& lightTarget(uint32_t resolution);
 
     gpu::Context& context_;
