@@ -295,9 +295,10 @@ TEST_F(VisibilityCulling, AnAnimatedPathKeepsEveryFrameExact)
     }
 }
 
-// Where culling keeps most casters (the default scene: nearly every caster shadows
-// something the camera sees), the views take their frustums after the first frame and
-// are culled in full again every 8 frames; the image never changes.
+// Where culling keeps most instances (the default scene: the camera sees most of them and
+// nearly every caster shadows something it sees), the camera and the light view take
+// their frustums after the first frame and are culled in full again every 8 frames; the
+// image never changes.
 TEST_F(VisibilityCulling, AViewWhereCullingCannotPayTakesItsFrustum)
 {
     config::RenderConfig cfg = smallDefault(scene::LightType::Spot, "hard", {{"resolution", 512}});
@@ -312,6 +313,7 @@ TEST_F(VisibilityCulling, AViewWhereCullingCannotPayTakesItsFrustum)
         // Frames 0 and 9 are culled in full, the others take the frustum.
         EXPECT_EQ(t.culling.viewsFellBack, frame == 0 || frame == 9 ? 0u : 1u);
         EXPECT_EQ(t.culling.views, 1u);
+        EXPECT_EQ(t.culling.cameraFellBack, frame == 0 || frame == 9 ? 0u : 1u) << "the camera sees most too";
         EXPECT_EQ(t.culling.maskMs > 0.0, frame == 0 || frame == 9) << "a mask only for a full culling";
     }
 }

@@ -31,6 +31,7 @@ json cullingJson(const std::string& mode, const render::CullingStats& s)
 {
     return {{"mode", mode},
             {"receivers", s.receivers},
+            {"camera_fell_back", s.cameraFellBack},
             {"views", s.views},
             {"views_fell_back", s.viewsFellBack},
             {"casters_drawn", s.castersDrawn},

@@ -80,6 +80,7 @@ render::CullingStats medianCulling(const std::vector<render::FrameTimings>& fram
     s.queryRounds = uint64_t(med(&render::CullingStats::queryRounds));
     s.maskRejected = uint64_t(med(&render::CullingStats::maskRejected));
     s.receivers = uint64_t(med(&render::CullingStats::receivers));
+    s.cameraFellBack = uint64_t(med(&render::CullingStats::cameraFellBack));
     s.views = uint64_t(med(&render::CullingStats::views));
     s.viewsFellBack = uint64_t(med(&render::CullingStats::viewsFellBack));
     s.castersDrawn = uint64_t(med(&render::CullingStats::castersDrawn));
@@ -94,6 +95,7 @@ void printCulling(const render::CullingStats& s, std::string_view mode)
 {
     fmt::print("culling {} (median per frame)\n", mode);
     fmt::print("  receivers (instances the camera sees)  {}\n", s.receivers);
+    fmt::print("  camera culled to its frustum only      {}\n", s.cameraFellBack);
     fmt::print("  light views culled                     {}\n", s.views);
     fmt::print("  of which to their frustum only         {}\n", s.viewsFellBack);
     fmt::print("  casters drawn (instance draws)         {}\n", s.castersDrawn);

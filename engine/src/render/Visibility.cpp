@@ -333,11 +333,31 @@ void Visibility::beginFrame(const glm::mat4& cameraViewProj)
     case config::CullingMode::Frustum: cullFrustum(cameraViewProj, receivers_); break;
     case config::CullingMode::LightOcclusion:
     case config::CullingMode::ReceiverMask: {
+        // As for light views (cullLightView): a view where the last full culling kept
+        // most of the frustum's instances (a bird's-eye view) takes its frustum, and is
+        // culled in full again every kRecheckFrames frames, on the same frames as the
+        // light views. Without the culling pass there is no camera depth, so the
+        // receiver masks wait for the next full frame too. Focusing needs the depth on
+        // every frame.
+        cameraDepthValid_ = false;
+        if (!focusing_ && cameraKeptFraction_ > kFallbackKeptFraction && cameraFramesSinceFull_ < kRecheckFrames) {
+            cullFrustum(cameraViewProj, receivers_);
+            ++cameraFramesSinceFull_;
+            stats_.cameraFellBack = 1;
+            break;
+        }
         Target& t = *camera_;
         t.viewProj = cameraViewProj;
         t.useMask = false;
         t.lightView = false;
         occlusionCull(t, cameraNodes_, cameraHidden_, receivers_);
+        cameraDepthValid_ = true;
+        std::vector<uint8_t> inFrustum;
+        cullFrustum(cameraViewProj, inFrustum);
+        const auto framed = double(std::count(inFrustum.begin(), inFrustum.end(), uint8_t(1)));
+        const auto seen = double(std::count(receivers_.begin(), receivers_.end(), uint8_t(1)));
+        cameraKeptFraction_ = framed > 0.0 ? seen / framed : 0.0;
+        cameraFramesSinceFull_ = 0;
         if (focusing_) computeFocus(cameraViewProj);
         if (mode_ == config::CullingMode::ReceiverMask) {
             // The receiver passes sample the camera depth.
@@ -444,7 +464,8 @@ void Visibility::cullLightView(const CasterView& view, ViewState& s)
     // most of the instances in its frustum (a bird's-eye view, where the queries cost more
     // than the draws they save), the view takes its frustum's instances, a superset, and
     // is culled in full again every kRecheckFrames frames.
-    if (s.keptFraction > kFallbackKeptFraction && s.framesSinceFull < kRecheckFrames) {
+    const bool noMask = mode_ == config::CullingMode::ReceiverMask && !cameraDepthValid_;
+    if (noMask || (s.keptFraction > kFallbackKeptFraction && s.framesSinceFull < kRecheckFrames)) {
         cullFrustum(view.viewProj, s.casters);
         ++s.framesSinceFull;
         ++stats_.viewsFellBack;

@@ -60,6 +60,7 @@ struct CullingStats {
     uint64_t maskRejected = 0;      // nodes culled without a query: their projection meets no mask texel
     uint64_t queryRounds = 0;       // submissions waited for
     uint64_t receivers = 0;         // instances the camera sees (the G-buffer draws them)
+    uint64_t cameraFellBack = 0;    // 1: the camera took its frustum (culling kept most last time)
     uint64_t views = 0;             // light views culled
     uint64_t viewsFellBack = 0;     // of which culled to their frustum: culling kept most last time
     uint64_t castersDrawn = 0;      // instance draws through Casters::draw
@@ -134,6 +135,9 @@ private:
     std::map<uint32_t, std::unique_ptr<Target>> lightTargets_;  // by resolution
     std::vector<uint8_t> cameraNodes_;    // per BVH node: visible last frame
     std::vector<uint16_t> cameraHidden_;  // per BVH node: frames invisible in a row
+    bool cameraDepthValid_ = false;       // this frame's camera culling left the camera depth
+    double cameraKeptFraction_ = 0.0;     // of the frustum's instances, at the last full culling
+    uint32_t cameraFramesSinceFull_ = 0;
     std::vector<uint8_t> receivers_;
     glm::mat4 cameraViewProj_{1.0f};
     std::map<std::pair<uint32_t, uint32_t>, std::unique_ptr<ViewState>> views_;  // by (light, view)
