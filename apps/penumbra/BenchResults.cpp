@@ -29,20 +29,14 @@ json timingJson(const TimingSummary& t)
 
 json cullingJson(const std::string& mode, const render::CullingStats& s)
 {
-    return {{"mode", mode},
-            {"receivers", s.receivers},
-            {"camera_fell_back", s.cameraFellBack},
-            {"views", s.views},
-            {"views_fell_back", s.viewsFellBack},
-            {"casters_drawn", s.castersDrawn},
-            {"triangles_drawn", s.trianglesDrawn},
-            {"nodes_visited", s.nodesVisited},
-            {"queries", s.queriesIssued},
-            {"query_rounds", s.queryRounds},
-            {"mask_rejected", s.maskRejected},
-            {"camera_ms", s.cameraMs},
-            {"mask_ms", s.maskMs},
-            {"caster_cull_ms", s.casterCullMs}};
+    json out = {{"mode", mode}};
+    for (const CullingFigure& figure : cullingFigures()) {
+        if (figure.count)
+            out[figure.key] = s.*figure.count;
+        else
+            out[figure.key] = s.*figure.ms;
+    }
+    return out;
 }
 
 // RFC 4180: a field with a comma, a quote or a line break is quoted, quotes doubled.

@@ -67,46 +67,52 @@ void printTimings(const TimingSummary& summary)
     fmt::print("  {:<28} {:>10.3f}\n", "frame wall clock (CPU)", summary.frameWallMs);
 }
 
+std::span<const CullingFigure> cullingFigures()
+{
+    using S = render::CullingStats;
+    static const CullingFigure figures[] = {
+        {"receivers", "receivers (instances the camera sees)", &S::receivers},
+        {"camera_fell_back", "camera culled to its frustum only", &S::cameraFellBack},
+        {"views", "light views culled", &S::views},
+        {"views_fell_back", "of which to their frustum only", &S::viewsFellBack},
+        {"casters_drawn", "casters drawn (instance draws)", &S::castersDrawn},
+        {"triangles_drawn", "triangles drawn in caster passes", &S::trianglesDrawn},
+        {"nodes_visited", "BVH nodes visited", &S::nodesVisited},
+        {"queries", "occlusion queries issued", &S::queriesIssued},
+        {"query_rounds", "query rounds (submissions waited for)", &S::queryRounds},
+        {"mask_rejected", "nodes culled by the mask, no query", &S::maskRejected},
+        {"camera_ms", "camera culling ms", nullptr, &S::cameraMs},
+        {"mask_ms", "receiver masks ms", nullptr, &S::maskMs},
+        {"caster_cull_ms", "caster culling ms", nullptr, &S::casterCullMs},
+    };
+    return figures;
+}
+
 render::CullingStats medianCulling(const std::vector<render::FrameTimings>& frames)
 {
-    const auto med = [&](auto field) {
-        std::vector<double> v;
-        for (const render::FrameTimings& f : frames) v.push_back(double(f.culling.*field));
-        return median(std::move(v));
-    };
     render::CullingStats s;
-    s.nodesVisited = uint64_t(med(&render::CullingStats::nodesVisited));
-    s.queriesIssued = uint64_t(med(&render::CullingStats::queriesIssued));
-    s.queryRounds = uint64_t(med(&render::CullingStats::queryRounds));
-    s.maskRejected = uint64_t(med(&render::CullingStats::maskRejected));
-    s.receivers = uint64_t(med(&render::CullingStats::receivers));
-    s.cameraFellBack = uint64_t(med(&render::CullingStats::cameraFellBack));
-    s.views = uint64_t(med(&render::CullingStats::views));
-    s.viewsFellBack = uint64_t(med(&render::CullingStats::viewsFellBack));
-    s.castersDrawn = uint64_t(med(&render::CullingStats::castersDrawn));
-    s.trianglesDrawn = uint64_t(med(&render::CullingStats::trianglesDrawn));
-    s.cameraMs = med(&render::CullingStats::cameraMs);
-    s.maskMs = med(&render::CullingStats::maskMs);
-    s.casterCullMs = med(&render::CullingStats::casterCullMs);
+    for (const CullingFigure& figure : cullingFigures()) {
+        std::vector<double> v;
+        for (const render::FrameTimings& f : frames)
+            v.push_back(figure.count ? double(f.culling.*figure.count) : f.culling.*figure.ms);
+        const double m = median(std::move(v));
+        if (figure.count)
+            s.*figure.count = uint64_t(m);
+        else
+            s.*figure.ms = m;
+    }
     return s;
 }
 
 void printCulling(const render::CullingStats& s, std::string_view mode)
 {
     fmt::print("culling {} (median per frame)\n", mode);
-    fmt::print("  receivers (instances the camera sees)  {}\n", s.receivers);
-    fmt::print("  camera culled to its frustum only      {}\n", s.cameraFellBack);
-    fmt::print("  light views culled                     {}\n", s.views);
-    fmt::print("  of which to their frustum only         {}\n", s.viewsFellBack);
-    fmt::print("  casters drawn (instance draws)         {}\n", s.castersDrawn);
-    fmt::print("  triangles drawn in caster passes       {}\n", s.trianglesDrawn);
-    fmt::print("  BVH nodes visited                      {}\n", s.nodesVisited);
-    fmt::print("  occlusion queries issued               {}\n", s.queriesIssued);
-    fmt::print("  query rounds (submissions waited for)  {}\n", s.queryRounds);
-    fmt::print("  nodes culled by the mask, no query     {}\n", s.maskRejected);
-    fmt::print("  camera culling ms                      {:.2f}\n", s.cameraMs);
-    fmt::print("  receiver masks ms                      {:.2f}\n", s.maskMs);
-    fmt::print("  caster culling ms                      {:.2f}\n", s.casterCullMs);
+    for (const CullingFigure& figure : cullingFigures()) {
+        if (figure.count)
+            fmt::print("  {:<39}{}\n", figure.label, s.*figure.count);
+        else
+            fmt::print("  {:<39}{:.2f}\n", figure.label, s.*figure.ms);
+    }
 }
 
 } // namespace penumbra::app

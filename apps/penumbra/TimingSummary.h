@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <set>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -43,6 +44,18 @@ TimingSummary summarizeTimings(const std::vector<render::FrameTimings>& frames, 
 
 // The table `render --timings` prints on stdout.
 void printTimings(const TimingSummary& summary);
+
+// One figure of render::CullingStats: its key in bench's results.json, its label in
+// `render --stats`, and its member (a count, or a time in ms).
+struct CullingFigure {
+    const char* key;
+    const char* label;
+    uint64_t render::CullingStats::*count = nullptr;
+    double render::CullingStats::*ms = nullptr;
+};
+// Every figure, in the order `render --stats` prints them: the one list that the median,
+// the printout and results.json follow.
+std::span<const CullingFigure> cullingFigures();
 
 // Medians over the frames of the visibility service's figures (render::CullingStats),
 // each taken separately.
