@@ -94,7 +94,11 @@ SceneGpu::SceneGpu(gpu::Context& context, const scene::Scene& scene)
     }
     std::stable_sort(draws_.begin(), draws_.end(), [](const Draw& a, const Draw& b) { return a.texture < b.texture; });
     instanceDraw_.assign(scene.instances.size(), kNoDraw);
-    for (uint32_t d = 0; d < draws_.size(); ++d) instanceDraw_[draws_[d].instance] = d;
+    instanceAlphaMasked_.assign(scene.instances.size(), 0);
+    for (uint32_t d = 0; d < draws_.size(); ++d) {
+        instanceDraw_[draws_[d].instance] = d;
+        instanceAlphaMasked_[draws_[d].instance] = draws_[d].alphaMasked ? 1 : 0;
+    }
     if (vertices.empty() || indices.empty()) {
         throw Error("scene has no triangles: nothing to render");
     }

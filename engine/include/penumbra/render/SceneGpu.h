@@ -52,6 +52,7 @@ public:
     // drawn when `alphaMasked` is true, solid ones otherwise.
     DrawCounts drawInstances(VkCommandBuffer cmd, std::span<const uint32_t> instances, bool alphaMasked) const;
     bool hasAlphaMasked() const;
+    bool isAlphaMasked(uint32_t instance) const { return instanceAlphaMasked_.at(instance) != 0; }
 
     uint32_t vertexStride() const { return sizeof(scene::Vertex); }
     size_t triangleCount() const { return triangles_; }
@@ -76,6 +77,7 @@ private:
     void bindGeometry(VkCommandBuffer cmd) const;
     std::vector<Draw> draws_;  // sorted by texture
     std::vector<uint32_t> instanceDraw_;        // instance -> index into draws_ (kNoDraw: no triangles)
+    std::vector<uint8_t> instanceAlphaMasked_;  // instance -> its material is alpha-masked
     size_t triangles_ = 0;
 };
 
