@@ -3,6 +3,7 @@
 // plugin, the penumbra's width against the analytic soft shadow of the penumbra scene
 // (scene/Generators.h penumbraVisibility), and the guards: no blocker, a huge light, a
 // blocker touching its receiver, grazing light, scene scales 1e-3 and 1e5.
+#include "PenumbraMeasure.h"
 #include "PluginFrame.h"
 #include "RayCastAgreement.h"
 #include "TestConfigs.h"
@@ -190,30 +191,7 @@ INSTANTIATE_TEST_SUITE_P(Pcss, PcssZeroSize,
 
 namespace {
 
-constexpr float kLightHeight = 3.0f;
-
-struct PenumbraSetup {
-    float lightSide = 0.5f;
-    float occluderHeight = 1.0f;
-    float occluderThickness = 0.01f;
-};
-
-scene::PenumbraParams penumbraParams(const PenumbraSetup& p)
-{
-    scene::PenumbraParams params;
-    params.occluderHeight = p.occluderHeight;
-    params.occluderThickness = p.occluderThickness;
-    return params;
-}
-
-// The camera looks straight down on the ground beside the plate (x in about [0.2, 1.8],
-// z in [-0.45, 0.45]), below the plate, so that only the ground is seen.
-config::RenderConfig penumbraConfig(const PenumbraSetup& p)
-{
-    config::RenderConfig cfg = test::lookDownRectLightConfig({1.0f, 0.8f, 0.0f}, {0.0f, kLightHeight, 0.0f}, p.lightSide);
-    cfg.scene = {};
-    return cfg;
-}
+using test::PenumbraSetup;
 
 // Wide radii: the penumbrae here are up to 42 texels wide at 1024 texels per cube face.
 PcssSettings penumbraPcss()
@@ -226,63 +204,13 @@ PcssSettings penumbraPcss()
     return s;
 }
 
-// The 10 %-90 % width of a shadow edge from (coordinate across the edge, V) samples on
-// the ground, V averaged over bins of 1 cm (the filter's per-pixel rotation is noise),
-// the umbra at smaller coordinates.
-double rampWidth(const std::vector<std::pair<float, float>>& samples)
-{
-    std::map<int, std::pair<double, int>> bins;  // bin -> (sum of V, count)
-    for (const auto& [coordinate, v] : samples) {
-        auto& bin = bins[int(std::floor(coordinate / 0.01f))];
-        bin.first += v;
-        ++bin.second;
-    }
-    double at10 = NAN, at90 = NAN;
-    for (const auto& [bin, sum] : bins) {
-        const double mean = sum.first / sum.second, coordinate = (bin + 0.5) * 0.01;
-        if (std::isnan(at10) && mean >= 0.1) at10 = coordinate;
-        if (std::isnan(at90) && mean >= 0.9) at90 = coordinate;
-    }
-    return at90 - at10;
-}
-
-// The penumbra scene's edge along x, on the ground near z = 0.
-double edgeWidth(const test::RenderedFrame& frame, const std::vector<float>& v)
-{
-    std::vector<std::pair<float, float>> samples;
-    for (size_t i = 0; i < v.size(); ++i) {
-        if (frame.onGround(i) && std::abs(frame.position(i).z) <= 0.05f) samples.emplace_back(frame.position(i).x, v[i]);
-    }
-    return rampWidth(samples);
-}
-
 class PcssPenumbra : public PcssTest {
 protected:
-    // PCSS's edge width, the exact one measured the same way, and the RMSE of V over the
-    // ground against the exact visibility.
-    struct Widths {
-        double pcss;
-        double exact;
-        double rmse;
-    };
-
-    Widths measure(const PenumbraSetup& p, const PcssSettings& s = penumbraPcss())
+    test::PenumbraWidths measure(const PenumbraSetup& p, const PcssSettings& s = penumbraPcss())
     {
-        const scene::PenumbraParams params = penumbraParams(p);
-        const std::vector<float> v = renderPcss(penumbraConfig(p), s, scene::generatePenumbra(params));
-        std::vector<float> exact(v.size(), 1.0f);
-        double squared = 0.0;
-        size_t ground = 0;
-        const scene::RectAreaLight light{{0.0f, kLightHeight, 0.0f}, {p.lightSide, p.lightSide}};
-        for (size_t i = 0; i < v.size(); ++i) {
-            if (!frame->onGround(i)) continue;
-            const glm::vec3 q = frame->position(i);
-            exact[i] = float(scene::penumbraVisibility(params, light, {q.x, q.z}));
-            squared += (v[i] - exact[i]) * (v[i] - exact[i]);
-            ++ground;
-        }
-        EXPECT_GT(ground, v.size() / 2) << "the camera sees the ground";
-        return {edgeWidth(*frame, v), edgeWidth(*frame, exact), std::sqrt(squared / std::max<size_t>(ground, 1))};
+        const std::vector<float> v =
+            renderPcss(test::penumbraConfig(p), s, scene::generatePenumbra(test::penumbraParams(p)));
+        return test::measurePenumbra(*frame, v, p);
     }
 };
 
@@ -294,16 +222,16 @@ TEST_F(PcssPenumbra, WidthGrowsWithLightSizeAndFollowsTheExactPenumbra)
     for (float side : {0.25f, 0.5f, 1.0f}) {
         PenumbraSetup p;
         p.lightSide = side;
-        const Widths w = measure(p);
+        const test::PenumbraWidths w = measure(p);
         SCOPED_TRACE("light side " + std::to_string(side));
-        EXPECT_GT(w.pcss, 1.5 * previous) << "doubling the light widens the penumbra";
+        EXPECT_GT(w.technique, 1.5 * previous) << "doubling the light widens the penumbra";
         // A disk filter's 10-90 % ramp spans 0.63 of its diameter, a square light's 0.8
         // of the penumbra: PCSS's edge is 0.79 times the exact one where its estimate
         // w = (d_r - d_b) w_light / d_b is right, as it is here (one blocker depth).
-        EXPECT_GT(w.pcss, 0.6 * w.exact) << "exact " << w.exact;
-        EXPECT_LT(w.pcss, 1.1 * w.exact) << "exact " << w.exact;
+        EXPECT_GT(w.technique, 0.6 * w.exact) << "exact " << w.exact;
+        EXPECT_LT(w.technique, 1.1 * w.exact) << "exact " << w.exact;
         EXPECT_LT(w.rmse, 0.05) << "RMSE against the exact visibility";
-        previous = w.pcss;
+        previous = w.technique;
     }
 }
 
@@ -313,30 +241,15 @@ TEST_F(PcssPenumbra, WidthGrowsWithTheReceiverBlockerDistance)
     for (float height : {0.5f, 1.0f, 1.5f}) {
         PenumbraSetup p;
         p.occluderHeight = height;
-        const Widths w = measure(p);
+        const test::PenumbraWidths w = measure(p);
         SCOPED_TRACE("occluder height " + std::to_string(height));
         // w h / (H - h): 0.1, 0.25, 0.5 for w = 0.5.
-        EXPECT_GT(w.pcss, 1.5 * previous);
-        EXPECT_GT(w.pcss, 0.6 * w.exact) << "exact " << w.exact;
-        EXPECT_LT(w.pcss, 1.1 * w.exact) << "exact " << w.exact;
-        previous = w.pcss;
+        EXPECT_GT(w.technique, 1.5 * previous);
+        EXPECT_GT(w.technique, 0.6 * w.exact) << "exact " << w.exact;
+        EXPECT_LT(w.technique, 1.1 * w.exact) << "exact " << w.exact;
+        previous = w.technique;
     }
 }
-
-namespace {
-
-// The box's shadow's side edge (along z > 0, on the ground) in the slice x +- 2 cm.
-double sideEdgeWidth(const test::RenderedFrame& frame, const std::vector<float>& v, float x)
-{
-    std::vector<std::pair<float, float>> samples;
-    for (size_t i = 0; i < v.size(); ++i) {
-        const glm::vec3 p = frame.position(i);
-        if (frame.onGround(i) && std::abs(p.x - x) <= 0.02f && p.z >= 0.0f) samples.emplace_back(p.z, v[i]);
-    }
-    return rampWidth(samples);
-}
-
-} // namespace
 
 TEST_F(PcssPenumbra, BlockerTouchingTheReceiverCastsAHardShadow)
 {
@@ -358,7 +271,7 @@ TEST_F(PcssPenumbra, BlockerTouchingTheReceiverCastsAHardShadow)
     // about 1 cm to 0.3 m here): the search also finds the box's top, far from the
     // ground, and the mean blocker distance mixes the two (Fernando 2005's single
     // average; measured 0.16 m at x = 0.6 and 0.23 m at x = 2).
-    const double nearFoot = sideEdgeWidth(*frame, v, 0.6f), farFromFoot = sideEdgeWidth(*frame, v, 2.0f);
+    const double nearFoot = test::sideEdgeWidth(*frame, v, 0.6f), farFromFoot = test::sideEdgeWidth(*frame, v, 2.0f);
     EXPECT_LT(nearFoot, 0.85 * farFromFoot) << "near the foot " << nearFoot << ", far " << farFromFoot;
 }
 

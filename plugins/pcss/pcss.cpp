@@ -29,10 +29,6 @@ enum class BiasMode : uint32_t { ReceiverPlane, Slope };
 constexpr const char* kBiasModeNames[] = {"receiver_plane", "slope"};
 
 constexpr int kSamplesMin = 4, kSamplesMax = render::kPoissonDiskPoints;
-// Directional lights: the angular diameter is clamped below 180° (tan(θ/2) is finite);
-// the texel radii clamp long before that.
-constexpr float kMaxAngularDiameterDeg = 179.0f;
-
 const plugin::ParamSpec kParams[] = {
     {"resolution", ParamType::Int, 2048, 16, 16384, "texels",
      "shadow-map texels per side of each face (point, rect and disk lights: six faces in a 3 x 2 atlas)"},
@@ -81,26 +77,6 @@ Settings readSettings(const plugin::ParamValues& params)
     return s;
 }
 
-// The light's size as the shader uses it: w_light in world units for lights at a
-// position (a square light's side; the penumbra is (d_r - d_b) w_light / d_b wide), and
-// for a directional light the penumbra width per unit of receiver-blocker distance,
-// 2 tan(θ/2) for the angular diameter θ (w_light / d_b as the light goes to infinity).
-float lightSizeFor(const scene::Light& light, float overrideSize)
-{
-    if (light.type == scene::LightType::Directional) {
-        const float degrees = overrideSize >= 0.0f ? overrideSize : light.angularDiameterDeg;
-        return 2.0f * std::tan(0.5f * glm::radians(std::clamp(degrees, 0.0f, kMaxAngularDiameterDeg)));
-    }
-    if (overrideSize >= 0.0f) return overrideSize;
-    switch (light.type) {
-    // The side of the square of equal area: one isotropic filter for an anisotropic
-    // penumbra (it is w_x h / (H - h) along x, w_z h / (H - h) along z).
-    case scene::LightType::Rect: return std::sqrt(std::max(light.sizeWorld.x * light.sizeWorld.y, 0.0f));
-    case scene::LightType::Disk: return 2.0f * std::max(light.radiusWorld, 0.0f);
-    default: return 0.0f;  // spot and point lights have no size of their own
-    }
-}
-
 // Bindings of visibility.comp.
 enum Binding : uint32_t {
     kBindingPosition = 0,       // G-buffer world position (storage, rgba32f)
@@ -112,7 +88,7 @@ enum Binding : uint32_t {
 };
 
 struct PcssPush {
-    float lightSize = 0.0f;  // lightSizeFor()
+    float lightSize = 0.0f;  // render::softShadowLightSize()
     float maxSearchTexels = 0.0f;
     float maxFilterTexels = 0.0f;
     uint32_t blockerSamples = 0;
@@ -167,13 +143,13 @@ PcssShadow::PcssShadow(const plugin::TechniqueSetup& setup)
     compareSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
                                          VK_COMPARE_OP_GREATER_OR_EQUAL);
     depthSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
-    lightSize_ = lightSizeFor(setup.light, settings_.lightSizeOverride);
+    lightSize_ = render::softShadowLightSize(setup.light, settings_.lightSizeOverride);
 }
 
 void PcssShadow::update(const scene::Light& light, const scene::Aabb& sceneBounds)
 {
     shadowMap_.update(light, sceneBounds);
-    lightSize_ = lightSizeFor(light, settings_.lightSizeOverride);
+    lightSize_ = render::softShadowLightSize(light, settings_.lightSizeOverride);
 }
 
 void PcssShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io)

@@ -35,6 +35,7 @@ layout(binding = 5) uniform sampler2D shadowDepth;  // the same map, raw depths
 #define SHADOW_MAP_BINDING 3
 #define SHADOW_RECEIVER_BIAS RECEIVER_BIAS
 #include "common/shadow_receiver.glsl"
+#include "common/penumbra_estimate.glsl"
 
 layout(push_constant) uniform Push {
     // Lights at a position: w_light in world units. Directional lights: the penumbra
@@ -45,39 +46,6 @@ layout(push_constant) uniform Push {
     uint blockerSamples;
     uint filterSamples;
 } pc;
-
-bool directionalLight() { return shadowMapData.light.w == 0.0; }
-
-// A radius in texels, clamped to [0, maxTexels]; NaN (from 0 * inf) becomes 0, +inf the
-// maximum.
-float clampRadius(float texels, float maxTexels) { return texels >= 0.0 ? min(texels, maxTexels) : 0.0; }
-
-// Where to look for blockers: the light (w_light wide) seen from the receiver at
-// distance d_r, cut by the plane where the nearest blockers can be. Fernando's
-// searchWidth = w_light (d_r - near) / d_r on the near plane; divided by near it is an
-// angle (tan units), which is what a perspective texel measures (texel.x: world per
-// unit of distance). Orthographic: every ray is parallel, so the light's angular size
-// spreads over (d_r - near) of depth, in world units like the texel.
-float searchRadiusTexels(ShadowFace face, float dReceiver)
-{
-    float near = face.depthRange.x;
-    float extent = directionalLight() ? (dReceiver - near) * pc.lightSize
-                                      : (pc.lightSize / near) * ((dReceiver - near) / dReceiver);
-    return clampRadius(0.5 * extent / face.texel.x, pc.maxSearchTexels);
-}
-
-// The penumbra's half-width in texels at the receiver: w = (d_r - d_b) w_light / d_b,
-// as an angle from the light w / d_r (perspective), or (d_r - d_b) 2 tan(θ/2) in world
-// units (directional). d_r - d_b is clamped at 0 (a blocker at the receiver makes the
-// shadow hard: contact hardening) and d_b below at the near plane (every caster lies
-// beyond it; d_b -> 0 cannot blow the ratio up).
-float filterRadiusTexels(ShadowFace face, float dReceiver, float dBlocker)
-{
-    float gap = max(dReceiver - dBlocker, 0.0);
-    float width = directionalLight() ? gap * pc.lightSize
-                                     : (gap / dReceiver) * (pc.lightSize / max(dBlocker, face.depthRange.x));
-    return clampRadius(0.5 * width / face.texel.x, pc.maxFilterTexels);
-}
 
 // Step 1: the mean distance of the blockers among the search taps; false when there is
 // none (the receiver sees the whole light).
@@ -109,9 +77,10 @@ float pcssVisibility(ShadowReceiver r, ivec2 pixel)
     float dReceiver = shadowDistance(r.face, r.depth);
     mat2 rotation = poissonRotation(pixel);
     float dBlocker;
-    if (!averageBlockerDistance(r, rotation, searchRadiusTexels(face, dReceiver), dBlocker)) return 1.0;
+    float search = shadowSearchRadiusTexels(face, pc.lightSize, dReceiver, pc.maxSearchTexels);
+    if (!averageBlockerDistance(r, rotation, search, dBlocker)) return 1.0;
 
-    float radius = filterRadiusTexels(face, dReceiver, dBlocker);
+    float radius = shadowFilterRadiusTexels(face, pc.lightSize, dReceiver, dBlocker, pc.maxFilterTexels);
     uint samples = clamp(pc.filterSamples, 1u, uint(kPoissonDisk.length()));
     float lit = 0.0;
     for (uint i = 0u; i < samples; ++i) lit += shadowCompareTap(shadowCompare, r, rotation * kPoissonDisk[i] * radius);

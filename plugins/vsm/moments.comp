@@ -25,9 +25,6 @@ void main()
 {
     ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(texel, imageSize(momentsOut)))) return;
-    // The face whose atlas cell holds this texel (a one-face map has one cell).
-    uvec2 cell = uvec2(texel) / uint(shadowMapData.faceTexels);
-    uint face = min(cell.y * 3u + cell.x, shadowMapData.faceCount - 1u);
-    float t = shadowLinearDepth(face, texelFetch(shadowDepth, texel, 0).r);
+    float t = shadowLinearDepth(shadowFaceOfTexel(texel), texelFetch(shadowDepth, texel, 0).r);
     imageStore(momentsOut, texel, warpDepth(t, pc.exponents));
 }

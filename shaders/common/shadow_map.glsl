@@ -146,6 +146,13 @@ vec2 shadowAtlasUv(uint face, vec2 faceUv)
     return (vec2(face % 3u, face / 3u) + faceUv) / grid;
 }
 
+// The face whose atlas cell holds atlas texel `texel` (a one-face map has one cell).
+uint shadowFaceOfTexel(ivec2 texel)
+{
+    uvec2 cell = uvec2(max(texel, ivec2(0))) / uint(shadowMapData.faceTexels);
+    return min(cell.y * 3u + cell.x, shadowMapData.faceCount - 1u);
+}
+
 // Keeps a lookup `marginTexels` inside its face: the next cell of the atlas is another
 // cube face, not the continuation of this one. Lookups beyond a cube edge read the
 // face's border texels instead of the adjacent face (an error confined to a filter

@@ -230,3 +230,26 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
 }
 
 } // namespace penumbra::render
+
+namespace penumbra::render {
+
+float softShadowLightSize(const scene::Light& light, float overrideSize)
+{
+    // Directional lights: the angular diameter is clamped below 180° (tan(θ/2) is
+    // finite); the techniques' texel radii clamp long before that.
+    constexpr float kMaxAngularDiameterDeg = 179.0f;
+    if (light.type == scene::LightType::Directional) {
+        const float degrees = overrideSize >= 0.0f ? overrideSize : light.angularDiameterDeg;
+        return 2.0f * std::tan(0.5f * glm::radians(std::clamp(degrees, 0.0f, kMaxAngularDiameterDeg)));
+    }
+    if (overrideSize >= 0.0f) return overrideSize;
+    switch (light.type) {
+    // The side of the square of equal area: one isotropic filter for an anisotropic
+    // penumbra (it is w_x h / (H - h) along x, w_z h / (H - h) along z).
+    case scene::LightType::Rect: return std::sqrt(std::max(light.sizeWorld.x * light.sizeWorld.y, 0.0f));
+    case scene::LightType::Disk: return 2.0f * std::max(light.radiusWorld, 0.0f);
+    default: return 0.0f;  // spot and point lights have no size of their own
+    }
+}
+
+} // namespace penumbra::render

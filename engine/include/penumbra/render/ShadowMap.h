@@ -91,6 +91,14 @@ struct ShadowDepthBias {
     float clamp = 0.0f;     // largest bias in NDC depth; 0: no clamp
 };
 
+// The light's size as the PCSS framework's kernels use it (shaders/common/
+// penumbra_estimate.glsl): for lights at a position w_light in world units (a rect's
+// side of equal area, a disk's diameter; spot and point lights have none: 0, a hard
+// shadow), for a directional light 2 tan(θ/2) of its angular diameter θ (clamped below
+// 179°, so the tangent stays finite). `overrideSize` >= 0 replaces the light's own size
+// (world units; directional: degrees).
+float softShadowLightSize(const scene::Light& light, float overrideSize);
+
 // Receiver-side bias of shadow_receiver.glsl (its SHADOW_RECEIVER_BIAS define).
 enum class ReceiverBias : uint32_t { None = 0, NormalOffset = 1, Plane = 2 };
 

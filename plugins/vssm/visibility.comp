@@ -1,0 +1,406 @@
+#version 460
+// Variance soft shadow mapping (Yang, Dong, Feng, Seidel, Kautz 2010; README.md next to
+// this file), per G-buffer pixel, after the depth map, its summed-area table of moments
+// (sat.glsl) and its min-max hierarchy (hsm.glsl) (paper Algorithm 1, L6-L20):
+//   1. the blocker search kernel w_i from the light's size and the receiver's distance
+//      (as PCSS, common/penumbra_estimate.glsl);
+//   2. the HSM's min and max over w_i: every texel behind the receiver -> lit, every one
+//      in front -> umbra (L8-L10);
+//   3. the average blocker depth by eq. 4, z_occ = (z_avg - P t) / (1 - P) with
+//      Chebyshev's P = P(x >= t), over sub-kernels of w_i (BLOCKER_SUBDIVISION);
+//   4. the penumbra kernel w_p from z_occ (L16); a blocker within contact_epsilon of the
+//      receiver gets 3 x 3 jittered bilinear PCF instead (§6.4);
+//   5. the visibility over sub-kernels of w_p (FILTER_SUBDIVISION): Chebyshev's bound
+//      where a sub-kernel's mean lies in front of the receiver, lit where it lies behind
+//      with a variance below lit_variance, else (the "non-planarity" case, §5) smaller
+//      sub-kernels or, at the finest, 2 x 2 PCF (Algorithm 2).
+//
+// Subdivision (defines BLOCKER_SUBDIVISION and FILTER_SUBDIVISION, vssm.cpp):
+//   0 none: the whole kernel is one box and a non-planar one counts as lit (SAVSM-like,
+//     the incorrectly-lit case the paper removes)
+//   1 uniform: m x m (or n x n) equal sub-kernels, non-planar ones by 2 x 2 PCF (§5.2)
+//   2 adaptive: a quad-tree of height H over the kernel, walked without a stack in
+//     linear order (child and next computed from a node's level and Morton index, which
+//     is what Bunnell's precomputed pointers encode; §5.3)
+//
+// Depths are the normalised t of shadow_map.glsl (0 at the light's near plane, 1 at its
+// far plane): larger is farther. The reference each sub-kernel is compared with is the
+// receiver's depth, or with RECEIVER_BIAS 2 its plane's depth at the sub-kernel's centre
+// plus the rounding margin (common/shadow_receiver.glsl): the mean of a tilted receiver's
+// own surface over a sub-kernel is its plane's depth at the centre, so a wide kernel on a
+// tilted receiver does not find the receiver itself as a blocker. (The paper compares
+// with the receiver's own depth t everywhere; with RECEIVER_BIAS 0 so does this, and the
+// rasterizer's slope bias is all there is.) Chebyshev's bound is taken per sub-kernel,
+// with that sub-kernel's reference, rather than once over the pooled moments of all
+// normal sub-kernels (eq. 5): each bound holds on its own, and a pooled one would mix
+// sub-kernels compared with different references.
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+
+#include "common/gbuffer.glsl"
+#include "common/sampling.glsl"
+#include "common/visibility.glsl"
+
+#ifndef RECEIVER_BIAS
+#define RECEIVER_BIAS 2
+#endif
+#ifndef BLOCKER_SUBDIVISION
+#define BLOCKER_SUBDIVISION 1
+#endif
+#ifndef FILTER_SUBDIVISION
+#define FILTER_SUBDIVISION 2
+#endif
+#define SUBDIVISION_NONE 0
+#define SUBDIVISION_UNIFORM 1
+#define SUBDIVISION_ADAPTIVE 2
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(binding = 0, GBUFFER_POSITION_FORMAT) uniform readonly image2D gPosition;
+layout(binding = 1) uniform sampler2DShadow shadowCompare;  // nearest, GREATER_OR_EQUAL
+layout(binding = 2, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
+layout(binding = 4, GBUFFER_NORMAL_FORMAT) uniform readonly image2D gNormal;
+layout(binding = 5) uniform sampler2D shadowDepth;  // the same map, raw depths
+
+#define SAT_BINDING 6
+#define SAT_QUALIFIER readonly
+#define SAT_READ_ONLY
+#include "sat.glsl"
+
+#define SHADOW_MAP_BINDING 3
+#define SHADOW_RECEIVER_BIAS RECEIVER_BIAS
+#include "common/shadow_receiver.glsl"
+#include "common/penumbra_estimate.glsl"
+
+float hsmLevel0(ivec2 texel) { return shadowLinearDepth(shadowFaceOfTexel(texel), texelFetch(shadowDepth, texel, 0).r); }
+
+#define HSM_BINDING 7
+#define HSM_QUALIFIER readonly
+#include "hsm.glsl"
+
+// Parameter debug_view (vssm.cpp DebugView).
+#define DEBUG_OFF 0
+#define DEBUG_KERNEL 1
+#define DEBUG_CLASSIFICATION 2
+#define DEBUG_SUBKERNELS 3
+
+layout(push_constant) uniform Push {
+    ivec2 atlasSize;        // the map's texels (all faces)
+    float lightSize;        // render::softShadowLightSize
+    float maxSearchTexels;  // clamps of the kernels' half-widths
+    float maxFilterTexels;
+    float sceneRadius;      // r: the scene's bounding radius, world units
+    float litVariance;      // Threshold / r^2 (§6.5), see litVarianceT
+    float contactEpsilon;   // epsilon / r (§6.4)
+    int blockerSubdivisions;  // m (uniform)
+    int filterSubdivisions;   // n (uniform)
+    int treeHeight;           // H (adaptive)
+    int debugView;
+    float debugScale;  // DEBUG_SUBKERNELS: 1 / the most sub-kernels a pixel can visit
+} pc;
+
+// Per-pixel classification (debug_view classification; values are what it shows).
+const float kClassLit = 1.0;         // the HSM, or no blocker found
+const float kClassUmbra = 0.0;       // the HSM
+const float kClassPenumbra = 0.5;    // Chebyshev over every sub-kernel
+const float kClassNonPlanar = 0.75;  // some sub-kernel needed PCF
+const float kClassContact = 0.25;    // blocker within contact_epsilon: PCF
+
+// The pixel's receiver and its face, shared by the helpers below.
+ShadowReceiver gReceiver;
+float gFaceTexels;
+vec2 gFaceOrigin;    // the face's first texel in the atlas
+float gLitVariance;  // Threshold in t^2
+uint gVisited;       // sub-kernels looked at
+bool gUsedPcf;
+
+// The moments over [lo, hi) in texels of the receiver's face, cut to the face.
+SatMoments faceBox(vec2 lo, vec2 hi)
+{
+    lo = clamp(lo, vec2(0.0), vec2(gFaceTexels));
+    hi = clamp(hi, vec2(0.0), vec2(gFaceTexels));
+    return satBox(gFaceOrigin + lo, gFaceOrigin + hi, pc.atlasSize);
+}
+
+// The depth t a texel at face texel position `at` is compared with (see the top).
+float referenceT(vec2 at)
+{
+    return shadowLinearDepth(gReceiver.face, shadowReferenceDepth(gReceiver, at / gFaceTexels));
+}
+
+// Chebyshev's one-tailed bound P(x >= t) for moments with mean < t (eq. 1): the
+// fraction of the box at or behind t. t - mean > 0, so the denominator is positive.
+float chebyshev(SatMoments m, float t)
+{
+    float d = t - m.mean;
+    return m.variance / (m.variance + d * d);
+}
+
+// The offset, in texels, from the receiver to face texel position `at`.
+vec2 offsetTo(vec2 at) { return at - gReceiver.uv * gFaceTexels; }
+
+// ---- Blocker estimate (step 3) ------------------------------------------------------
+
+struct Blockers {
+    float area;      // the area of the blocking texels found
+    float depthSum;  // the sum of their depths t, times area
+};
+
+// One sub-kernel [lo, hi): adds its blockers, or asks to be split (descend) when it is
+// non-planar and not a leaf. `pcfLeaves`: a non-planar leaf is sampled by 2 x 2 PCF; else
+// it counts as lit (subdivision none).
+void addBlockerNode(vec2 lo, vec2 hi, bool leaf, bool pcfLeaves, inout Blockers b, out bool descend)
+{
+    descend = false;
+    ++gVisited;
+    SatMoments m = faceBox(lo, hi);
+    if (!(m.area > 0.0)) return;
+    float t = referenceT(0.5 * (lo + hi));
+    if (m.mean < t) {
+        // Eq. 4 with z_unocc = t: the blockers are the share 1 - P of the box, at mean
+        // depth (z_avg - P t) / (1 - P). P -> 1 leaves no blocker worth the division.
+        float p = chebyshev(m, t);
+        float blocking = 1.0 - p;
+        if (blocking > 1e-6) {
+            float zOcc = clamp((m.mean - p * t) / blocking, 0.0, t);
+            b.area += blocking * m.area;
+            b.depthSum += zOcc * blocking * m.area;
+        }
+        return;
+    }
+    if (m.variance < gLitVariance) return;  // behind the receiver and nearly flat: lit
+    if (!leaf) {
+        descend = true;
+        return;
+    }
+    if (!pcfLeaves) return;
+    // Non-planar leaf: 2 x 2 depth taps at the quarters' centres.
+    gUsedPcf = true;
+    for (int i = 0; i < 4; ++i) {
+        vec2 at = mix(lo, hi, vec2(0.25 + 0.5 * float(i & 1), 0.25 + 0.5 * float(i >> 1)));
+        vec2 uv = shadowTapUv(gReceiver, offsetTo(at));
+        float depth = textureLod(shadowDepth, shadowAtlasUv(gReceiver.face, uv), 0.0).r;
+        if (depth > shadowReferenceDepth(gReceiver, uv)) {  // reversed-Z: nearer the light
+            b.area += 0.25 * m.area;
+            b.depthSum += 0.25 * m.area * shadowLinearDepth(gReceiver.face, depth);
+        }
+    }
+}
+
+// ---- Visibility (step 5) ------------------------------------------------------------
+
+struct Lit {
+    float area;     // the kernel's area looked at
+    float litArea;  // of which lit
+};
+
+void addFilterNode(vec2 lo, vec2 hi, bool leaf, bool pcfLeaves, inout Lit f, out bool descend)
+{
+    descend = false;
+    ++gVisited;
+    SatMoments m = faceBox(lo, hi);
+    if (!(m.area > 0.0)) return;
+    float t = referenceT(0.5 * (lo + hi));
+    if (m.mean < t) {
+        f.area += m.area;
+        f.litArea += chebyshev(m, t) * m.area;
+        return;
+    }
+    if (m.variance < gLitVariance || !pcfLeaves) {
+        f.area += m.area;
+        f.litArea += m.area;
+        return;
+    }
+    if (!leaf) {
+        descend = true;
+        return;
+    }
+    gUsedPcf = true;
+    float lit = 0.0;
+    for (int i = 0; i < 4; ++i)
+        lit += shadowCompareTap(shadowCompare, gReceiver,
+                                offsetTo(mix(lo, hi, vec2(0.25 + 0.5 * float(i & 1), 0.25 + 0.5 * float(i >> 1)))));
+    f.area += m.area;
+    f.litArea += 0.25 * lit * m.area;
+}
+
+// ---- Traversals ---------------------------------------------------------------------
+
+// Morton index -> cell (x, y) of its level.
+ivec2 mortonCell(uint index)
+{
+    ivec2 cell = ivec2(0);
+    for (int bit = 0; bit < 8; ++bit) {
+        cell.x |= int((index >> (2 * bit)) & 1u) << bit;
+        cell.y |= int((index >> (2 * bit + 1)) & 1u) << bit;
+    }
+    return cell;
+}
+
+// Visits the kernel [lo, hi) as `mode` says; NODE(lo, hi, leaf, descend) adds one node.
+#define TRAVERSE(mode, count, lo, hi, NODE)                                                 \
+    if (mode == SUBDIVISION_NONE) {                                                         \
+        bool descend;                                                                       \
+        NODE(lo, hi, true, descend);                                                        \
+    } else if (mode == SUBDIVISION_UNIFORM) {                                               \
+        int n = max(count, 1);                                                              \
+        for (int j = 0; j < n; ++j)                                                         \
+            for (int i = 0; i < n; ++i) {                                                   \
+                bool descend;                                                               \
+                NODE(mix(lo, hi, vec2(i, j) / float(n)), mix(lo, hi, vec2(i + 1, j + 1) / float(n)), true, descend); \
+            }                                                                               \
+    } else {                                                                                \
+        /* Stackless linear quad-tree walk (Algorithm 2): child = (level + 1, 4 index),     \
+           next = the next sibling, or the parent's next after the last sibling. */         \
+        int height = clamp(pc.treeHeight, 0, 5);                                            \
+        int level = 0;                                                                      \
+        uint index = 0u;                                                                    \
+        for (;;) {                                                                          \
+            vec2 size = (hi - lo) / float(1 << level);                                      \
+            vec2 nodeLo = lo + size * vec2(mortonCell(index));                              \
+            bool descend;                                                                   \
+            NODE(nodeLo, nodeLo + size, level == height, descend);                          \
+            if (descend) {                                                                  \
+                ++level;                                                                    \
+                index *= 4u;                                                                \
+                continue;                                                                   \
+            }                                                                               \
+            while (level > 0 && (index & 3u) == 3u) {                                       \
+                index >>= 2;                                                                \
+                --level;                                                                    \
+            }                                                                               \
+            if (level == 0) break;                                                          \
+            ++index;                                                                        \
+        }                                                                                   \
+    }
+
+// ---- Contact (§6.4) -----------------------------------------------------------------
+
+// Bilinear PCF at an offset from the receiver: the four texels' compares, each against
+// the reference at its own centre, weighted bilinearly.
+float bilinearCompare(vec2 offsetTexels)
+{
+    vec2 p = gReceiver.uv * gFaceTexels + offsetTexels - 0.5;
+    vec2 i = floor(p), w = p - i;
+    float v00 = shadowCompareTap(shadowCompare, gReceiver, offsetTo(i + vec2(0.5, 0.5)));
+    float v10 = shadowCompareTap(shadowCompare, gReceiver, offsetTo(i + vec2(1.5, 0.5)));
+    float v01 = shadowCompareTap(shadowCompare, gReceiver, offsetTo(i + vec2(0.5, 1.5)));
+    float v11 = shadowCompareTap(shadowCompare, gReceiver, offsetTo(i + vec2(1.5, 1.5)));
+    return mix(mix(v00, v10, w.x), mix(v01, v11, w.x), w.y);
+}
+
+// 3 x 3 bilinear PCF over the penumbra kernel (half-width `radius` texels), the grid
+// rotated per pixel (jittered, Bavoil 2008).
+float contactPcf(float radius, ivec2 pixel)
+{
+    mat2 rotation = poissonRotation(pixel);
+    float spacing = 2.0 * radius / 3.0;
+    float lit = 0.0;
+    for (int j = -1; j <= 1; ++j)
+        for (int i = -1; i <= 1; ++i) lit += bilinearCompare(rotation * (vec2(i, j) * spacing));
+    return lit / 9.0;
+}
+
+// ---- The pixel ----------------------------------------------------------------------
+
+struct Result {
+    float v;
+    float kernelTexels;  // the penumbra kernel's half-width (0: decided before it)
+    float classification;
+};
+
+Result vssmVisibility(ivec2 pixel)
+{
+    Result res = Result(1.0, 0.0, kClassLit);
+    ShadowFace face = shadowMapData.faces[gReceiver.face];
+    // A light of size 0 (or a degenerate map) casts a hard shadow: exactly hard's one
+    // nearest compare.
+    if (!(pc.lightSize > 0.0) || !(face.texel.x > 0.0)) {
+        res.v = shadowCompareTap(shadowCompare, gReceiver, vec2(0.0));
+        res.classification = res.v > 0.5 ? kClassLit : kClassUmbra;
+        return res;
+    }
+    // The scene-relative thresholds in units of t (the face's depth range; ShadowMap
+    // keeps it positive).
+    float depthRange = face.depthRange.y - face.depthRange.x;
+    float radiusT = pc.sceneRadius / depthRange;
+    gLitVariance = pc.litVariance * radiusT * radiusT;
+    float contactT = pc.contactEpsilon * radiusT;
+
+    float dReceiver = shadowDistance(gReceiver.face, gReceiver.depth);
+    vec2 centre = gReceiver.uv * gFaceTexels;
+    float tReceiver = referenceT(centre);
+
+    // 1-2. The search kernel and the HSM's early-out. The references at its corners bound
+    // those inside (the plane's depth is monotonic along each axis).
+    float search = max(shadowSearchRadiusTexels(face, pc.lightSize, dReceiver, pc.maxSearchTexels), 0.5);
+    vec2 lo = centre - search, hi = centre + search;
+    vec2 cutLo = clamp(lo, vec2(0.0), vec2(gFaceTexels)), cutHi = clamp(hi, vec2(0.0), vec2(gFaceTexels));
+    ivec2 first = ivec2(gFaceOrigin) + ivec2(floor(cutLo));
+    ivec2 last = max(ivec2(gFaceOrigin) + ivec2(ceil(cutHi)) - 1, first);
+    vec2 range = hsmRange(first, last, pc.atlasSize);
+    float t00 = referenceT(cutLo), t11 = referenceT(cutHi);
+    float t10 = referenceT(vec2(cutHi.x, cutLo.y)), t01 = referenceT(vec2(cutLo.x, cutHi.y));
+    float tMin = min(min(t00, t11), min(t10, t01)), tMax = max(max(t00, t11), max(t10, t01));
+    if (range.x >= tMax) return res;  // every texel behind the receiver: lit
+    if (range.y < tMin) {             // every texel in front: umbra
+        res.v = 0.0;
+        res.classification = kClassUmbra;
+        return res;
+    }
+
+    // 3. The average blocker depth.
+    Blockers b = Blockers(0.0, 0.0);
+#define BLOCKER_NODE(nlo, nhi, leaf, descend) \
+    addBlockerNode(nlo, nhi, leaf, BLOCKER_SUBDIVISION != SUBDIVISION_NONE, b, descend)
+    TRAVERSE(BLOCKER_SUBDIVISION, pc.blockerSubdivisions, lo, hi, BLOCKER_NODE)
+    float kernelArea = (cutHi.x - cutLo.x) * (cutHi.y - cutLo.y);
+    if (!(b.area > 1e-4 * kernelArea)) return res;  // no blocker: lit
+    // Clamped into [z_min, t]: eq. 4 extrapolates, and the HSM bounds what is there.
+    float zOcc = clamp(b.depthSum / b.area, range.x, tReceiver);
+
+    // 4. The penumbra kernel.
+    float dBlocker = face.depthRange.x + zOcc * depthRange;
+    float radius = max(shadowFilterRadiusTexels(face, pc.lightSize, dReceiver, dBlocker, pc.maxFilterTexels), 0.5);
+    res.kernelTexels = radius;
+    if (tReceiver - zOcc < contactT) {
+        res.v = contactPcf(radius, pixel);
+        res.classification = kClassContact;
+        return res;
+    }
+
+    // 5. The visibility over it.
+    Lit f = Lit(0.0, 0.0);
+    vec2 flo = centre - radius, fhi = centre + radius;
+#define FILTER_NODE(nlo, nhi, leaf, descend) \
+    addFilterNode(nlo, nhi, leaf, FILTER_SUBDIVISION != SUBDIVISION_NONE, f, descend)
+    TRAVERSE(FILTER_SUBDIVISION, pc.filterSubdivisions, flo, fhi, FILTER_NODE)
+    res.v = f.area > 0.0 ? f.litArea / f.area : 1.0;
+    res.classification = gUsedPcf ? kClassNonPlanar : kClassPenumbra;
+    return res;
+}
+
+void main()
+{
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(pixel, imageSize(visibilityOut)))) return;
+
+    vec4 position = imageLoad(gPosition, pixel);
+    float v = VISIBILITY_NO_GEOMETRY;
+    Result res = Result(VISIBILITY_NO_GEOMETRY, 0.0, kClassLit);
+    gVisited = 0u;
+    gUsedPcf = false;
+    if (position.w != 0.0) {
+        if (makeShadowReceiver(pixel, position.xyz, 0.0, gReceiver)) {
+            gFaceTexels = shadowMapData.faceTexels;
+            gFaceOrigin = shadowMapData.faceCount == 6u
+                              ? vec2(float(gReceiver.face % 3u), float(gReceiver.face / 3u)) * gFaceTexels
+                              : vec2(0.0);
+            res = vssmVisibility(pixel);
+        }
+        v = res.v * shadowLightAboveHorizon(position.xyz, shadowReceiverNormal(pixel));
+    }
+    if (pc.debugView == DEBUG_KERNEL) v = res.kernelTexels / max(pc.maxFilterTexels, 0.5);
+    else if (pc.debugView == DEBUG_CLASSIFICATION) v = res.classification;
+    else if (pc.debugView == DEBUG_SUBKERNELS) v = float(gVisited) * pc.debugScale;
+    imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
+}

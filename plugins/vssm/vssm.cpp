@@ -1,0 +1,442 @@
+// Variance soft shadow mapping (Yang, Dong, Feng, Seidel and Kautz 2010; README.md next
+// to this file): the PCSS framework with the blocker search and the filter read from a
+// summed-area table of the map's moments instead of point samples, and the kernels
+// subdivided where the variance test cannot decide (the "non-planarity" problem).
+// Passes (paper Algorithm 1): the engine's shadow map (render/ShadowMap.h), its
+// summed-area table (sat.comp, sat.glsl), its min-max hierarchy (hsm.comp, hsm.glsl),
+// and the per-pixel visibility (visibility.comp). The table (an image) and the
+// hierarchy (a buffer) are transient graph resources.
+#include "penumbra/core/Error.h"
+#include "penumbra/gpu/Barrier.h"
+#include "penumbra/gpu/Context.h"
+#include "penumbra/gpu/Pipeline.h"
+#include "penumbra/graph/GraphExecutor.h"
+#include "penumbra/graph/RenderGraph.h"
+#include "penumbra/plugin/Plugin.h"
+#include "penumbra/plugin/Technique.h"
+#include "penumbra/render/ShadowMap.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <string>
+
+namespace penumbra::vssm {
+namespace {
+
+using plugin::ParamType;
+
+// Parameter `subdivision`, in ParamSpec choice order (§6.3: mixed is the paper's).
+enum class Subdivision : uint32_t { None, Uniform, Adaptive, Mixed };
+constexpr const char* kSubdivisionNames[] = {"none", "uniform", "adaptive", "mixed"};
+// visibility.comp's BLOCKER_SUBDIVISION / FILTER_SUBDIVISION values.
+enum class Scheme : uint32_t { None = 0, Uniform = 1, Adaptive = 2 };
+
+// Parameter `bias_mode`.
+enum class BiasMode : uint32_t { ReceiverPlane, Slope };
+constexpr const char* kBiasModeNames[] = {"receiver_plane", "slope"};
+
+// Parameter `debug_view` (visibility.comp DEBUG_*).
+enum class DebugView : uint32_t { Off, Kernel, Classification, Subkernels };
+constexpr const char* kDebugViewNames[] = {"off", "kernel", "classification", "subkernels"};
+
+constexpr int kMaxTreeHeight = 5;  // visibility.comp clamps to it (4^5 leaves)
+
+const plugin::ParamSpec kParams[] = {
+    {"resolution", ParamType::Int, 1024, 16, 8192, "texels",
+     "shadow-map texels per side of each face (point, rect and disk lights: six faces in a 3 x 2 atlas); the "
+     "summed-area table takes 16 bytes per texel"},
+    {"light_size", ParamType::Float, -1, -1, 1e9, "world or deg",
+     "-1: the light's own size (rect: sqrt(w h), disk: diameter, directional: angular_diameter_deg; spot and "
+     "point: 0, a hard shadow); >= 0: this size instead, in world units (directional: angular diameter in degrees)"},
+    {"subdivision", ParamType::Enum, double(Subdivision::Mixed), 0, 0, "",
+     "none: one box per kernel, non-planar kernels lit (SAVSM-like); uniform: m x m blocker and n x n filter "
+     "sub-kernels; adaptive: quad-trees of height H for both; mixed: m x m blocker, quad-tree filter (paper 6.3)",
+     kSubdivisionNames, uint32_t(std::size(kSubdivisionNames))},
+    {"blocker_subdivisions", ParamType::Int, 5, 1, 16, "", "m: sub-kernels per side of the blocker search (uniform)"},
+    {"filter_subdivisions", ParamType::Int, 8, 1, 16, "", "n: sub-kernels per side of the filter (uniform)"},
+    {"tree_height", ParamType::Int, 3, 0, kMaxTreeHeight, "", "H: levels of the adaptive quad-tree (4^H leaves)"},
+    {"max_search_radius", ParamType::Float, 64, 0.5, 1024, "texels", "largest blocker-search half-width"},
+    {"max_filter_radius", ParamType::Float, 64, 0.5, 1024, "texels", "largest penumbra-filter half-width"},
+    {"lit_variance", ParamType::Float, 1e-4, 0, 1, "r^2",
+     "Threshold of Algorithm 2: a sub-kernel behind the receiver with a variance below lit_variance r^2 is lit "
+     "(r: the scene's bounding radius; paper 6.5)"},
+    {"contact_epsilon", ParamType::Float, 0.01, 0, 1, "r",
+     "blockers within contact_epsilon r of the receiver get 3 x 3 jittered bilinear PCF (paper 6.4)"},
+    {"bias_mode", ParamType::Enum, double(BiasMode::ReceiverPlane), 0, 0, "",
+     "receiver_plane: each sub-kernel and tap compares against the receiver's plane there; slope: the receiver's "
+     "depth and the rasterizer's slope bias",
+     kBiasModeNames, uint32_t(std::size(kBiasModeNames))},
+    {"depth_bias", ParamType::Float, 4, 0, 1e6, "r",
+     "constant depth bias in Vulkan's minimum resolvable depth differences r; applied in every bias_mode"},
+    {"slope_bias", ParamType::Float, 2, 0, 1000, "", "slope-scaled rasterizer depth bias factor; bias_mode slope only"},
+    {"debug_view", ParamType::Enum, double(DebugView::Off), 0, 0, "",
+     "off: V; kernel: the penumbra kernel's half-width / max_filter_radius; classification: lit 1, non-planar "
+     "0.75, penumbra 0.5, contact 0.25, umbra 0; subkernels: sub-kernels visited / the most possible",
+     kDebugViewNames, uint32_t(std::size(kDebugViewNames))},
+};
+
+struct Settings {
+    uint32_t resolution = 1024;
+    float lightSizeOverride = -1.0f;
+    Subdivision subdivision = Subdivision::Mixed;
+    int blockerSubdivisions = 5;
+    int filterSubdivisions = 8;
+    int treeHeight = 3;
+    float maxSearchTexels = 64.0f;
+    float maxFilterTexels = 64.0f;
+    float litVariance = 1e-4f;
+    float contactEpsilon = 0.01f;
+    BiasMode bias = BiasMode::ReceiverPlane;
+    float depthBias = 4.0f;
+    float slopeBias = 2.0f;
+    DebugView debugView = DebugView::Off;
+
+    Scheme blockerScheme() const
+    {
+        switch (subdivision) {
+        case Subdivision::None: return Scheme::None;
+        case Subdivision::Adaptive: return Scheme::Adaptive;
+        default: return Scheme::Uniform;
+        }
+    }
+    Scheme filterScheme() const
+    {
+        switch (subdivision) {
+        case Subdivision::None: return Scheme::None;
+        case Subdivision::Uniform: return Scheme::Uniform;
+        default: return Scheme::Adaptive;
+        }
+    }
+};
+
+Settings readSettings(const plugin::ParamValues& params)
+{
+    Settings s;
+    s.resolution = uint32_t(params.getInt("resolution"));
+    s.lightSizeOverride = params.getFloat("light_size");
+    s.subdivision = Subdivision(params.getEnumIndex("subdivision"));
+    s.blockerSubdivisions = params.getInt("blocker_subdivisions");
+    s.filterSubdivisions = params.getInt("filter_subdivisions");
+    s.treeHeight = params.getInt("tree_height");
+    s.maxSearchTexels = params.getFloat("max_search_radius");
+    s.maxFilterTexels = params.getFloat("max_filter_radius");
+    s.litVariance = params.getFloat("lit_variance");
+    s.contactEpsilon = params.getFloat("contact_epsilon");
+    s.bias = BiasMode(params.getEnumIndex("bias_mode"));
+    s.depthBias = params.getFloat("depth_bias");
+    s.slopeBias = params.getFloat("slope_bias");
+    s.debugView = DebugView(params.getEnumIndex("debug_view"));
+    return s;
+}
+
+// The most sub-kernels one scheme visits in one kernel.
+int maxNodes(Scheme scheme, int perSide, int height)
+{
+    switch (scheme) {
+    case Scheme::None: return 1;
+    case Scheme::Uniform: return perSide * perSide;
+    case Scheme::Adaptive: return ((1 << (2 * (height + 1))) - 1) / 3;  // 1 + 4 + ... + 4^H
+    }
+    return 1;
+}
+
+// Bindings of visibility.comp.
+enum Binding : uint32_t {
+    kBindingPosition = 0,
+    kBindingShadowCompare = 1,
+    kBindingVisibility = 2,
+    kBindingShadowMapData = 3,
+    kBindingNormal = 4,
+    kBindingShadowDepth = 5,
+    kBindingSat = 6,
+    kBindingHsm = 7,
+};
+
+struct VisibilityPush {
+    glm::ivec2 atlasSize{0};
+    float lightSize = 0.0f;
+    float maxSearchTexels = 0.0f;
+    float maxFilterTexels = 0.0f;
+    float sceneRadius = 0.0f;
+    float litVariance = 0.0f;
+    float contactEpsilon = 0.0f;
+    int32_t blockerSubdivisions = 1;
+    int32_t filterSubdivisions = 1;
+    int32_t treeHeight = 0;
+    int32_t debugView = 0;
+    float debugScale = 0.0f;
+};
+static_assert(sizeof(VisibilityPush) == 52);
+
+struct SatPush {
+    glm::ivec2 size{0};
+    int32_t vertical = 0;
+};
+
+struct HsmPush {
+    glm::ivec2 size{0};
+    int32_t level = 0;
+};
+
+// The min-max hierarchy's levels (hsm.glsl): down to one texel, level 0 (the depth
+// map itself) included.
+int hsmLevelCount(uint32_t width, uint32_t height)
+{
+    int levels = 1;
+    while (((width + (1u << (levels - 1)) - 1) >> (levels - 1)) > 1 ||
+           ((height + (1u << (levels - 1)) - 1) >> (levels - 1)) > 1)
+        ++levels;
+    return levels;
+}
+
+// The buffer of levels 1 and up.
+VkDeviceSize hsmBytes(uint32_t width, uint32_t height)
+{
+    VkDeviceSize texels = 0;
+    for (int level = 1; level < hsmLevelCount(width, height); ++level)
+        texels += VkDeviceSize((width + (1u << level) - 1) >> level) * ((height + (1u << level) - 1) >> level);
+    return std::max<VkDeviceSize>(texels, 1) * 2 * sizeof(float);
+}
+
+class VssmShadow final : public plugin::Technique {
+public:
+    explicit VssmShadow(const plugin::TechniqueSetup& setup);
+
+    void update(const scene::Light& light, const scene::Aabb& sceneBounds) override;
+    void registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io) override;
+
+private:
+    void checkDevice() const;
+    void recordSat(const graph::PassContext& pass, const std::string& map, const std::string& sat) const;
+    void recordHsm(const graph::PassContext& pass, const std::string& map, const std::string& hsm) const;
+    void recordVisibility(const graph::PassContext& pass, const plugin::LightPassIo& io, const std::string& map,
+                          const std::string& sat, const std::string& hsm) const;
+    glm::ivec2 atlasSize() const { return {int(shadowMap_.atlasWidth()), int(shadowMap_.atlasHeight())}; }
+
+    gpu::Context& context_;
+    const Settings settings_;
+    render::ShadowMap shadowMap_;
+    gpu::Pipeline sat_;
+    gpu::Pipeline hsm_;
+    gpu::Pipeline visibility_;
+    gpu::Sampler compareSampler_;
+    gpu::Sampler depthSampler_;
+    float lightSize_ = 0.0f;
+    float sceneRadius_ = 0.0f;
+};
+
+float boundingRadius(const scene::Aabb& bounds)
+{
+    const glm::vec3 extent = bounds.max - bounds.min;
+    const float r = 0.5f * std::sqrt(glm::dot(extent, extent));
+    return std::isfinite(r) ? r : 0.0f;  // an empty scene's inverted box: no threshold
+}
+
+VssmShadow::VssmShadow(const plugin::TechniqueSetup& setup)
+    : context_(setup.context),
+      settings_(readSettings(setup.params)),
+      shadowMap_(setup, settings_.resolution, "vssm")
+{
+    checkDevice();
+    // The kernels are clamped to these half-widths; one texel more for the taps' rounding.
+    shadowMap_.setFootprint(std::max(settings_.maxSearchTexels, settings_.maxFilterTexels) + 1.0f);
+    const std::string name = fmt::format("light{}.vssm.", setup.lightIndex);
+
+    gpu::ComputePipelineDesc c;
+    c.name = name + "sat";
+    c.shader = "sat.comp";
+    c.bindings = {{0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+                  {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                  {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
+    c.pushConstantBytes = sizeof(SatPush);
+    sat_ = gpu::Pipeline(context_, setup.shaders, c);
+
+    c.name = name + "hsm";
+    c.shader = "hsm.comp";
+    c.bindings[1].type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    c.pushConstantBytes = sizeof(HsmPush);
+    hsm_ = gpu::Pipeline(context_, setup.shaders, c);
+
+    c.name = name + "visibility";
+    c.shader = "visibility.comp";
+    c.defines = {{"RECEIVER_BIAS", std::to_string(uint32_t(settings_.bias == BiasMode::ReceiverPlane
+                                                              ? render::ReceiverBias::Plane
+                                                              : render::ReceiverBias::None))},
+                 {"BLOCKER_SUBDIVISION", std::to_string(uint32_t(settings_.blockerScheme()))},
+                 {"FILTER_SUBDIVISION", std::to_string(uint32_t(settings_.filterScheme()))}};
+    c.bindings = {{kBindingPosition, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                  {kBindingShadowCompare, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+                  {kBindingVisibility, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                  {kBindingShadowMapData, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                  {kBindingNormal, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                  {kBindingShadowDepth, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+                  {kBindingSat, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
+                  {kBindingHsm, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
+    c.pushConstantBytes = sizeof(VisibilityPush);
+    visibility_ = gpu::Pipeline(context_, setup.shaders, c);
+
+    compareSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+                                         VK_COMPARE_OP_GREATER_OR_EQUAL);
+    depthSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
+    lightSize_ = render::softShadowLightSize(setup.light, settings_.lightSizeOverride);
+    sceneRadius_ = boundingRadius(setup.sceneBounds);
+}
+
+// The table needs 64-bit integers in shaders, and its box queries fp64 (sat.glsl); both
+// are optional Vulkan features. The hierarchy must fit one storage buffer binding.
+void VssmShadow::checkDevice() const
+{
+    VkPhysicalDeviceFeatures features{};
+    vkGetPhysicalDeviceFeatures(context_.physicalDevice(), &features);
+    if (!features.shaderInt64 || !features.shaderFloat64) {
+        throw ConfigError(fmt::format("vssm: this device lacks {} (the summed-area table is 64-bit fixed point, "
+                                      "plugins/vssm/sat.glsl); choose another technique or device",
+                                      !features.shaderInt64 ? "shaderInt64" : "shaderFloat64"));
+    }
+    VkPhysicalDeviceProperties properties{};
+    vkGetPhysicalDeviceProperties(context_.physicalDevice(), &properties);
+    const VkDeviceSize bytes = hsmBytes(shadowMap_.atlasWidth(), shadowMap_.atlasHeight());
+    if (bytes > properties.limits.maxStorageBufferRange) {
+        throw ConfigError(fmt::format("vssm: resolution: {} texels per face need a {} MiB min-max hierarchy, more "
+                                      "than this device binds as one buffer ({} MiB); use a lower resolution",
+                                      settings_.resolution, bytes >> 20,
+                                      properties.limits.maxStorageBufferRange >> 20));
+    }
+}
+
+void VssmShadow::update(const scene::Light& light, const scene::Aabb& sceneBounds)
+{
+    shadowMap_.update(light, sceneBounds);
+    lightSize_ = render::softShadowLightSize(light, settings_.lightSizeOverride);
+    sceneRadius_ = boundingRadius(sceneBounds);
+}
+
+void VssmShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io)
+{
+    const std::string map = io.local("shadow_map");
+    shadowMap_.addDepthPass(graph, map,
+                            {settings_.depthBias, settings_.bias == BiasMode::Slope ? settings_.slopeBias : 0.0f, 0.0f});
+
+    const uint32_t width = shadowMap_.atlasWidth(), height = shadowMap_.atlasHeight();
+    const std::string sat = io.local("sat"), hsm = io.local("hsm");
+    graph.declareImage({sat, width, height, VK_FORMAT_R32G32B32A32_UINT});
+    graph.declareBuffer({hsm, hsmBytes(width, height)});
+    graph.addPass(sat, graph::QueueKind::Compute)
+        .read(map, graph::Usage::Sampled)
+        .write(sat, graph::Usage::Storage)
+        .execute([this, map, sat](graph::PassContext& pass) { recordSat(pass, map, sat); });
+    graph.addPass(hsm, graph::QueueKind::Compute)
+        .read(map, graph::Usage::Sampled)
+        .write(hsm, graph::Usage::Storage)
+        .execute([this, map, hsm](graph::PassContext& pass) { recordHsm(pass, map, hsm); });
+
+    graph::PassBuilder visibility = graph.addPass(io.local("visibility"), graph::QueueKind::Compute);
+    visibility.read(io.gPosition, graph::Usage::Storage)
+        .read(io.gNormal, graph::Usage::Storage)
+        .read(map, graph::Usage::Sampled)
+        .read(sat, graph::Usage::Storage)
+        .read(hsm, graph::Usage::Storage)
+        .write(io.visibility, graph::Usage::Storage);
+    visibility.execute(
+        [this, io, map, sat, hsm](graph::PassContext& pass) { recordVisibility(pass, io, map, sat, hsm); });
+}
+
+constexpr gpu::MemoryAccess kComputeWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
+constexpr gpu::MemoryAccess kComputeReadWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                                              VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
+
+void VssmShadow::recordSat(const graph::PassContext& pass, const std::string& map, const std::string& sat) const
+{
+    VkCommandBuffer cmd = pass.cmd();
+    sat_.bind(cmd);
+    gpu::DescriptorPush()
+        .sampledImage(0, pass.image(map), depthSampler_, pass.layout(map))
+        .storageImage(1, pass.image(sat))
+        .storageBuffer(2, shadowMap_.buffer())
+        .push(context_, cmd, sat_);
+    const glm::ivec2 size = atlasSize();
+    SatPush push{size, 0};
+    sat_.pushConstants(cmd, &push, sizeof(push));
+    vkCmdDispatch(cmd, (uint32_t(size.y) + 63) / 64, 1, 1);  // one invocation per row
+    gpu::memoryBarrier(cmd, kComputeWrite, kComputeReadWrite);
+    push.vertical = 1;
+    sat_.pushConstants(cmd, &push, sizeof(push));
+    vkCmdDispatch(cmd, (uint32_t(size.x) + 63) / 64, 1, 1);  // one per column
+}
+
+void VssmShadow::recordHsm(const graph::PassContext& pass, const std::string& map, const std::string& hsm) const
+{
+    VkCommandBuffer cmd = pass.cmd();
+    hsm_.bind(cmd);
+    gpu::DescriptorPush()
+        .sampledImage(0, pass.image(map), depthSampler_, pass.layout(map))
+        .storageBuffer(1, pass.buffer(hsm))
+        .storageBuffer(2, shadowMap_.buffer())
+        .push(context_, cmd, hsm_);
+    const glm::ivec2 size = atlasSize();
+    const int levels = hsmLevelCount(uint32_t(size.x), uint32_t(size.y));
+    for (int level = 1; level < levels; ++level) {
+        if (level > 1) gpu::memoryBarrier(cmd, kComputeWrite, kComputeReadWrite);
+        const HsmPush push{size, level};
+        hsm_.pushConstants(cmd, &push, sizeof(push));
+        const glm::ivec2 texels = (size + (1 << level) - 1) >> level;
+        vkCmdDispatch(cmd, (uint32_t(texels.x) + 7) / 8, (uint32_t(texels.y) + 7) / 8, 1);
+    }
+}
+
+void VssmShadow::recordVisibility(const graph::PassContext& pass, const plugin::LightPassIo& io,
+                                  const std::string& map, const std::string& sat, const std::string& hsm) const
+{
+    VkCommandBuffer cmd = pass.cmd();
+    const gpu::Image& out = pass.image(io.visibility);
+    visibility_.bind(cmd);
+    gpu::DescriptorPush()
+        .storageImage(kBindingPosition, pass.image(io.gPosition))
+        .sampledImage(kBindingShadowCompare, pass.image(map), compareSampler_, pass.layout(map))
+        .storageImage(kBindingVisibility, out)
+        .storageBuffer(kBindingShadowMapData, shadowMap_.buffer())
+        .storageImage(kBindingNormal, pass.image(io.gNormal))
+        .sampledImage(kBindingShadowDepth, pass.image(map), depthSampler_, pass.layout(map))
+        .storageImage(kBindingSat, pass.image(sat))
+        .storageBuffer(kBindingHsm, pass.buffer(hsm))
+        .push(context_, cmd, visibility_);
+    const int most = maxNodes(settings_.blockerScheme(), settings_.blockerSubdivisions, settings_.treeHeight) +
+                     maxNodes(settings_.filterScheme(), settings_.filterSubdivisions, settings_.treeHeight);
+    const VisibilityPush push{atlasSize(),
+                              lightSize_,
+                              settings_.maxSearchTexels,
+                              settings_.maxFilterTexels,
+                              sceneRadius_,
+                              settings_.litVariance,
+                              settings_.contactEpsilon,
+                              settings_.blockerSubdivisions,
+                              settings_.filterSubdivisions,
+                              settings_.treeHeight,
+                              int32_t(settings_.debugView),
+                              1.0f / float(most)};
+    visibility_.pushConstants(cmd, &push, sizeof(push));
+    vkCmdDispatch(cmd, (out.desc().width + 7) / 8, (out.desc().height + 7) / 8, 1);
+}
+
+plugin::Technique* createVssmShadow(const plugin::TechniqueSetup& setup) { return new VssmShadow(setup); }
+
+} // namespace
+} // namespace penumbra::vssm
+
+PENUMBRA_PLUGIN_EXPORT const PenumbraPluginInfo* penumbra_plugin_entry()
+{
+    static const PenumbraPluginInfo info{PENUMBRA_PLUGIN_ABI_VERSION,
+                                         "vssm",
+                                         "1.0.0",
+                                         "variance soft shadow mapping: summed-area table of 64-bit moments, min-max "
+                                         "hierarchy, eq. 4 blocker depth, uniform and adaptive kernel subdivision "
+                                         "(Yang et al. 2010)",
+                                         penumbra::vssm::kParams,
+                                         uint32_t(std::size(penumbra::vssm::kParams)),
+                                         &penumbra::vssm::createVssmShadow,
+                                         PENUMBRA_PLUGIN_SHADER_DIR};
+    return &info;
+}

@@ -1,0 +1,54 @@
+#pragma once
+// The penumbra scene (scene/Generators.h generatePenumbra: a 1 x 1 plate h above the
+// ground under a square light of side w at height 3, whose penumbra along x is
+// w h / (H - h) wide) seen from straight above, and the measures the soft-shadow
+// plugin tests take of a visibility image on it: the width of a shadow edge and the
+// RMSE against the exact visibility (tests/test_pcss_plugin.cpp, test_vssm_plugin.cpp).
+#include "PluginFrame.h"
+
+#include "penumbra/config/Config.h"
+#include "penumbra/scene/Generators.h"
+
+#include <utility>
+#include <vector>
+
+namespace penumbra::test {
+
+constexpr float kPenumbraLightHeight = 3.0f;
+
+struct PenumbraSetup {
+    float lightSide = 0.5f;
+    float occluderHeight = 1.0f;
+    float occluderThickness = 0.01f;
+};
+
+scene::PenumbraParams penumbraParams(const PenumbraSetup& p);
+
+// The camera looks straight down on the ground beside the plate (x in about [0.2, 1.8],
+// z in [-0.45, 0.45]), below the plate, so that only the ground is seen. The light's
+// technique is left to the test.
+config::RenderConfig penumbraConfig(const PenumbraSetup& p);
+
+// The 10 %-90 % width of a shadow edge from (coordinate across the edge, V) samples on
+// the ground, V averaged over bins of 1 cm (a filter's per-pixel rotation is noise), the
+// umbra at smaller coordinates.
+double rampWidth(const std::vector<std::pair<float, float>>& samples);
+
+// The penumbra scene's edge along x, on the ground near z = 0.
+double edgeWidth(const RenderedFrame& frame, const std::vector<float>& v);
+
+// A box's shadow's side edge (along z > 0, on the ground) in the slice x +- 2 cm.
+double sideEdgeWidth(const RenderedFrame& frame, const std::vector<float>& v, float x);
+
+// A technique's edge width on the penumbra scene, the exact one measured the same way,
+// and the RMSE of V over the ground against the exact visibility.
+struct PenumbraWidths {
+    double technique;
+    double exact;
+    double rmse;
+};
+
+// `v`: the visibility `frame` rendered of penumbraConfig(p) over generatePenumbra.
+PenumbraWidths measurePenumbra(const RenderedFrame& frame, const std::vector<float>& v, const PenumbraSetup& p);
+
+} // namespace penumbra::test
