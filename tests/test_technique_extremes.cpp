@@ -1,4 +1,4 @@
-// Every shadow-map technique (hard, PCF, PCSS, VSM, EVSM, ESM) under the same extremes,
+// Every shadow-map technique (hard, PCF, PCSS, VSM, EVSM, ESM, VSSM) under the same extremes,
 // end to end through render::FrameRenderer, with the contract's invariants (every V
 // finite and in [0, 1], 1 without geometry: PluginFrame's checkedVisibility) on every
 // image:
@@ -12,7 +12,7 @@
 //     knob rises.
 // Light size 0, huge lights, blockers touching their receiver, grazing light and scene
 // scales 1e-3 and 1e5 are covered per technique in test_hard_plugin.cpp,
-// test_pcss_plugin.cpp and test_vsm_plugin.cpp.
+// test_pcss_plugin.cpp, test_vsm_plugin.cpp and test_vssm_plugin.cpp.
 #include "PluginFrame.h"
 #include "TestConfigs.h"
 #include "TestContext.h"
@@ -45,7 +45,7 @@ struct TechniqueCase {
     const char* knob;
     std::vector<int> knobValues;
     // The light the technique models: a point light for the hard-shadow family and the
-    // VSM family (filtered hard shadows), the rect light for PCSS.
+    // VSM family (filtered hard shadows), the rect light for PCSS and VSSM.
     bool areaLightModel = false;
     // The part of the pixels whose V may change by more than 0.05 when the light's depth
     // range grows 50-fold (NearFarRatioOf1e6). The VSM family stores depth over that
@@ -65,6 +65,7 @@ const TechniqueCase kTechniques[] = {
     {"vsm", "vsm", {{"resolution", 1024}, {"variant", "vsm"}}, "resolution", {256, 512, 1024, 2048}, false, 0.03},
     {"evsm", "vsm", {{"resolution", 1024}, {"variant", "evsm"}}, "resolution", {256, 512, 1024, 2048}, false, 0.03},
     {"esm", "vsm", {{"resolution", 1024}, {"variant", "esm"}}, "resolution", {256, 512, 1024, 2048}, false, 0.12},
+    {"vssm", "vssm", {{"resolution", 1024}}, "resolution", {256, 512, 1024, 2048}, true, 0.03},
 };
 
 void applyTechnique(config::LightConfig& light, const TechniqueCase& t)

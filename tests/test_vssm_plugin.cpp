@@ -477,3 +477,278 @@ TEST_P(VssmPenumbra, WidthGrowsWithLightSizeAndFollowsTheExactPenumbra)
 }
 
 INSTANTIATE_TEST_SUITE_P(Vssm, VssmPenumbra, ::testing::Values("none", "uniform", "adaptive", "mixed"));
+
+// ---------------------------------------------------------------------------------
+// Overlapping blockers at different depths (the paper's Fig. 3 and 9, as numbers).
+
+namespace {
+
+// A 0.3 x 1 x 0.3 pillar on the ground (top at y = 1) and a plate of the same size 0.2
+// above its top, under a 1 x 1 rect light 3 above the top: the plate's umbra covers most
+// of the top. The kernels there (up to 64 texels, about 0.4 m) mostly see the ground a
+// metre below, behind the receiver, so a kernel's mean depth lies behind the receiver
+// although the plate covers part of it: the non-planar case, which SAVSM-like lookups
+// (subdivision none) take as lit. The camera looks straight down on the top from below
+// the plate.
+scene::Scene platformScene()
+{
+    scene::Scene s = test::planeScene();
+    test::addInstance(s, test::addMesh(s, scene::makeBox("pillar")), "pillar",
+                      glm::scale(glm::translate(glm::mat4(1.0f), {0.0f, 0.5f, 0.0f}), {0.3f, 1.0f, 0.3f}));
+    test::addInstance(s, test::addMesh(s, scene::makePlane("plate")), "plate",
+                      glm::scale(glm::translate(glm::mat4(1.0f), {0.0f, 1.2f, 0.0f}), {0.3f, 1.0f, 0.3f}));
+    return s;
+}
+
+config::RenderConfig platformConfig()
+{
+    return test::lookDownRectLightConfig({0.0f, 1.15f, 0.0f}, {0.0f, 4.0f, 0.0f}, 1.0f);
+}
+
+bool onPlatformTop(const test::RenderedFrame& frame, size_t pixel)
+{
+    return frame.hasGeometry(pixel) && std::abs(frame.positions[4 * pixel + 1] - 1.0f) < 1e-3f;
+}
+
+} // namespace
+
+TEST_F(VssmTest, SubdivisionRemovesTheIncorrectlyLitAreaOfOverlappingBlockers)
+{
+    config::RenderConfig cfg = platformConfig();
+    cfg.lights[0].shadow = {};
+    cfg.lights[0].shadow.technique = "reference";
+    cfg.lights[0].shadow.required = true;
+    cfg.lights[0].shadow.setParam("cache", false, "test");
+    cfg.lights[0].shadow.setParam("samples", 256, "test");
+    render(cfg, platformScene());
+    const std::vector<float> reference = frame->checkedVisibility();
+
+    std::map<std::string, size_t> incorrectlyLit;
+    size_t shadowedTop = 0;
+    for (const char* subdivision : {"none", "uniform", "adaptive", "mixed"}) {
+        VssmSettings s;
+        s.maxSearchTexels = 64.0;
+        s.maxFilterTexels = 64.0;
+        s.subdivision = subdivision;
+        const std::vector<float> v = renderVssm(platformConfig(), s, platformScene());
+        size_t wrong = 0, top = 0;
+        double squared = 0.0;
+        shadowedTop = 0;
+        for (size_t i = 0; i < v.size(); ++i) {
+            if (!onPlatformTop(*frame, i)) continue;
+            ++top;
+            squared += (v[i] - reference[i]) * (v[i] - reference[i]);
+            if (reference[i] >= 0.5f) continue;
+            ++shadowedTop;
+            wrong += v[i] >= 0.9f;  // shadowed by the rays, lit by the technique
+        }
+        incorrectlyLit[subdivision] = wrong;
+        EXPECT_GT(top, v.size() / 4) << "the camera sees the pillar's top";
+        RecordProperty(fmt::format("incorrectly_lit_{}", subdivision), std::to_string(wrong));
+        RecordProperty(fmt::format("rmse_top_{}", subdivision), fmt::format("{:.4f}", std::sqrt(squared / double(top))));
+    }
+    EXPECT_GT(shadowedTop, 500u) << "the plate shadows the pillar's top";
+    EXPECT_GT(incorrectlyLit["none"], shadowedTop / 10) << "without subdivision the umbra at the edge is lit";
+    for (const char* subdivision : {"uniform", "adaptive", "mixed"})
+        EXPECT_LT(incorrectlyLit[subdivision], incorrectlyLit["none"] / 10) << subdivision;
+}
+
+// ---------------------------------------------------------------------------------
+// Extremes and guards.
+
+TEST_F(VssmTest, NoBlockerIsExactlyLitAtGrazingAngles)
+{
+    // A plane alone under a directional light at 60, 85 and 89 degrees from its normal
+    // (1 degree wide, so all of it stays above the horizon): the HSM or the receiver
+    // plane keeps the plane from finding itself as a blocker, so every pixel is exactly 1.
+    for (float degrees : {60.0f, 85.0f, 89.0f}) {
+        config::RenderConfig cfg = test::defaultTestConfig();
+        cfg.camera.position = {0.0f, 12.0f, 0.5f};
+        cfg.camera.target = {0.0f, 0.0f, 0.0f};
+        cfg.lights.resize(1);
+        const float a = glm::radians(degrees);
+        cfg.lights[0].light = {};
+        cfg.lights[0].light.type = scene::LightType::Directional;
+        cfg.lights[0].light.direction = {std::sin(a), -std::cos(a), 0.0f};
+        cfg.lights[0].light.angularDiameterDeg = 1.0f;
+        VssmSettings s;
+        s.maxSearchTexels = 64.0;
+        s.maxFilterTexels = 64.0;
+        const std::vector<float> v = renderVssm(cfg, s, test::planeScene());
+        size_t plane = 0, notLit = 0;
+        for (size_t i = 0; i < v.size(); ++i) {
+            if (!frame->hasGeometry(i)) continue;
+            ++plane;
+            notLit += v[i] != 1.0f;
+        }
+        EXPECT_GT(plane, v.size() / 2);
+        EXPECT_EQ(notLit, 0u) << degrees << " degrees";
+    }
+}
+
+TEST_F(VssmTest, HugeLightIsClampedToTheMaximumRadii)
+{
+    // A spot light of 1e9 world units: the kernels stop at their maximum half-widths, so
+    // penumbrae stay that narrow (agreement with the rays beyond them).
+    VssmSettings s;
+    s.lightSize = 1e9;
+    const std::vector<float> v = renderVssm(test::defaultTestConfig(), s);
+    expectRayCastAgreement(v, s, "light size 1e9");
+}
+
+TEST_F(VssmTest, BlockerTouchingTheReceiverCastsAHardShadow)
+{
+    // At the box's foot the blocker is at the receiver: t - z_occ < contact_epsilon, so
+    // the contact PCF takes over with a kernel of half a texel or so, and the ground
+    // right behind the foot is umbra, with no division by zero.
+    VssmSettings s;
+    s.maxSearchTexels = 64.0;
+    s.maxFilterTexels = 64.0;
+    const std::vector<float> v = renderVssm(test::boxOnGroundConfig(), s, test::boxOnGroundScene());
+    const double texel = 2.0 * 3.0 / 1024.0;  // a texel of the cube face on the ground, at most
+    size_t behindFoot = 0, notUmbra = 0;
+    for (size_t i = 0; i < v.size(); ++i) {
+        const glm::vec3 q = frame->position(i);
+        if (!frame->onGround(i) || std::abs(q.z) > 0.3f || q.x < 0.5f + 4.0f * texel || q.x > 0.65f) continue;
+        ++behindFoot;
+        notUmbra += v[i] > 0.01f;
+    }
+    EXPECT_GT(behindFoot, 100u);
+    EXPECT_EQ(notUmbra, 0u) << "ground pixels right behind the foot that are not umbra (V > 0.01)";
+    // The side edge widens away from the foot (contact hardening).
+    const double nearFoot = test::sideEdgeWidth(*frame, v, 0.6f), farFromFoot = test::sideEdgeWidth(*frame, v, 2.0f);
+    EXPECT_LT(nearFoot, 0.85 * farFromFoot) << "near the foot " << nearFoot << ", far " << farFromFoot;
+}
+
+TEST_F(VssmTest, LargestMapAgreesWithTheRays)
+{
+    // 4096^2 (the SAT's entries reach 2^55 here): the same agreement as at 1024^2.
+    VssmSettings s;
+    s.resolution = 4096;
+    s.lightSize = 0.6;
+    const std::vector<float> v = renderVssm(test::defaultTestConfig(), s);
+    expectRayCastAgreement(v, s, "4096^2");
+}
+
+namespace {
+
+class VssmScales : public VssmTest, public ::testing::WithParamInterface<std::tuple<float, LightCase>> {};
+
+} // namespace
+
+TEST_P(VssmScales, MatchesRayCastAwayFromPenumbrae)
+{
+    // Depths are normalised to the light's depth range and the thresholds are relative to
+    // the scene's radius, so nothing depends on absolute units.
+    const auto& [scale, c] = GetParam();
+    config::RenderConfig cfg = test::defaultTestConfig();
+    test::setLightType(cfg.lights[0], c.type);
+    VssmSettings s;
+    s.lightSize = c.lightSize * scale;
+    test::scaleConfig(cfg, scale);
+    const std::vector<float> v = renderVssm(cfg, s);
+    expectRayCastAgreement(v, s, c.name);
+}
+
+INSTANTIATE_TEST_SUITE_P(Vssm, VssmScales,
+                         ::testing::Combine(::testing::Values(1e-3f, 1e5f),
+                                            ::testing::Values(LightCase{"spot", scene::LightType::Spot, 0.6},
+                                                              LightCase{"point", scene::LightType::Point, 0.4})),
+                         [](const ::testing::TestParamInfo<std::tuple<float, LightCase>>& info) {
+                             return std::string(std::get<0>(info.param) < 1.0f ? "milli_" : "e5_") +
+                                    std::get<1>(info.param).name;
+                         });
+
+// ---------------------------------------------------------------------------------
+// Debug views.
+
+TEST_F(VssmTest, DebugViewsShowKernelClassificationAndSubKernels)
+{
+    config::RenderConfig cfg = test::defaultTestConfig();
+    VssmSettings s;
+    s.lightSize = 0.6;
+    const std::vector<float> v = renderVssm(cfg, s);
+
+    // Classification: every pixel with geometry is one of the five classes, and the
+    // scene has lit, umbra and penumbra pixels; where V is 0 or 1 by the HSM the class
+    // says so.
+    s.debugView = "classification";
+    const std::vector<float> classes = renderVssm(cfg, s);
+    std::map<float, size_t> count;
+    for (size_t i = 0; i < classes.size(); ++i) {
+        if (!frame->hasGeometry(i)) continue;
+        const float c = classes[i];
+        EXPECT_TRUE(c == 0.0f || c == 0.25f || c == 0.5f || c == 0.75f || c == 1.0f) << "pixel " << i << ": " << c;
+        ++count[c];
+        // V is weighted by the light above the receiver's horizon after the class.
+        if (c == 0.0f) {
+            EXPECT_EQ(v[i], 0.0f) << "umbra pixel " << i;
+        }
+    }
+    EXPECT_GT(count[1.0f], classes.size() / 10) << "lit";
+    EXPECT_GT(count[0.0f], 100u) << "umbra";
+    EXPECT_GT(count[0.5f] + count[0.75f], 100u) << "penumbra";
+
+    // Kernel: 0 where the HSM decided, in (0, 1] in penumbrae.
+    s.debugView = "kernel";
+    const std::vector<float> kernel = renderVssm(cfg, s);
+    size_t withKernel = 0;
+    for (size_t i = 0; i < kernel.size(); ++i) {
+        if (!frame->hasGeometry(i)) continue;
+        if (classes[i] == 0.0f) {
+            EXPECT_EQ(kernel[i], 0.0f) << "pixel " << i;
+        }
+        withKernel += kernel[i] > 0.0f;
+    }
+    EXPECT_GT(withKernel, 100u);
+
+    // Sub-kernels: none where the HSM decided, some in penumbrae.
+    s.debugView = "subkernels";
+    const std::vector<float> visited = renderVssm(cfg, s);
+    size_t penumbraVisited = 0;
+    for (size_t i = 0; i < visited.size(); ++i) {
+        if (!frame->hasGeometry(i)) continue;
+        if (classes[i] == 0.0f) {
+            EXPECT_EQ(visited[i], 0.0f) << "pixel " << i;
+        }
+        if (classes[i] == 0.5f || classes[i] == 0.75f) penumbraVisited += visited[i] > 0.0f;
+    }
+    EXPECT_EQ(penumbraVisited, count[0.5f] + count[0.75f]);
+}
+
+// ---------------------------------------------------------------------------------
+// Parameters.
+
+TEST(VssmPluginEntry, ReflectsEveryParameterWithItsDefault)
+{
+    plugin::PluginRegistry registry;
+    const plugin::ParamValues params = registry.load("vssm").defaultParams();
+    EXPECT_EQ(params.getInt("resolution"), 1024);
+    EXPECT_EQ(params.getEnum("subdivision"), "mixed");
+    EXPECT_EQ(params.getInt("blocker_subdivisions"), 5);  // the paper's m
+    EXPECT_EQ(params.getInt("tree_height"), 3);           // and H (6.2)
+    EXPECT_FLOAT_EQ(params.getFloat("lit_variance"), 1e-4f);
+    EXPECT_FLOAT_EQ(params.getFloat("contact_epsilon"), 0.01f);
+    EXPECT_EQ(params.getEnum("debug_view"), "off");
+    for (const plugin::ParamSpec& spec : params.specs()) EXPECT_NE(std::string(spec.doc), "") << spec.name;
+}
+
+TEST(VssmPluginEntry, OutOfRangeValuesNameTheParameter)
+{
+    plugin::PluginRegistry registry;
+    plugin::ParamValues params = registry.load("vssm").defaultParams();
+    auto message = [&](const char* name, const nlohmann::json& value) -> std::string {
+        try {
+            params.set(name, value, "test.json: /lights/0/shadow");
+        } catch (const ConfigError& e) {
+            return e.what();
+        }
+        ADD_FAILURE() << name << " = " << value << " was accepted";
+        return {};
+    };
+    for (const auto& [name, value] : std::vector<std::pair<const char*, nlohmann::json>>{
+             {"resolution", 16384}, {"tree_height", 6}, {"blocker_subdivisions", 0}, {"subdivision", "quadtree"},
+             {"lit_variance", -1.0}, {"max_filter_radius", 0.0}}) {
+        EXPECT_NE(message(name, value).find(name), std::string::npos) << name;
+    }
+}

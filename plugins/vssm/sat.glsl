@@ -103,23 +103,29 @@ struct SatMoments {
 // The box [lo, hi) in atlas texels (real edges, lo <= hi, inside [0, size]): (mean
 // E(t), E(t^2), variance E(t^2) - E(t)^2 >= 0, area in texels), in fp64. An empty box
 // has area 0 and the moments of a lit texel (t = 1): callers skip it.
-dvec4 satBoxMoments(vec2 lo, vec2 hi, ivec2 size)
+// The moments of a box from its sums (fixed-point units, satIntegral differences) and
+// its area: (mean, E(t^2), variance, area); an empty box gives a lit texel's, area 0.
+dvec4 satMomentsOfSums(dvec2 sum, double area)
 {
-    double area = double(max(hi.x - lo.x, 0.0)) * double(max(hi.y - lo.y, 0.0));
     if (!(area > 0.0lf)) return dvec4(1.0lf, 1.0lf, 0.0lf, 0.0lf);
-    u64vec2 base = satCorner(ivec2(floor(lo)), size);
-    dvec2 sum = satIntegral(hi, base, size) - satIntegral(vec2(lo.x, hi.y), base, size) -
-                satIntegral(vec2(hi.x, lo.y), base, size) + satIntegral(lo, base, size);
     double mean = sum.x / (kSatScale * area), meanSquare = sum.y / (kSatScale * area);
     return dvec4(mean, meanSquare, max(meanSquare - mean * mean, 0.0lf), area);
 }
 
+dvec4 satBoxMoments(vec2 lo, vec2 hi, ivec2 size)
+{
+    double area = double(max(hi.x - lo.x, 0.0)) * double(max(hi.y - lo.y, 0.0));
+    if (!(area > 0.0lf)) return satMomentsOfSums(dvec2(0.0lf), 0.0lf);
+    u64vec2 base = satCorner(ivec2(floor(lo)), size);
+    dvec2 sum = satIntegral(hi, base, size) - satIntegral(vec2(lo.x, hi.y), base, size) -
+                satIntegral(vec2(hi.x, lo.y), base, size) + satIntegral(lo, base, size);
+    return satMomentsOfSums(sum, area);
+}
+
 // The same in fp32 for the lookups: the variance is formed in fp64 first, so it keeps
 // its own relative precision.
-SatMoments satBox(vec2 lo, vec2 hi, ivec2 size)
-{
-    dvec4 m = satBoxMoments(lo, hi, size);
-    return SatMoments(float(m.x), float(m.y), float(m.z), float(m.w));
-}
+SatMoments satMoments(dvec4 m) { return SatMoments(float(m.x), float(m.y), float(m.z), float(m.w)); }
+
+SatMoments satBox(vec2 lo, vec2 hi, ivec2 size) { return satMoments(satBoxMoments(lo, hi, size)); }
 
 #endif

@@ -145,14 +145,13 @@ struct Blockers {
     float depthSum;  // the sum of their depths t, times area
 };
 
-// One sub-kernel [lo, hi): adds its blockers, or asks to be split (descend) when it is
+// One sub-kernel [lo, hi) with moments m: adds its blockers, or asks to be split (descend) when it is
 // non-planar and not a leaf. `pcfLeaves`: a non-planar leaf is sampled by 2 x 2 PCF; else
 // it counts as lit (subdivision none).
-void addBlockerNode(vec2 lo, vec2 hi, bool leaf, bool pcfLeaves, inout Blockers b, out bool descend)
+void addBlockerNode(SatMoments m, vec2 lo, vec2 hi, bool leaf, bool pcfLeaves, inout Blockers b, out bool descend)
 {
     descend = false;
     ++gVisited;
-    SatMoments m = faceBox(lo, hi);
     if (!(m.area > 0.0)) return;
     float t = referenceT(0.5 * (lo + hi));
     if (m.mean < t) {
@@ -193,11 +192,10 @@ struct Lit {
     float litArea;  // of which lit
 };
 
-void addFilterNode(vec2 lo, vec2 hi, bool leaf, bool pcfLeaves, inout Lit f, out bool descend)
+void addFilterNode(SatMoments m, vec2 lo, vec2 hi, bool leaf, bool pcfLeaves, inout Lit f, out bool descend)
 {
     descend = false;
     ++gVisited;
-    SatMoments m = faceBox(lo, hi);
     if (!(m.area > 0.0)) return;
     float t = referenceT(0.5 * (lo + hi));
     if (m.mean < t) {
@@ -236,18 +234,45 @@ ivec2 mortonCell(uint index)
     return cell;
 }
 
-// Visits the kernel [lo, hi) as `mode` says; NODE(lo, hi, leaf, descend) adds one node.
+// A point of the n x n lattice over the kernel [lo, hi) (face texels), cut to the face,
+// in atlas texels.
+vec2 latticePoint(vec2 lo, vec2 hi, int i, int j, int n)
+{
+    return gFaceOrigin + clamp(mix(lo, hi, vec2(i, j) / float(n)), vec2(0.0), vec2(gFaceTexels));
+}
+
+const int kMaxUniformSubdivisions = 16;  // vssm.cpp blocker_ and filter_subdivisions
+dvec2 gLatticeRow[kMaxUniformSubdivisions + 1];
+
+// Visits the kernel [lo, hi) as `mode` says; NODE(m, lo, hi, leaf, descend) adds one node
+// with moments m. Uniform: the n x n sub-kernels share their corners, so the table is
+// read at the (n + 1)^2 lattice points once (four entries each, satIntegral), a row at a
+// time, instead of four corners per sub-kernel.
 #define TRAVERSE(mode, count, lo, hi, NODE)                                                 \
     if (mode == SUBDIVISION_NONE) {                                                         \
         bool descend;                                                                       \
-        NODE(lo, hi, true, descend);                                                        \
+        NODE(faceBox(lo, hi), lo, hi, true, descend);                                       \
     } else if (mode == SUBDIVISION_UNIFORM) {                                               \
-        int n = max(count, 1);                                                              \
-        for (int j = 0; j < n; ++j)                                                         \
+        int n = clamp(count, 1, kMaxUniformSubdivisions);                                   \
+        u64vec2 base = satCorner(ivec2(floor(latticePoint(lo, hi, 0, 0, n))), pc.atlasSize); \
+        for (int i = 0; i <= n; ++i)                                                        \
+            gLatticeRow[i] = satIntegral(latticePoint(lo, hi, i, 0, n), base, pc.atlasSize); \
+        for (int j = 0; j < n; ++j) {                                                       \
+            vec2 a = latticePoint(lo, hi, 0, j + 1, n);                                     \
+            dvec2 left = satIntegral(a, base, pc.atlasSize);                                \
             for (int i = 0; i < n; ++i) {                                                   \
+                vec2 p0 = latticePoint(lo, hi, i, j, n), p1 = latticePoint(lo, hi, i + 1, j + 1, n); \
+                dvec2 right = satIntegral(p1, base, pc.atlasSize);                          \
+                dvec2 sum = right - left - gLatticeRow[i + 1] + gLatticeRow[i];             \
+                double area = double(p1.x - p0.x) * double(p1.y - p0.y);                    \
+                gLatticeRow[i] = left; /* the next row's, column i: box i no longer needs it */ \
+                left = right;                                                               \
                 bool descend;                                                               \
-                NODE(mix(lo, hi, vec2(i, j) / float(n)), mix(lo, hi, vec2(i + 1, j + 1) / float(n)), true, descend); \
+                NODE(satMoments(satMomentsOfSums(sum, area)), mix(lo, hi, vec2(i, j) / float(n)), \
+                     mix(lo, hi, vec2(i + 1, j + 1) / float(n)), true, descend);           \
             }                                                                               \
+            gLatticeRow[n] = left;                                                          \
+        }                                                                                   \
     } else {                                                                                \
         /* Stackless linear quad-tree walk (Algorithm 2): child = (level + 1, 4 index),     \
            next = the next sibling, or the parent's next after the last sibling. */         \
@@ -258,7 +283,7 @@ ivec2 mortonCell(uint index)
             vec2 size = (hi - lo) / float(1 << level);                                      \
             vec2 nodeLo = lo + size * vec2(mortonCell(index));                              \
             bool descend;                                                                   \
-            NODE(nodeLo, nodeLo + size, level == height, descend);                          \
+            NODE(faceBox(nodeLo, nodeLo + size), nodeLo, nodeLo + size, level == height, descend); \
             if (descend) {                                                                  \
                 ++level;                                                                    \
                 index *= 4u;                                                                \
@@ -350,8 +375,8 @@ Result vssmVisibility(ivec2 pixel)
 
     // 3. The average blocker depth.
     Blockers b = Blockers(0.0, 0.0);
-#define BLOCKER_NODE(nlo, nhi, leaf, descend) \
-    addBlockerNode(nlo, nhi, leaf, BLOCKER_SUBDIVISION != SUBDIVISION_NONE, b, descend)
+#define BLOCKER_NODE(m, nlo, nhi, leaf, descend) \
+    addBlockerNode(m, nlo, nhi, leaf, BLOCKER_SUBDIVISION != SUBDIVISION_NONE, b, descend)
     TRAVERSE(BLOCKER_SUBDIVISION, pc.blockerSubdivisions, lo, hi, BLOCKER_NODE)
     float kernelArea = (cutHi.x - cutLo.x) * (cutHi.y - cutLo.y);
     if (!(b.area > 1e-4 * kernelArea)) return res;  // no blocker: lit
@@ -371,8 +396,8 @@ Result vssmVisibility(ivec2 pixel)
     // 5. The visibility over it.
     Lit f = Lit(0.0, 0.0);
     vec2 flo = centre - radius, fhi = centre + radius;
-#define FILTER_NODE(nlo, nhi, leaf, descend) \
-    addFilterNode(nlo, nhi, leaf, FILTER_SUBDIVISION != SUBDIVISION_NONE, f, descend)
+#define FILTER_NODE(m, nlo, nhi, leaf, descend) \
+    addFilterNode(m, nlo, nhi, leaf, FILTER_SUBDIVISION != SUBDIVISION_NONE, f, descend)
     TRAVERSE(FILTER_SUBDIVISION, pc.filterSubdivisions, flo, fhi, FILTER_NODE)
     res.v = f.area > 0.0 ? f.litArea / f.area : 1.0;
     res.classification = gUsedPcf ? kClassNonPlanar : kClassPenumbra;
@@ -399,8 +424,11 @@ void main()
         }
         v = res.v * shadowLightAboveHorizon(position.xyz, shadowReceiverNormal(pixel));
     }
-    if (pc.debugView == DEBUG_KERNEL) v = res.kernelTexels / max(pc.maxFilterTexels, 0.5);
-    else if (pc.debugView == DEBUG_CLASSIFICATION) v = res.classification;
-    else if (pc.debugView == DEBUG_SUBKERNELS) v = float(gVisited) * pc.debugScale;
+    // The debug views replace V where there is geometry (the contract keeps 1 elsewhere).
+    if (position.w != 0.0) {
+        if (pc.debugView == DEBUG_KERNEL) v = res.kernelTexels / max(pc.maxFilterTexels, 0.5);
+        else if (pc.debugView == DEBUG_CLASSIFICATION) v = res.classification;
+        else if (pc.debugView == DEBUG_SUBKERNELS) v = float(gVisited) * pc.debugScale;
+    }
     imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
 }
