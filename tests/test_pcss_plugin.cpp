@@ -74,11 +74,8 @@ protected:
     // the centre's view has no blocker in reach (V = 1) or only blockers (V = 0).
     void expectRayCastAgreement(const std::vector<float>& v, const PcssSettings& s, const std::string& label)
     {
-        const test::FrameImages images{frame->positions, frame->normals, v, frame->config.width,
-                                       frame->config.height};
         const double band = std::max(s.maxSearchTexels, s.maxFilterTexels) + 2.0;
-        const test::RayCastAgreement a =
-            test::compareWithRayCast(frame->classifier(0), images, {2, band, kBinaryTolerance, label});
+        const test::RayCastAgreement a = frame->rayCastAgreement(v, band, kBinaryTolerance, label);
         EXPECT_EQ(a.mismatches, 0u) << label;
         EXPECT_GT(a.surelyShadowed, 150u) << label;
         EXPECT_GT(a.surelyLit, 2000u) << label;

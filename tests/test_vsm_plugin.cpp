@@ -92,9 +92,7 @@ protected:
     test::RayCastAgreement agreement(const std::vector<float>& v, const VsmSettings& s, float tolerance,
                                      const std::string& label)
     {
-        const test::FrameImages images{frame->positions, frame->normals, v, frame->config.width,
-                                       frame->config.height};
-        return test::compareWithRayCast(frame->classifier(0), images, {2, reachTexels(s) + 2.0, tolerance, label});
+        return frame->rayCastAgreement(v, reachTexels(s) + 2.0, tolerance, label);
     }
 };
 

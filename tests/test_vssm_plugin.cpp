@@ -349,11 +349,8 @@ protected:
     // reach, plus two texels, all lit or all shadowed in the centre's view.
     void expectRayCastAgreement(const std::vector<float>& v, const VssmSettings& s, const std::string& label)
     {
-        const test::FrameImages images{frame->positions, frame->normals, v, frame->config.width,
-                                       frame->config.height};
         const double band = std::max(s.maxSearchTexels, s.maxFilterTexels) + 2.0;
-        const test::RayCastAgreement a =
-            test::compareWithRayCast(frame->classifier(0), images, {2, band, kAgreementTolerance, label});
+        const test::RayCastAgreement a = frame->rayCastAgreement(v, band, kAgreementTolerance, label);
         EXPECT_EQ(a.mismatches, 0u) << label;
         EXPECT_GT(a.surelyShadowed, 150u) << label;
         EXPECT_GT(a.surelyLit, 2000u) << label;

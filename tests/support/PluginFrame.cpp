@@ -57,4 +57,11 @@ void PluginGpuTest::render(const config::RenderConfig& cfg, scene::Scene scene)
     frame = std::make_unique<RenderedFrame>(*context, *registry, cfg, std::move(scene));
 }
 
+RayCastAgreement RenderedFrame::rayCastAgreement(const std::vector<float>& v, double bandTexels, float tolerance,
+                                                const std::string& label) const
+{
+    const FrameImages images{positions, normals, v, config.width, config.height};
+    return compareWithRayCast(classifier(0), images, {2, bandTexels, tolerance, label});
+}
+
 } // namespace penumbra::test

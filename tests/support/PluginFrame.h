@@ -12,6 +12,7 @@
 
 #include <cmath>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace penumbra::test {
@@ -39,6 +40,11 @@ struct RenderedFrame {
     // Light `l`'s shadow map as its plugin builds it: the same frusta (from the scene
     // bounds) and its resolution (the config's, else the plugin's default).
     LightRayClassifier classifier(size_t l) const;
+
+    // Light 0's visibility `v` against rays from the light (compareWithRayCast, every
+    // second pixel, away from edges by `bandTexels`).
+    RayCastAgreement rayCastAgreement(const std::vector<float>& v, double bandTexels, float tolerance,
+                                      const std::string& label) const;
 
     plugin::PluginRegistry& registry;
     config::RenderConfig config;
