@@ -229,10 +229,6 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
     vkCmdEndRendering(cmd);
 }
 
-} // namespace penumbra::render
-
-namespace penumbra::render {
-
 float softShadowLightSize(const scene::Light& light, float overrideSize)
 {
     // Directional lights: the angular diameter is clamped below 180° (tan(θ/2) is
