@@ -19,6 +19,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <iterator>
 #include <string>
 #include <vector>
@@ -134,6 +135,12 @@ HardShadow::HardShadow(const plugin::TechniqueSetup& setup)
     const float width = footprintWidthTexels(settings_);
     shadowMap_.setFootprint(0.5f * width +
                             (settings_.variant.bias == BiasMode::NormalOffset ? settings_.normalOffsetTexels * width : 0.0f));
+    // Constant and slope bias compare every tap with the receiver's own depth; the taps
+    // lie within half the filter's width of the receiver, so their texels within
+    // ceil(width / 2 - 1/2) of its texel (none 0, pcf k: (k - 1) / 2, poisson ceil(radius),
+    // bilinear 1).
+    if (settings_.variant.bias == BiasMode::Constant || settings_.variant.bias == BiasMode::Slope)
+        shadowMap_.setOwnDepthCompare(int32_t(std::ceil(0.5f * width - 0.5f)));
     gpu::ComputePipelineDesc c;
     c.name = fmt::format("light{}.hard.visibility", setup.lightIndex);
     c.shader = "visibility.comp";

@@ -124,6 +124,8 @@ PcssShadow::PcssShadow(const plugin::TechniqueSetup& setup)
     // The blocker search and the filter are clamped to these radii; one texel more for the
     // taps' rounding.
     shadowMap_.setFootprint(std::max(settings_.maxSearchTexels, settings_.maxFilterTexels) + 1.0f);
+    // Slope bias: the search and the filter compare each tap with the receiver's own depth.
+    if (settings_.bias == BiasMode::Slope) shadowMap_.setOwnDepthCompare(int32_t(std::ceil(shadowMap_.footprint())));
     gpu::ComputePipelineDesc c;
     c.name = fmt::format("light{}.pcss.visibility", setup.lightIndex);
     c.shader = "visibility.comp";

@@ -7,6 +7,12 @@
 // view it falls in. Exact (no depth tolerance), and one invocation per pixel instead of a
 // reverse test per receiver fragment at the map's resolution, which on a CPU rasteriser
 // cost more than the casters it saved (docs/culling.md).
+//
+// With RECEIVER_DEPTH defined (the view's technique compares with each receiver's own
+// depth, CasterView::OwnDepthCompare) each pixel also lowers, in receiverDepth at the
+// view's full resolution, the texel's farthest receiver depth to its own (atomic min of
+// the bits of a non-negative float); engine/receiver_depth_min.comp then spreads it over
+// the technique's taps.
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 0) uniform sampler2D cameraDepth;  // reversed-Z, 0 where nothing was drawn
@@ -14,13 +20,31 @@ layout(binding = 1, r8) uniform writeonly image2D receiverMask;
 layout(std430, binding = 2) readonly buffer Camera {
     mat4 inverseViewProj;
     vec4 size;  // xy: camera image size
+    vec4 eye;   // xyz: the camera's position (a far point along the view for orthographic cameras)
 } camera;
+#ifdef RECEIVER_DEPTH
+layout(binding = 3, r32ui) uniform coherent uimage2D receiverDepth;  // cleared to all ones
+#endif
 
 layout(push_constant) uniform Push {
     mat4 lightViewProj;
     int maskBlock;   // view texels per mask texel, per side
     int resolution;  // view texels per side
 } pc;
+
+#ifdef RECEIVER_DEPTH
+// How far the point unprojected here may lie from the G-buffer's position of the same
+// pixel, which the technique projects: both come from the same triangles at the same
+// pixel centre, through fp32 depth, matrix inverses and interpolation, each good to a
+// few 1e-7 of the coordinates' size. 1e-5 of it leaves ten times that.
+const float kReconstructionRelative = 1e-5;
+
+// |grad (row . p / w)| at p, for a row of the light's matrix: (row w - x row_w) / w^2.
+float projectedGradient(vec3 row, vec3 rowW, float x, float w)
+{
+    return length(row * w - x * rowW) / (w * w);
+}
+#endif
 
 void main()
 {
@@ -31,10 +55,34 @@ void main()
     vec2 ndc = (vec2(pixel) + 0.5) / camera.size.xy * 2.0 - 1.0;
     vec4 world = camera.inverseViewProj * vec4(ndc, depth, 1.0);
     if (world.w == 0.0) return;
-    vec4 clip = pc.lightViewProj * vec4(world.xyz / world.w, 1.0);
+    vec3 p = world.xyz / world.w;
+    vec4 clip = pc.lightViewProj * vec4(p, 1.0);
     if (clip.w <= 0.0) return;
     vec3 light = clip.xyz / clip.w;
     if (any(greaterThan(abs(light.xy), vec2(1.0))) || light.z < 0.0 || light.z > 1.0) return;
-    ivec2 texel = clamp(ivec2((light.xy * 0.5 + 0.5) * float(pc.resolution)), ivec2(0), ivec2(pc.resolution - 1));
+    vec2 texelCoord = (light.xy * 0.5 + 0.5) * float(pc.resolution);
+    ivec2 texel = clamp(ivec2(texelCoord), ivec2(0), ivec2(pc.resolution - 1));
     imageStore(receiverMask, texel / pc.maskBlock, vec4(1.0));
+#ifdef RECEIVER_DEPTH
+    // The technique's receiver lies within `slack` of p: its depth is at least light.z
+    // less the depth gradient times slack, and its texel within `spread` texels of p's.
+    mat4 m = pc.lightViewProj;
+    vec3 rowX = vec3(m[0][0], m[1][0], m[2][0]), rowY = vec3(m[0][1], m[1][1], m[2][1]);
+    vec3 rowZ = vec3(m[0][2], m[1][2], m[2][2]), rowW = vec3(m[0][3], m[1][3], m[2][3]);
+    float slack = kReconstructionRelative * (length(p) + length(p - camera.eye.xyz));
+    float farthest = light.z - projectedGradient(rowZ, rowW, clip.z, clip.w) * slack - 4.0 / 16777216.0;
+    uint bits = floatBitsToUint(max(farthest, 0.0));
+    float texelsPerNdc = 0.5 * float(pc.resolution);
+    float spread = texelsPerNdc * slack *
+                       max(projectedGradient(rowX, rowW, clip.x, clip.w), projectedGradient(rowY, rowW, clip.y, clip.w)) +
+                   1.0 / 64.0;
+    // A texel's worth of slack would mean a map finer than the camera's depth can place
+    // (beyond 30,000 texels for a scene seen from its own size); the spread is capped at
+    // one texel, which keeps the loop below at most 3 x 3.
+    spread = min(spread, 1.0);
+    ivec2 lo = clamp(ivec2(floor(texelCoord - spread)), ivec2(0), ivec2(pc.resolution - 1));
+    ivec2 hi = clamp(ivec2(floor(texelCoord + spread)), ivec2(0), ivec2(pc.resolution - 1));
+    for (int y = lo.y; y <= hi.y; ++y)
+        for (int x = lo.x; x <= hi.x; ++x) imageAtomicMin(receiverDepth, ivec2(x, y), bits);
+#endif
 }

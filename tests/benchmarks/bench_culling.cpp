@@ -9,8 +9,8 @@
 //   camera_ms     the camera culling (step 1) before the G-buffer
 //   triangles     triangles drawn into the shadow map
 //   oracle        triangles of the casters that really shadow a visible pixel: every
-//                 instance a shadow ray from a visible pixel towards the sun hits (CPU
-//                 ray casting over the instances' triangles, once per view)
+//                 instance a shadow ray from a visible pixel towards the sun hits
+//                 (tests/support/CasterOracle.h, once per view)
 //   casters, queries, nodes: instance draws, occlusion queries, BVH nodes visited
 //
 //   cmake --build --preset release --target penumbra_benchmarks
@@ -18,12 +18,12 @@
 //
 // Figures: docs/culling.md.
 #include "BenchContext.h"
+#include "CasterOracle.h"
 
 #include "penumbra/config/Config.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/plugin/PluginRegistry.h"
 #include "penumbra/render/FrameRenderer.h"
-#include "penumbra/scene/Bvh.h"
 #include "penumbra/scene/Generators.h"
 
 #include <benchmark/benchmark.h>
@@ -88,24 +88,6 @@ config::RenderConfig cityConfig(View view, config::CullingMode mode)
     return cfg;
 }
 
-// Möller-Trumbore, double precision; hits with t in (0, tMax).
-bool hitsTriangle(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& a, const glm::dvec3& b,
-                  const glm::dvec3& c, double tMax)
-{
-    const glm::dvec3 e1 = b - a, e2 = c - a, p = glm::cross(d, e2);
-    const double det = glm::dot(e1, p);
-    if (std::abs(det) < 1e-300) return false;
-    const double inv = 1.0 / det;
-    const glm::dvec3 s = o - a;
-    const double u = glm::dot(s, p) * inv;
-    if (u < 0.0 || u > 1.0) return false;
-    const glm::dvec3 q = glm::cross(s, e1);
-    const double v = glm::dot(d, q) * inv;
-    if (v < 0.0 || u + v > 1.0) return false;
-    const double t = glm::dot(e2, q) * inv;
-    return t > 0.0 && t < tMax;
-}
-
 // Triangles of the instances that some visible pixel's shadow ray hits.
 uint64_t oracleTriangles(View view)
 {
@@ -115,36 +97,9 @@ uint64_t oracleTriangles(View view)
     const config::RenderConfig cfg = cityConfig(view, config::CullingMode::None);
     render::FrameRenderer renderer(context(), scene, cfg, registry());
     renderer.renderFrame();
-    const std::vector<float> positions = renderer.readPositions();
-    const std::vector<float> normals = renderer.readNormals();
-    const scene::InstanceBvh bvh(scene::instanceWorldBounds(scene.instances));
-    const glm::dvec3 toLight = -glm::normalize(glm::dvec3(cfg.lights[0].light.direction));
-    const double offset = 1e-4 * scene.bounds().radius();
-    std::vector<uint8_t> shadows(scene.instances.size(), 0);
-    std::vector<scene::RayHit> hits;
-    for (size_t px = 0; px < size_t(kWidth) * kHeight; ++px) {
-        if (positions[4 * px + 3] == 0.0f) continue;
-        const glm::dvec3 n(normals[4 * px], normals[4 * px + 1], normals[4 * px + 2]);
-        // Faces turned away from the sun are shadowed by themselves (the horizon), not by
-        // casters.
-        if (glm::dot(n, toLight) <= 0.0) continue;
-        const glm::dvec3 o = glm::dvec3(positions[4 * px], positions[4 * px + 1], positions[4 * px + 2]) + offset * n;
-        bvh.findAllHits({glm::vec3(o), glm::vec3(toLight)}, hits);
-        for (const scene::RayHit& h : hits) {
-            if (shadows[h.instance]) continue;
-            const scene::Instance& inst = scene.instances[h.instance];
-            const scene::Mesh& mesh = scene.meshes[inst.mesh];
-            const glm::dmat4 m(scene.instanceTransform(inst));
-            for (size_t t = 0; t + 2 < mesh.indices.size() && !shadows[h.instance]; t += 3) {
-                glm::dvec3 v[3];
-                for (int k = 0; k < 3; ++k) v[k] = glm::dvec3(m * glm::dvec4(glm::dvec3(mesh.vertices[mesh.indices[t + k]].position), 1.0));
-                if (hitsTriangle(o, toLight, v[0], v[1], v[2], 1e30)) shadows[h.instance] = 1;
-            }
-        }
-    }
-    uint64_t triangles = 0;
-    for (size_t i = 0; i < shadows.size(); ++i)
-        if (shadows[i]) triangles += scene.meshes[scene.instances[i].mesh].indices.size() / 3;
+    const uint64_t triangles = test::casterOracle(scene, renderer.readPositions(), renderer.readNormals(),
+                                                  -glm::normalize(glm::dvec3(cfg.lights[0].light.direction)))
+                                   .triangles;
     cache[view] = triangles;
     return triangles;
 }

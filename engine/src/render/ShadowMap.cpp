@@ -204,7 +204,8 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
             const VkRect2D scissor{{x, y}, {size, size}};
             vkCmdSetViewport(cmd, 0, 1, &viewport);
             vkCmdSetScissor(cmd, 0, 1, &scissor);
-            const CasterView view{map.frusta[face].viewProj, lightIndex_, map.firstView + face, size, footprint_};
+            const CasterView view{map.frusta[face].viewProj, lightIndex_, map.firstView + face, size, footprint_, bias,
+                                  compareTapRadius_};
             // The solid pipeline stays bound across faces unless the masked one replaced it.
             if (!solidBound) {
                 depth_.bind(cmd);

@@ -22,16 +22,14 @@ namespace {
 
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
 constexpr VkFormat kMaskFormat = VK_FORMAT_R8_UNORM;
+// Receiver depths (engine/receiver_scatter.comp RECEIVER_DEPTH): the bits of a
+// non-negative float, all ones where no receiver reads the texel.
+constexpr VkFormat kReceiverDepthFormat = VK_FORMAT_R32_UINT;
 
 // Texels added to every view's footprint in the mask: the technique's lookup texel may
 // round differently from the mask's (1), and receiver bias (normal offset, receiver
 // plane) moves the lookup by up to about a texel (1).
 constexpr float kMaskSafetyTexels = 2.0f;
-// Light-view culling depth is pushed away from the light by more than the techniques'
-// default rasterizer bias (hard: 4 r + 2 x slope), so that a caster culled as lying
-// behind an occluder would lie behind it in the technique's biased map too.
-constexpr float kCullBiasConstant = 64.0f;
-constexpr float kCullBiasSlope = 8.0f;
 // The receiver mask is kept at most this many texels per side: each mask texel stands for
 // a block of the view's texels and is set when any texel of the block is. The queries
 // still rasterise at the view's own resolution (so coverage is the technique's), and only
@@ -50,6 +48,12 @@ constexpr uint32_t kQueriesPerRendering = 256;
 // in the next round.
 constexpr uint16_t kMultiQueryAfterFrames = 2;
 constexpr uint32_t kMultiQueryBatch = 8;
+// A leaf drawn without waiting (visible last frame) whose draw finds no sample is drawn
+// so again for up to this many frames before its box is queried again. A box can show
+// around geometry that never counts (a lit receiver that shadows nothing: its box takes
+// no bias), and without this such a leaf would alternate between a draw and a chain of
+// query rounds every other frame.
+constexpr uint8_t kEmptyDrawFrames = 8;
 // Inner nodes whose projection covers more than this fraction of the view are opened
 // without a query.
 constexpr float kOpenWithoutQueryFraction = 1.0f / 64.0f;
@@ -77,12 +81,15 @@ struct ScatterPush {  // receiver_scatter.comp Push
 struct CulledQueryPush {  // culling_mask.frag / occlusion_box.vert Push
     glm::mat4 viewProj;
     int32_t maskBlock;
-    int32_t pad[3];
+    int32_t ownDepth;
+    float biasSlope;
+    float biasClamp;
 };
 
 struct CameraData {  // receiver_scatter.comp Camera
     glm::mat4 inverseViewProj;
     glm::vec4 size;
+    glm::vec4 eye;
 };
 
 bool outside(const scene::Frustum& f, const scene::Aabb& box)
@@ -167,6 +174,10 @@ struct Visibility::Target {
     uint32_t maskBlock = 1;  // view texels per mask texel, per side
     gpu::Buffer maskReadback;            // the dilated mask, host-visible
     std::vector<uint32_t> maskSum;       // its summed-area table, (maskSize + 1)^2
+    // Views whose technique compares with the receivers' own depth: the farthest receiver
+    // depth per view texel, and the scratch of its spreading over the taps; made on
+    // first use.
+    gpu::Image receiverDepth, receiverDepthPrefix;
 
     // Whether no mask texel in `rect` (view texels, inclusive) is marked, so that no
     // fragment of a query inside it could pass the mask test.
@@ -187,6 +198,9 @@ struct Visibility::Target {
     // The traversal's view.
     glm::mat4 viewProj{1.0f};
     bool useMask = false;
+    VkRect2D area{};  // what the traversal renders: the view, or the receiver mask's bounds
+    ShadowDepthBias bias;           // light views: the technique's, for leaf draws (boxes take none)
+    int32_t compareTapRadius = -1;  // with useMask, >= 0: receiverDepth is tested too
     bool lightView = false;  // culling depth biased away from the light
 };
 
@@ -196,8 +210,9 @@ struct Visibility::ViewState {
     glm::mat4 viewProj{0.0f};
     uint32_t resolution = 0;
     float footprint = -1.0f;
-    std::vector<uint8_t> nodes;
-    std::vector<uint16_t> hidden;
+    ShadowDepthBias bias;
+    int32_t compareTapRadius = -1;
+    NodeHistory history;
     std::vector<uint8_t> casters;
     double keptFraction = 0.0;     // of the frustum's instances, at the last full culling
     uint32_t framesSinceFull = 0;  // frames culled to the frustum since then
@@ -250,11 +265,15 @@ Visibility::Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders
     box_ = gpu::Pipeline(context_, shaders, boxDesc);
     if (mode_ == config::CullingMode::ReceiverMask) {
         d.fragmentShader = "engine/culling_mask.frag";
+        d.defines = {{"CULLING_WORLD", "1"}};
         d.pushConstantBytes = sizeof(CulledQueryPush);
-        d.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}, {1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}};
+        d.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+                      {1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
+                      {2, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
         maskLeafDepth_ = make("mask_leaf", true);
         maskLeafCount_ = make("mask_leaf_count", false);
         boxDesc.fragmentShader = d.fragmentShader;
+        boxDesc.defines = d.defines;
         boxDesc.pushConstantBytes = d.pushConstantBytes;
         boxDesc.bindings = d.bindings;
         boxDesc.name = "visibility.mask_box";
@@ -267,6 +286,23 @@ Visibility::Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders
                       {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
         c.pushConstantBytes = sizeof(ScatterPush);
         scatter_ = gpu::Pipeline(context_, shaders, c);
+        c.name = "visibility.receiver_depth_scatter";
+        c.defines = {{"RECEIVER_DEPTH", "1"}};
+        c.bindings.push_back({3, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE});
+        scatterDepth_ = gpu::Pipeline(context_, shaders, c);
+        c = {};
+        c.name = "visibility.receiver_depth_min";
+        c.shader = "engine/receiver_depth_min.comp";
+        c.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}, {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
+        c.pushConstantBytes = 3 * sizeof(int32_t);
+        depthMin_ = gpu::Pipeline(context_, shaders, c);
+        // Bound in place of a target's receiver depth by views that have none.
+        noReceiverDepth_ = gpu::Image(context_, {1, 1, kReceiverDepthFormat, VK_IMAGE_USAGE_STORAGE_BIT,
+                                                 "visibility.no_receiver_depth"});
+        context_.submitAndWait([&](VkCommandBuffer cmd) {
+            gpu::transition(cmd, noReceiverDepth_, gpu::access::kUndefined,
+                            {VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0});
+        });
         c = {};
         c.name = "visibility.dilate";
         c.shader = "engine/mask_dilate.comp";
@@ -308,12 +344,8 @@ void Visibility::instancesMoved(std::span<const uint32_t> moved)
     const std::vector<scene::Aabb> bounds = scene::instanceWorldBounds(scene_.instances);
     if (bvh_.refitOrRebuild(bounds, moved).action == scene::RefitAction::Rebuilt) {
         // Node indices changed: last frame's visibility no longer names the same nodes.
-        cameraNodes_.clear();
-        cameraHidden_.clear();
-        for (auto& [key, view] : views_) {
-            view->nodes.clear();
-            view->hidden.clear();
-        }
+        cameraHistory_ = {};
+        for (auto& [key, view] : views_) view->history = {};
     }
 }
 
@@ -351,9 +383,10 @@ void Visibility::beginFrame(const glm::mat4& cameraViewProj)
         }
         Target& t = *camera_;
         t.viewProj = cameraViewProj;
+        t.area = {{0, 0}, {t.width, t.height}};
         t.useMask = false;
         t.lightView = false;
-        occlusionCull(t, cameraNodes_, cameraHidden_, receivers_);
+        occlusionCull(t, cameraHistory_, receivers_);
         cameraDepthValid_ = true;
         std::vector<uint8_t> inFrustum;
         cullFrustum(cameraViewProj, inFrustum);
@@ -371,7 +404,8 @@ void Visibility::beginFrame(const glm::mat4& cameraViewProj)
                                  VK_ACCESS_2_SHADER_SAMPLED_READ_BIT});
             });
             t.depthLayout = VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL;
-            CameraData data{glm::inverse(cameraViewProj), glm::vec4(float(width_), float(height_), 0.0f, 0.0f)};
+            CameraData data{glm::inverse(cameraViewProj), glm::vec4(float(width_), float(height_), 0.0f, 0.0f),
+                            glm::vec4(traversalOrigin(cameraViewProj, scene_.bounds().radius()), 0.0f)};
             std::memcpy(cameraData_.mapped(), &data, sizeof(data));
         }
         break;
@@ -414,12 +448,14 @@ const std::vector<uint8_t>* Visibility::casters(const CasterView& view)
     if (!state) state = std::make_unique<ViewState>();
     ViewState& s = *state;
     if (s.frame != frame_ || s.viewProj != view.viewProj || s.resolution != view.resolution ||
-        s.footprint != view.footprintTexels) {
+        s.footprint != view.footprintTexels || s.bias != view.depthBias || s.compareTapRadius != view.compareTapRadius) {
         cullLightView(view, s);
         s.frame = frame_;
         s.viewProj = view.viewProj;
         s.resolution = view.resolution;
         s.footprint = view.footprintTexels;
+        s.bias = view.depthBias;
+        s.compareTapRadius = view.compareTapRadius;
     }
     return &s.casters;
 }
@@ -452,6 +488,28 @@ Visibility::Target& Visibility::lightTarget(uint32_t resolution)
         });
     }
     return *t;
+}
+
+void Visibility::makeReceiverDepth(Target& t, bool withPrefix)
+{
+    const VkImageUsageFlags usage = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+    const std::string name = fmt::format("visibility.light{}", t.width);
+    std::vector<gpu::Image*> made;
+    if (!t.receiverDepth.handle()) {
+        t.receiverDepth = gpu::Image(context_, {t.width, t.height, kReceiverDepthFormat, usage, name + ".receiver_depth"});
+        made.push_back(&t.receiverDepth);
+    }
+    if (withPrefix && !t.receiverDepthPrefix.handle()) {
+        t.receiverDepthPrefix =
+            gpu::Image(context_, {t.width, t.height, kReceiverDepthFormat, usage, name + ".receiver_depth_prefix"});
+        made.push_back(&t.receiverDepthPrefix);
+    }
+    if (made.empty()) return;
+    context_.submitAndWait([&](VkCommandBuffer cmd) {
+        for (gpu::Image* image : made)
+            gpu::transition(cmd, *image, gpu::access::kUndefined,
+                            {VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0});
+    });
 }
 
 void Visibility::cullLightView(const CasterView& view, ViewState& s)
@@ -490,9 +548,11 @@ void Visibility::cullLightViewFully(const CasterView& view, ViewState& s)
     Target& t = lightTarget(view.resolution);
     t.viewProj = view.viewProj;
     t.lightView = true;
+    t.bias = view.depthBias;
+    t.area = {{0, 0}, {t.width, t.height}};
     if (mode_ == config::CullingMode::LightOcclusion) {
         t.useMask = false;
-        occlusionCull(t, s.nodes, s.hidden, s.casters);
+        occlusionCull(t, s.history, s.casters);
         stats_.casterCullMs += msSince(start);
         return;
     }
@@ -513,6 +573,10 @@ void Visibility::cullLightViewFully(const CasterView& view, ViewState& s)
     // texel within ceil(reach / block) of the marked one's.
     const float reach = std::min(view.footprintTexels, float(size)) + kMaskSafetyTexels;
     const auto radius = int32_t(std::min(std::ceil(std::max(reach, 0.0f) / float(t.maskBlock)), float(t.maskSize)));
+    // The receiver depths, for a technique that compares with them (culling_mask.frag).
+    const bool ownDepth = view.compareTapRadius >= 0;
+    const int32_t tapRadius = std::min(view.compareTapRadius, int32_t(size));
+    if (ownDepth) makeReceiverDepth(t, tapRadius > 0);
     context_.submitAndWait([&](VkCommandBuffer cmd) {
         // The previous submission's reads and writes of these images (the last view).
         gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT},
@@ -520,17 +584,23 @@ void Visibility::cullLightViewFully(const CasterView& view, ViewState& s)
         const VkClearColorValue zero{{0.0f, 0.0f, 0.0f, 0.0f}};
         const VkImageSubresourceRange colorRange{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
         vkCmdClearColorImage(cmd, t.mask.handle(), VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &colorRange);
+        if (ownDepth) {
+            const VkClearColorValue none{.uint32 = {~0u, 0u, 0u, 0u}};
+            vkCmdClearColorImage(cmd, t.receiverDepth.handle(), VK_IMAGE_LAYOUT_GENERAL, &none, 1, &colorRange);
+        }
         gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT},
                            {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT});
-        // The texels the camera's pixels look up (receiver_scatter.comp).
-        scatter_.bind(cmd);
-        gpu::DescriptorPush()
-            .sampledImage(0, camera_->depth, nearest_, VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL)
+        // The texels the camera's pixels look up, and their depths (receiver_scatter.comp).
+        const gpu::Pipeline& scatter = ownDepth ? scatterDepth_ : scatter_;
+        scatter.bind(cmd);
+        gpu::DescriptorPush scatterBindings;
+        scatterBindings.sampledImage(0, camera_->depth, nearest_, VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL)
             .storageImage(1, t.mask)
-            .storageBuffer(2, cameraData_)
-            .push(context_, cmd, scatter_);
-        const ScatterPush scatter{view.viewProj, int32_t(t.maskBlock), int32_t(size)};
-        scatter_.pushConstants(cmd, &scatter, sizeof(scatter));
+            .storageBuffer(2, cameraData_);
+        if (ownDepth) scatterBindings.storageImage(3, t.receiverDepth);
+        scatterBindings.push(context_, cmd, scatter);
+        const ScatterPush scatterPush{view.viewProj, int32_t(t.maskBlock), int32_t(size)};
+        scatter.pushConstants(cmd, &scatterPush, sizeof(scatterPush));
         vkCmdDispatch(cmd, (width_ + 7) / 8, (height_ + 7) / 8, 1);
 
         const gpu::MemoryAccess stores{VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
@@ -539,6 +609,20 @@ void Visibility::cullLightViewFully(const CasterView& view, ViewState& s)
                                       VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
                                           VK_ACCESS_2_SHADER_SAMPLED_READ_BIT};
         gpu::memoryBarrier(cmd, stores, loads);
+        if (ownDepth && tapRadius > 0) {
+            // Each receiver's depth over the texels its taps read (receiver_depth_min.comp).
+            depthMin_.bind(cmd);
+            gpu::DescriptorPush()
+                .storageImage(0, t.receiverDepth)
+                .storageImage(1, t.receiverDepthPrefix)
+                .push(context_, cmd, depthMin_);
+            for (int32_t vertical = 0; vertical < 2; ++vertical) {
+                const int32_t push[3] = {int32_t(size), tapRadius, vertical};
+                depthMin_.pushConstants(cmd, push, sizeof(push));
+                vkCmdDispatch(cmd, (size + 63) / 64, 1, 1);
+                gpu::memoryBarrier(cmd, stores, loads);
+            }
+        }
         dilate_.bind(cmd);
         const gpu::Image* passes[2][2] = {{&t.mask, &t.maskRows}, {&t.maskRows, &t.maskDilated}};
         for (int32_t vertical = 0; vertical < 2; ++vertical) {
@@ -571,31 +655,50 @@ void Visibility::cullLightViewFully(const CasterView& view, ViewState& s)
     const uint32_t m = t.maskSize;
     const auto* texels = static_cast<const uint8_t*>(t.maskReadback.mapped());
     t.maskSum.assign(size_t(m + 1) * (m + 1), 0);
+    uint32_t x0 = m, y0 = m, x1 = 0, y1 = 0;  // the marked texels' bounds, inclusive
     for (uint32_t y = 0; y < m; ++y) {
         uint32_t row = 0;
         for (uint32_t x = 0; x < m; ++x) {
-            row += texels[size_t(y) * m + x] >= 128 ? 1u : 0u;
+            const bool marked = texels[size_t(y) * m + x] >= 128;
+            row += marked ? 1u : 0u;
             t.maskSum[size_t(y + 1) * (m + 1) + x + 1] = t.maskSum[size_t(y) * (m + 1) + x + 1] + row;
+            if (marked) {
+                x0 = std::min(x0, x);
+                x1 = std::max(x1, x);
+                y0 = std::min(y0, y);
+                y1 = std::max(y1, y);
+            }
         }
     }
+    // The queries render only there (render area and scissor; the viewport, and so every
+    // texel centre, stays the view's): no sample outside it could pass the mask, and
+    // lavapipe's cost per query grows with the area it bins, not only with what is drawn.
+    // An empty mask keeps one texel: the traversal then rejects every node.
+    if (x0 > x1) x0 = x1 = y0 = y1 = 0;
+    const uint32_t b = t.maskBlock;
+    t.area = {{int32_t(x0 * b), int32_t(y0 * b)},
+              {std::min((x1 + 1) * b, size) - x0 * b, std::min((y1 + 1) * b, size) - y0 * b}};
     stats_.maskMs += msSince(start);
 
-    // Step 3: casters against the mask.
+    // Step 3: casters against the mask, or against the receiver depths.
     start = std::chrono::steady_clock::now();
     t.useMask = true;
-    occlusionCull(t, s.nodes, s.hidden, s.casters);
+    t.compareTapRadius = view.compareTapRadius;
+    occlusionCull(t, s.history, s.casters);
     stats_.casterCullMs += msSince(start);
 }
 
-void Visibility::occlusionCull(Target& t, std::vector<uint8_t>& nodeVisible, std::vector<uint16_t>& hidden,
-                               std::vector<uint8_t>& visible)
+void Visibility::occlusionCull(Target& t, NodeHistory& history, std::vector<uint8_t>& visible)
 {
+    std::vector<uint8_t>& nodeVisible = history.visible;
+    std::vector<uint16_t>& hidden = history.hidden;
     const size_t nodeCount = bvh_.nodeCount();
     visible.assign(scene_.instances.size(), 0);
     if (nodeVisible.size() != nodeCount) {
         // First frame, or a rebuilt tree: nothing is known, so the root is queried.
         nodeVisible.assign(nodeCount, 0);
         hidden.assign(nodeCount, 0);
+        history.emptyDraws.assign(nodeCount, 0);
     }
     if (nodeCount == 0) return;
 
@@ -645,7 +748,7 @@ void Visibility::occlusionCull(Target& t, std::vector<uint8_t>& nodeVisible, std
             depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
             depth.clearValue.depthStencil = {0.0f, 0};
             VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
-            info.renderArea = {{0, 0}, {t.width, t.height}};
+            info.renderArea = t.area;
             info.layerCount = 1;
             info.pDepthAttachment = &depth;
             const gpu::Pipeline* bound = nullptr;
@@ -654,13 +757,9 @@ void Visibility::occlusionCull(Target& t, std::vector<uint8_t>& nodeVisible, std
                 depth.loadOp = clear ? VK_ATTACHMENT_LOAD_OP_CLEAR : VK_ATTACHMENT_LOAD_OP_LOAD;
                 vkCmdBeginRendering(cmd, &info);
                 const VkViewport viewport{0.0f, 0.0f, float(t.width), float(t.height), 0.0f, 1.0f};
-                const VkRect2D scissor{{0, 0}, {t.width, t.height}};
+                const VkRect2D scissor = t.area;
                 vkCmdSetViewport(cmd, 0, 1, &viewport);
                 vkCmdSetScissor(cmd, 0, 1, &scissor);
-                if (t.lightView)
-                    vkCmdSetDepthBias(cmd, -kCullBiasConstant, 0.0f, -kCullBiasSlope);
-                else
-                    vkCmdSetDepthBias(cmd, 0.0f, 0.0f, 0.0f);
                 bound = nullptr;
                 inRendering = 0;
             };
@@ -670,9 +769,20 @@ void Visibility::occlusionCull(Target& t, std::vector<uint8_t>& nodeVisible, std
                 p.bind(cmd);
                 gpu::DescriptorPush push;
                 push.storageBuffer(0, boxPipeline ? boxes_ : sceneGpu_.instanceBuffer());
-                if (t.useMask) push.sampledImage(1, t.maskDilated, nearest_, VK_IMAGE_LAYOUT_GENERAL);
+                const bool ownDepth = t.useMask && t.compareTapRadius >= 0;
+                if (t.useMask) {
+                    push.sampledImage(1, t.maskDilated, nearest_, VK_IMAGE_LAYOUT_GENERAL)
+                        .storageImage(2, ownDepth ? t.receiverDepth : noReceiverDepth_);
+                }
                 push.push(context_, cmd, p);
-                const CulledQueryPush constants{t.viewProj, int32_t(t.maskBlock)};
+                // Leaf draws take the technique's bias in a light view, so that what they
+                // draw and what their queries count is the technique's own map (reversed-Z:
+                // negated, as in render::ShadowMap). Box proxies take none: the geometry
+                // inside lies behind their faces, biased or not.
+                const ShadowDepthBias bias = t.lightView && !boxPipeline ? t.bias : ShadowDepthBias{};
+                vkCmdSetDepthBias(cmd, -bias.constant, -bias.clamp, -bias.slope);
+                const CulledQueryPush constants{t.viewProj, int32_t(t.maskBlock), ownDepth ? 1 : 0, bias.slope,
+                                                bias.clamp};
                 p.pushConstants(cmd, &constants, t.useMask ? sizeof(constants) : sizeof(glm::mat4));
                 bound = &p;
             };
@@ -716,7 +826,10 @@ void Visibility::occlusionCull(Target& t, std::vector<uint8_t>& nodeVisible, std
                     sceneGpu_.drawInstances(cmd, instances, alphaMasked);
                 }
                 endQuery({Kind::Leaf, node, 0, 0});
-                for (const uint32_t i : instances) visible[i] = 1;
+                // The camera keeps what it draws (the G-buffer follows this list); a light
+                // view keeps a leaf when its draw finds samples (below).
+                if (!t.lightView)
+                    for (const uint32_t i : instances) visible[i] = 1;
             };
             std::vector<uint32_t> batch;
             const auto flushBatch = [&]() {
@@ -820,16 +933,33 @@ void Visibility::occlusionCull(Target& t, std::vector<uint8_t>& nodeVisible, std
         leavesToDraw.clear();
         for (size_t i = 0; i < issued.size(); ++i) {
             const Query& q = issued[i];
-            if (samples[i] == 0) continue;
+            if (samples[i] == 0) {
+                if (q.kind == Kind::Leaf && history.emptyDraws[q.node] < kEmptyDrawFrames) {
+                    nextVisible[q.node] = 1;  // drawn without waiting next frame too
+                    ++history.emptyDraws[q.node];
+                }
+                continue;
+            }
             switch (q.kind) {
-            case Kind::Leaf: nextVisible[q.node] = 1; break;
+            case Kind::Leaf:
+                nextVisible[q.node] = 1;
+                history.emptyDraws[q.node] = 0;
+                // A light view's leaf whose draw found no sample lies, at every texel that
+                // a receiver reads and where it lies in front of one, behind casters drawn
+                // before it in the technique's own biased depth: it cannot change what a
+                // receiver gets, though its box showed (a large lit receiver's box does).
+                if (t.lightView)
+                    for (const uint32_t i : bvh_.leafInstances(q.node)) visible[i] = 1;
+                break;
             case Kind::Box:
                 // A node whose box shows is opened (or, a leaf, drawn) without waiting
                 // next frame, even if its own geometry turns out hidden: otherwise a box
                 // that shows around hidden geometry would send its subtree through the
                 // same chain of rounds every frame. A leaf drawn that way is queried by
-                // its draw, which unmarks it when the geometry stays hidden.
+                // its draw, which unmarks it when the geometry stays hidden (after
+                // kEmptyDrawFrames such draws).
                 nextVisible[q.node] = 1;
+                history.emptyDraws[q.node] = 0;
                 if (bvh_.isLeafNode(q.node)) {
                     leavesToDraw.push_back(q.node);
                 } else {

@@ -15,6 +15,15 @@
 
 namespace penumbra::render {
 
+// The rasterizer's depth bias of a shadow map, positive "away from the light" (a depth
+// pass negates it for reversed-Z).
+struct ShadowDepthBias {
+    float constant = 0.0f;  // in Vulkan's minimum resolvable depth differences r
+    float slope = 0.0f;     // times the caster's depth slope
+    float clamp = 0.0f;     // largest bias in NDC depth; 0: no clamp
+    bool operator==(const ShadowDepthBias&) const = default;
+};
+
 // One light view that casters are drawn into: a shadow map, a cube face, a sub-light.
 struct CasterView {
     glm::mat4 viewProj{1.0f};  // world -> the view's clip space (reversed-Z)
@@ -32,6 +41,20 @@ struct CasterView {
     // chains), so the mask covers the whole view.
     float footprintTexels = 0.0f;
     static constexpr float kWholeView = 1e30f;
+
+    // The rasterizer depth bias of the technique's map (render::ShadowMap's depth pass).
+    // Light-view culling draws with exactly this bias, so that its depth is the map's.
+    ShadowDepthBias depthBias;
+    // When every lookup compares a texel's stored depth with the receiver point's own
+    // depth (a nearest, PCF or Poisson compare, or PCSS's search and filter, with the
+    // rasterizer's constant or slope-scaled bias and no receiver-side bias): the texels,
+    // in a square around the one the receiver point projects to, that its lookups read.
+    // A caster fragment then matters only where, after the bias, it lies in front of a
+    // receiver point whose lookups read its texel, and receiver-mask culling keeps only
+    // such fragments: a lit receiver that shadows nothing the camera sees is not drawn
+    // (docs/culling.md). -1: the lookups do something else (moments, receiver planes,
+    // normal offsets), so only the receiver mask applies.
+    int32_t compareTapRadius = -1;
 };
 
 class Visibility;

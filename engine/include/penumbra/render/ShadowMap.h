@@ -83,14 +83,6 @@ struct ShadowMapData {
 };
 static_assert(sizeof(ShadowFaceData) == 96 && sizeof(ShadowMapData) == 64 + 6 * 96, "std430 layout of shadow_map.glsl");
 
-// The rasterizer's depth bias, positive "away from the light" (the depth pass negates it
-// for reversed-Z).
-struct ShadowDepthBias {
-    float constant = 0.0f;  // in Vulkan's minimum resolvable depth differences r
-    float slope = 0.0f;     // times the caster's depth slope
-    float clamp = 0.0f;     // largest bias in NDC depth; 0: no clamp
-};
-
 // The light's size as the PCSS framework's kernels use it (shaders/common/
 // penumbra_estimate.glsl): for lights at a position w_light in world units (a rect's
 // side of equal area, a disk's diameter; spot and point lights have none: 0, a hard
@@ -149,6 +141,13 @@ public:
     void setFootprint(float texels) { footprint_ = texels; }
     float footprint() const { return footprint_; }
 
+    // Declares that every lookup compares the map with the receiver point's own depth,
+    // reading the texels within `tapRadius` (a square) of the one the point projects to
+    // (CasterView::compareTapRadius); -1 (the default): the lookups do something else.
+    // Receiver-mask culling then draws only the casters that lie in front of a visible
+    // receiver point after the depth pass's bias.
+    void setOwnDepthCompare(int32_t tapRadius) { compareTapRadius_ = tapRadius; }
+
     uint32_t faceCount() const { return faceCount_; }
     uint32_t resolution() const { return resolution_; }
     uint32_t atlasWidth() const { return resolution_ * (faceCount_ == kMaxShadowFaces ? 3u : 1u); }
@@ -171,6 +170,7 @@ private:
     ShadowMapData data_;
     std::vector<LightFrustum> frusta_;
     float footprint_ = 0.0f;
+    int32_t compareTapRadius_ = -1;
 };
 
 } // namespace penumbra::render

@@ -113,15 +113,21 @@ public:
 private:
     struct Traversal;
     struct ViewState;
+    // Per BVH node, what the last frames' traversals of one view found.
+    struct NodeHistory {
+        std::vector<uint8_t> visible;      // visible last frame: opened or drawn without waiting
+        std::vector<uint16_t> hidden;      // frames invisible in a row
+        std::vector<uint8_t> emptyDraws;   // leaves: draws in a row that found no sample
+    };
     struct Target;
 
     void cullFrustum(const glm::mat4& viewProj, std::vector<uint8_t>& visible) const;
     void computeFocus(const glm::mat4& cameraViewProj);
-    void occlusionCull(Target& target, std::vector<uint8_t>& nodeVisible, std::vector<uint16_t>& hidden,
-                       std::vector<uint8_t>& visible);
+    void occlusionCull(Target& target, NodeHistory& history, std::vector<uint8_t>& visible);
     void cullLightView(const CasterView& view, ViewState& state);
     void cullLightViewFully(const CasterView& view, ViewState& state);
     Target& lightTarget(uint32_t resolution);
+    void makeReceiverDepth(Target& target, bool withPrefix);
 
     gpu::Context& context_;
     const scene::Scene& scene_;
@@ -133,8 +139,7 @@ private:
 
     std::unique_ptr<Target> camera_;
     std::map<uint32_t, std::unique_ptr<Target>> lightTargets_;  // by resolution
-    std::vector<uint8_t> cameraNodes_;    // per BVH node: visible last frame
-    std::vector<uint16_t> cameraHidden_;  // per BVH node: frames invisible in a row
+    NodeHistory cameraHistory_;
     bool cameraDepthValid_ = false;       // this frame's camera culling left the camera depth
     double cameraKeptFraction_ = 0.0;     // of the frustum's instances, at the last full culling
     uint32_t cameraFramesSinceFull_ = 0;
@@ -147,12 +152,15 @@ private:
     scene::Aabb focus_;
 
     // Pipelines: depth-only leaf draws (writing depth, or only counting samples for
-    // alpha-masked instances), box queries; the same behind the receiver mask; the
-    // receiver mask's scatter and dilation.
+    // alpha-masked instances), box queries; the same behind the receiver mask (or the
+    // receiver depths); the receiver mask's scatter (with receiver depths) and dilation,
+    // and the receivers' depths spread over the taps.
     gpu::Pipeline leafDepth_, leafCount_, box_;
     gpu::Pipeline maskLeafDepth_, maskLeafCount_, maskBox_;
-    gpu::Pipeline scatter_;
+    gpu::Pipeline scatter_, scatterDepth_;
+    gpu::Pipeline depthMin_;
     gpu::Pipeline dilate_;
+    gpu::Image noReceiverDepth_;
     gpu::Sampler nearest_;
     gpu::Buffer boxes_;
     gpu::Buffer cameraData_;  // the reverse shadow test's camera
