@@ -7,14 +7,19 @@
 #include "TestContext.h"
 
 #include "penumbra/config/Config.h"
+#include "penumbra/gpu/Barrier.h"
+#include "penumbra/gpu/Pipeline.h"
+#include "penumbra/gpu/ShaderCompiler.h"
 #include "penumbra/render/FrameRenderer.h"
 #include "penumbra/scene/Generators.h"
 
+#include <fmt/format.h>
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdio>
+#include <cstring>
+#include <random>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -424,13 +429,104 @@ TEST_F(VisibilityCulling, ReceiverDepthsKeepAStreetViewNearTheOracle)
         const Frame mask = render(scene, cfg, CullingMode::ReceiverMask);
         EXPECT_TRUE(sameVisibility(all.visibility, mask.visibility, cfg.width));
         ASSERT_GT(oracle.triangles, 0u);
+        // Measured: slope 3,900 triangles against an oracle of 4,312 (0.90: the oracle
+        // counts every instance along a ray, also those behind the first), normal offset
+        // 13,842 (3.2).
         const double ratio = double(mask.stats.trianglesDrawn) / double(oracle.triangles);
-        std::printf("%s: %llu triangles drawn, oracle %llu, ratio %.2f\n", bias,
-                    (unsigned long long)mask.stats.trianglesDrawn, (unsigned long long)oracle.triangles, ratio);
+        const std::string figures = fmt::format("{} triangles drawn, oracle {}", mask.stats.trianglesDrawn,
+                                                oracle.triangles);
         if (std::string(bias) == "slope")
-            EXPECT_LE(ratio, 1.5);
+            EXPECT_LE(ratio, 1.5) << figures;
         else
-            EXPECT_GT(ratio, 1.5);
+            EXPECT_GT(ratio, 1.5) << figures;
+    }
+}
+
+// A camera that sees nothing leaves an empty receiver mask: no caster is drawn (the
+// queries' render area shrinks to one texel, and every node is rejected), and the
+// image is the one with every caster.
+TEST_F(VisibilityCulling, ACameraThatSeesNothingDrawsNoCaster)
+{
+    config::RenderConfig cfg = smallDefault(scene::LightType::Directional, "hard", {{"resolution", 512}});
+    cfg.camera.target = cfg.camera.position + glm::vec3(0.0f, 1.0f, 0.1f);  // up into the sky
+    const scene::Scene scene = config::buildScene(cfg);
+    const Frame all = render(scene, cfg, CullingMode::None);
+    const Frame mask = render(scene, cfg, CullingMode::ReceiverMask);
+    EXPECT_TRUE(sameVisibility(all.visibility, mask.visibility, cfg.width));
+    EXPECT_EQ(mask.stats.receivers, 0u);
+    EXPECT_EQ(mask.stats.castersDrawn, 0u);
+    EXPECT_EQ(mask.stats.queriesIssued, 0u);
+}
+
+// engine/receiver_depth_min.comp spreads each receiver's depth over the taps of radius r
+// (the least value in a (2 r + 1)^2 square, running minima over blocks of 2 r + 1): the
+// same as the brute-force minimum on random images, with most texels empty (all ones),
+// for sizes that are and are not multiples of the block, and radii past the image.
+TEST_F(VisibilityCulling, ReceiverDepthsSpreadOverTheTapsExactly)
+{
+    const gpu::ShaderCompiler compiler({gpu::engineShaderDir()});
+    gpu::ComputePipelineDesc desc;
+    desc.name = "test.receiver_depth_min";
+    desc.shader = "engine/receiver_depth_min.comp";
+    desc.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}, {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
+    desc.pushConstantBytes = 3 * sizeof(int32_t);
+    const gpu::Pipeline spread(*context, compiler, desc);
+    std::mt19937 random(6);
+    struct Case {
+        int32_t size, radius;
+    };
+    for (const Case c : {Case{37, 1}, Case{37, 5}, Case{37, 40}, Case{64, 3}, Case{100, 7}, Case{9, 4}}) {
+        SCOPED_TRACE(fmt::format("size {}, radius {}", c.size, c.radius));
+        const auto n = size_t(c.size);
+        std::vector<uint32_t> texels(n * n, ~0u);
+        for (uint32_t& t : texels)
+            if (random() % 10 < 2) t = random() % 0x3f800000u;
+        const VkImageUsageFlags usage =
+            VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+        const gpu::Image depth(*context, {uint32_t(n), uint32_t(n), VK_FORMAT_R32_UINT, usage, "test.depth"});
+        const gpu::Image prefix(*context, {uint32_t(n), uint32_t(n), VK_FORMAT_R32_UINT, usage, "test.prefix"});
+        gpu::Buffer staging(*context, texels.size() * sizeof(uint32_t), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true,
+                            "test.staging");
+        std::memcpy(staging.mapped(), texels.data(), texels.size() * sizeof(uint32_t));
+        const gpu::MemoryAccess write{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
+        const gpu::MemoryAccess readWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                                          VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
+        context->submitAndWait([&](VkCommandBuffer cmd) {
+            const gpu::ImageAccess copyTarget{VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
+                                              VK_ACCESS_2_TRANSFER_WRITE_BIT};
+            gpu::transition(cmd, depth, gpu::access::kUndefined, copyTarget);
+            VkBufferImageCopy copy{};
+            copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+            copy.imageExtent = {uint32_t(n), uint32_t(n), 1};
+            vkCmdCopyBufferToImage(cmd, staging.handle(), depth.handle(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &copy);
+            gpu::transition(cmd, depth, copyTarget,
+                            {VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                             VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT});
+            gpu::transition(cmd, prefix, gpu::access::kUndefined, gpu::access::kComputeWrite);
+            spread.bind(cmd);
+            gpu::DescriptorPush().storageImage(0, depth).storageImage(1, prefix).push(*context, cmd, spread);
+            for (int32_t vertical = 0; vertical < 2; ++vertical) {
+                const int32_t push[3] = {c.size, c.radius, vertical};
+                spread.pushConstants(cmd, push, sizeof(push));
+                vkCmdDispatch(cmd, (uint32_t(n) + 63) / 64, 1, 1);
+                gpu::memoryBarrier(cmd, write, readWrite);
+            }
+        });
+        const std::vector<std::byte> bytes = gpu::readImage(*context, depth, VK_IMAGE_LAYOUT_GENERAL);
+        ASSERT_EQ(bytes.size(), n * n * sizeof(uint32_t));
+        std::vector<uint32_t> spreadTexels(n * n);
+        std::memcpy(spreadTexels.data(), bytes.data(), bytes.size());
+        size_t wrong = 0;
+        for (int32_t y = 0; y < c.size; ++y) {
+            for (int32_t x = 0; x < c.size; ++x) {
+                uint32_t expected = ~0u;
+                for (int32_t v = std::max(y - c.radius, 0); v <= std::min(y + c.radius, c.size - 1); ++v)
+                    for (int32_t u = std::max(x - c.radius, 0); u <= std::min(x + c.radius, c.size - 1); ++u)
+                        expected = std::min(expected, texels[size_t(v) * n + size_t(u)]);
+                wrong += spreadTexels[size_t(y) * n + size_t(x)] != expected ? 1 : 0;
+            }
+        }
+        EXPECT_EQ(wrong, 0u);
     }
 }
 

@@ -18,7 +18,12 @@
 //                    footprint, and casters are kept only where a hierarchical occlusion
 //                    query that discards fragments outside the mask finds samples in
 //                    front of what the traversal drew (the paper's method, steps 1-3;
-//                    docs/culling.md says where and why this differs from the paper)
+//                    docs/culling.md says where and why this differs from the paper).
+//                    A view whose technique compares with the receivers' own depth
+//                    (CasterView::compareTapRadius) also gets the receivers' depths per
+//                    texel, and only caster samples in front of one count: lit receivers
+//                    that shadow nothing are not drawn. Light views draw with the
+//                    technique's own bias, and keep a leaf only when its draw finds samples.
 //
 // Hierarchical occlusion culling (CHC++, Mattausch, Bittner and Wimmer 2008) over the
 // scene's instance BVH, with occlusion queries that are waited for within the frame, so
