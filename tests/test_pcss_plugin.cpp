@@ -30,55 +30,27 @@ namespace {
 // Averages of 0/1 compares in fp32: V counts as 0 or 1 within this.
 constexpr float kBinaryTolerance = 1e-5f;
 
-struct PcssSettings {
-    double lightSize = -1.0;  // the light's own
-    int resolution = 1024;
-    double maxSearchTexels = 8.0;
-    double maxFilterTexels = 8.0;
+struct PcssSettings : test::KernelSettings {
     int blockerSamples = 16;
     int filterSamples = 32;
-    std::string biasMode = "receiver_plane";
 };
 
 void applyPcss(config::LightConfig& light, const PcssSettings& s)
 {
-    config::ShadowSettings& shadow = light.shadow;
-    shadow = {};
-    shadow.technique = "pcss";
-    shadow.required = true;
-    shadow.setParam("light_size", s.lightSize, "test");
-    shadow.setParam("resolution", s.resolution, "test");
-    shadow.setParam("max_search_radius", s.maxSearchTexels, "test");
-    shadow.setParam("max_filter_radius", s.maxFilterTexels, "test");
-    shadow.setParam("blocker_samples", s.blockerSamples, "test");
-    shadow.setParam("filter_samples", s.filterSamples, "test");
-    shadow.setParam("bias_mode", s.biasMode, "test");
+    nlohmann::json params = s.params();
+    params["blocker_samples"] = s.blockerSamples;
+    params["filter_samples"] = s.filterSamples;
+    test::setShadow(light, "pcss", params);
 }
 
-class PcssTest : public test::PluginGpuTest {
+class PcssTest : public test::TechniqueTest<PcssSettings, applyPcss> {
 protected:
-    std::vector<float> renderPcss(config::RenderConfig cfg, const PcssSettings& s, scene::Scene scene)
-    {
-        applyPcss(cfg.lights[0], s);
-        render(cfg, std::move(scene));
-        return frame->checkedVisibility();
-    }
-    std::vector<float> renderPcss(config::RenderConfig cfg, const PcssSettings& s)
-    {
-        scene::Scene scene = config::buildScene(cfg.scene);
-        return renderPcss(std::move(cfg), s, std::move(scene));
-    }
-
     // Against rays from the light's centre: a pixel whose neighbourhood (as far as the
     // blocker search or the filter reach, plus two texels) is all lit or all shadowed in
     // the centre's view has no blocker in reach (V = 1) or only blockers (V = 0).
     void expectRayCastAgreement(const std::vector<float>& v, const PcssSettings& s, const std::string& label)
     {
-        const double band = std::max(s.maxSearchTexels, s.maxFilterTexels) + 2.0;
-        const test::RayCastAgreement a = frame->rayCastAgreement(v, band, kBinaryTolerance, label);
-        EXPECT_EQ(a.mismatches, 0u) << label;
-        EXPECT_GT(a.surelyShadowed, 150u) << label;
-        EXPECT_GT(a.surelyLit, 2000u) << label;
+        PluginGpuTest::expectRayCastAgreement(v, s.bandTexels(), kBinaryTolerance, label);
     }
 };
 
@@ -110,7 +82,7 @@ TEST_P(PcssLightTypes, MatchesRayCastAwayFromPenumbrae)
     PcssSettings s;
     s.lightSize = c.lightSize;
     s.resolution = c.resolution;
-    const std::vector<float> v = renderPcss(cfg, s);
+    const std::vector<float> v = renderWith(cfg, s);
     expectRayCastAgreement(v, s, c.name);
     size_t soft = 0;
     for (float x : v) soft += x > 0.02f && x < 0.98f;
@@ -150,7 +122,7 @@ TEST_P(PcssZeroSize, EqualsTheHardShadow)
     PcssSettings s;
     s.lightSize = 0.0;
     s.biasMode = c.biasMode;
-    const std::vector<float> pcss = renderPcss(cfg, s);
+    const std::vector<float> pcss = renderWith(cfg, s);
 
     config::ShadowSettings& hard = cfg.lights[0].shadow;
     hard = {};
@@ -206,7 +178,7 @@ protected:
     test::PenumbraWidths measure(const PenumbraSetup& p, const PcssSettings& s = penumbraPcss())
     {
         const std::vector<float> v =
-            renderPcss(test::penumbraConfig(p), s, scene::generatePenumbra(test::penumbraParams(p)));
+            renderWith(test::penumbraConfig(p), s, scene::generatePenumbra(test::penumbraParams(p)));
         return test::measurePenumbra(*frame, v, p);
     }
 };
@@ -253,7 +225,7 @@ TEST_F(PcssPenumbra, BlockerTouchingTheReceiverCastsAHardShadow)
     // At the box's foot the blockers are at the receiver: d_r - d_b -> 0, so the filter
     // shrinks to one texel's compare (contact hardening) and the ground right behind the
     // foot is umbra, with no division by zero; the penumbra widens away from the foot.
-    const std::vector<float> v = renderPcss(test::boxOnGroundConfig(), penumbraPcss(), test::boxOnGroundScene());
+    const std::vector<float> v = renderWith(test::boxOnGroundConfig(), penumbraPcss(), test::boxOnGroundScene());
     const double texel = 2.0 * 3.0 / 1024.0;  // a texel of the cube face on the ground, at most
     size_t behindFoot = 0, notUmbra = 0;
     for (size_t i = 0; i < v.size(); ++i) {
@@ -290,7 +262,7 @@ TEST_F(PcssTest, NoBlockerIsExactlyLit)
         cfg.lights[0].light.type = scene::LightType::Directional;
         cfg.lights[0].light.direction = {std::sin(a), -std::cos(a), 0.0f};
         cfg.lights[0].light.angularDiameterDeg = 10.0f;
-        const std::vector<float> v = renderPcss(cfg, {}, test::planeScene());
+        const std::vector<float> v = renderWith(cfg, {}, test::planeScene());
         size_t plane = 0, notLit = 0;
         for (size_t i = 0; i < v.size(); ++i) {
             if (!frame->hasGeometry(i)) continue;
@@ -311,10 +283,10 @@ TEST_F(PcssTest, HugeLightIsClampedToTheMaximumRadii)
     config::RenderConfig cfg = test::defaultTestConfig();
     PcssSettings s;
     s.lightSize = 1e9;
-    const std::vector<float> huge = renderPcss(cfg, s);
+    const std::vector<float> huge = renderWith(cfg, s);
     expectRayCastAgreement(huge, s, "light size 1e9");
     s.lightSize = 1e3;
-    const std::vector<float> large = renderPcss(cfg, s);
+    const std::vector<float> large = renderWith(cfg, s);
     size_t differ = 0;
     for (size_t i = 0; i < huge.size(); ++i) differ += huge[i] != large[i];
     EXPECT_LT(differ, huge.size() / 100);
@@ -335,7 +307,7 @@ TEST_F(PcssTest, BlockerAtTheLightIsClampedNotInfinite)
     cfg.lights[0].light.position = {0.0f, 3.0f, 0.0f};
     PcssSettings settings;
     settings.lightSize = 0.5;
-    const std::vector<float> v = renderPcss(cfg, settings, std::move(s));
+    const std::vector<float> v = renderWith(cfg, settings, std::move(s));
     size_t ground = 0, lit = 0;
     for (size_t i = 0; i < v.size(); ++i) {
         if (!frame->onGround(i)) continue;
@@ -352,7 +324,7 @@ TEST_F(PcssTest, AngularDiameterBeyond180DegreesIsClamped)
     test::setLightType(cfg.lights[0], scene::LightType::Directional);
     PcssSettings s;
     s.lightSize = 1e6;  // degrees
-    renderPcss(cfg, s);  // finite, in [0, 1] (expectValidVisibility)
+    renderWith(cfg, s);  // finite, in [0, 1] (expectValidVisibility)
 }
 
 // ---------------------------------------------------------------------------------
@@ -373,7 +345,7 @@ TEST_P(PcssScales, MatchesRayCastAwayFromPenumbrae)
     PcssSettings s;
     s.lightSize = c.lightSize * scale;
     test::scaleConfig(cfg, scale);
-    const std::vector<float> v = renderPcss(cfg, s);
+    const std::vector<float> v = renderWith(cfg, s);
     expectRayCastAgreement(v, s, c.name);
 }
 
@@ -407,20 +379,10 @@ TEST(PcssPluginEntry, ReflectsEveryParameterWithItsDefault)
 
 TEST(PcssPluginEntry, OutOfRangeValuesNameTheParameter)
 {
-    plugin::PluginRegistry registry;
-    plugin::ParamValues params = registry.load("pcss").defaultParams();
-    auto message = [&](const char* name, const nlohmann::json& value) -> std::string {
-        try {
-            params.set(name, value, "test.json: /lights/0/shadow");
-        } catch (const ConfigError& e) {
-            return e.what();
-        }
-        ADD_FAILURE() << name << " = " << value << " was accepted";
-        return {};
-    };
-    for (const auto& [name, value] : std::vector<std::pair<const char*, nlohmann::json>>{
-             {"blocker_samples", 65}, {"filter_samples", 3}, {"max_search_radius", 0.0}, {"max_filter_radius", 1e3},
-             {"light_size", -2.0}, {"bias_mode", "normal_offset"}}) {
-        EXPECT_NE(message(name, value).find(name), std::string::npos) << name;
-    }
+    test::expectRefusalsNameTheParameter("pcss", {{"blocker_samples", 65},
+                                                  {"filter_samples", 3},
+                                                  {"max_search_radius", 0.0},
+                                                  {"max_filter_radius", 1e3},
+                                                  {"light_size", -2.0},
+                                                  {"bias_mode", "normal_offset"}});
 }

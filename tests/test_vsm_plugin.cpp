@@ -37,16 +37,13 @@ struct VsmSettings {
 
 void applyVsm(config::LightConfig& light, const VsmSettings& s)
 {
-    config::ShadowSettings& shadow = light.shadow;
-    shadow = {};
-    shadow.technique = "vsm";
-    shadow.required = true;
-    shadow.setParam("variant", s.variant, "test");
-    shadow.setParam("filter", s.filter, "test");
-    shadow.setParam("moment_format", s.format, "test");
-    shadow.setParam("blur_radius", s.blurRadius, "test");
-    shadow.setParam("resolution", s.resolution, "test");
-    for (const auto& [name, value] : s.more) shadow.setParam(name, value, "test");
+    nlohmann::json params = {{"variant", s.variant},
+                             {"filter", s.filter},
+                             {"moment_format", s.format},
+                             {"blur_radius", s.blurRadius},
+                             {"resolution", s.resolution}};
+    for (const auto& [name, value] : s.more) params[name] = value;
+    test::setShadow(light, "vsm", params);
 }
 
 // How far from the receiver, in texels, the filtered value at a pixel gathers casters:
@@ -70,20 +67,8 @@ float tolerance(const std::string& variant)
     return 0.1f;
 }
 
-class VsmTest : public test::PluginGpuTest {
+class VsmTest : public test::TechniqueTest<VsmSettings, applyVsm> {
 protected:
-    std::vector<float> renderVsm(config::RenderConfig cfg, const VsmSettings& s, scene::Scene scene)
-    {
-        applyVsm(cfg.lights[0], s);
-        render(cfg, std::move(scene));
-        return frame->checkedVisibility();
-    }
-    std::vector<float> renderVsm(config::RenderConfig cfg, const VsmSettings& s)
-    {
-        scene::Scene scene = config::buildScene(cfg.scene);
-        return renderVsm(std::move(cfg), s, std::move(scene));
-    }
-
     // Against rays from the light: where every caster within the filter's reach is the
     // receiver itself (lit) or lies well in front of it (shadowed). The VSM family's
     // answer there is not exactly 0: Chebyshev's bound is an upper bound, so umbrae
@@ -128,7 +113,7 @@ TEST_P(VsmVariantsAndLights, MatchesRayCastAwayFromShadowEdges)
     // 512 texels keep the full-resolution passes over six cube faces quick; the
     // directional light's map spans the whole scene: twice the texels.
     s.resolution = light.type == scene::LightType::Directional ? 1024 : 512;
-    const std::vector<float> v = renderVsm(cfg, s);
+    const std::vector<float> v = renderWith(cfg, s);
     const test::RayCastAgreement a = agreement(v, s, tolerance(variant), std::string(variant) + " " + light.name);
     EXPECT_EQ(a.mismatches, 0u);
     EXPECT_GT(a.surelyShadowed, 150u);
@@ -171,7 +156,7 @@ TEST_P(VsmFilters, MatchesRayCastAwayFromShadowEdges)
     // double that in world units and leave few pixels clear of edges.
     s.resolution = s.filter == "gaussian" || s.filter == "box" ? 512 : 1024;
     if (s.format == "rgba16f") s.more["min_variance"] = 1e-4;  // VsmPlane.MinimumVarianceKeepsAFlatReceiverLit
-    const std::vector<float> v = renderVsm(test::defaultTestConfig(), s);
+    const std::vector<float> v = renderWith(test::defaultTestConfig(), s);
     const float allowed = c.tolerance;
     const test::RayCastAgreement a = agreement(v, s, allowed, c.name);
     EXPECT_EQ(a.mismatches, 0u);
@@ -222,7 +207,7 @@ protected:
     // V on the plane's pixels.
     std::vector<float> planeVisibility(float degrees, const VsmSettings& s)
     {
-        const std::vector<float> v = renderVsm(planeConfig(degrees), s, test::planeScene());
+        const std::vector<float> v = renderWith(planeConfig(degrees), s, test::planeScene());
         std::vector<float> plane;
         for (size_t i = 0; i < v.size(); ++i) {
             if (frame->hasGeometry(i)) plane.push_back(v[i]);
@@ -338,7 +323,7 @@ protected:
         s.variant = variant;
         s.blurRadius = 4;
         s.more["bleeding_reduction"] = reduction;
-        const std::vector<float> v = renderVsm(stackedPlatesConfig(), s, stackedPlatesScene());
+        const std::vector<float> v = renderWith(stackedPlatesConfig(), s, stackedPlatesScene());
         float brightest = 0.0f;
         size_t ground = 0;
         for (size_t i = 0; i < v.size(); ++i) {
@@ -396,7 +381,7 @@ TEST_P(VsmExtremes, HugeExponentsStayFiniteAtEveryScale)
     s.more["positive_exponent"] = 1e4;
     s.more["negative_exponent"] = 1e4;
     s.more["esm_exponent"] = 1e4;
-    const std::vector<float> v = renderVsm(cfg, s);  // finite, in [0, 1]: checkedVisibility
+    const std::vector<float> v = renderWith(cfg, s);  // finite, in [0, 1]: checkedVisibility
     // ESM with c = 1e4 (single floats) is a hard test against the largest depth under
     // the filter: lit exactly where any texel within the blur is at or behind the
     // receiver, so its shadows shrink by the blur's reach (inside the band); half floats
@@ -431,7 +416,7 @@ TEST_F(VsmTest, BlockerTouchingTheReceiverGivesAShadowWithoutNaN)
     for (const char* variant : {"vsm", "evsm", "esm"}) {
         VsmSettings s;
         s.variant = variant;
-        const std::vector<float> v = renderVsm(test::boxOnGroundConfig(), s, test::boxOnGroundScene());
+        const std::vector<float> v = renderWith(test::boxOnGroundConfig(), s, test::boxOnGroundScene());
         double nearFoot = 0.0, farther = 0.0;
         size_t nearCount = 0, fartherCount = 0;
         for (size_t i = 0; i < v.size(); ++i) {
@@ -469,18 +454,12 @@ TEST(VsmPluginEntry, ReflectsEveryParameterWithItsDefault)
 
 TEST(VsmPluginEntry, OutOfRangeValuesNameTheParameter)
 {
-    plugin::PluginRegistry registry;
-    plugin::ParamValues params = registry.load("vsm").defaultParams();
-    for (const auto& [name, value] : std::vector<std::pair<const char*, nlohmann::json>>{
-             {"bleeding_reduction", 1.0}, {"min_variance", -1e-6}, {"blur_radius", 33}, {"variant", "pcf"},
-             {"moment_format", "r16f"}, {"max_anisotropy", 0}}) {
-        try {
-            params.set(name, value, "test.json: /lights/0/shadow");
-            ADD_FAILURE() << name << " = " << value << " was accepted";
-        } catch (const ConfigError& e) {
-            EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
-        }
-    }
+    test::expectRefusalsNameTheParameter("vsm", {{"bleeding_reduction", 1.0},
+                                                 {"min_variance", -1e-6},
+                                                 {"blur_radius", 33},
+                                                 {"variant", "pcf"},
+                                                 {"moment_format", "r16f"},
+                                                 {"max_anisotropy", 0}});
 }
 
 TEST_F(VsmTest, MipFiltersNeedAPowerOfTwoResolution)
@@ -490,7 +469,7 @@ TEST_F(VsmTest, MipFiltersNeedAPowerOfTwoResolution)
     s.filter = "trilinear";
     s.resolution = 1000;
     try {
-        renderVsm(cfg, s);
+        renderWith(cfg, s);
         FAIL() << "rendered with resolution 1000 and a mip filter";
     } catch (const Error& e) {
         const std::string what = e.what();

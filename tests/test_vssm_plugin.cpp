@@ -306,54 +306,26 @@ namespace {
 // 0.29 (point, a pixel between two boxes) for mixed, about the same for none.
 constexpr float kAgreementTolerance = 0.35f;
 
-struct VssmSettings {
-    double lightSize = -1.0;  // the light's own
-    int resolution = 1024;
-    double maxSearchTexels = 8.0;
-    double maxFilterTexels = 8.0;
+struct VssmSettings : test::KernelSettings {
     std::string subdivision = "mixed";
-    std::string biasMode = "receiver_plane";
     std::string debugView = "off";
 };
 
 void applyVssm(config::LightConfig& light, const VssmSettings& s)
 {
-    config::ShadowSettings& shadow = light.shadow;
-    shadow = {};
-    shadow.technique = "vssm";
-    shadow.required = true;
-    shadow.setParam("light_size", s.lightSize, "test");
-    shadow.setParam("resolution", s.resolution, "test");
-    shadow.setParam("max_search_radius", s.maxSearchTexels, "test");
-    shadow.setParam("max_filter_radius", s.maxFilterTexels, "test");
-    shadow.setParam("subdivision", s.subdivision, "test");
-    shadow.setParam("bias_mode", s.biasMode, "test");
-    shadow.setParam("debug_view", s.debugView, "test");
+    nlohmann::json params = s.params();
+    params["subdivision"] = s.subdivision;
+    params["debug_view"] = s.debugView;
+    test::setShadow(light, "vssm", params);
 }
 
-class VssmTest : public test::PluginGpuTest {
+class VssmTest : public test::TechniqueTest<VssmSettings, applyVssm> {
 protected:
-    std::vector<float> renderVssm(config::RenderConfig cfg, const VssmSettings& s, scene::Scene scene)
-    {
-        applyVssm(cfg.lights[0], s);
-        render(cfg, std::move(scene));
-        return frame->checkedVisibility();
-    }
-    std::vector<float> renderVssm(config::RenderConfig cfg, const VssmSettings& s)
-    {
-        scene::Scene scene = config::buildScene(cfg.scene);
-        return renderVssm(std::move(cfg), s, std::move(scene));
-    }
-
     // Against rays from the light's centre, away from penumbrae: as far as the kernels
     // reach, plus two texels, all lit or all shadowed in the centre's view.
     void expectRayCastAgreement(const std::vector<float>& v, const VssmSettings& s, const std::string& label)
     {
-        const double band = std::max(s.maxSearchTexels, s.maxFilterTexels) + 2.0;
-        const test::RayCastAgreement a = frame->rayCastAgreement(v, band, kAgreementTolerance, label);
-        EXPECT_EQ(a.mismatches, 0u) << label;
-        EXPECT_GT(a.surelyShadowed, 150u) << label;
-        EXPECT_GT(a.surelyLit, 2000u) << label;
+        PluginGpuTest::expectRayCastAgreement(v, s.bandTexels(), kAgreementTolerance, label);
     }
 };
 
@@ -380,7 +352,7 @@ TEST_P(VssmLightTypes, MatchesRayCastAwayFromPenumbrae)
     s.lightSize = c.lightSize;
     s.resolution = c.resolution;
     s.subdivision = subdivision;
-    const std::vector<float> v = renderVssm(cfg, s);
+    const std::vector<float> v = renderWith(cfg, s);
     expectRayCastAgreement(v, s, std::string(c.name) + " " + subdivision);
     size_t soft = 0;
     for (float x : v) soft += x > 0.02f && x < 0.98f;
@@ -407,7 +379,7 @@ TEST_F(VssmTest, ZeroSizeEqualsTheHardShadow)
         VssmSettings s;
         s.lightSize = 0.0;
         s.biasMode = bias;
-        const std::vector<float> vssm = renderVssm(cfg, s);
+        const std::vector<float> vssm = renderWith(cfg, s);
 
         config::ShadowSettings& hard = cfg.lights[0].shadow;
         hard = {};
@@ -446,7 +418,7 @@ class VssmPenumbra : public VssmTest, public ::testing::WithParamInterface<const
 protected:
     test::PenumbraWidths measure(const test::PenumbraSetup& p)
     {
-        const std::vector<float> v = renderVssm(test::penumbraConfig(p), penumbraVssm(GetParam()),
+        const std::vector<float> v = renderWith(test::penumbraConfig(p), penumbraVssm(GetParam()),
                                                 scene::generatePenumbra(test::penumbraParams(p)));
         return test::measurePenumbra(*frame, v, p);
     }
@@ -527,7 +499,7 @@ TEST_F(VssmTest, SubdivisionRemovesTheIncorrectlyLitAreaOfOverlappingBlockers)
         s.maxSearchTexels = 64.0;
         s.maxFilterTexels = 64.0;
         s.subdivision = subdivision;
-        const std::vector<float> v = renderVssm(platformConfig(), s, platformScene());
+        const std::vector<float> v = renderWith(platformConfig(), s, platformScene());
         size_t wrong = 0, top = 0;
         double squared = 0.0;
         shadowedTop = 0;
@@ -571,7 +543,7 @@ TEST_F(VssmTest, NoBlockerIsExactlyLitAtGrazingAngles)
         VssmSettings s;
         s.maxSearchTexels = 64.0;
         s.maxFilterTexels = 64.0;
-        const std::vector<float> v = renderVssm(cfg, s, test::planeScene());
+        const std::vector<float> v = renderWith(cfg, s, test::planeScene());
         size_t plane = 0, notLit = 0;
         for (size_t i = 0; i < v.size(); ++i) {
             if (!frame->hasGeometry(i)) continue;
@@ -589,7 +561,7 @@ TEST_F(VssmTest, HugeLightIsClampedToTheMaximumRadii)
     // penumbrae stay that narrow (agreement with the rays beyond them).
     VssmSettings s;
     s.lightSize = 1e9;
-    const std::vector<float> v = renderVssm(test::defaultTestConfig(), s);
+    const std::vector<float> v = renderWith(test::defaultTestConfig(), s);
     expectRayCastAgreement(v, s, "light size 1e9");
 }
 
@@ -601,7 +573,7 @@ TEST_F(VssmTest, BlockerTouchingTheReceiverCastsAHardShadow)
     VssmSettings s;
     s.maxSearchTexels = 64.0;
     s.maxFilterTexels = 64.0;
-    const std::vector<float> v = renderVssm(test::boxOnGroundConfig(), s, test::boxOnGroundScene());
+    const std::vector<float> v = renderWith(test::boxOnGroundConfig(), s, test::boxOnGroundScene());
     const double texel = 2.0 * 3.0 / 1024.0;  // a texel of the cube face on the ground, at most
     size_t behindFoot = 0, notUmbra = 0;
     for (size_t i = 0; i < v.size(); ++i) {
@@ -623,7 +595,7 @@ TEST_F(VssmTest, LargestMapAgreesWithTheRays)
     VssmSettings s;
     s.resolution = 4096;
     s.lightSize = 0.6;
-    const std::vector<float> v = renderVssm(test::defaultTestConfig(), s);
+    const std::vector<float> v = renderWith(test::defaultTestConfig(), s);
     expectRayCastAgreement(v, s, "4096^2");
 }
 
@@ -643,7 +615,7 @@ TEST_P(VssmScales, MatchesRayCastAwayFromPenumbrae)
     VssmSettings s;
     s.lightSize = c.lightSize * scale;
     test::scaleConfig(cfg, scale);
-    const std::vector<float> v = renderVssm(cfg, s);
+    const std::vector<float> v = renderWith(cfg, s);
     expectRayCastAgreement(v, s, c.name);
 }
 
@@ -664,13 +636,13 @@ TEST_F(VssmTest, DebugViewsShowKernelClassificationAndSubKernels)
     config::RenderConfig cfg = test::defaultTestConfig();
     VssmSettings s;
     s.lightSize = 0.6;
-    const std::vector<float> v = renderVssm(cfg, s);
+    const std::vector<float> v = renderWith(cfg, s);
 
     // Classification: every pixel with geometry is one of the five classes, and the
     // scene has lit, umbra and penumbra pixels; where V is 0 or 1 by the HSM the class
     // says so.
     s.debugView = "classification";
-    const std::vector<float> classes = renderVssm(cfg, s);
+    const std::vector<float> classes = renderWith(cfg, s);
     std::map<float, size_t> count;
     for (size_t i = 0; i < classes.size(); ++i) {
         if (!frame->hasGeometry(i)) continue;
@@ -688,7 +660,7 @@ TEST_F(VssmTest, DebugViewsShowKernelClassificationAndSubKernels)
 
     // Kernel: 0 where the HSM decided, in (0, 1] in penumbrae.
     s.debugView = "kernel";
-    const std::vector<float> kernel = renderVssm(cfg, s);
+    const std::vector<float> kernel = renderWith(cfg, s);
     size_t withKernel = 0;
     for (size_t i = 0; i < kernel.size(); ++i) {
         if (!frame->hasGeometry(i)) continue;
@@ -701,7 +673,7 @@ TEST_F(VssmTest, DebugViewsShowKernelClassificationAndSubKernels)
 
     // Sub-kernels: none where the HSM decided, some in penumbrae.
     s.debugView = "subkernels";
-    const std::vector<float> visited = renderVssm(cfg, s);
+    const std::vector<float> visited = renderWith(cfg, s);
     size_t penumbraVisited = 0;
     for (size_t i = 0; i < visited.size(); ++i) {
         if (!frame->hasGeometry(i)) continue;
@@ -732,20 +704,10 @@ TEST(VssmPluginEntry, ReflectsEveryParameterWithItsDefault)
 
 TEST(VssmPluginEntry, OutOfRangeValuesNameTheParameter)
 {
-    plugin::PluginRegistry registry;
-    plugin::ParamValues params = registry.load("vssm").defaultParams();
-    auto message = [&](const char* name, const nlohmann::json& value) -> std::string {
-        try {
-            params.set(name, value, "test.json: /lights/0/shadow");
-        } catch (const ConfigError& e) {
-            return e.what();
-        }
-        ADD_FAILURE() << name << " = " << value << " was accepted";
-        return {};
-    };
-    for (const auto& [name, value] : std::vector<std::pair<const char*, nlohmann::json>>{
-             {"resolution", 16384}, {"tree_height", 6}, {"blocker_subdivisions", 0}, {"subdivision", "quadtree"},
-             {"lit_variance", -1.0}, {"max_filter_radius", 0.0}}) {
-        EXPECT_NE(message(name, value).find(name), std::string::npos) << name;
-    }
+    test::expectRefusalsNameTheParameter("vssm", {{"resolution", 16384},
+                                                  {"tree_height", 6},
+                                                  {"blocker_subdivisions", 0},
+                                                  {"subdivision", "quadtree"},
+                                                  {"lit_variance", -1.0},
+                                                  {"max_filter_radius", 0.0}});
 }

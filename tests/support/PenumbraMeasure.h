@@ -9,10 +9,34 @@
 #include "penumbra/config/Config.h"
 #include "penumbra/scene/Generators.h"
 
+#include <algorithm>
+#include <string>
 #include <utility>
 #include <vector>
 
 namespace penumbra::test {
+
+// The parameters the PCSS-framework plugins (pcss, vssm) share, as their tests vary them.
+struct KernelSettings {
+    double lightSize = -1.0;  // the light's own
+    int resolution = 1024;
+    double maxSearchTexels = 8.0;
+    double maxFilterTexels = 8.0;
+    std::string biasMode = "receiver_plane";
+
+    // As setShadow takes them.
+    nlohmann::json params() const
+    {
+        return {{"light_size", lightSize},
+                {"resolution", resolution},
+                {"max_search_radius", maxSearchTexels},
+                {"max_filter_radius", maxFilterTexels},
+                {"bias_mode", biasMode}};
+    }
+    // Away from penumbrae for a ray-cast comparison: as far as the kernels reach, plus
+    // two texels.
+    double bandTexels() const { return std::max(maxSearchTexels, maxFilterTexels) + 2.0; }
+};
 
 constexpr float kPenumbraLightHeight = 3.0f;
 

@@ -1,5 +1,6 @@
 #include "PluginFrame.h"
 
+#include "penumbra/core/Error.h"
 #include "penumbra/render/Projection.h"
 
 #include <gtest/gtest.h>
@@ -55,6 +56,39 @@ void PluginGpuTest::render(const config::RenderConfig& cfg, scene::Scene scene)
 {
     frame.reset();
     frame = std::make_unique<RenderedFrame>(*context, *registry, cfg, std::move(scene));
+}
+
+void PluginGpuTest::expectRayCastAgreement(const std::vector<float>& v, double bandTexels, float tolerance,
+                                           const std::string& label) const
+{
+    const RayCastAgreement a = frame->rayCastAgreement(v, bandTexels, tolerance, label);
+    EXPECT_EQ(a.mismatches, 0u) << label;
+    EXPECT_GT(a.surelyShadowed, 150u) << label;
+    EXPECT_GT(a.surelyLit, 2000u) << label;
+}
+
+void setShadow(config::LightConfig& light, const std::string& technique, const nlohmann::json& params)
+{
+    config::ShadowSettings& shadow = light.shadow;
+    shadow = {};
+    shadow.technique = technique;
+    shadow.required = true;
+    for (const auto& [name, value] : params.items()) shadow.setParam(name, value, "test");
+}
+
+void expectRefusalsNameTheParameter(const std::string& plugin,
+                                    const std::vector<std::pair<std::string, nlohmann::json>>& values)
+{
+    plugin::PluginRegistry registry;
+    plugin::ParamValues params = registry.load(plugin).defaultParams();
+    for (const auto& [name, value] : values) {
+        try {
+            params.set(name, value, "test.json: /lights/0/shadow");
+            ADD_FAILURE() << plugin << ": " << name << " = " << value << " was accepted";
+        } catch (const ConfigError& e) {
+            EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+        }
+    }
 }
 
 RayCastAgreement RenderedFrame::rayCastAgreement(const std::vector<float>& v, double bandTexels, float tolerance,

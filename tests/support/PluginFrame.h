@@ -13,6 +13,7 @@
 #include <cmath>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace penumbra::test {
@@ -63,8 +64,42 @@ protected:
     // Renders `cfg` over `scene` into `frame` (replacing the last one).
     void render(const config::RenderConfig& cfg, scene::Scene scene);
 
+    // Expects light 0's `v` to agree with rays from the light's centre within
+    // `tolerance` away from edges (by `bandTexels`), with enough pixels surely shadowed
+    // (> 150) and surely lit (> 2000) for that to mean something.
+    void expectRayCastAgreement(const std::vector<float>& v, double bandTexels, float tolerance,
+                                const std::string& label) const;
+
     std::unique_ptr<plugin::PluginRegistry> registry;
     std::unique_ptr<RenderedFrame> frame;
 };
+
+// Light `light`'s shadow set to `technique`, required, with `params` (name -> value) and
+// the plugin's defaults for the rest.
+void setShadow(config::LightConfig& light, const std::string& technique, const nlohmann::json& params);
+
+// The fixture of one technique's tests: `Settings` (the parameters a test varies) are set
+// on light 0 by `apply`, and renderWith returns the frame's checked visibility.
+template <class Settings, void (*apply)(config::LightConfig&, const Settings&)>
+class TechniqueTest : public PluginGpuTest {
+protected:
+    std::vector<float> renderWith(config::RenderConfig cfg, const Settings& s, scene::Scene scene)
+    {
+        apply(cfg.lights[0], s);
+        render(cfg, std::move(scene));
+        return frame->checkedVisibility();
+    }
+    // Over the scene `cfg` names.
+    std::vector<float> renderWith(config::RenderConfig cfg, const Settings& s)
+    {
+        scene::Scene scene = config::buildScene(cfg.scene);
+        return renderWith(std::move(cfg), s, std::move(scene));
+    }
+};
+
+// Expects plugin `plugin` to refuse each (name, value) with a ConfigError that names the
+// parameter, as it would when a config file's shadow settings set it.
+void expectRefusalsNameTheParameter(const std::string& plugin,
+                                    const std::vector<std::pair<std::string, nlohmann::json>>& values);
 
 } // namespace penumbra::test
