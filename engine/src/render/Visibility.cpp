@@ -201,7 +201,7 @@ struct Visibility::Target {
     VkRect2D area{};  // what the traversal renders: the view, or the receiver mask's bounds
     ShadowDepthBias bias;           // light views: the technique's, for leaf draws (boxes take none)
     int32_t compareTapRadius = -1;  // with useMask, >= 0: receiverDepth is tested too
-    bool lightView = false;  // culling depth biased away from the light
+    bool lightView = false;  // leaf draws take the technique's bias, and are kept only when they find samples
 };
 
 // Per (light, view): last frame's node visibility and this frame's caster list.
