@@ -11,6 +11,7 @@
 #include "penumbra/gpu/Pipeline.h"
 #include "penumbra/gpu/ShaderCompiler.h"
 #include "penumbra/render/FrameRenderer.h"
+#include "penumbra/render/Projection.h"
 #include "penumbra/scene/Generators.h"
 
 #include <fmt/format.h>
@@ -229,6 +230,77 @@ TEST_F(VisibilityCulling, FocusingSharpensADirectionalShadowAndKeepsCastersOutsi
     } catch (const ConfigError& e) {
         EXPECT_NE(std::string(e.what()).find("shadow_focus"), std::string::npos) << e.what();
     }
+}
+
+// Focusing a spot light: 20 m above a 400 m ground, its 140° cone spreads a 256² map
+// over well beyond the ground; narrowed about its axis to what the camera sees (about
+// 25 m of ground), the shadows come out much closer to a 4096² map's (mean error 0.114
+// unfocused, 0.001 focused when written), and the tower behind the camera, outside its
+// view, still casts.
+TEST_F(VisibilityCulling, FocusingNarrowsASpotLightsConeAndKeepsCastersOutsideTheView)
+{
+    scene::Scene scene;
+    test::addInstance(scene, test::addMesh(scene, scene::makePlane("ground")), "ground",
+                      glm::scale(glm::mat4(1.0f), glm::vec3(400.0f, 1.0f, 400.0f)));
+    const uint32_t box = test::addMesh(scene, scene::makeBox("box"));
+    test::addInstance(scene, box, "tower",
+                      glm::scale(glm::translate(glm::mat4(1.0f), {-6.0f, 4.0f, 0.0f}), glm::vec3(1.0f, 8.0f, 1.0f)));
+    test::addInstance(scene, box, "post",
+                      glm::scale(glm::translate(glm::mat4(1.0f), {7.0f, 0.6f, 1.5f}), glm::vec3(0.2f, 1.2f, 0.2f)));
+    scene.updateTransforms();
+    config::RenderConfig cfg = smallDefault(scene::LightType::Spot, "hard", {{"resolution", 4096}});
+    cfg.camera.position = {2.0f, 3.0f, 0.0f};
+    cfg.camera.target = {6.0f, 0.0f, 0.0f};
+    cfg.camera.up = {0.0f, 1.0f, 0.0f};
+    scene::Light& spot = cfg.lights[0].light;
+    spot.position = {-40.0f, 20.0f, 0.0f};
+    spot.direction = glm::normalize(glm::vec3(46.0f, -20.0f, 0.0f));
+    spot.innerConeDeg = 60.0f;
+    spot.outerConeDeg = 70.0f;
+    const Frame fine = render(scene, cfg, CullingMode::None);
+
+    cfg.lights[0].shadow.setParam("resolution", 256, "test");
+    const Frame coarse = render(scene, cfg, CullingMode::ReceiverMask);
+    cfg.shadowFocus = true;
+    const Frame focused = render(scene, cfg, CullingMode::ReceiverMask);
+    const auto meanError = [&](const Frame& f) {
+        double sum = 0.0;
+        for (size_t i = 0; i < fine.visibility.size(); ++i) sum += std::abs(f.visibility[i] - fine.visibility[i]);
+        return sum / double(fine.visibility.size());
+    };
+    const double coarseError = meanError(coarse), focusedError = meanError(focused);
+    RecordProperty("mean_error_unfocused", std::to_string(coarseError));
+    RecordProperty("mean_error_focused", std::to_string(focusedError));
+    EXPECT_LT(focusedError, 0.25 * coarseError);
+    EXPECT_LT(focusedError, 0.01);
+    // The tower's and the post's shadows are both there.
+    ASSERT_GT(countBelow(fine.visibility, 0.5f), 1000u);
+    EXPECT_GT(countBelow(focused.visibility, 0.5f), countBelow(fine.visibility, 0.5f) * 9 / 10);
+}
+
+// The focused cone's guards: a box that reaches around the light keeps the whole cone; a
+// box far down the axis, thousands of times narrower than the cone, gives the narrowest
+// cone allowed (1e-4 rad), not a degenerate matrix.
+TEST(SpotFocus, ABoxAroundTheLightKeepsTheConeAndATinyBoxTheNarrowestCone)
+{
+    scene::Light spot;
+    spot.type = scene::LightType::Spot;
+    spot.position = {0.0f, 10.0f, 0.0f};
+    spot.direction = {0.0f, -1.0f, 0.0f};
+    spot.outerConeDeg = 45.0f;
+    const scene::Aabb bounds{{-100.0f, -1.0f, -100.0f}, {100.0f, 20.0f, 100.0f}};
+    const glm::mat4 cone = render::shadowFrusta(spot, bounds).front().proj;
+
+    const scene::Aabb around{{-1.0f, 0.0f, -1.0f}, {1.0f, 11.0f, 1.0f}};
+    EXPECT_EQ(render::shadowFrusta(spot, bounds, &around).front().proj, cone);
+
+    const scene::Aabb beside{{20.0f, 0.0f, -1.0f}, {21.0f, 1.0f, 1.0f}};  // outside the 45° cone
+    EXPECT_EQ(render::shadowFrusta(spot, bounds, &beside).front().proj, cone) << "never wider than the cone";
+
+    const scene::Aabb tiny{{-1e-6f, 0.0f, -1e-6f}, {1e-6f, 1e-6f, 1e-6f}};
+    const glm::mat4 narrow = render::shadowFrusta(spot, bounds, &tiny).front().proj;
+    EXPECT_NEAR(-1.0f / narrow[1][1], 5e-5f, 1e-7f) << "tan of the half-angle (y is flipped for Vulkan)";
+    EXPECT_TRUE(std::isfinite(narrow[0][0]) && std::isfinite(narrow[1][1]));
 }
 
 // Thin casters (zero-thickness quads) seen edge-on from the light, and from the camera:

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace penumbra::render {
 
@@ -105,6 +106,25 @@ LightFrustum directionalFrustum(const scene::Light& light, const scene::Aabb& bo
     return f;
 }
 
+// Focused spot light (Mattausch et al. 2011, §1.4): the cone narrowed about its own axis
+// to the box of what the camera sees, plus 1 % for rounding. Every point the camera sees
+// stays in it, and so does every caster between such a point and the light, since the
+// cone is convex from its apex. Returns +inf (keep the cone) when a corner of the box
+// lies at or behind the near plane: the box then reaches around the light. The narrowest
+// cone is 1e-4 of a radian wide, so that the matrix stays well conditioned.
+float focusedTanHalfAngle(const LightFrustum& f, const scene::Aabb& focus)
+{
+    float tanHalf = 0.0f;
+    for (int c = 0; c < 8; ++c) {
+        const glm::vec4 v = f.view * glm::vec4((c & 1) ? focus.max.x : focus.min.x, (c & 2) ? focus.max.y : focus.min.y,
+                                               (c & 4) ? focus.max.z : focus.min.z, 1.0f);
+        const float distance = -v.z;  // along the light's axis
+        if (!(distance > f.nearWorld)) return std::numeric_limits<float>::infinity();
+        tanHalf = std::max(tanHalf, std::max(std::abs(v.x), std::abs(v.y)) / distance);
+    }
+    return std::max(1.01f * tanHalf, 5e-5f);
+}
+
 } // namespace
 
 std::vector<LightFrustum> shadowFrusta(const scene::Light& light, const scene::Aabb& bounds, const scene::Aabb* focus)
@@ -116,8 +136,15 @@ std::vector<LightFrustum> shadowFrusta(const scene::Light& light, const scene::A
         // The frustum covers the cone: its half-angle is the outer cone's (below 90° by
         // config validation).
         const glm::vec3 dir = glm::normalize(light.direction);
-        return {perspectiveFrustum(light.position, dir, stableUp(dir, glm::vec3(0, 1, 0)),
-                                   2.0f * glm::radians(light.outerConeDeg), bounds)};
+        const glm::vec3 up = stableUp(dir, glm::vec3(0, 1, 0));
+        const float fov = 2.0f * glm::radians(light.outerConeDeg);
+        LightFrustum f = perspectiveFrustum(light.position, dir, up, fov, bounds);
+        if (focus && !focus->empty()) {
+            const float tanHalf = focusedTanHalfAngle(f, *focus);
+            if (tanHalf < std::tan(0.5f * fov))
+                f = perspectiveFrustum(light.position, dir, up, 2.0f * std::atan(tanHalf), bounds);
+        }
+        return {f};
     }
     case scene::LightType::Point:
     case scene::LightType::Rect:

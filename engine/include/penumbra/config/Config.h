@@ -77,7 +77,7 @@ struct RenderConfig {
     // default shadow settings; resolved by buildScene.
     bool lightsFromScene = false;
     CullingMode culling = CullingMode::None;
-    // Fit directional lights' shadow maps to what the camera sees (render/Visibility.h,
+    // Fit directional and spot lights' shadow maps to what the camera sees (render/Visibility.h,
     // "focusing"); needs culling receiver-mask or light-occlusion.
     bool shadowFocus = false;
     uint32_t width = 1280;

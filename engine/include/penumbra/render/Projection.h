@@ -26,9 +26,11 @@ struct LightFrustum {
     glm::mat4 viewProj;
     float nearWorld;
 };
-// `focus`, when given and not empty: the box of what the camera sees. A directional
-// light's box is then fitted to it across the light and on its far side, and keeps the
-// scene's side nearest the light (shadow-map focusing); other lights ignore it.
+// `focus`, when given and not empty: the box of what the camera sees (shadow-map
+// focusing). A directional light's box is then fitted to it across the light and on its
+// far side, and keeps the scene's side nearest the light; a spot light's cone is
+// narrowed about its axis to it. Cube maps (point, rect, disk lights) ignore it: their
+// six faces already cover every direction, each at its own fixed 90°.
 std::vector<LightFrustum> shadowFrusta(const scene::Light& light, const scene::Aabb& sceneBounds,
                                        const scene::Aabb* focus = nullptr);
 
