@@ -290,12 +290,18 @@ Visibility::Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders
         c.defines = {{"RECEIVER_DEPTH", "1"}};
         c.bindings.push_back({3, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE});
         scatterDepth_ = gpu::Pipeline(context_, shaders, c);
-        c = {};
-        c.name = "visibility.receiver_depth_min";
-        c.shader = "engine/receiver_depth_min.comp";
-        c.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}, {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
-        c.pushConstantBytes = 3 * sizeof(int32_t);
-        depthMin_ = gpu::Pipeline(context_, shaders, c);
+        // Separable filters over a radius, one axis per dispatch: bindings (source,
+        // destination), push (size, radius, vertical).
+        const auto imageFilter = [&](const char* name, const char* shader) {
+            gpu::ComputePipelineDesc f;
+            f.name = name;
+            f.shader = shader;
+            f.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}, {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
+            f.pushConstantBytes = 3 * sizeof(int32_t);
+            return gpu::Pipeline(context_, shaders, f);
+        };
+        depthMin_ = imageFilter("visibility.receiver_depth_min", "engine/receiver_depth_min.comp");
+        dilate_ = imageFilter("visibility.dilate", "engine/mask_dilate.comp");
         // Bound in place of a target's receiver depth by views that have none.
         noReceiverDepth_ = gpu::Image(context_, {1, 1, kReceiverDepthFormat, VK_IMAGE_USAGE_STORAGE_BIT,
                                                  "visibility.no_receiver_depth"});
@@ -303,12 +309,6 @@ Visibility::Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders
             gpu::transition(cmd, noReceiverDepth_, gpu::access::kUndefined,
                             {VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0});
         });
-        c = {};
-        c.name = "visibility.dilate";
-        c.shader = "engine/mask_dilate.comp";
-        c.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}, {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
-        c.pushConstantBytes = 3 * sizeof(int32_t);
-        dilate_ = gpu::Pipeline(context_, shaders, c);
         nearest_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
         cameraData_ = gpu::Buffer(context_, sizeof(CameraData), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true,
                                   "visibility.camera");
