@@ -112,7 +112,7 @@ struct TechniqueCase {
 // Techniques whose lookups reach from one texel (hard) to wide kernels (PCF 7 x 7, PCSS's
 // blocker search, VSM's blur) and to the whole map (a mip chain).
 // hard with slope or constant bias, PCF, Poisson, bilinear and PCSS with slope bias
-// compare with the receivers' own depth (CasterView::OwnDepthCompare: their casters are
+// compare with the receivers' own depth (CasterView::compareTapRadius: their casters are
 // tested against the receivers' depths, spread over taps of radius 0, 3, 2, 1 and 65);
 // normal offset, receiver planes and VSM use the receiver mask alone.
 const TechniqueCase kTechniques[] = {
@@ -421,7 +421,7 @@ TEST_F(VisibilityCulling, AStreetViewOfACityCullsMostCasters)
 
 // A technique that compares with the receivers' own depth (hard, slope bias) needs no
 // caster where the camera sees only lit ground: after the bias the ground lies behind
-// every receiver depth its lookups compare with (CasterView::OwnDepthCompare). Also at
+// every receiver depth its lookups compare with (CasterView::compareTapRadius). Also at
 // 1e-3 and 1e5 of the size, where the slack given to the receiver depths
 // (engine/receiver_scatter.comp) must scale with the scene: too little would cull a
 // caster the technique draws, too much would keep the ground. With normal offset the

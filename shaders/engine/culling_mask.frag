@@ -7,7 +7,7 @@
 // mask texel stands for a block of maskBlock x maskBlock view texels.
 //
 // With a receiver-depth image (the technique compares every lookup with the receiver's own depth,
-// CasterView::OwnDepthCompare), receiverDepth holds per view texel the farthest depth
+// CasterView::compareTapRadius), receiverDepth holds per view texel the farthest depth
 // that any visible receiver point whose lookups read the texel compares with
 // (engine/receiver_scatter.comp, engine/receiver_depth_min.comp; all ones: none). A
 // sample counts only when the technique would store it in front of that depth: after the
@@ -21,7 +21,7 @@ layout(location = 0) in vec3 world;
 layout(push_constant) uniform Push {
     mat4 viewProj;
     int maskBlock;
-    int ownDepth;     // 1: test receiverDepth instead of the mask
+    int ownDepth;     // 1: test receiverDepth too
     float biasSlope;  // the technique's slope-scaled bias; 0 for box proxies
     float biasClamp;  // its clamp in NDC depth; 0: none
 } pc;

@@ -9,7 +9,7 @@
 // cost more than the casters it saved (docs/culling.md).
 //
 // With RECEIVER_DEPTH defined (the view's technique compares with each receiver's own
-// depth, CasterView::OwnDepthCompare) each pixel also lowers, in receiverDepth at the
+// depth, CasterView::compareTapRadius) each pixel also lowers, in receiverDepth at the
 // view's full resolution, the texel's farthest receiver depth to its own (atomic min of
 // the bits of a non-negative float); engine/receiver_depth_min.comp then spreads it over
 // the technique's taps.
