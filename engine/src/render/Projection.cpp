@@ -116,8 +116,7 @@ float focusedTanHalfAngle(const LightFrustum& f, const scene::Aabb& focus)
 {
     float tanHalf = 0.0f;
     for (int c = 0; c < 8; ++c) {
-        const glm::vec4 v = f.view * glm::vec4((c & 1) ? focus.max.x : focus.min.x, (c & 2) ? focus.max.y : focus.min.y,
-                                               (c & 4) ? focus.max.z : focus.min.z, 1.0f);
+        const glm::vec4 v = f.view * glm::vec4(focus.corner(c), 1.0f);
         const float distance = -v.z;  // along the light's axis
         if (!(distance > f.nearWorld)) return std::numeric_limits<float>::infinity();
         tanHalf = std::max(tanHalf, std::max(std::abs(v.x), std::abs(v.y)) / distance);

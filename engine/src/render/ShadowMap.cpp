@@ -48,12 +48,8 @@ glm::vec2 depthRange(const LightFrustum& f, const scene::Aabb& bounds)
     }
     float far = 0.0f;
     if (!bounds.empty()) {
-        for (int corner = 0; corner < 8; ++corner) {
-            const glm::vec3 c((corner & 1) ? bounds.max.x : bounds.min.x, (corner & 2) ? bounds.max.y : bounds.min.y,
-                              (corner & 4) ? bounds.max.z : bounds.min.z);
-            // View space looks down -z: the distance along the axis is -z_view.
-            far = std::max(far, -(f.view * glm::vec4(c, 1.0f)).z);
-        }
+        // View space looks down -z: the distance along the axis is -z_view.
+        for (int c = 0; c < 8; ++c) far = std::max(far, -(f.view * glm::vec4(bounds.corner(c), 1.0f)).z);
     }
     // A scene entirely behind the face (or none): any range will do, nothing projects.
     return {f.nearWorld, std::max(far, 2.0f * f.nearWorld)};

@@ -118,8 +118,7 @@ std::optional<TexelRect> projectedRect(const glm::mat4& viewProj, const scene::A
 {
     glm::vec2 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
     for (int c = 0; c < 8; ++c) {
-        const glm::vec4 clip = viewProj * glm::vec4((c & 1) ? box.max.x : box.min.x, (c & 2) ? box.max.y : box.min.y,
-                                                    (c & 4) ? box.max.z : box.min.z, 1.0f);
+        const glm::vec4 clip = viewProj * glm::vec4(box.corner(c), 1.0f);
         if (!(clip.w > 0.0f) || clip.z > clip.w) return std::nullopt;
         const glm::vec2 p = (glm::vec2(clip) / clip.w * 0.5f + 0.5f) * glm::vec2(float(width), float(height));
         lo = glm::min(lo, p);

@@ -45,10 +45,7 @@ Aabb Aabb::transformed(const glm::mat4& m) const
 {
     Aabb out;
     if (empty()) return out;
-    for (int corner = 0; corner < 8; ++corner) {
-        const glm::vec3 p{corner & 1 ? max.x : min.x, corner & 2 ? max.y : min.y, corner & 4 ? max.z : min.z};
-        out.extend(glm::vec3(m * glm::vec4(p, 1.0f)));
-    }
+    for (int c = 0; c < 8; ++c) out.extend(glm::vec3(m * glm::vec4(corner(c), 1.0f)));
     return out;
 }
 

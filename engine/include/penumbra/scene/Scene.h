@@ -30,6 +30,11 @@ struct Aabb {
     glm::vec3 extent() const { return empty() ? glm::vec3(0.0f) : max - min; }
     float radius() const { return empty() ? 0.0f : 0.5f * glm::length(max - min); }
     float surfaceArea() const;
+    // Corner `i` of 8: bit 0 picks max.x, bit 1 max.y, bit 2 max.z.
+    glm::vec3 corner(int i) const
+    {
+        return {(i & 1) ? max.x : min.x, (i & 2) ? max.y : min.y, (i & 4) ? max.z : min.z};
+    }
     // The box of this box's eight corners under `m`.
     Aabb transformed(const glm::mat4& m) const;
 };
