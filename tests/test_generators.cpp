@@ -1,15 +1,19 @@
-// Procedural scenes: determinism, counts, well-formed meshes, parameter checks, scale,
-// and the penumbra scene's closed-form visibility against ray casting.
+// Procedural scenes: determinism, counts, well-formed meshes, parameter checks (and the
+// config schema's list of the parameters), scale, and the penumbra scene's closed-form
+// visibility against ray casting.
 #include "ErrorText.h"
 #include "RayCast.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/scene/Generators.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <functional>
 #include <tuple>
 
@@ -81,6 +85,35 @@ TEST(Generators, ListedByName)
     ASSERT_FALSE(params.empty());
     EXPECT_EQ(params[0].name, "blocks");
     EXPECT_EQ(params[0].defaultValue, "8");
+}
+
+// config/schema/penumbra-config.schema.json repeats every generator's parameters for
+// editors; one the schema lacked would make it refuse configs that the engine takes.
+TEST(Generators, ConfigSchemaListsEveryParameterWithItsDefault)
+{
+    std::ifstream in(std::filesystem::path(PENUMBRA_SOURCE_DIR) / "config/schema/penumbra-config.schema.json");
+    const nlohmann::json schema = nlohmann::json::parse(in);
+    std::vector<std::string> names = generatorNames();
+    names.push_back("null");
+    std::vector<std::string> schemaNames;
+    for (const nlohmann::json& name : schema["$defs"]["scene"]["properties"]["generator"]["enum"]) {
+        schemaNames.push_back(name.is_string() ? name.get<std::string>() : name.dump());
+    }
+    EXPECT_EQ(schemaNames, names);
+    for (const std::string& name : generatorNames()) {
+        SCOPED_TRACE(name);
+        const nlohmann::json& properties = schema["$defs"]["generatorParams"][name]["properties"];
+        std::vector<std::string> inSchema, inEngine;
+        for (const auto& [parameter, property] : properties.items()) inSchema.push_back(parameter);
+        for (const GeneratorParameter& p : generatorParameters(name)) {
+            inEngine.push_back(p.name);
+            if (properties.contains(p.name)) {
+                EXPECT_FLOAT_EQ(properties[p.name]["default"].get<float>(), std::stof(p.defaultValue)) << p.name;
+            }
+        }
+        std::sort(inEngine.begin(), inEngine.end());
+        EXPECT_EQ(inSchema, inEngine);  // nlohmann::json keeps object keys sorted
+    }
 }
 
 TEST(Generators, DeterministicBySeed)

@@ -48,16 +48,17 @@ good = {
     "one camera field over an include": {"include": "default.json", "camera": {"fov_y_deg": 30}},
     "fps alone over an include": {"include": "animated.json", "animation": {"fps": 60}},
     "params of an included generator": {"include": "city.json", "scene": {"params": {"blocks": 2}}},
-    "a generator parameter as a string": {"scene": {"generator": "fence", "params": {"holes_x": "8", "cell": "0.2"}}},
+    "a generator parameter as a string": {"scene": {"generator": "fence", "params": {"holes_x": "8", "cell": "0.05"}}},
     "a glTF scene removing an included generator": {"include": "default.json",
                                                     "scene": {"gltf": "a.glb", "generator": None, "params": None}},
-    "tracks of the config's lights": {"lights": [point, point], "animation": {"tracks": [
-        {"target": "/lights/1/intensity", "keys": [{"t": 0, "value": 1}]},
-        {"target": "/lights/0/direction", "keys": [{"t": 0, "value": [0, -1, 0]}]}]}},
-    "a track of an included light": {"include": "default.json", "animation": {"tracks": [
-        {"target": "/lights/7/color", "keys": [{"t": 0, "value": [1, 1, 1]}]}]}},
-    "sweep pointers": {"sweep": [{"paths": ["/lights/0/shadow", "/culling", "/scene/params/a~1b"],
-                                  "values": [[{}, "none", 1]]}, {"path": "/lights", "values": [[point]]}]},
+    "tracks of the config's lights": {"lights": [{"type": "spot", "position": [0, 4, 0], "direction": [0, -1, 0]}, point],
+                                      "animation": {"tracks": [
+        {"target": "/lights/0/direction", "keys": [{"t": 0, "value": [0, -1, 0]}, {"t": 1, "value": [0.1, -1, 0]}]},
+        {"target": "/lights/1/intensity", "keys": [{"t": 0, "value": 1}]}]}},
+    "a track of an included light": {"include": "two-spots.json", "animation": {"tracks": [
+        {"target": "/lights/1/color", "keys": [{"t": 0, "value": [1, 1, 1]}]}]}},
+    "sweep pointers": {"sweep": [{"paths": ["/lights/0/shadow", "/culling"], "values": [[{}, "none"]]},
+                                 {"path": "/lights", "values": [[point]]}]},
 }
 for name, doc in good.items():
     for e in validator.iter_errors(doc):
