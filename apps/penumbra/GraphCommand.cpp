@@ -3,9 +3,9 @@
 #include "penumbra/config/Config.h"
 #include "penumbra/config/Overrides.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/io/StagedFile.h"
 #include "penumbra/plugin/PluginRegistry.h"
-#include "penumbra/render/FrameRenderer.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -31,7 +31,7 @@ int runGraph(const GraphFlags& flags, const gpu::ContextOptions& device)
     const scene::Scene scene = config::buildScene(config);
     config::applyParamOverrides(config, overrides);  // after buildScene: "lights": "scene"
     plugin::PluginRegistry plugins;
-    render::FrameRenderer renderer(context, scene, config, plugins);
+    frame::FrameRenderer renderer(context, scene, config, plugins);
     for (const std::string& warning : renderer.warnings()) spdlog::warn("{}", warning);
     renderer.renderFrame();
 

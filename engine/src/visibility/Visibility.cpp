@@ -1,4 +1,4 @@
-#include "penumbra/render/Visibility.h"
+#include "visibility/Visibility.h"
 
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
@@ -17,7 +17,7 @@
 #include <limits>
 #include <optional>
 
-namespace penumbra::render {
+namespace penumbra::visibility {
 namespace {
 
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
@@ -198,7 +198,7 @@ struct Visibility::Target {
     glm::mat4 viewProj{1.0f};
     bool useMask = false;
     VkRect2D area{};  // what the traversal renders: the view, or the receiver mask's bounds
-    ShadowDepthBias bias;           // light views: the technique's, for leaf draws (boxes take none)
+    render::ShadowDepthBias bias;           // light views: the technique's, for leaf draws (boxes take none)
     int32_t compareTapRadius = -1;  // with useMask, >= 0: receiverDepth is tested too
     bool lightView = false;  // leaf draws take the technique's bias, and are kept only when they find samples
 };
@@ -209,7 +209,7 @@ struct Visibility::ViewState {
     glm::mat4 viewProj{0.0f};
     uint32_t resolution = 0;
     float footprint = -1.0f;
-    ShadowDepthBias bias;
+    render::ShadowDepthBias bias;
     int32_t compareTapRadius = -1;
     NodeHistory history;
     std::vector<uint8_t> casters;
@@ -218,7 +218,7 @@ struct Visibility::ViewState {
 };
 
 Visibility::Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders, const scene::Scene& scene,
-                       const SceneGpu& sceneGpu, config::CullingMode mode, uint32_t width, uint32_t height,
+                       const render::SceneGpu& sceneGpu, config::CullingMode mode, uint32_t width, uint32_t height,
                        bool focus)
     : context_(context),
       scene_(scene),
@@ -434,13 +434,13 @@ void Visibility::computeFocus(const glm::mat4& cameraViewProj)
     }
 }
 
-void Visibility::countDraw(const DrawCounts& counts)
+void Visibility::countDraw(const render::DrawCounts& counts)
 {
     stats_.castersDrawn += counts.instances;
     stats_.trianglesDrawn += counts.triangles;
 }
 
-const std::vector<uint8_t>* Visibility::casters(const CasterView& view)
+const std::vector<uint8_t>* Visibility::casters(const render::CasterView& view)
 {
     if (mode_ == config::CullingMode::None) return nullptr;
     std::unique_ptr<ViewState>& state = views_[{view.light, view.view}];
@@ -511,7 +511,7 @@ void Visibility::makeReceiverDepth(Target& t, bool withPrefix)
     });
 }
 
-void Visibility::cullLightView(const CasterView& view, ViewState& s)
+void Visibility::cullLightView(const render::CasterView& view, ViewState& s)
 {
     ++stats_.views;
     const auto start = std::chrono::steady_clock::now();
@@ -541,7 +541,7 @@ void Visibility::cullLightView(const CasterView& view, ViewState& s)
     s.framesSinceFull = 0;
 }
 
-void Visibility::cullLightViewFully(const CasterView& view, ViewState& s)
+void Visibility::cullLightViewFully(const render::CasterView& view, ViewState& s)
 {
     auto start = std::chrono::steady_clock::now();
     Target& t = lightTarget(view.resolution);
@@ -778,7 +778,7 @@ void Visibility::occlusionCull(Target& t, NodeHistory& history, std::vector<uint
                 // draw and what their queries count is the technique's own map (reversed-Z:
                 // negated, as in render::ShadowMap). Box proxies take none: the geometry
                 // inside lies behind their faces, biased or not.
-                const ShadowDepthBias bias = t.lightView && !boxPipeline ? t.bias : ShadowDepthBias{};
+                const render::ShadowDepthBias bias = t.lightView && !boxPipeline ? t.bias : render::ShadowDepthBias{};
                 vkCmdSetDepthBias(cmd, -bias.constant, -bias.clamp, -bias.slope);
                 const CulledQueryPush constants{t.viewProj, int32_t(t.maskBlock), ownDepth ? 1 : 0, bias.slope,
                                                 bias.clamp};
@@ -980,4 +980,4 @@ void Visibility::occlusionCull(Target& t, NodeHistory& history, std::vector<uint
     nodeVisible.swap(nextVisible);
 }
 
-} // namespace penumbra::render
+} // namespace penumbra::visibility

@@ -4,7 +4,7 @@
 // ../shared/papers/online-visibility-for-shadow-maps.txt): which instances the camera
 // sees, and which casters each light view must draw so that every visible receiver gets
 // the shadow it would get with every caster drawn. Plugins never see it: render::Casters
-// asks it for the casters of each CasterView.
+// asks it for the casters of each CasterView (render/CasterCulling.h).
 //
 // Modes (config "culling"):
 //   none             every instance, everywhere
@@ -41,6 +41,8 @@
 #include "penumbra/render/Casters.h"
 #include "penumbra/render/SceneGpu.h"
 #include "penumbra/scene/Bvh.h"
+#include "penumbra/visibility/CullingStats.h"
+#include "render/CasterCulling.h"
 
 #include <glm/glm.hpp>
 
@@ -56,32 +58,15 @@ class Context;
 class ShaderCompiler;
 }
 
-namespace penumbra::render {
+namespace penumbra::visibility {
 
-// Per frame, summed over the camera and every light view.
-struct CullingStats {
-    uint64_t nodesVisited = 0;      // BVH nodes the traversals looked at
-    uint64_t queriesIssued = 0;     // occlusion queries (boxes, multi-queries, leaf draws)
-    uint64_t maskRejected = 0;      // nodes culled without a query: their projection meets no mask texel
-    uint64_t queryRounds = 0;       // submissions waited for
-    uint64_t receivers = 0;         // instances the camera sees (the G-buffer draws them)
-    uint64_t cameraFellBack = 0;    // 1: the camera took its frustum (culling kept most last time)
-    uint64_t views = 0;             // light views culled
-    uint64_t viewsFellBack = 0;     // of which culled to their frustum: culling kept most last time
-    uint64_t castersDrawn = 0;      // instance draws through Casters::draw
-    uint64_t trianglesDrawn = 0;    // their triangles
-    double cameraMs = 0.0;          // step 1: camera culling (wall clock, GPU work waited for)
-    double maskMs = 0.0;            // step 2: receiver masks
-    double casterCullMs = 0.0;      // step 3: caster culling (queries, or frustum tests)
-};
-
-class Visibility {
+class Visibility final : public render::CasterCulling {
 public:
     // `scene` and `sceneGpu` must outlive the service; `width` x `height` is the camera's
     // output. `focus`: compute the box of what the camera sees every frame (focus()); needs an
     // occlusion mode, whose camera pass leaves the camera depth.
     Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders, const scene::Scene& scene,
-               const SceneGpu& sceneGpu, config::CullingMode mode, uint32_t width, uint32_t height,
+               const render::SceneGpu& sceneGpu, config::CullingMode mode, uint32_t width, uint32_t height,
                bool focus = false);
     ~Visibility();
     Visibility(const Visibility&) = delete;
@@ -101,15 +86,15 @@ public:
 
     // The casters `view` must draw this frame, or null for all. Culls the view on its
     // first call in the frame and keeps the list for the frame.
-    const std::vector<uint8_t>* casters(const CasterView& view);
-    void countDraw(const DrawCounts& counts);
+    const std::vector<uint8_t>* casters(const render::CasterView& view) override;
+    void countDraw(const render::DrawCounts& counts) override;
 
     // Shadow-map focusing (Mattausch et al. §1.4): the world box of every point the camera
     // sees this frame (camera pixels unprojected from the camera depth), which lies in the
     // view frustum by construction: the paper's "view frustum intersected with the
     // visible objects' boxes", tightened to the visible surfaces. Null when focusing is
     // off or the camera sees nothing.
-    const scene::Aabb* focus() const { return focusing_ && !focus_.empty() ? &focus_ : nullptr; }
+    const scene::Aabb* focus() const override { return focusing_ && !focus_.empty() ? &focus_ : nullptr; }
     bool focusing() const { return focusing_; }
 
     // This frame's figures so far.
@@ -129,14 +114,14 @@ private:
     void cullFrustum(const glm::mat4& viewProj, std::vector<uint8_t>& visible) const;
     void computeFocus(const glm::mat4& cameraViewProj);
     void occlusionCull(Target& target, NodeHistory& history, std::vector<uint8_t>& visible);
-    void cullLightView(const CasterView& view, ViewState& state);
-    void cullLightViewFully(const CasterView& view, ViewState& state);
+    void cullLightView(const render::CasterView& view, ViewState& state);
+    void cullLightViewFully(const render::CasterView& view, ViewState& state);
     Target& lightTarget(uint32_t resolution);
     void makeReceiverDepth(Target& target, bool withPrefix);
 
     gpu::Context& context_;
     const scene::Scene& scene_;
-    const SceneGpu& sceneGpu_;
+    const render::SceneGpu& sceneGpu_;
     const config::CullingMode mode_;
     const uint32_t width_;
     const uint32_t height_;
@@ -173,4 +158,4 @@ private:
     uint32_t queryCapacity_ = 0;
 };
 
-} // namespace penumbra::render
+} // namespace penumbra::visibility
