@@ -55,6 +55,8 @@ struct CasterView {
     // (docs/culling.md). -1: the lookups do something else (moments, receiver planes,
     // normal offsets), so only the receiver mask applies.
     int32_t compareTapRadius = -1;
+
+    bool operator==(const CasterView&) const = default;
 };
 
 // Private to the engine (engine/src/render/CasterCulling.h): its visibility service.
