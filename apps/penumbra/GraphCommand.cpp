@@ -1,5 +1,7 @@
 #include "GraphCommand.h"
 
+#include "TimingSummary.h"
+
 #include "penumbra/config/Config.h"
 #include "penumbra/config/Overrides.h"
 #include "penumbra/core/Error.h"
@@ -17,6 +19,27 @@ namespace {
 
 std::string mebibytes(VkDeviceSize bytes) { return fmt::format("{:.2f} MiB", double(bytes) / (1024.0 * 1024.0)); }
 
+// The visibility service culls in submissions of its own, outside the graph: the camera
+// before the passes run, each light view when a pass first draws its casters (so inside
+// that pass's CPU time). The graph shows no pass for them; this says so, with their
+// figures for the frame.
+std::string cullingSection(const visibility::CullingStats& stats, config::CullingMode mode)
+{
+    std::string text =
+        fmt::format("outside the graph: culling {} (the visibility service's own submissions, waited for: the "
+                    "camera's before the passes, each light view's in the pass that first draws its casters)\n",
+                    config::cullingModeName(mode));
+    for (const CullingFigure& figure : cullingFigures()) {
+        const std::string_view key = figure.key;
+        if (key != "camera_ms" && key != "mask_ms" && key != "caster_cull_ms" && key != "query_rounds") continue;
+        if (figure.count)
+            text += fmt::format("  {:<39}{}\n", figure.label, stats.*figure.count);
+        else
+            text += fmt::format("  {:<39}{:.2f}\n", figure.label, stats.*figure.ms);
+    }
+    return text;
+}
+
 } // namespace
 
 int runGraph(const GraphFlags& flags, const gpu::ContextOptions& device)
@@ -33,7 +56,7 @@ int runGraph(const GraphFlags& flags, const gpu::ContextOptions& device)
     plugin::PluginRegistry plugins;
     frame::FrameRenderer renderer(context, scene, config, plugins);
     for (const std::string& warning : renderer.warnings()) spdlog::warn("{}", warning);
-    renderer.renderFrame();
+    const frame::FrameTimings timings = renderer.renderFrame();
 
     const graph::CompiledGraph& compiled = renderer.compiledGraph();
     std::string text;
@@ -47,6 +70,7 @@ int runGraph(const GraphFlags& flags, const gpu::ContextOptions& device)
         const double saved = unaliased > 0 ? 100.0 * double(unaliased - std::min(allocated, unaliased)) / double(unaliased) : 0.0;
         text += fmt::format("device memory for transient resources: {} allocated, {} without aliasing ({:.1f}% saved)\n",
                             mebibytes(allocated), mebibytes(unaliased), saved);
+        text += cullingSection(timings.culling, config.culling);
     }
     if (flags.output.empty()) {
         std::fputs(text.c_str(), stdout);
