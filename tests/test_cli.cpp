@@ -443,6 +443,20 @@ TEST_F(Cli, GraphPrintsPassesInOrderResourcesAndMemory)
     EXPECT_NE(r.out.find("device memory for transient resources:"), std::string::npos) << r.out;
 }
 
+TEST_F(Cli, GraphSaysCullingRunsOutsideTheGraph)
+{
+    const fs::path cfg = dir / "culled.json";
+    std::ofstream(cfg) << fmt::format(R"({{"include": "{}/config/default.json", "culling": "receiver-mask"}})",
+                                      PENUMBRA_SOURCE_DIR);
+    const CliResult r = run(fmt::format("graph '{}' --width 160 --height 90", cfg.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const size_t section = r.out.find("outside the graph: culling receiver-mask");
+    ASSERT_NE(section, std::string::npos) << r.out;
+    EXPECT_LT(r.out.find("shading (compute)"), section) << "after the passes";
+    for (const char* figure : {"camera culling ms", "receiver masks ms", "caster culling ms", "query rounds"})
+        EXPECT_NE(r.out.find(figure, section), std::string::npos) << figure << "\n" << r.out;
+}
+
 TEST_F(Cli, GraphWritesGraphvizToAFile)
 {
     const fs::path dot = dir / "frame.dot";

@@ -6,8 +6,8 @@
 #include "TestContext.h"
 
 #include "penumbra/config/Config.h"
+#include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/plugin/PluginRegistry.h"
-#include "penumbra/render/FrameRenderer.h"
 
 #include <gtest/gtest.h>
 
@@ -69,7 +69,7 @@ TEST_F(FramePlugins, WhatTheTechniquesPassWritesIsTheLightsVisibility)
 {
     const config::RenderConfig cfg = twoLights("testgood", {{"fill", 0.75}});
     const scene::Scene scene = config::buildScene(cfg.scene);
-    render::FrameRenderer renderer(*context, scene, cfg, registry);
+    frame::FrameRenderer renderer(*context, scene, cfg, registry);
     renderer.renderFrame();
     EXPECT_TRUE(renderer.warnings().empty());
     EXPECT_EQ(renderer.techniqueName(0), "testgood");
@@ -84,7 +84,7 @@ TEST_F(FramePlugins, AnEnumParameterChangesWhatThePassWrites)
 {
     const config::RenderConfig cfg = twoLights("testgood", {{"fill", 0.75}, {"mode", "unshadowed"}});
     const scene::Scene scene = config::buildScene(cfg.scene);
-    render::FrameRenderer renderer(*context, scene, cfg, registry);
+    frame::FrameRenderer renderer(*context, scene, cfg, registry);
     renderer.renderFrame();
     EXPECT_TRUE(allEqual(renderer.readVisibility(0), 1.0f));
 }
@@ -109,7 +109,7 @@ TEST_F(FramePlugins, AFailingTechniqueLeavesItsLightUnshadowedAndTheOthersIntact
         SCOPED_TRACE(c.technique + " " + c.params.dump());
         const config::RenderConfig cfg = twoLights(c.technique, c.params);
         const scene::Scene scene = config::buildScene(cfg.scene);
-        render::FrameRenderer renderer(*context, scene, cfg, registry);
+        frame::FrameRenderer renderer(*context, scene, cfg, registry);
         renderer.renderFrame();
         ASSERT_EQ(renderer.warnings().size(), 1u);
         const std::string& warning = renderer.warnings()[0];
@@ -132,7 +132,7 @@ TEST_F(FramePlugins, ARequiredTechniqueThatFailsStopsTheFrame)
         const config::RenderConfig cfg = twoLights(technique, params, true);
         const scene::Scene scene = config::buildScene(cfg.scene);
         try {
-            render::FrameRenderer renderer(*context, scene, cfg, registry);
+            frame::FrameRenderer renderer(*context, scene, cfg, registry);
             ADD_FAILURE() << "the frame was built";
         } catch (const plugin::PluginError& e) {
             EXPECT_NE(std::string(e.what()).find(technique), std::string::npos) << e.what();
@@ -141,7 +141,7 @@ TEST_F(FramePlugins, ARequiredTechniqueThatFailsStopsTheFrame)
     // The registry survives: the next frame loads and renders.
     const config::RenderConfig cfg = twoLights("testgood", {{"fill", 0.5}}, true);
     const scene::Scene scene = config::buildScene(cfg.scene);
-    render::FrameRenderer renderer(*context, scene, cfg, registry);
+    frame::FrameRenderer renderer(*context, scene, cfg, registry);
     renderer.renderFrame();
     EXPECT_TRUE(allEqual(renderer.readVisibility(0), 0.5f));
 }

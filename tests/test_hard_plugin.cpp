@@ -5,7 +5,7 @@
 // ---------------------------------------------------------------------------------
 // BUILT ONLY WITH -DPENUMBRA_TEST_HARD_PLUGIN=ON (tests/CMakeLists.txt). It is written
 // against the renderer of the technique-plugin integration:
-//   render::FrameRenderer(gpu::Context&, const scene::Scene&, const config::RenderConfig&,
+//   frame::FrameRenderer(gpu::Context&, const scene::Scene&, const config::RenderConfig&,
 //                         plugin::PluginRegistry&)
 // with renderFrame(), readVisibility(l), readPositions() and readNormals(), and against
 // plugin::PluginRegistry and plugin::ParamValues as engine/include/penumbra/plugin/
@@ -19,10 +19,10 @@
 
 #include "penumbra/config/Config.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/gpu/ShaderCompiler.h"
 #include "penumbra/plugin/PluginRegistry.h"
 #include "penumbra/render/Casters.h"
-#include "penumbra/render/FrameRenderer.h"
 #include "penumbra/render/Projection.h"
 #include "penumbra/render/SceneGpu.h"
 #include "penumbra/scene/Generators.h"

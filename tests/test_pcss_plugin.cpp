@@ -1,4 +1,4 @@
-// The pcss plugin (plugins/pcss) end to end, through render::FrameRenderer: every light
+// The pcss plugin (plugins/pcss) end to end, through frame::FrameRenderer: every light
 // type against rays from the light away from penumbrae, light size 0 against the hard
 // plugin, the penumbra's width against the analytic soft shadow of the penumbra scene
 // (scene/Generators.h penumbraVisibility), and the guards: no blocker, a huge light, a

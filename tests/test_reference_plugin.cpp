@@ -9,8 +9,8 @@
 
 #include "penumbra/config/Config.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/plugin/PluginRegistry.h"
-#include "penumbra/render/FrameRenderer.h"
 #include "penumbra/scene/Generators.h"
 #include "plugins/reference/ReferenceStats.h"
 
@@ -106,7 +106,7 @@ struct Frame {
 
     config::RenderConfig config;
     scene::Scene scene;
-    render::FrameRenderer renderer;
+    frame::FrameRenderer renderer;
     std::vector<float> visibility, positions, normals;
 };
 

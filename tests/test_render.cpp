@@ -5,7 +5,7 @@
 #include "TestContext.h"
 
 #include "penumbra/config/Config.h"
-#include "penumbra/render/FrameRenderer.h"
+#include "penumbra/frame/FrameRenderer.h"
 
 #include <gtest/gtest.h>
 
@@ -30,7 +30,7 @@ struct RenderedFrame {
 
     config::RenderConfig config;
     scene::Scene scene;
-    render::FrameRenderer renderer;
+    frame::FrameRenderer renderer;
     std::vector<float> positions;
     std::vector<float> normals;
 };
@@ -230,7 +230,7 @@ TEST_F(Materials, AlphaMaskCutsHolesInSurfacesAndShadows)
     // transparent half, its opaque half shadows x in [1, 3].
     const scene::Scene s = test::halfMaskedQuadScene();
     const config::RenderConfig cfg = test::halfMaskedQuadConfig();
-    render::FrameRenderer renderer(*context, s, cfg, test::plugins());
+    frame::FrameRenderer renderer(*context, s, cfg, test::plugins());
     renderer.renderFrame();
     const std::vector<float> positions = renderer.readPositions();
     const std::vector<float> v = renderer.readVisibility(0);

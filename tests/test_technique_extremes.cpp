@@ -1,5 +1,5 @@
 // Every shadow-map technique (hard, PCF, PCSS, VSM, EVSM, ESM, VSSM) under the same extremes,
-// end to end through render::FrameRenderer, with the contract's invariants (every V
+// end to end through frame::FrameRenderer, with the contract's invariants (every V
 // finite and in [0, 1], 1 without geometry: PluginFrame's checkedVisibility) on every
 // image:
 //   - the horizon: light from below a receiver's tangent plane is blocked by the

@@ -1,4 +1,4 @@
-// The visibility service (render/Visibility.h): every culling mode gives the visibility
+// The visibility service (engine/src/visibility/): every culling mode gives the visibility
 // image that drawing every caster gives (max |ΔV| <= 1e-3, the bound), for every
 // light type and for techniques with wide lookups, along an animated path, with a caster
 // outside the camera's frustum and thin casters seen edge-on; and culling does cull.
@@ -7,10 +7,10 @@
 #include "TestContext.h"
 
 #include "penumbra/config/Config.h"
+#include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/gpu/Barrier.h"
 #include "penumbra/gpu/Pipeline.h"
 #include "penumbra/gpu/ShaderCompiler.h"
-#include "penumbra/render/FrameRenderer.h"
 #include "penumbra/render/Projection.h"
 #include "penumbra/scene/Generators.h"
 
@@ -36,7 +36,7 @@ constexpr float kMaxVisibilityChange = 1e-3f;
 struct Frame {
     std::vector<float> visibility;
     std::vector<float> positions;
-    render::CullingStats stats;
+    visibility::CullingStats stats;
 };
 
 ::testing::AssertionResult sameVisibility(const std::vector<float>& expected, const std::vector<float>& actual,
@@ -71,8 +71,8 @@ protected:
     Frame render(const scene::Scene& scene, config::RenderConfig cfg, CullingMode mode)
     {
         cfg.culling = mode;
-        render::FrameRenderer renderer(*context, scene, cfg, test::plugins());
-        const render::FrameTimings t = renderer.renderFrame();
+        frame::FrameRenderer renderer(*context, scene, cfg, test::plugins());
+        const frame::FrameTimings t = renderer.renderFrame();
         return {renderer.readVisibility(0), renderer.readPositions(), t.culling};
     }
 
@@ -231,7 +231,7 @@ protected:
 
         cfg.culling = CullingMode::Frustum;
         try {
-            render::FrameRenderer renderer(*context, scene, cfg, test::plugins());
+            frame::FrameRenderer renderer(*context, scene, cfg, test::plugins());
             ADD_FAILURE() << "focusing without an occlusion mode must be refused";
         } catch (const ConfigError& e) {
             EXPECT_NE(std::string(e.what()).find("shadow_focus"), std::string::npos) << e.what();
@@ -340,8 +340,8 @@ TEST_F(VisibilityCulling, AnAnimatedPathKeepsEveryFrameExact)
     cfg.camera.fovYDeg = 60.0f;
     config::RenderConfig culledCfg = cfg;
     culledCfg.culling = CullingMode::ReceiverMask;
-    render::FrameRenderer all(*context, sceneAll, cfg, test::plugins());
-    render::FrameRenderer culled(*context, sceneCulled, culledCfg, test::plugins());
+    frame::FrameRenderer all(*context, sceneAll, cfg, test::plugins());
+    frame::FrameRenderer culled(*context, sceneCulled, culledCfg, test::plugins());
     const config::RenderConfig start = cfg;
     const auto moving = uint32_t(sceneAll.instances.size() - 1);
     const uint32_t node = sceneAll.instances[moving].node;
@@ -359,8 +359,8 @@ TEST_F(VisibilityCulling, AnAnimatedPathKeepsEveryFrameExact)
         cc.culling = CullingMode::ReceiverMask;
         all.update(c, sceneAll, sceneAll.updateTransforms());
         culled.update(cc, sceneCulled, sceneCulled.updateTransforms());
-        const render::FrameTimings at = all.renderFrame();
-        const render::FrameTimings ct = culled.renderFrame();
+        const frame::FrameTimings at = all.renderFrame();
+        const frame::FrameTimings ct = culled.renderFrame();
         EXPECT_TRUE(sameVisibility(all.readVisibility(0), culled.readVisibility(0), cfg.width));
         EXPECT_EQ(ct.culling.viewsFellBack, 0u) << "the mask culls on every frame";
         EXPECT_LT(ct.culling.trianglesDrawn, at.culling.trianglesDrawn / 3);
@@ -377,10 +377,10 @@ TEST_F(VisibilityCulling, AViewWhereCullingCannotPayTakesItsFrustum)
     const scene::Scene scene = config::buildScene(cfg);
     const Frame all = render(scene, cfg, CullingMode::None);
     cfg.culling = CullingMode::ReceiverMask;
-    render::FrameRenderer renderer(*context, scene, cfg, test::plugins());
+    frame::FrameRenderer renderer(*context, scene, cfg, test::plugins());
     for (int frame = 0; frame < 10; ++frame) {
         SCOPED_TRACE(frame);
-        const render::FrameTimings t = renderer.renderFrame();
+        const frame::FrameTimings t = renderer.renderFrame();
         EXPECT_TRUE(sameVisibility(all.visibility, renderer.readVisibility(0), cfg.width));
         // Frames 0 and 9 are culled in full, the others take the frustum.
         EXPECT_EQ(t.culling.viewsFellBack, frame == 0 || frame == 9 ? 0u : 1u);
@@ -476,7 +476,7 @@ TEST_F(VisibilityCulling, ReceiverDepthsKeepAStreetViewNearTheOracle)
         cfg.camera.nearWorld = 0.1f;
         cfg.camera.fovYDeg = 60.0f;
         cfg.lights[0].light.direction = glm::normalize(glm::vec3(0.6f, -0.35f, 0.35f));
-        render::FrameRenderer renderer(*context, scene, cfg, test::plugins());
+        frame::FrameRenderer renderer(*context, scene, cfg, test::plugins());
         renderer.renderFrame();
         const test::CasterOracle oracle =
             test::casterOracle(scene, renderer.readPositions(), renderer.readNormals(),

@@ -1,4 +1,4 @@
-// The VSM family plugin (plugins/vsm) end to end, through render::FrameRenderer: every
+// The VSM family plugin (plugins/vsm) end to end, through frame::FrameRenderer: every
 // variant on every light type against rays from the light, every filter and moment
 // format, a lit receiver, the minimum variance guard, light-bleeding reduction on two
 // stacked blockers, huge exponents at scene scales 1e-3 and 1e5, grazing light and a

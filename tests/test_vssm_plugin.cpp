@@ -1,6 +1,6 @@
 // The vssm plugin (plugins/vssm): its summed-area table's precision against exact sums
 // at 512^2, 2048^2 and 4096^2 (run on the GPU, without the plugin loaded), then the
-// technique end to end through render::FrameRenderer: light size 0 against the hard
+// technique end to end through frame::FrameRenderer: light size 0 against the hard
 // plugin, every light type against rays from the light away from penumbrae, the
 // penumbra scene against the exact soft shadow for every subdivision variant,
 // overlapping blockers (the incorrectly-lit area that subdivision removes), the debug

@@ -12,10 +12,10 @@
 #include "penumbra/config/Config.h"
 #include "penumbra/config/Overrides.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/io/StagedFile.h"
 #include "penumbra/metrics/ImageComparison.h"
 #include "penumbra/plugin/PluginRegistry.h"
-#include "penumbra/render/FrameRenderer.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -334,7 +334,7 @@ private:
     {
         progress.clear();
         spdlog::info("reference: rendering {} light(s) with {}", config.lights.size(), reference_.shadow.technique);
-        render::FrameRenderer renderer(context_, scene, config, plugins_);
+        frame::FrameRenderer renderer(context_, scene, config, plugins_);
         renderer.renderFrame();
         InterruptHandler::check();
         FrameImages images = captureFrame(renderer);
@@ -368,15 +368,15 @@ BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& v
     const scene::Scene scene = buildFirstFrame(config, overridesFor(session.overrides, config));
     const std::vector<const ReferenceVisibility*> references = session.references.lookUp(config, scene, session.progress);
 
-    render::FrameRenderer renderer(session.context, scene, config, session.plugins);
+    frame::FrameRenderer renderer(session.context, scene, config, session.plugins);
     for (const std::string& warning : renderer.warnings()) {
         session.progress.clear();
         session.warnings.push_back(fmt::format("variant {} ({}): {}", index, variant.label, warning));
         spdlog::warn("{}", session.warnings.back());
     }
-    std::vector<render::FrameTimings> measured;
+    std::vector<frame::FrameTimings> measured;
     for (uint32_t frame = 0; frame < session.flags.warmup + session.flags.frames; ++frame) {
-        render::FrameTimings timings = renderer.renderFrame();
+        frame::FrameTimings timings = renderer.renderFrame();
         if (frame >= session.flags.warmup) measured.push_back(std::move(timings));
         session.progress.frameDone();
         InterruptHandler::check();

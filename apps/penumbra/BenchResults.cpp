@@ -27,7 +27,7 @@ json timingJson(const TimingSummary& t)
             {"cpu_ms", t.cpuMs},   {"wall_ms", t.frameWallMs}, {"passes", std::move(passes)}};
 }
 
-json cullingJson(const std::string& mode, const render::CullingStats& s)
+json cullingJson(const std::string& mode, const visibility::CullingStats& s)
 {
     json out = {{"mode", mode}};
     for (const CullingFigure& figure : cullingFigures()) {

@@ -46,7 +46,7 @@ struct BenchVariant {
     uint32_t height = 0;
     TimingSummary frame;          // every pass of the frame
     std::string culling;          // the config's culling mode
-    render::CullingStats cullingStats;  // medians per frame (render --stats)
+    visibility::CullingStats cullingStats;  // medians per frame (render --stats)
     std::vector<BenchLight> lights;
 };
 

@@ -7,11 +7,11 @@
 #include "penumbra/config/Config.h"
 #include "penumbra/config/Overrides.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/io/Png.h"
 #include "penumbra/io/StagedFile.h"
 #include "penumbra/metrics/ImageComparison.h"
 #include "penumbra/plugin/PluginRegistry.h"
-#include "penumbra/render/FrameRenderer.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -31,7 +31,7 @@ namespace {
 FrameImages renderOnce(gpu::Context& context, const scene::Scene& scene, const config::RenderConfig& config,
                        plugin::PluginRegistry& plugins, const char* label, std::vector<std::string>& warnings)
 {
-    render::FrameRenderer renderer(context, scene, config, plugins);
+    frame::FrameRenderer renderer(context, scene, config, plugins);
     for (const std::string& warning : renderer.warnings()) {
         spdlog::warn("{} render: {}", label, warning);
         warnings.push_back(fmt::format("{} render: {}", label, warning));

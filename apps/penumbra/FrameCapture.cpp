@@ -13,7 +13,7 @@ scene::Scene buildFirstFrame(config::RenderConfig& config, const std::vector<con
     return scene;
 }
 
-FrameImages captureFrame(const render::FrameRenderer& renderer)
+FrameImages captureFrame(const frame::FrameRenderer& renderer)
 {
     FrameImages images;
     images.width = renderer.width();

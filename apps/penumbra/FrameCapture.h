@@ -3,7 +3,7 @@
 // config at, and what they read back from the renderer for the metrics.
 #include "penumbra/config/Config.h"
 #include "penumbra/config/Overrides.h"
-#include "penumbra/render/FrameRenderer.h"
+#include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/scene/Scene.h"
 
 #include <cstdint>
@@ -28,6 +28,6 @@ struct FrameImages {
 };
 
 // Reads back the last frame `renderer` rendered.
-FrameImages captureFrame(const render::FrameRenderer& renderer);
+FrameImages captureFrame(const frame::FrameRenderer& renderer);
 
 } // namespace penumbra::app

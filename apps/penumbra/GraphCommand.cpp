@@ -1,11 +1,13 @@
 #include "GraphCommand.h"
 
+#include "TimingSummary.h"
+
 #include "penumbra/config/Config.h"
 #include "penumbra/config/Overrides.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/io/StagedFile.h"
 #include "penumbra/plugin/PluginRegistry.h"
-#include "penumbra/render/FrameRenderer.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -16,6 +18,27 @@ namespace penumbra::app {
 namespace {
 
 std::string mebibytes(VkDeviceSize bytes) { return fmt::format("{:.2f} MiB", double(bytes) / (1024.0 * 1024.0)); }
+
+// The visibility service culls in submissions of its own, outside the graph: the camera
+// before the passes run, each light view when a pass first draws its casters (so inside
+// that pass's CPU time). The graph shows no pass for them; this says so, with their
+// figures for the frame.
+std::string cullingSection(const visibility::CullingStats& stats, config::CullingMode mode)
+{
+    std::string text =
+        fmt::format("outside the graph: culling {} (the visibility service's own submissions, waited for: the "
+                    "camera's before the passes, each light view's in the pass that first draws its casters)\n",
+                    config::cullingModeName(mode));
+    for (const CullingFigure& figure : cullingFigures()) {
+        const std::string_view key = figure.key;
+        if (key != "camera_ms" && key != "mask_ms" && key != "caster_cull_ms" && key != "query_rounds") continue;
+        if (figure.count)
+            text += fmt::format("  {:<39}{}\n", figure.label, stats.*figure.count);
+        else
+            text += fmt::format("  {:<39}{:.2f}\n", figure.label, stats.*figure.ms);
+    }
+    return text;
+}
 
 } // namespace
 
@@ -31,9 +54,9 @@ int runGraph(const GraphFlags& flags, const gpu::ContextOptions& device)
     const scene::Scene scene = config::buildScene(config);
     config::applyParamOverrides(config, overrides);  // after buildScene: "lights": "scene"
     plugin::PluginRegistry plugins;
-    render::FrameRenderer renderer(context, scene, config, plugins);
+    frame::FrameRenderer renderer(context, scene, config, plugins);
     for (const std::string& warning : renderer.warnings()) spdlog::warn("{}", warning);
-    renderer.renderFrame();
+    const frame::FrameTimings timings = renderer.renderFrame();
 
     const graph::CompiledGraph& compiled = renderer.compiledGraph();
     std::string text;
@@ -47,6 +70,7 @@ int runGraph(const GraphFlags& flags, const gpu::ContextOptions& device)
         const double saved = unaliased > 0 ? 100.0 * double(unaliased - std::min(allocated, unaliased)) / double(unaliased) : 0.0;
         text += fmt::format("device memory for transient resources: {} allocated, {} without aliasing ({:.1f}% saved)\n",
                             mebibytes(allocated), mebibytes(unaliased), saved);
+        text += cullingSection(timings.culling, config.culling);
     }
     if (flags.output.empty()) {
         std::fputs(text.c_str(), stdout);

@@ -18,7 +18,8 @@ struct GraphFlags {
 };
 
 // Builds the config's frame (plugins, techniques, graph), executes it once so that the
-// memory figures are the device's own, and prints the compiled graph.
+// memory figures are the device's own, and prints the compiled graph; as text, followed
+// by the culling that ran outside the graph (the visibility service's submissions).
 int runGraph(const GraphFlags& flags, const gpu::ContextOptions& device);
 
 } // namespace penumbra::app

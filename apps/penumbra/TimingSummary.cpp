@@ -15,7 +15,7 @@ double median(std::vector<double> samples)
     return n % 2 ? samples[n / 2] : 0.5 * (samples[n / 2 - 1] + samples[n / 2]);
 }
 
-TimingSummary summarizeTimings(const std::vector<render::FrameTimings>& frames, std::string_view prefix,
+TimingSummary summarizeTimings(const std::vector<frame::FrameTimings>& frames, std::string_view prefix,
                                const std::set<std::string, std::less<>>& hostPasses)
 {
     struct Samples {
@@ -24,9 +24,9 @@ TimingSummary summarizeTimings(const std::vector<render::FrameTimings>& frames, 
     std::vector<std::string> order;
     std::map<std::string, Samples, std::less<>> samples;
     std::vector<double> gpuSums, cpuSums, hostSums, workSums, wall;
-    for (const render::FrameTimings& frame : frames) {
+    for (const frame::FrameTimings& frame : frames) {
         double gpu = 0.0, cpu = 0.0, host = 0.0;
-        for (const render::PassTiming& pass : frame.passes) {
+        for (const frame::PassTiming& pass : frame.passes) {
             if (pass.name.compare(0, prefix.size(), prefix) != 0) continue;
             if (!samples.count(pass.name)) order.push_back(pass.name);
             samples[pass.name].gpu.push_back(pass.gpuMs);
@@ -69,7 +69,7 @@ void printTimings(const TimingSummary& summary)
 
 std::span<const CullingFigure> cullingFigures()
 {
-    using S = render::CullingStats;
+    using S = visibility::CullingStats;
     static const CullingFigure figures[] = {
         {"receivers", "receivers (instances the camera sees)", &S::receivers},
         {"camera_fell_back", "camera culled to its frustum only", &S::cameraFellBack},
@@ -88,12 +88,12 @@ std::span<const CullingFigure> cullingFigures()
     return figures;
 }
 
-render::CullingStats medianCulling(const std::vector<render::FrameTimings>& frames)
+visibility::CullingStats medianCulling(const std::vector<frame::FrameTimings>& frames)
 {
-    render::CullingStats s;
+    visibility::CullingStats s;
     for (const CullingFigure& figure : cullingFigures()) {
         std::vector<double> v;
-        for (const render::FrameTimings& f : frames)
+        for (const frame::FrameTimings& f : frames)
             v.push_back(figure.count ? double(f.culling.*figure.count) : f.culling.*figure.ms);
         const double m = median(std::move(v));
         if (figure.count)
@@ -104,7 +104,7 @@ render::CullingStats medianCulling(const std::vector<render::FrameTimings>& fram
     return s;
 }
 
-void printCulling(const render::CullingStats& s, std::string_view mode)
+void printCulling(const visibility::CullingStats& s, std::string_view mode)
 {
     fmt::print("culling {} (median per frame)\n", mode);
     for (const CullingFigure& figure : cullingFigures()) {

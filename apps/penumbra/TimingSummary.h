@@ -1,7 +1,7 @@
 #pragma once
 // Medians of per-pass timings over measured frames: `render --timings` prints them,
 // `bench` records them per variant and per technique.
-#include "penumbra/render/FrameRenderer.h"
+#include "penumbra/frame/FrameRenderer.h"
 
 #include <cstddef>
 #include <set>
@@ -39,29 +39,29 @@ struct TimingSummary {
 // Summarises the passes whose names start with `prefix` (every pass for ""); those named
 // in `hostPasses` are host passes (graph::QueueKind::Host). A pass missing from a frame
 // counts as 0 ms there. With no frames every figure is 0.
-TimingSummary summarizeTimings(const std::vector<render::FrameTimings>& frames, std::string_view prefix = "",
+TimingSummary summarizeTimings(const std::vector<frame::FrameTimings>& frames, std::string_view prefix = "",
                                const std::set<std::string, std::less<>>& hostPasses = {});
 
 // The table `render --timings` prints on stdout.
 void printTimings(const TimingSummary& summary);
 
-// One figure of render::CullingStats: its key in bench's results.json, its label in
+// One figure of visibility::CullingStats: its key in bench's results.json, its label in
 // `render --stats`, and its member (a count, or a time in ms).
 struct CullingFigure {
     const char* key;
     const char* label;
-    uint64_t render::CullingStats::*count = nullptr;
-    double render::CullingStats::*ms = nullptr;
+    uint64_t visibility::CullingStats::*count = nullptr;
+    double visibility::CullingStats::*ms = nullptr;
 };
 // Every figure, in the order `render --stats` prints them: the one list that the median,
 // the printout and results.json follow.
 std::span<const CullingFigure> cullingFigures();
 
-// Medians over the frames of the visibility service's figures (render::CullingStats),
+// Medians over the frames of the visibility service's figures (visibility::CullingStats),
 // each taken separately.
-render::CullingStats medianCulling(const std::vector<render::FrameTimings>& frames);
+visibility::CullingStats medianCulling(const std::vector<frame::FrameTimings>& frames);
 
 // The lines `render --stats` prints on stdout.
-void printCulling(const render::CullingStats& stats, std::string_view mode);
+void printCulling(const visibility::CullingStats& stats, std::string_view mode);
 
 } // namespace penumbra::app

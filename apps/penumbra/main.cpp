@@ -15,10 +15,10 @@
 #include "penumbra/config/Config.h"
 #include "penumbra/config/Overrides.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/io/Png.h"
 #include "penumbra/plugin/PluginRegistry.h"
-#include "penumbra/render/FrameRenderer.h"
 #include "penumbra/scene/Generators.h"
 #include "penumbra/scene/GltfWriter.h"
 #include "penumbra/scene/GltfLoader.h"
@@ -112,14 +112,14 @@ int runRender(const RenderFlags& flags, const DeviceFlags& deviceFlags)
     penumbra::config::applyParamOverrides(config, overrides);
     const penumbra::config::RenderConfig rest = config;  // the animation's starting point
     penumbra::plugin::PluginRegistry plugins;
-    penumbra::render::FrameRenderer renderer(context, scene, config, plugins);
+    penumbra::frame::FrameRenderer renderer(context, scene, config, plugins);
     for (const std::string& warning : renderer.warnings()) spdlog::warn("{}", warning);
     spdlog::info("scene: {} instances, {} triangles; {}x{}, {} light(s), {} frame(s)", scene.instances.size(),
                  scene.triangleCount(), config.width, config.height, config.lights.size(), config.frames);
 
     // Warm-up frames absorb one-time costs (lavapipe JIT-compiles pipelines at first use).
     const uint32_t warmup = config.frames > 1 ? flags.warmup : 0;
-    std::vector<penumbra::render::FrameTimings> measured;
+    std::vector<penumbra::frame::FrameTimings> measured;
     for (uint32_t i = 0; i < warmup + config.frames; ++i) {
         const uint32_t frame = i < warmup ? 0 : i - warmup;
         if (!config.animation.empty()) {
@@ -128,7 +128,7 @@ int runRender(const RenderFlags& flags, const DeviceFlags& deviceFlags)
             penumbra::config::applyAnimation(config.animation, float(frame) / config.animation.fps, config, scene);
             renderer.update(config, scene, scene.updateTransforms());
         }
-        penumbra::render::FrameTimings t = renderer.renderFrame();
+        penumbra::frame::FrameTimings t = renderer.renderFrame();
         if (i < warmup) continue;
         measured.push_back(std::move(t));
         if (outputPerFrame(flags.output)) {

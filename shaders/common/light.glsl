@@ -1,5 +1,5 @@
 // Lights as the shading pass reads them (one std430 array, filled by
-// render/FrameRenderer.cpp). Type codes match scene::LightType.
+// frame/FrameRenderer.cpp). Type codes match scene::LightType.
 #ifndef PENUMBRA_LIGHT_GLSL
 #define PENUMBRA_LIGHT_GLSL
 

@@ -1,5 +1,5 @@
 #version 460
-// render::Visibility, receiver-mask mode: an occlusion query (a box, or a leaf's casters)
+// visibility::OcclusionTraversal, receiver-mask mode: an occlusion query (a box, or a leaf's casters)
 // counts only the samples that can change what a visible receiver gets from the map (the
 // paper's Listing 1.2). The query rasterises at the view's resolution.
 //

@@ -1,5 +1,5 @@
 #version 460
-// render::Visibility, step 2: dilates the receiver mask by `radius` texels (a square
+// visibility::ReceiverMaskBuilder, step 2: dilates the receiver mask by `radius` texels (a square
 // neighbourhood: a row pass, then a column pass), so that the casters a technique's
 // lookups reach around a receiver's texel are kept. One invocation per row (or column)
 // sweeps it forwards and backwards, keeping the distance to the nearest marked texel:

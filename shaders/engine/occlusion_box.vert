@@ -1,5 +1,5 @@
 #version 460
-// Occlusion-query proxies of render::Visibility: the bounding boxes of BVH nodes,
+// Occlusion-query proxies of visibility::OcclusionTraversal: the bounding boxes of BVH nodes,
 // boxes[gl_InstanceIndex] (one instanced draw per query: a multi-query draws several),
 // 12 triangles each from gl_VertexIndex. Both faces are drawn (no culling), so a box
 // seen from inside still produces fragments; boxes that reach in front of the near plane

@@ -1,5 +1,5 @@
 #version 460
-// render::Visibility, step 2, for views whose technique compares with each receiver's
+// visibility::ReceiverMaskBuilder, step 2, for views whose technique compares with each receiver's
 // own depth (engine/receiver_scatter.comp RECEIVER_DEPTH): every texel gets the least
 // (farthest) receiver depth within `radius` texels, a square (a row pass, then a column
 // pass), since a receiver's lookups read every texel within the technique's tap radius

@@ -1,5 +1,5 @@
 #version 460
-// render::Visibility, step 2: the receiver mask. The paper rasterises the visible
+// visibility::ReceiverMaskBuilder, step 2: the receiver mask. The paper rasterises the visible
 // receivers from the light and keeps the fragments that pass the reverse shadow test
 // against the camera depth; the texels it keeps are those whose surface point a camera
 // pixel sees. This pass marks the same texels from the camera's side: every camera pixel

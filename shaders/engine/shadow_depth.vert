@@ -2,7 +2,7 @@
 // The depth pass of render::ShadowMap (render/ShadowMap.h): casters from the light,
 // reversed-Z (near = 1, far = 0).
 // With ALPHA_MASK defined it also hands the fragment shader what it needs to cut holes;
-// with CULLING_WORLD (render::Visibility's receiver-mask queries) the world position, from
+// with CULLING_WORLD (visibility::OcclusionTraversal's receiver-mask queries) the world position, from
 // which engine/culling_mask.frag computes the depth free of the culling pass's own bias.
 #include "common/scene.glsl"
 

@@ -1,4 +1,4 @@
-// Caster culling (render/Visibility.h) on the generated city: 13 x 13 blocks (over a
+// Caster culling (engine/src/visibility/) on the generated city: 13 x 13 blocks (over a
 // million triangles, over 10,000 instances), a low sun shadowed by `hard` with a 2048²
 // map, seen from the street and from a bird's-eye view, in the four culling modes side by
 // side. Each iteration renders one frame; the iteration time is the frame's wall time
@@ -21,9 +21,9 @@
 #include "CasterOracle.h"
 
 #include "penumbra/config/Config.h"
+#include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/plugin/PluginRegistry.h"
-#include "penumbra/render/FrameRenderer.h"
 #include "penumbra/scene/Generators.h"
 
 #include <benchmark/benchmark.h>
@@ -95,7 +95,7 @@ uint64_t oracleTriangles(View view)
     if (auto it = cache.find(view); it != cache.end()) return it->second;
     const scene::Scene& scene = city();
     const config::RenderConfig cfg = cityConfig(view, config::CullingMode::None);
-    render::FrameRenderer renderer(context(), scene, cfg, registry());
+    frame::FrameRenderer renderer(context(), scene, cfg, registry());
     renderer.renderFrame();
     const uint64_t triangles = test::casterOracle(scene, renderer.readPositions(), renderer.readNormals(),
                                                   -glm::normalize(glm::dvec3(cfg.lights[0].light.direction)))
@@ -109,15 +109,15 @@ void BM_Culling(benchmark::State& state, View view, config::CullingMode mode)
     const scene::Scene& scene = city();
     const config::RenderConfig cfg = cityConfig(view, mode);
     const uint64_t oracle = oracleTriangles(view);
-    render::FrameRenderer renderer(context(), scene, cfg, registry());
+    frame::FrameRenderer renderer(context(), scene, cfg, registry());
     renderer.renderFrame();  // lavapipe compiles pipelines at first use
     const std::string depthPass = "light0.hard.shadow_map";
     double depthMs = 0.0, shadowMs = 0.0, cameraMs = 0.0;
-    render::CullingStats last;
+    visibility::CullingStats last;
     for (auto _ : state) {
-        const render::FrameTimings t = renderer.renderFrame();
+        const frame::FrameTimings t = renderer.renderFrame();
         double depth = 0.0;
-        for (const render::PassTiming& p : t.passes)
+        for (const frame::PassTiming& p : t.passes)
             if (p.name == depthPass) depth += p.gpuMs;
         depthMs += depth;
         shadowMs += depth + t.culling.maskMs + t.culling.casterCullMs;

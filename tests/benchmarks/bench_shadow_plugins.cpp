@@ -1,7 +1,7 @@
 // GPU time of each shadow technique's passes: config/default.json (27 instances, 9,326
 // triangles) at 1280 x 720, its spot light shadowed with a 2048² map by hard, pcss and
 // the VSM family's variants and filters. Each iteration renders one frame through
-// render::FrameRenderer; the iteration time is the sum of the technique's passes' GPU
+// frame::FrameRenderer; the iteration time is the sum of the technique's passes' GPU
 // times (timestamps, manual time), and a counter per pass gives its mean GPU ms. One
 // warm-up frame first (lavapipe compiles pipelines at first use).
 //
@@ -13,9 +13,9 @@
 #include "BenchContext.h"
 
 #include "penumbra/config/Config.h"
+#include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/plugin/PluginRegistry.h"
-#include "penumbra/render/FrameRenderer.h"
 
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>
@@ -64,7 +64,7 @@ void BM_ShadowTechnique(benchmark::State& state, const Technique& technique)
     shadow.required = true;
     for (const auto& [name, value] : technique.params) shadow.setParam(name, value, "benchmark");
     const scene::Scene scene = config::buildScene(cfg.scene);
-    render::FrameRenderer renderer(context(), scene, cfg, registry());
+    frame::FrameRenderer renderer(context(), scene, cfg, registry());
     renderer.renderFrame();
 
     const std::string prefix = fmt::format("light0.{}.", technique.plugin);

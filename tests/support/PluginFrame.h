@@ -1,13 +1,13 @@
 #pragma once
-// Technique plugins tested end to end: a frame rendered through render::FrameRenderer
+// Technique plugins tested end to end: a frame rendered through frame::FrameRenderer
 // with the config's plugins, what the tests read back from it, and a GPU test fixture
 // that owns a plugin registry (tests/test_*_plugin.cpp).
 #include "RayCastAgreement.h"
 #include "TestContext.h"
 
 #include "penumbra/config/Config.h"
+#include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/plugin/PluginRegistry.h"
-#include "penumbra/render/FrameRenderer.h"
 #include "penumbra/scene/Scene.h"
 
 #include <cmath>
@@ -50,7 +50,7 @@ struct RenderedFrame {
     plugin::PluginRegistry& registry;
     config::RenderConfig config;
     scene::Scene scene;
-    render::FrameRenderer renderer;
+    frame::FrameRenderer renderer;
     std::vector<float> positions;
     std::vector<float> normals;
 };

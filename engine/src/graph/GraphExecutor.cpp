@@ -61,15 +61,18 @@ const ResourceUse& declaredUse(const CompiledGraph& graph, const CompiledPass& p
 
 } // namespace
 
-struct GraphExecutor::State {
-    State(gpu::Context& context, ExecutorOptions options) : context(context), options(options) {}
-    ~State()
+// What the executor keeps on the device from frame to frame: the objects behind every
+// resource (transient images and buffers with their memory, bound imports), the command
+// buffer and timers it records with, and the last frame's timings.
+struct GraphExecutor::DeviceResources {
+    DeviceResources(gpu::Context& context, ExecutorOptions options) : context(context), options(options) {}
+    ~DeviceResources()
     {
         releaseTransients();
         if (cmd) vkFreeCommandBuffers(context.device(), context.commandPool(), 1, &cmd);
     }
-    State(const State&) = delete;
-    State& operator=(const State&) = delete;
+    DeviceResources(const DeviceResources&) = delete;
+    DeviceResources& operator=(const DeviceResources&) = delete;
 
     gpu::Context& context;
     ExecutorOptions options;
@@ -121,7 +124,7 @@ struct GraphExecutor::State {
     void recordBarriers(VkCommandBuffer cmd, const CompiledGraph& graph, const std::vector<Barrier>& barriers);
 };
 
-void GraphExecutor::State::releaseTransients()
+void GraphExecutor::DeviceResources::releaseTransients()
 {
     // Objects before the memory they are bound to.
     transientImages.clear();
@@ -135,7 +138,7 @@ void GraphExecutor::State::releaseTransients()
     transientMemory.clear();
 }
 
-void GraphExecutor::State::createTransients(const CompiledGraph& graph)
+void GraphExecutor::DeviceResources::createTransients(const CompiledGraph& graph)
 {
     // The previous frame's command buffer may still read the resources being replaced.
     // This happens only when the graph's declaration changed, so a full wait is cheap.
@@ -185,8 +188,8 @@ void GraphExecutor::State::createTransients(const CompiledGraph& graph)
 // One allocation for the slot's members, sized from the real requirements: the largest
 // member, rounded to the largest alignment (all are bound at offset 0, where every
 // alignment holds). The compiler's slot sizes are estimates and are not used here.
-void GraphExecutor::State::placeSlot(const CompiledGraph& graph, uint32_t slot,
-                                     const std::vector<VkMemoryRequirements>& requirements)
+void GraphExecutor::DeviceResources::placeSlot(const CompiledGraph& graph, uint32_t slot,
+                                               const std::vector<VkMemoryRequirements>& requirements)
 {
     const bool hostVisible = graph.memorySlots[slot].hostVisible;
     std::vector<uint32_t> shared;
@@ -219,8 +222,8 @@ void GraphExecutor::State::placeSlot(const CompiledGraph& graph, uint32_t slot,
 // Host-visible blocks are coherent (no flush or invalidate around host passes) and
 // preferably cached (host passes read what the GPU wrote); they stay mapped while they
 // live.
-GraphExecutor::State::Block GraphExecutor::State::allocate(VkDeviceSize size, uint32_t typeBits, bool hostVisible,
-                                                           const std::string& name)
+GraphExecutor::DeviceResources::Block GraphExecutor::DeviceResources::allocate(VkDeviceSize size, uint32_t typeBits,
+                                                                               bool hostVisible, const std::string& name)
 {
     VkMemoryAllocateInfo info{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     info.allocationSize = size;
@@ -244,7 +247,7 @@ GraphExecutor::State::Block GraphExecutor::State::allocate(VkDeviceSize size, ui
     return block;
 }
 
-void GraphExecutor::State::bind(const CompiledGraph& graph, uint32_t r, const Block& block)
+void GraphExecutor::DeviceResources::bind(const CompiledGraph& graph, uint32_t r, const Block& block)
 {
     const CompiledResource& res = graph.resources[r];
     try {
@@ -256,7 +259,7 @@ void GraphExecutor::State::bind(const CompiledGraph& graph, uint32_t r, const Bl
     hostPointers[r] = block.mapped;
 }
 
-void GraphExecutor::State::beginSegment()
+void GraphExecutor::DeviceResources::beginSegment()
 {
     // A callback that threw may have left the buffer recording: reset it either way.
     gpu::check(vkResetCommandBuffer(cmd, 0), "vkResetCommandBuffer (render graph)");
@@ -265,13 +268,13 @@ void GraphExecutor::State::beginSegment()
     gpu::check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer (render graph)");
 }
 
-void GraphExecutor::State::submitSegment()
+void GraphExecutor::DeviceResources::submitSegment()
 {
     gpu::check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer (render graph)");
     context.submitAndWait(cmd);
 }
 
-void GraphExecutor::State::resolveImports(const CompiledGraph& graph)
+void GraphExecutor::DeviceResources::resolveImports(const CompiledGraph& graph)
 {
     for (uint32_t r = 0; r < graph.resources.size(); ++r) {
         const CompiledResource& res = graph.resources[r];
@@ -314,8 +317,8 @@ void GraphExecutor::State::resolveImports(const CompiledGraph& graph)
     }
 }
 
-void GraphExecutor::State::recordBarriers(VkCommandBuffer cmd, const CompiledGraph& graph,
-                                          const std::vector<Barrier>& barriers)
+void GraphExecutor::DeviceResources::recordBarriers(VkCommandBuffer cmd, const CompiledGraph& graph,
+                                                    const std::vector<Barrier>& barriers)
 {
     if (barriers.empty()) return;
     imageBarriers.clear();
@@ -362,7 +365,7 @@ void GraphExecutor::State::recordBarriers(VkCommandBuffer cmd, const CompiledGra
 const gpu::Image& PassContext::image(std::string_view name) const
 {
     const ResourceUse& use = declaredUse(*executor_->compiled_, *pass_, name);
-    const gpu::Image* object = executor_->state_->images[use.resource];
+    const gpu::Image* object = executor_->resources_->images[use.resource];
     if (!object)
         throw Error(fmt::format("render graph: pass '{}' asks for image '{}', which is a buffer", *passName_, name));
     return *object;
@@ -371,7 +374,7 @@ const gpu::Image& PassContext::image(std::string_view name) const
 const gpu::Buffer& PassContext::buffer(std::string_view name) const
 {
     const ResourceUse& use = declaredUse(*executor_->compiled_, *pass_, name);
-    const gpu::Buffer* object = executor_->state_->buffers[use.resource];
+    const gpu::Buffer* object = executor_->resources_->buffers[use.resource];
     if (!object)
         throw Error(fmt::format("render graph: pass '{}' asks for buffer '{}', which is an image", *passName_, name));
     return *object;
@@ -384,7 +387,7 @@ std::span<std::byte> PassContext::hostMemory(std::string_view name) const
         throw Error(fmt::format("render graph: pass '{}' asks for the host memory of '{}' but is not a host pass "
                                 "(the GPU may be using that memory while it records)",
                                 *passName_, name));
-    std::byte* mapped = executor_->state_->hostPointers[use.resource];
+    std::byte* mapped = executor_->resources_->hostPointers[use.resource];
     if (!mapped)
         throw Error(fmt::format("render graph: pass '{}' asks for the host memory of '{}', which is not a "
                                 "host-visible buffer",
@@ -405,34 +408,34 @@ VkImageLayout PassContext::layout(std::string_view name) const
 // GraphExecutor
 
 GraphExecutor::GraphExecutor(gpu::Context& context, ExecutorOptions options)
-    : state_(std::make_unique<State>(context, options))
+    : resources_(std::make_unique<DeviceResources>(context, options))
 {}
 
 GraphExecutor::~GraphExecutor() = default;
 
 void GraphExecutor::bindImage(std::string_view name, const gpu::Image& image)
 {
-    state_->boundImages.insert_or_assign(std::string(name), &image);
+    resources_->boundImages.insert_or_assign(std::string(name), &image);
 }
 
 void GraphExecutor::bindBuffer(std::string_view name, const gpu::Buffer& buffer)
 {
-    state_->boundBuffers.insert_or_assign(std::string(name), &buffer);
+    resources_->boundBuffers.insert_or_assign(std::string(name), &buffer);
 }
 
 const CompiledGraph& GraphExecutor::prepare(RenderGraph& graph)
 {
-    State& st = *state_;
-    st.frameRecorded = false;
-    st.cpuMs.clear();
-    st.timerScope.clear();
+    DeviceResources& resources = *resources_;
+    resources.frameRecorded = false;
+    resources.cpuMs.clear();
+    resources.timerScope.clear();
     const std::shared_ptr<const CompiledGraph> compiled = graph.compile();
     if (compiled != compiled_) {
         compiled_.reset();
-        st.createTransients(*compiled);
+        resources.createTransients(*compiled);
         compiled_ = compiled;
     }
-    st.resolveImports(*compiled);
+    resources.resolveImports(*compiled);
     // Checked before anything is recorded: a missing callback is a declaration error.
     for (const CompiledPass& pass : compiled->passes)
         if (!graph.executeFn(pass.declarationIndex))
@@ -442,13 +445,13 @@ const CompiledGraph& GraphExecutor::prepare(RenderGraph& graph)
 
     const auto gpuPasses = uint32_t(std::count_if(compiled->passes.begin(), compiled->passes.end(),
                                                   [](const CompiledPass& p) { return p.queue != QueueKind::Host; }));
-    st.timed = st.options.gpuTimestamps && gpuPasses > 0;
-    if (st.timed && (!st.timer || st.timerScopes < gpuPasses)) {
-        st.timer = std::make_unique<gpu::GpuTimer>(st.context, gpuPasses);
-        st.timerScopes = gpuPasses;
+    resources.timed = resources.options.gpuTimestamps && gpuPasses > 0;
+    if (resources.timed && (!resources.timer || resources.timerScopes < gpuPasses)) {
+        resources.timer = std::make_unique<gpu::GpuTimer>(resources.context, gpuPasses);
+        resources.timerScopes = gpuPasses;
     }
-    st.cpuMs.reserve(compiled->passes.size());
-    st.timerScope.reserve(compiled->passes.size());
+    resources.cpuMs.reserve(compiled->passes.size());
+    resources.timerScope.reserve(compiled->passes.size());
     return *compiled;
 }
 
@@ -475,14 +478,14 @@ void runCallback(const ExecuteFn& fn, PassContext& context, const CompiledPass& 
 
 void GraphExecutor::recordGpuPass(VkCommandBuffer cmd, RenderGraph& graph, size_t index)
 {
-    State& st = *state_;
+    DeviceResources& resources = *resources_;
     const CompiledPass& pass = compiled_->passes[index];
-    st.recordBarriers(cmd, *compiled_, pass.barriersBefore);
-    st.context.beginLabel(cmd, pass.name);
-    const int scope = st.timed ? int(st.timer->beginScope(cmd, pass.name)) : -1;
+    resources.recordBarriers(cmd, *compiled_, pass.barriersBefore);
+    resources.context.beginLabel(cmd, pass.name);
+    const int scope = resources.timed ? int(resources.timer->beginScope(cmd, pass.name)) : -1;
     PassContext context;
     context.cmd_ = cmd;
-    context.context_ = &st.context;
+    context.context_ = &resources.context;
     context.passName_ = &pass.name;
     context.executor_ = this;
     context.pass_ = &pass;
@@ -490,92 +493,92 @@ void GraphExecutor::recordGpuPass(VkCommandBuffer cmd, RenderGraph& graph, size_
     try {
         runCallback(graph.executeFn(pass.declarationIndex), context, pass, "recording");
     } catch (...) {
-        st.context.endLabel(cmd);
+        resources.context.endLabel(cmd);
         throw;
     }
-    st.cpuMs.push_back(msSince(start));
-    st.timerScope.push_back(scope);
-    if (scope >= 0) st.timer->endScope(cmd, uint32_t(scope));
-    st.context.endLabel(cmd);
+    resources.cpuMs.push_back(msSince(start));
+    resources.timerScope.push_back(scope);
+    if (scope >= 0) resources.timer->endScope(cmd, uint32_t(scope));
+    resources.context.endLabel(cmd);
 }
 
 void GraphExecutor::runHostPass(RenderGraph& graph, size_t index)
 {
-    State& st = *state_;
+    DeviceResources& resources = *resources_;
     const CompiledPass& pass = compiled_->passes[index];
     PassContext context;
-    context.context_ = &st.context;
+    context.context_ = &resources.context;
     context.passName_ = &pass.name;
     context.executor_ = this;
     context.pass_ = &pass;
     const auto start = std::chrono::steady_clock::now();
     runCallback(graph.executeFn(pass.declarationIndex), context, pass, "running on the host");
-    st.cpuMs.push_back(msSince(start));
-    st.timerScope.push_back(-1);
+    resources.cpuMs.push_back(msSince(start));
+    resources.timerScope.push_back(-1);
 }
 
 void GraphExecutor::execute(RenderGraph& graph)
 {
-    State& st = *state_;
+    DeviceResources& resources = *resources_;
     const CompiledGraph& compiled = prepare(graph);
-    if (!st.cmd) {
+    if (!resources.cmd) {
         VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-        alloc.commandPool = st.context.commandPool();
+        alloc.commandPool = resources.context.commandPool();
         alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
         alloc.commandBufferCount = 1;
-        gpu::check(vkAllocateCommandBuffers(st.context.device(), &alloc, &st.cmd),
+        gpu::check(vkAllocateCommandBuffers(resources.context.device(), &alloc, &resources.cmd),
                    "vkAllocateCommandBuffers (render graph)");
     }
-    st.beginSegment();
-    if (st.timed) st.timer->beginFrame(st.cmd);
+    resources.beginSegment();
+    if (resources.timed) resources.timer->beginFrame(resources.cmd);
     for (size_t i = 0; i < compiled.passes.size(); ++i) {
         const CompiledPass& pass = compiled.passes[i];
         if (pass.queue != QueueKind::Host) {
-            recordGpuPass(st.cmd, graph, i);
+            recordGpuPass(resources.cmd, graph, i);
             continue;
         }
         // The host pass's barriers end the segment before it: their HOST destination
         // makes the segment's writes available to the host, and the wait makes them
         // visible. Its own writes reach the next segment through the submission.
-        st.recordBarriers(st.cmd, compiled, pass.barriersBefore);
-        st.submitSegment();
+        resources.recordBarriers(resources.cmd, compiled, pass.barriersBefore);
+        resources.submitSegment();
         runHostPass(graph, i);
-        st.beginSegment();
+        resources.beginSegment();
     }
-    st.recordBarriers(st.cmd, compiled, compiled.barriersAfter);
-    st.submitSegment();
-    st.frameRecorded = true;
+    resources.recordBarriers(resources.cmd, compiled, compiled.barriersAfter);
+    resources.submitSegment();
+    resources.frameRecorded = true;
 }
 
 void GraphExecutor::record(VkCommandBuffer cmd, RenderGraph& graph)
 {
-    State& st = *state_;
+    DeviceResources& resources = *resources_;
     const CompiledGraph& compiled = prepare(graph);
     for (const CompiledPass& pass : compiled.passes)
         if (pass.queue == QueueKind::Host)
             throw Error(fmt::format("render graph: pass '{}' is a host pass: record() fills one command buffer and "
                                     "cannot wait for the GPU before it; run the frame with execute()",
                                     pass.name));
-    if (st.timed) st.timer->beginFrame(cmd);
+    if (resources.timed) resources.timer->beginFrame(cmd);
     for (size_t i = 0; i < compiled.passes.size(); ++i) recordGpuPass(cmd, graph, i);
-    st.recordBarriers(cmd, compiled, compiled.barriersAfter);
-    st.frameRecorded = true;
+    resources.recordBarriers(cmd, compiled, compiled.barriersAfter);
+    resources.frameRecorded = true;
 }
 
 std::vector<PassTiming> GraphExecutor::collectTimings() const
 {
-    const State& st = *state_;
-    if (!st.frameRecorded)
+    const DeviceResources& resources = *resources_;
+    if (!resources.frameRecorded)
         throw Error("render graph: collectTimings() needs a frame that execute() finished (or whose record() "
                     "finished and whose command buffer was submitted)");
     std::vector<gpu::ScopeTime> gpuTimes;
-    if (st.timed) gpuTimes = st.timer->collect();
+    if (resources.timed) gpuTimes = resources.timer->collect();
     std::vector<PassTiming> out;
-    out.reserve(st.cpuMs.size());
-    for (size_t i = 0; i < st.cpuMs.size(); ++i) {
-        const int scope = st.timerScope[i];
+    out.reserve(resources.cpuMs.size());
+    for (size_t i = 0; i < resources.cpuMs.size(); ++i) {
+        const int scope = resources.timerScope[i];
         const double gpuMs = scope >= 0 && size_t(scope) < gpuTimes.size() ? gpuTimes[size_t(scope)].gpuMs : 0.0;
-        out.push_back({compiled_->passes[i].name, gpuMs, st.cpuMs[i]});
+        out.push_back({compiled_->passes[i].name, gpuMs, resources.cpuMs[i]});
     }
     return out;
 }
@@ -595,35 +598,35 @@ uint32_t lookUp(const std::shared_ptr<const CompiledGraph>& compiled,
 
 const gpu::Image& GraphExecutor::image(std::string_view name) const
 {
-    const uint32_t r = lookUp(compiled_, state_->resourceIndex, name);
+    const uint32_t r = lookUp(compiled_, resources_->resourceIndex, name);
     if (!compiled_->resources[r].isImage)
         throw Error(fmt::format("render graph: '{}' is a buffer, not an image", name));
-    if (!state_->images[r])
+    if (!resources_->images[r])
         throw Error(fmt::format("render graph: image '{}' has no object: no executed pass uses it", name));
-    return *state_->images[r];
+    return *resources_->images[r];
 }
 
 const gpu::Buffer& GraphExecutor::buffer(std::string_view name) const
 {
-    const uint32_t r = lookUp(compiled_, state_->resourceIndex, name);
+    const uint32_t r = lookUp(compiled_, resources_->resourceIndex, name);
     if (compiled_->resources[r].isImage) throw Error(fmt::format("render graph: '{}' is an image, not a buffer", name));
-    if (!state_->buffers[r])
+    if (!resources_->buffers[r])
         throw Error(fmt::format("render graph: buffer '{}' has no object: no executed pass uses it", name));
-    return *state_->buffers[r];
+    return *resources_->buffers[r];
 }
 
 VkImageLayout GraphExecutor::finalLayout(std::string_view name) const
 {
-    const uint32_t r = lookUp(compiled_, state_->resourceIndex, name);
+    const uint32_t r = lookUp(compiled_, resources_->resourceIndex, name);
     if (!compiled_->resources[r].isImage)
         throw Error(fmt::format("render graph: '{}' is a buffer: it has no layout", name));
     return compiled_->resources[r].finalLayout;
 }
 
-VkDeviceSize GraphExecutor::transientBytesAllocated() const { return state_->bytesAllocated; }
+VkDeviceSize GraphExecutor::transientBytesAllocated() const { return resources_->bytesAllocated; }
 
-VkDeviceSize GraphExecutor::transientBytesWithoutAliasing() const { return state_->bytesWithoutAliasing; }
+VkDeviceSize GraphExecutor::transientBytesWithoutAliasing() const { return resources_->bytesWithoutAliasing; }
 
-std::vector<TransientMemory> GraphExecutor::transientMemory() const { return state_->transientMemory; }
+std::vector<TransientMemory> GraphExecutor::transientMemory() const { return resources_->transientMemory; }
 
 } // namespace penumbra::graph

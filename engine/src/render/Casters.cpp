@@ -1,6 +1,6 @@
 #include "penumbra/render/Casters.h"
 
-#include "penumbra/render/Visibility.h"
+#include "render/CasterCulling.h"
 
 #include <cstddef>
 
@@ -9,18 +9,18 @@ namespace penumbra::render {
 void Casters::draw(VkCommandBuffer cmd, const CasterView& view, DrawFilter filter,
                    const std::function<void(const gpu::Image& texture)>& bindTexture) const
 {
-    if (!visibility_) {
+    if (!culling_) {
         scene_->draw(cmd, filter, bindTexture);
         return;
     }
     // The service culls the view on its first draw of the frame (its own submissions,
     // waited for: the caster list is exact for this frame) and keeps the list for the
     // view's other draws.
-    const std::vector<uint8_t>* casters = visibility_->casters(view);
-    visibility_->countDraw(scene_->draw(cmd, filter, bindTexture, casters));
+    const std::vector<uint8_t>* casters = culling_->casters(view);
+    culling_->countDraw(scene_->draw(cmd, filter, bindTexture, casters));
 }
 
-const scene::Aabb* Casters::focus() const { return visibility_ ? visibility_->focus() : nullptr; }
+const scene::Aabb* Casters::focus() const { return culling_ ? culling_->focus() : nullptr; }
 
 gpu::VertexLayout Casters::positionLayout() const
 {

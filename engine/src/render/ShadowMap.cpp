@@ -3,7 +3,6 @@
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/graph/GraphExecutor.h"
-#include "penumbra/plugin/Technique.h"
 
 #include <fmt/format.h>
 
@@ -57,7 +56,7 @@ glm::vec2 depthRange(const LightFrustum& f, const scene::Aabb& bounds)
 
 } // namespace
 
-ShadowMap::ShadowMap(const plugin::TechniqueSetup& setup, uint32_t resolution, std::string_view technique)
+ShadowMap::ShadowMap(const ShadowMapSetup& setup, uint32_t resolution, std::string_view technique)
     : context_(setup.context),
       casters_(setup.casters),
       lightIndex_(setup.lightIndex),
@@ -108,7 +107,7 @@ void ShadowMap::update(const scene::Light& light, const scene::Aabb& sceneBounds
         throw Error(fmt::format("{}: light {} changed type to {}; the shadow map was created for {} face(s)", name_,
                                 lightIndex_, scene::lightTypeName(light.type), faceCount_));
     }
-    // Focused on what the camera sees when the config asks for it (render/Visibility.h).
+    // Focused on what the camera sees when the config asks for it (visibility/Visibility.h).
     frusta_ = shadowFrusta(light, sceneBounds, casters_.focus());
     data_ = {};
     data_.faceCount = faceCount_;

@@ -77,8 +77,8 @@ struct RenderConfig {
     // default shadow settings; resolved by buildScene.
     bool lightsFromScene = false;
     CullingMode culling = CullingMode::None;
-    // Fit directional and spot lights' shadow maps to what the camera sees (render/Visibility.h,
-    // "focusing"); needs culling receiver-mask or light-occlusion.
+    // Fit directional and spot lights' shadow maps to what the camera sees (the visibility
+    // service's "focusing", engine/src/visibility/); needs culling receiver-mask or light-occlusion.
     bool shadowFocus = false;
     uint32_t width = 1280;
     uint32_t height = 720;

@@ -133,11 +133,11 @@ public:
 
 private:
     friend class PassContext;
-    struct State;
+    struct DeviceResources;
     const CompiledGraph& prepare(RenderGraph& graph);
     void recordGpuPass(VkCommandBuffer cmd, RenderGraph& graph, size_t index);
     void runHostPass(RenderGraph& graph, size_t index);
-    std::unique_ptr<State> state_;
+    std::unique_ptr<DeviceResources> resources_;
     std::shared_ptr<const CompiledGraph> compiled_;
 };
 

@@ -1,5 +1,5 @@
 #pragma once
-// The images the metrics read, as the renderer reads them back (render/FrameRenderer.h),
+// The images the metrics read, as the renderer reads them back (frame/FrameRenderer.h),
 // and the mask of pixels that hold geometry. Pure CPU: nothing here touches Vulkan.
 #include <cstdint>
 #include <span>

@@ -17,7 +17,7 @@
 //   }
 #include <cstdint>
 
-#define PENUMBRA_PLUGIN_ABI_VERSION 4u
+#define PENUMBRA_PLUGIN_ABI_VERSION 5u
 #define PENUMBRA_PLUGIN_ENTRY_SYMBOL "penumbra_plugin_entry"
 #define PENUMBRA_PLUGIN_EXPORT extern "C" __attribute__((visibility("default")))
 

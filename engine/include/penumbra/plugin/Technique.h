@@ -8,6 +8,7 @@
 #include "penumbra/graph/RenderGraph.h"
 #include "penumbra/plugin/Params.h"
 #include "penumbra/render/Casters.h"
+#include "penumbra/render/ShadowMap.h"
 #include "penumbra/scene/Scene.h"
 
 #include <cstdint>
@@ -38,6 +39,9 @@ struct TechniqueSetup {
     uint32_t lightIndex = 0;
     uint32_t width = 0;             // the visibility image's size (the output's)
     uint32_t height = 0;
+
+    // What render::ShadowMap takes: `render::ShadowMap map(setup, resolution, "mine")`.
+    operator render::ShadowMapSetup() const { return {context, shaders, casters, light, sceneBounds, lightIndex}; }
 };
 
 // Names of the engine's images a technique may use, as declared in the graph, and the

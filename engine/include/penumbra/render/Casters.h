@@ -1,10 +1,10 @@
 #pragma once
 // The caster interface: the only way a shadow technique draws scene geometry. A
 // technique asks for "the casters of this light seen through this light-view
-// projection" and the engine draws them; the visibility service (render/Visibility.h:
-// frustum, light-space occlusion and receiver-mask culling, per the config's "culling")
-// decides which casters that is, for every technique at once, so that no plugin
-// implements culling itself.
+// projection" and the engine draws them; the engine's visibility service
+// (engine/src/visibility/: frustum, light-space occlusion and receiver-mask culling, per
+// the config's "culling") decides which casters that is, for every technique at once, so
+// that no plugin implements culling itself.
 #include "penumbra/gpu/Pipeline.h"
 #include "penumbra/render/SceneGpu.h"
 
@@ -55,9 +55,12 @@ struct CasterView {
     // (docs/culling.md). -1: the lookups do something else (moments, receiver planes,
     // normal offsets), so only the receiver mask applies.
     int32_t compareTapRadius = -1;
+
+    bool operator==(const CasterView&) const = default;
 };
 
-class Visibility;
+// Private to the engine (engine/src/render/CasterCulling.h): its visibility service.
+class CasterCulling;
 
 class Casters {
 public:
@@ -65,7 +68,7 @@ public:
 
     // The engine's visibility service, which narrows every draw to the casters that can
     // shadow a visible receiver; none (tests, tools): every caster is drawn.
-    void setVisibility(Visibility* visibility) { visibility_ = visibility; }
+    void setCulling(CasterCulling* culling) { culling_ = culling; }
 
     // Binds the scene's vertex and index buffers and draws the casters for `view` that
     // pass `filter`; before each group of draws that share a base-colour texture it calls
@@ -97,7 +100,7 @@ public:
 
 private:
     const SceneGpu* scene_;
-    Visibility* visibility_ = nullptr;
+    CasterCulling* culling_ = nullptr;
 };
 
 } // namespace penumbra::render

@@ -33,14 +33,11 @@
 
 namespace penumbra::gpu {
 class Context;
-}
+class ShaderCompiler;
+} // namespace penumbra::gpu
 
 namespace penumbra::graph {
 class PassContext;
-}
-
-namespace penumbra::plugin {
-struct TechniqueSetup;
 }
 
 namespace penumbra::render {
@@ -103,6 +100,19 @@ struct ShadowMapPlacement {
     uint32_t firstView = 0;
 };
 
+// What a shadow map needs from the technique that owns it. A plugin::TechniqueSetup
+// converts to it, so a technique passes its own setup; the map takes no more than this
+// because render sits below plugin (plugin/Technique.h includes this header, not the
+// other way round). References stay valid for the map's lifetime.
+struct ShadowMapSetup {
+    gpu::Context& context;
+    const gpu::ShaderCompiler& shaders;  // the technique's: it finds the engine's shaders/ too
+    const Casters& casters;
+    const scene::Light& light;  // the first frame's state
+    scene::Aabb sceneBounds;
+    uint32_t lightIndex = 0;
+};
+
 // One light's shadow map: its frusta, a host-visible buffer of ShadowMapData for the
 // shaders, and the depth pass. Owned by the technique (one per light).
 class ShadowMap {
@@ -111,7 +121,7 @@ public:
     // ("light0.hard.shadow_map") and prefixes errors. Throws penumbra::ConfigError when
     // the atlas of `resolution` texels per face exceeds the device's largest image
     // (naming `resolution`), penumbra::Error when a shader does not compile.
-    ShadowMap(const plugin::TechniqueSetup& setup, uint32_t resolution, std::string_view technique);
+    ShadowMap(const ShadowMapSetup& setup, uint32_t resolution, std::string_view technique);
     ShadowMap(const ShadowMap&) = delete;
     ShadowMap& operator=(const ShadowMap&) = delete;
 

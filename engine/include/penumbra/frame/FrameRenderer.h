@@ -15,21 +15,25 @@
 #include "penumbra/render/Casters.h"
 #include "penumbra/render/Projection.h"
 #include "penumbra/render/SceneGpu.h"
-#include "penumbra/render/Visibility.h"
+#include "penumbra/visibility/CullingStats.h"
 
 #include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
-namespace penumbra::render {
+namespace penumbra::visibility {
+class Visibility;  // private to the engine (engine/src/visibility/)
+}
+
+namespace penumbra::frame {
 
 using PassTiming = graph::PassTiming;
 
 struct FrameTimings {
-    std::vector<PassTiming> passes;  // the executed passes, in execution order
-    double frameCpuMs = 0.0;         // record + submit + wait (+ host passes), wall clock
-    CullingStats culling;            // the visibility service's figures for the frame
+    std::vector<PassTiming> passes;    // the executed passes, in execution order
+    double frameCpuMs = 0.0;           // record + submit + wait (+ host passes), wall clock
+    visibility::CullingStats culling;  // the visibility service's figures for the frame
 };
 
 class FrameRenderer {
@@ -75,7 +79,6 @@ public:
     // with sizes and aliasing), and the executor that allocated its memory.
     const graph::CompiledGraph& compiledGraph();
     const graph::GraphExecutor& executor() const { return executor_; }
-    const Visibility& visibility() const { return *visibility_; }
 
     // Read-back after renderFrame(): sRGB RGBA8 rows, top row first.
     std::vector<uint8_t> readColor() const;
@@ -116,9 +119,9 @@ private:
     glm::vec4 ambient_{0.0f};
     glm::vec4 background_{0.0f};
 
-    SceneGpu sceneGpu_;
-    Casters casters_;
-    std::unique_ptr<Visibility> visibility_;
+    render::SceneGpu sceneGpu_;
+    render::Casters casters_;
+    std::unique_ptr<visibility::Visibility> visibility_;
     gpu::Buffer lightBuffer_;
     gpu::Pipeline gbufferPipeline_;
     gpu::Pipeline shadingPipeline_;
@@ -132,4 +135,4 @@ private:
     graph::GraphExecutor executor_;
 };
 
-} // namespace penumbra::render
+} // namespace penumbra::frame

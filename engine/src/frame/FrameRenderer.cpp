@@ -1,15 +1,16 @@
-#include "penumbra/render/FrameRenderer.h"
+#include "penumbra/frame/FrameRenderer.h"
 
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
 #include "penumbra/plugin/Params.h"
+#include "visibility/Visibility.h"
 
 #include <fmt/format.h>
 
 #include <chrono>
 #include <cstring>
 
-namespace penumbra::render {
+namespace penumbra::frame {
 namespace {
 
 constexpr VkFormat kPositionFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
@@ -97,9 +98,9 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
     s.pushConstantBytes = sizeof(ShadingPush);
     shadingPipeline_ = gpu::Pipeline(context, compiler_, s);
     nearestSampler_ = gpu::createSampler(context, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
-    visibility_ = std::make_unique<Visibility>(context, compiler_, scene, sceneGpu_, config.culling, width_, height_,
-                                               config.shadowFocus);
-    casters_.setVisibility(visibility_.get());
+    visibility_ = std::make_unique<visibility::Visibility>(context, compiler_, scene, sceneGpu_, config.culling, width_,
+                                                           height_, config.shadowFocus);
+    casters_.setCulling(visibility_.get());
 
     createTechniques(config, scene);
     updateLights(config, scene.bounds());
@@ -347,7 +348,7 @@ void FrameRenderer::recordGBuffer(graph::PassContext& pass)
     gbufferPipeline_.bind(cmd);
     gbufferPipeline_.pushConstants(cmd, &cameraViewProj_, sizeof(glm::mat4));
     sceneGpu_.draw(
-        cmd, DrawFilter::All,
+        cmd, render::DrawFilter::All,
         [&](const gpu::Image& texture) {
             gpu::DescriptorPush()
                 .storageBuffer(0, sceneGpu_.instanceBuffer())
@@ -397,4 +398,4 @@ std::vector<float> FrameRenderer::readPositions() const { return readFloats(kGPo
 
 std::vector<float> FrameRenderer::readNormals() const { return readFloats(kGNormal); }
 
-} // namespace penumbra::render
+} // namespace penumbra::frame

@@ -4,12 +4,12 @@
 // ../shared/papers/online-visibility-for-shadow-maps.txt): which instances the camera
 // sees, and which casters each light view must draw so that every visible receiver gets
 // the shadow it would get with every caster drawn. Plugins never see it: render::Casters
-// asks it for the casters of each CasterView.
+// asks it for the casters of each CasterView (render/CasterCulling.h).
 //
 // Modes (config "culling"):
 //   none             every instance, everywhere
 //   frustum          camera and light views: instances whose box meets the view frustum
-//   light-occlusion  camera: hierarchical occlusion culling (below); light views: the same
+//   light-occlusion  camera: hierarchical occlusion culling (OcclusionTraversal.h); light views: the same
 //                    occlusion culling from the light (the paper's REF)
 //   receiver-mask    camera: hierarchical occlusion culling; light views: the texels that
 //                    camera pixels see are marked in a receiver mask (the reverse shadow
@@ -25,28 +25,26 @@
 //                    that shadow nothing are not drawn. Light views draw with the
 //                    technique's own bias, and keep a leaf only when its draw finds samples.
 //
-// Hierarchical occlusion culling (CHC++, Mattausch, Bittner and Wimmer 2008) over the
-// scene's instance BVH, with occlusion queries that are waited for within the frame, so
-// that the result is exact for the frame and never a frame late: the traversal runs in
-// rounds, each one submission. Round 0 walks the tree front to back, draws the leaves
-// visible last frame at once (temporal coherence: no waiting for them; their own draw is
-// their query for the next frame) and queries the boxes of nodes that were invisible
-// (nodes invisible for several frames share one multi-query per batch). Each later round
-// draws the leaves and queries the children of the nodes whose queries found samples,
-// until no query is pending. A query that finds no samples proves its node hidden behind
-// geometry already drawn, so nothing visible is ever culled.
+// This file is the policy: the modes, the camera's and each light view's culling per
+// frame (a light view is culled on its first draw of the frame and keeps its list for the
+// frame), the fall-back to the frustum where culling cannot pay, and shadow-map focusing.
+// The traversal is OcclusionTraversal.h, the receiver mask ReceiverMask.h.
 #include "penumbra/config/Config.h"
-#include "penumbra/gpu/Pipeline.h"
-#include "penumbra/gpu/Resources.h"
 #include "penumbra/render/Casters.h"
 #include "penumbra/render/SceneGpu.h"
 #include "penumbra/scene/Bvh.h"
+#include "penumbra/scene/Scene.h"
+#include "penumbra/visibility/CullingStats.h"
+#include "render/CasterCulling.h"
+#include "visibility/OcclusionTraversal.h"
+#include "visibility/ReceiverMask.h"
 
 #include <glm/glm.hpp>
 
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <span>
 #include <utility>
 #include <vector>
@@ -54,34 +52,17 @@
 namespace penumbra::gpu {
 class Context;
 class ShaderCompiler;
-}
+} // namespace penumbra::gpu
 
-namespace penumbra::render {
+namespace penumbra::visibility {
 
-// Per frame, summed over the camera and every light view.
-struct CullingStats {
-    uint64_t nodesVisited = 0;      // BVH nodes the traversals looked at
-    uint64_t queriesIssued = 0;     // occlusion queries (boxes, multi-queries, leaf draws)
-    uint64_t maskRejected = 0;      // nodes culled without a query: their projection meets no mask texel
-    uint64_t queryRounds = 0;       // submissions waited for
-    uint64_t receivers = 0;         // instances the camera sees (the G-buffer draws them)
-    uint64_t cameraFellBack = 0;    // 1: the camera took its frustum (culling kept most last time)
-    uint64_t views = 0;             // light views culled
-    uint64_t viewsFellBack = 0;     // of which culled to their frustum: culling kept most last time
-    uint64_t castersDrawn = 0;      // instance draws through Casters::draw
-    uint64_t trianglesDrawn = 0;    // their triangles
-    double cameraMs = 0.0;          // step 1: camera culling (wall clock, GPU work waited for)
-    double maskMs = 0.0;            // step 2: receiver masks
-    double casterCullMs = 0.0;      // step 3: caster culling (queries, or frustum tests)
-};
-
-class Visibility {
+class Visibility final : public render::CasterCulling {
 public:
     // `scene` and `sceneGpu` must outlive the service; `width` x `height` is the camera's
     // output. `focus`: compute the box of what the camera sees every frame (focus()); needs an
     // occlusion mode, whose camera pass leaves the camera depth.
     Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders, const scene::Scene& scene,
-               const SceneGpu& sceneGpu, config::CullingMode mode, uint32_t width, uint32_t height,
+               const render::SceneGpu& sceneGpu, config::CullingMode mode, uint32_t width, uint32_t height,
                bool focus = false);
     ~Visibility();
     Visibility(const Visibility&) = delete;
@@ -101,76 +82,63 @@ public:
 
     // The casters `view` must draw this frame, or null for all. Culls the view on its
     // first call in the frame and keeps the list for the frame.
-    const std::vector<uint8_t>* casters(const CasterView& view);
-    void countDraw(const DrawCounts& counts);
+    const std::vector<uint8_t>* casters(const render::CasterView& view) override;
+    void countDraw(const render::DrawCounts& counts) override;
 
     // Shadow-map focusing (Mattausch et al. §1.4): the world box of every point the camera
     // sees this frame (camera pixels unprojected from the camera depth), which lies in the
     // view frustum by construction: the paper's "view frustum intersected with the
     // visible objects' boxes", tightened to the visible surfaces. Null when focusing is
     // off or the camera sees nothing.
-    const scene::Aabb* focus() const { return focusing_ && !focus_.empty() ? &focus_ : nullptr; }
+    const scene::Aabb* focus() const override { return focusing_ && !focus_.empty() ? &focus_ : nullptr; }
     bool focusing() const { return focusing_; }
 
     // This frame's figures so far.
     const CullingStats& stats() const { return stats_; }
 
 private:
-    struct Traversal;
-    struct ViewState;
-    // Per BVH node, what the last frames' traversals of one view found.
-    struct NodeHistory {
-        std::vector<uint8_t> visible;      // visible last frame: opened or drawn without waiting
-        std::vector<uint16_t> hidden;      // frames invisible in a row
-        std::vector<uint8_t> emptyDraws;   // leaves: draws in a row that found no sample
+    // One light view across frames: the CasterView it was last culled for and in which
+    // frame, its traversal history, its caster list, and whether culling it pays.
+    struct CulledLightView {
+        uint64_t frame = UINT64_MAX;
+        render::CasterView culledFor;
+        NodeHistory history;
+        std::vector<uint8_t> casters;
+        double keptFraction = 0.0;     // of the frustum's instances, at the last full culling
+        uint32_t framesSinceFull = 0;  // frames culled to the frustum since then
     };
-    struct Target;
 
     void cullFrustum(const glm::mat4& viewProj, std::vector<uint8_t>& visible) const;
+    double keptFraction(const glm::mat4& viewProj, const std::vector<uint8_t>& kept) const;
+    void cullCamera(const glm::mat4& cameraViewProj);
     void computeFocus(const glm::mat4& cameraViewProj);
-    void occlusionCull(Target& target, NodeHistory& history, std::vector<uint8_t>& visible);
-    void cullLightView(const CasterView& view, ViewState& state);
-    void cullLightViewFully(const CasterView& view, ViewState& state);
-    Target& lightTarget(uint32_t resolution);
-    void makeReceiverDepth(Target& target, bool withPrefix);
+    void cullLightView(const render::CasterView& view, CulledLightView& culled);
+    void cullLightViewFully(const render::CasterView& view, CulledLightView& culled);
+    OccluderDepth& lightDepth(uint32_t resolution);
 
     gpu::Context& context_;
     const scene::Scene& scene_;
-    const SceneGpu& sceneGpu_;
     const config::CullingMode mode_;
     const uint32_t width_;
     const uint32_t height_;
     scene::InstanceBvh bvh_;
+    // Occlusion modes: the traversal and the depth it draws into, the camera's and one per
+    // light-view resolution; receiver-mask mode: the masks.
+    std::unique_ptr<OcclusionTraversal> traversal_;
+    std::optional<OccluderDepth> cameraDepth_;
+    std::map<uint32_t, OccluderDepth> lightDepths_;
+    std::unique_ptr<ReceiverMaskBuilder> masks_;
 
-    std::unique_ptr<Target> camera_;
-    std::map<uint32_t, std::unique_ptr<Target>> lightTargets_;  // by resolution
     NodeHistory cameraHistory_;
     bool cameraDepthValid_ = false;       // this frame's camera culling left the camera depth
     double cameraKeptFraction_ = 0.0;     // of the frustum's instances, at the last full culling
     uint32_t cameraFramesSinceFull_ = 0;
     std::vector<uint8_t> receivers_;
-    glm::mat4 cameraViewProj_{1.0f};
-    std::map<std::pair<uint32_t, uint32_t>, std::unique_ptr<ViewState>> views_;  // by (light, view)
+    std::map<std::pair<uint32_t, uint32_t>, CulledLightView> lightViews_;  // by (light, view)
     uint64_t frame_ = 0;
     CullingStats stats_;
     const bool focusing_;
     scene::Aabb focus_;
-
-    // Pipelines: depth-only leaf draws (writing depth, or only counting samples for
-    // alpha-masked instances), box queries; the same behind the receiver mask (or the
-    // receiver depths); the receiver mask's scatter (with receiver depths) and dilation,
-    // and the receivers' depths spread over the taps.
-    gpu::Pipeline leafDepth_, leafCount_, box_;
-    gpu::Pipeline maskLeafDepth_, maskLeafCount_, maskBox_;
-    gpu::Pipeline scatter_, scatterDepth_;
-    gpu::Pipeline depthMin_;
-    gpu::Pipeline dilate_;
-    gpu::Image noReceiverDepth_;
-    gpu::Sampler nearest_;
-    gpu::Buffer boxes_;
-    gpu::Buffer cameraData_;  // the reverse shadow test's camera
-    VkQueryPool queries_ = VK_NULL_HANDLE;
-    uint32_t queryCapacity_ = 0;
 };
 
-} // namespace penumbra::render
+} // namespace penumbra::visibility

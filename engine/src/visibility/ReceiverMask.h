@@ -1,0 +1,100 @@
+#pragma once
+// Step 2 of Mattausch et al. (Visibility.h): the receiver mask of a light view, the texels
+// that the camera's visible pixels look up. Each camera pixel, unprojected from the camera
+// depth, marks its texel (engine/receiver_scatter.comp: the reverse shadow test, done from
+// the camera's side); the mask is dilated by the view's footprint (engine/mask_dilate.comp)
+// and read back into a summed-area table, so that the traversal can skip, without a
+// query, every node whose projection meets no marked texel. A view whose technique
+// compares with the receivers' own depth also gets the farthest receiver depth per texel,
+// spread over the technique's taps (engine/receiver_depth_min.comp).
+//
+// The paper also rasterises the receivers' depth here, as the start of the shadow map.
+// Here the technique draws its own map, so that pass would draw the receivers twice (in a
+// bird's-eye view, most of the scene: measured 400 ms of 1.3 s on lavapipe,
+// docs/culling.md). The queries are tested against the depth of what the traversal itself
+// draws instead; it is all drawn into the technique's map too, so a node behind it at
+// every masked texel is still one that cannot change a masked texel.
+#include "penumbra/gpu/Pipeline.h"
+#include "penumbra/gpu/Resources.h"
+#include "penumbra/render/Casters.h"
+
+#include <glm/glm.hpp>
+
+#include <algorithm>
+#include <cstdint>
+#include <map>
+#include <vector>
+
+namespace penumbra::gpu {
+class Context;
+class ShaderCompiler;
+} // namespace penumbra::gpu
+
+namespace penumbra::visibility {
+
+// Receiver depths (engine/receiver_scatter.comp RECEIVER_DEPTH): the bits of a
+// non-negative float, all ones where no receiver reads the texel.
+inline constexpr VkFormat kReceiverDepthFormat = VK_FORMAT_R32_UINT;
+
+// The view texels a box's projection can cover (OcclusionTraversal.cpp projectedRect).
+struct TexelRect {
+    glm::vec2 lo, hi;
+    float area() const { return std::max(hi.x - lo.x, 0.0f) * std::max(hi.y - lo.y, 0.0f); }
+};
+
+// The receiver mask of the light view last built at one resolution.
+struct ReceiverMask {
+    uint32_t resolution = 0;  // the view's texels per side
+    uint32_t size = 0;        // mask texels per side
+    uint32_t block = 1;       // view texels per mask texel, per side
+    gpu::Image marked, dilatedRows, dilated;  // the scatter's marks; the row pass; the dilated mask
+    gpu::Buffer readback;                     // the dilated mask, host-visible
+    std::vector<uint32_t> summedArea;         // of the dilated mask, (size + 1)^2
+    // Views whose technique compares with the receivers' own depth: the farthest receiver
+    // depth per view texel, and the scratch of its spreading over the taps; made on
+    // first use.
+    gpu::Image receiverDepth, receiverDepthPrefix;
+    bool hasReceiverDepth = false;  // this view's receiver depths are in receiverDepth
+    // The view texels that the marked mask texels cover: the queries render only there.
+    VkRect2D bounds{};
+
+    // Whether no mask texel in `rect` (view texels, inclusive) is marked, so that no
+    // fragment of a query inside it could pass the mask test.
+    bool rejects(const TexelRect& rect) const;
+};
+
+// Builds the receiver masks: their pipelines, the camera they are scattered from, and one
+// mask per light-view resolution (views of one resolution share it, one after another).
+class ReceiverMaskBuilder {
+public:
+    ReceiverMaskBuilder(gpu::Context& context, const gpu::ShaderCompiler& shaders);
+
+    // This frame's camera: its depth (reversed-Z, in DEPTH_READ_ONLY_OPTIMAL, which must
+    // outlive the builder), its world -> clip matrix, and its eye (OcclusionTraversal.h
+    // viewOrigin).
+    void setCamera(const gpu::Image& depth, const glm::mat4& viewProj, const glm::vec3& eye);
+
+    // The mask of `view` (resolution > 0), with its receiver depths when the view's
+    // technique compares with them (CasterView::compareTapRadius >= 0). One submission,
+    // waited for.
+    const ReceiverMask& build(const render::CasterView& view);
+
+private:
+    ReceiverMask& maskFor(uint32_t resolution);
+    void makeReceiverDepth(ReceiverMask& mask, bool withPrefix);
+    void recordMask(VkCommandBuffer cmd, const render::CasterView& view, ReceiverMask& mask, int32_t tapRadius);
+    void sumMarkedTexels(ReceiverMask& mask);
+
+    gpu::Context& context_;
+    const gpu::Image* cameraDepth_ = nullptr;
+    std::map<uint32_t, ReceiverMask> masks_;  // by resolution
+    // The scatter (with receiver depths), the receivers' depths spread over the taps, and
+    // the dilation.
+    gpu::Pipeline scatter_, scatterDepth_;
+    gpu::Pipeline depthMin_;
+    gpu::Pipeline dilate_;
+    gpu::Sampler nearest_;
+    gpu::Buffer cameraData_;  // the reverse shadow test's camera
+};
+
+} // namespace penumbra::visibility
