@@ -2,7 +2,7 @@
 
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Context.h"
-#include "penumbra/graph/GraphExecutor.h"
+#include "penumbra/graph/PassContext.h"
 #include "penumbra/plugin/Technique.h"
 
 #include <fmt/format.h>
