@@ -11,7 +11,7 @@
 #include "penumbra/gpu/Context.h"
 #include "penumbra/gpu/Pipeline.h"
 #include "penumbra/gpu/Resources.h"
-#include "penumbra/graph/GraphExecutor.h"
+#include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/Technique.h"
@@ -145,7 +145,6 @@ HardShadow::HardShadow(const plugin::TechniqueSetup& setup)
     c.name = fmt::format("light{}.hard.visibility", setup.lightIndex);
     c.shader = "visibility.comp";
     c.defines = visibilityDefines(settings_.variant);
-    c.bindings = visibilityBindings();
     c.pushConstantBytes = sizeof(VisibilityPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
 
@@ -184,34 +183,23 @@ void HardShadow::recordVisibility(const graph::PassContext& pass, const plugin::
     VkCommandBuffer cmd = pass.cmd();
     const gpu::Image& out = pass.image(io.visibility);
     visibility_.bind(cmd);
-    gpu::DescriptorPush descriptors;
-    descriptors.storageImage(kBindingPosition, pass.image(io.gPosition))
-        .sampledImage(kBindingShadowMap, pass.image(map), compareSampler_, pass.layout(map))
-        .storageImage(kBindingVisibility, out)
-        .storageBuffer(kBindingShadowMapData, shadowMap_.buffer())
-        .storageImage(kBindingNormal, pass.image(io.gNormal));
-    descriptors.push(context_, cmd, visibility_);
+    gpu::DescriptorPush()
+        .storageImage("gPosition", pass.image(io.gPosition))
+        .sampledImage("shadowMap", pass.image(map), compareSampler_, pass.layout(map))
+        .storageImage("visibilityOut", out)
+        .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
+        .storageImage("gNormal", pass.image(io.gNormal))
+        .push(context_, cmd, visibility_);
     const VisibilityPush push{settings_.normalOffsetTexels * footprintWidthTexels(settings_),
                               settings_.filterRadiusTexels};
     visibility_.pushConstants(cmd, &push, sizeof(push));
-    vkCmdDispatch(cmd, (out.desc().width + 7) / 8, (out.desc().height + 7) / 8, 1);
+    visibility_.dispatchOver(cmd, out);
 }
-
-plugin::Technique* createHardShadow(const plugin::TechniqueSetup& setup) { return new HardShadow(setup); }
 
 } // namespace
 } // namespace penumbra::hard
 
-PENUMBRA_PLUGIN_EXPORT const PenumbraPluginInfo* penumbra_plugin_entry()
-{
-    static const PenumbraPluginInfo info{PENUMBRA_PLUGIN_ABI_VERSION,
-                                         "hard",
-                                         "1.0.0",
-                                         "shadow map with constant, slope, normal-offset or receiver-plane bias and "
-                                         "none, PCF, Poisson or bilinear filtering",
-                                         penumbra::hard::kParams,
-                                         uint32_t(std::size(penumbra::hard::kParams)),
-                                         &penumbra::hard::createHardShadow,
-                                         PENUMBRA_PLUGIN_SHADER_DIR};
-    return &info;
-}
+PENUMBRA_DEFINE_PLUGIN("hard", "1.0.0",
+                       "shadow map with constant, slope, normal-offset or receiver-plane bias and none, PCF, Poisson "
+                       "or bilinear filtering",
+                       penumbra::hard::kParams, penumbra::hard::HardShadow)

@@ -6,7 +6,7 @@
 // compares with a rotated Poisson disk (visibility.comp).
 #include "penumbra/gpu/Context.h"
 #include "penumbra/gpu/Pipeline.h"
-#include "penumbra/graph/GraphExecutor.h"
+#include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/Technique.h"
@@ -77,16 +77,6 @@ Settings readSettings(const plugin::ParamValues& params)
     return s;
 }
 
-// Bindings of visibility.comp.
-enum Binding : uint32_t {
-    kBindingPosition = 0,       // G-buffer world position (storage, rgba32f)
-    kBindingShadowCompare = 1,  // the depth atlas, compare sampler (sampler2DShadow)
-    kBindingVisibility = 2,     // V_l (storage, r32f)
-    kBindingShadowMapData = 3,  // render::ShadowMap::buffer() (storage buffer)
-    kBindingNormal = 4,         // G-buffer world normal (storage, rgba16f): horizon, receiver plane
-    kBindingShadowDepth = 5,    // the depth atlas, nearest sampler without compare (sampler2D)
-};
-
 struct PcssPush {
     float lightSize = 0.0f;  // render::softShadowLightSize()
     float maxSearchTexels = 0.0f;
@@ -131,12 +121,6 @@ PcssShadow::PcssShadow(const plugin::TechniqueSetup& setup)
     c.shader = "visibility.comp";
     c.defines = {{"RECEIVER_BIAS", std::to_string(uint32_t(usesReceiverPlane() ? render::ReceiverBias::Plane
                                                                                 : render::ReceiverBias::None))}};
-    c.bindings = {{kBindingPosition, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {kBindingShadowCompare, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                  {kBindingVisibility, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {kBindingShadowMapData, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                  {kBindingShadowDepth, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                  {kBindingNormal, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
     c.pushConstantBytes = sizeof(PcssPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
 
@@ -174,35 +158,24 @@ void PcssShadow::recordVisibility(const graph::PassContext& pass, const plugin::
     VkCommandBuffer cmd = pass.cmd();
     const gpu::Image& out = pass.image(io.visibility);
     visibility_.bind(cmd);
-    gpu::DescriptorPush descriptors;
-    descriptors.storageImage(kBindingPosition, pass.image(io.gPosition))
-        .sampledImage(kBindingShadowCompare, pass.image(map), compareSampler_, pass.layout(map))
-        .storageImage(kBindingVisibility, out)
-        .storageBuffer(kBindingShadowMapData, shadowMap_.buffer())
-        .sampledImage(kBindingShadowDepth, pass.image(map), depthSampler_, pass.layout(map))
-        .storageImage(kBindingNormal, pass.image(io.gNormal));
-    descriptors.push(context_, cmd, visibility_);
+    gpu::DescriptorPush()
+        .storageImage("gPosition", pass.image(io.gPosition))
+        .sampledImage("shadowCompare", pass.image(map), compareSampler_, pass.layout(map))
+        .storageImage("visibilityOut", out)
+        .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
+        .sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map))
+        .storageImage("gNormal", pass.image(io.gNormal))
+        .push(context_, cmd, visibility_);
     const PcssPush push{lightSize_, settings_.maxSearchTexels, settings_.maxFilterTexels, settings_.blockerSamples,
                         settings_.filterSamples};
     visibility_.pushConstants(cmd, &push, sizeof(push));
-    vkCmdDispatch(cmd, (out.desc().width + 7) / 8, (out.desc().height + 7) / 8, 1);
+    visibility_.dispatchOver(cmd, out);
 }
-
-plugin::Technique* createPcssShadow(const plugin::TechniqueSetup& setup) { return new PcssShadow(setup); }
 
 } // namespace
 } // namespace penumbra::pcss
 
-PENUMBRA_PLUGIN_EXPORT const PenumbraPluginInfo* penumbra_plugin_entry()
-{
-    static const PenumbraPluginInfo info{PENUMBRA_PLUGIN_ABI_VERSION,
-                                         "pcss",
-                                         "1.0.0",
-                                         "percentage-closer soft shadows: blocker search, penumbra estimate, "
-                                         "Poisson-disk filter (Fernando 2005)",
-                                         penumbra::pcss::kParams,
-                                         uint32_t(std::size(penumbra::pcss::kParams)),
-                                         &penumbra::pcss::createPcssShadow,
-                                         PENUMBRA_PLUGIN_SHADER_DIR};
-    return &info;
-}
+PENUMBRA_DEFINE_PLUGIN("pcss", "1.0.0",
+                       "percentage-closer soft shadows: blocker search, penumbra estimate, Poisson-disk filter "
+                       "(Fernando 2005)",
+                       penumbra::pcss::kParams, penumbra::pcss::PcssShadow)

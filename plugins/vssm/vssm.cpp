@@ -10,7 +10,7 @@
 #include "penumbra/gpu/Barrier.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/gpu/Pipeline.h"
-#include "penumbra/graph/GraphExecutor.h"
+#include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/Technique.h"
@@ -143,18 +143,6 @@ int maxNodes(Scheme scheme, int perSide, int height)
     return 1;
 }
 
-// Bindings of visibility.comp.
-enum Binding : uint32_t {
-    kBindingPosition = 0,
-    kBindingShadowCompare = 1,
-    kBindingVisibility = 2,
-    kBindingShadowMapData = 3,
-    kBindingNormal = 4,
-    kBindingShadowDepth = 5,
-    kBindingSat = 6,
-    kBindingHsm = 7,
-};
-
 struct VisibilityPush {
     glm::ivec2 atlasSize{0};
     float lightSize = 0.0f;
@@ -248,15 +236,11 @@ VssmShadow::VssmShadow(const plugin::TechniqueSetup& setup)
     gpu::ComputePipelineDesc c;
     c.name = name + "sat";
     c.shader = "sat.comp";
-    c.bindings = {{0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                  {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
     c.pushConstantBytes = sizeof(SatPush);
     sat_ = gpu::Pipeline(context_, setup.shaders, c);
 
     c.name = name + "hsm";
     c.shader = "hsm.comp";
-    c.bindings[1].type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     c.pushConstantBytes = sizeof(HsmPush);
     hsm_ = gpu::Pipeline(context_, setup.shaders, c);
 
@@ -267,14 +251,6 @@ VssmShadow::VssmShadow(const plugin::TechniqueSetup& setup)
                                                               : render::ReceiverBias::None))},
                  {"BLOCKER_SUBDIVISION", std::to_string(uint32_t(settings_.blockerScheme()))},
                  {"FILTER_SUBDIVISION", std::to_string(uint32_t(settings_.filterScheme()))}};
-    c.bindings = {{kBindingPosition, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {kBindingShadowCompare, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                  {kBindingVisibility, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {kBindingShadowMapData, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                  {kBindingNormal, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {kBindingShadowDepth, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                  {kBindingSat, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {kBindingHsm, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
     c.pushConstantBytes = sizeof(VisibilityPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
 
@@ -353,18 +329,18 @@ void VssmShadow::recordSat(const graph::PassContext& pass, const std::string& ma
     VkCommandBuffer cmd = pass.cmd();
     sat_.bind(cmd);
     gpu::DescriptorPush()
-        .sampledImage(0, pass.image(map), depthSampler_, pass.layout(map))
-        .storageImage(1, pass.image(sat))
-        .storageBuffer(2, shadowMap_.buffer())
+        .sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map))
+        .storageImage("satImage", pass.image(sat))
+        .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
         .push(context_, cmd, sat_);
     const glm::ivec2 size = atlasSize();
     SatPush push{size, 0};
     sat_.pushConstants(cmd, &push, sizeof(push));
-    vkCmdDispatch(cmd, (uint32_t(size.y) + 63) / 64, 1, 1);  // one invocation per row
+    sat_.dispatchOver(cmd, uint32_t(size.y));  // one invocation per row
     gpu::memoryBarrier(cmd, kComputeWrite, kComputeReadWrite);
     push.vertical = 1;
     sat_.pushConstants(cmd, &push, sizeof(push));
-    vkCmdDispatch(cmd, (uint32_t(size.x) + 63) / 64, 1, 1);  // one per column
+    sat_.dispatchOver(cmd, uint32_t(size.x));  // one per column
 }
 
 void VssmShadow::recordHsm(const graph::PassContext& pass, const std::string& map, const std::string& hsm) const
@@ -372,9 +348,9 @@ void VssmShadow::recordHsm(const graph::PassContext& pass, const std::string& ma
     VkCommandBuffer cmd = pass.cmd();
     hsm_.bind(cmd);
     gpu::DescriptorPush()
-        .sampledImage(0, pass.image(map), depthSampler_, pass.layout(map))
-        .storageBuffer(1, pass.buffer(hsm))
-        .storageBuffer(2, shadowMap_.buffer())
+        .sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map))
+        .storageBuffer("HsmBuffer", pass.buffer(hsm))
+        .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
         .push(context_, cmd, hsm_);
     const glm::ivec2 size = atlasSize();
     const int levels = hsmLevelCount(uint32_t(size.x), uint32_t(size.y));
@@ -383,7 +359,7 @@ void VssmShadow::recordHsm(const graph::PassContext& pass, const std::string& ma
         const HsmPush push{size, level};
         hsm_.pushConstants(cmd, &push, sizeof(push));
         const glm::ivec2 texels = (size + (1 << level) - 1) >> level;
-        vkCmdDispatch(cmd, (uint32_t(texels.x) + 7) / 8, (uint32_t(texels.y) + 7) / 8, 1);
+        hsm_.dispatchOver(cmd, uint32_t(texels.x), uint32_t(texels.y));
     }
 }
 
@@ -394,14 +370,14 @@ void VssmShadow::recordVisibility(const graph::PassContext& pass, const plugin::
     const gpu::Image& out = pass.image(io.visibility);
     visibility_.bind(cmd);
     gpu::DescriptorPush()
-        .storageImage(kBindingPosition, pass.image(io.gPosition))
-        .sampledImage(kBindingShadowCompare, pass.image(map), compareSampler_, pass.layout(map))
-        .storageImage(kBindingVisibility, out)
-        .storageBuffer(kBindingShadowMapData, shadowMap_.buffer())
-        .storageImage(kBindingNormal, pass.image(io.gNormal))
-        .sampledImage(kBindingShadowDepth, pass.image(map), depthSampler_, pass.layout(map))
-        .storageImage(kBindingSat, pass.image(sat))
-        .storageBuffer(kBindingHsm, pass.buffer(hsm))
+        .storageImage("gPosition", pass.image(io.gPosition))
+        .sampledImage("shadowCompare", pass.image(map), compareSampler_, pass.layout(map))
+        .storageImage("visibilityOut", out)
+        .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
+        .storageImage("gNormal", pass.image(io.gNormal))
+        .sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map))
+        .storageImage("satImage", pass.image(sat))
+        .storageBuffer("HsmBuffer", pass.buffer(hsm))
         .push(context_, cmd, visibility_);
     const int most = maxNodes(settings_.blockerScheme(), settings_.blockerSubdivisions, settings_.treeHeight) +
                      maxNodes(settings_.filterScheme(), settings_.filterSubdivisions, settings_.treeHeight);
@@ -418,25 +394,13 @@ void VssmShadow::recordVisibility(const graph::PassContext& pass, const plugin::
                               int32_t(settings_.debugView),
                               1.0f / float(most)};
     visibility_.pushConstants(cmd, &push, sizeof(push));
-    vkCmdDispatch(cmd, (out.desc().width + 7) / 8, (out.desc().height + 7) / 8, 1);
+    visibility_.dispatchOver(cmd, out);
 }
-
-plugin::Technique* createVssmShadow(const plugin::TechniqueSetup& setup) { return new VssmShadow(setup); }
 
 } // namespace
 } // namespace penumbra::vssm
 
-PENUMBRA_PLUGIN_EXPORT const PenumbraPluginInfo* penumbra_plugin_entry()
-{
-    static const PenumbraPluginInfo info{PENUMBRA_PLUGIN_ABI_VERSION,
-                                         "vssm",
-                                         "1.0.0",
-                                         "variance soft shadow mapping: summed-area table of 64-bit moments, min-max "
-                                         "hierarchy, eq. 4 blocker depth, uniform and adaptive kernel subdivision "
-                                         "(Yang et al. 2010)",
-                                         penumbra::vssm::kParams,
-                                         uint32_t(std::size(penumbra::vssm::kParams)),
-                                         &penumbra::vssm::createVssmShadow,
-                                         PENUMBRA_PLUGIN_SHADER_DIR};
-    return &info;
-}
+PENUMBRA_DEFINE_PLUGIN("vssm", "1.0.0",
+                       "variance soft shadow mapping: summed-area table of 64-bit moments, min-max hierarchy, eq. 4 "
+                       "blocker depth, uniform and adaptive kernel subdivision (Yang et al. 2010)",
+                       penumbra::vssm::kParams, penumbra::vssm::VssmShadow)
