@@ -8,6 +8,7 @@
 #include "penumbra/graph/PassContext.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/Technique.h"
+#include "penumbra/plugin/VisibilityPass.h"
 #include "penumbra/render/ShadowMap.h"
 
 #include <fmt/format.h>
@@ -20,12 +21,8 @@ using namespace penumbra;
 
 // Reflected parameters: configs set them as "shadow": {"technique": "example",
 // "resolution": 2048}, the command line as --set example.resolution=2048.
-const plugin::ParamSpec kParams[] = {
-    {"resolution", plugin::ParamType::Int, 1024, 16, 8192, "texels",
-     "shadow-map texels per side of each face (point, rect and disk lights: six faces in a 3 x 2 atlas)"},
-    {"depth_bias", plugin::ParamType::Float, 4.0, 0.0, 1e5, "r",
-     "constant depth bias away from the light, in Vulkan's minimum resolvable depth differences r"},
-};
+// Both are parameters every shadow-map technique has, worded once in render/ShadowMap.h.
+const plugin::ParamSpec kParams[] = {render::shadowResolutionParam(1024, 8192), render::kShadowDepthBiasParam};
 
 // Slope-scaled bias, fixed here to keep the example short (plugins/hard reflects it).
 constexpr float kSlopeBias = 2.0f;
@@ -33,13 +30,12 @@ constexpr float kSlopeBias = 2.0f;
 class ExampleShadow final : public plugin::Technique {
 public:
     explicit ExampleShadow(const plugin::TechniqueSetup& setup)
-        : context_(setup.context),
-          depthBias_(setup.params.getFloat("depth_bias")),
+        : depthBias_(setup.params.getFloat("depth_bias")),
           shadowMap_(setup, uint32_t(setup.params.getInt("resolution")), "example")
     {
         // What the visibility pass reads, for the engine's caster culling: one texel per
         // receiver point (half a texel around the point), compared with the point's own
-        // depth (docs/plugins.md, "Shadow maps").
+        // depth (docs/plugins.md, "Declaring what the lookups read").
         shadowMap_.setFootprint(0.5f);
         shadowMap_.setOwnDepthCompare(0);
 
@@ -49,11 +45,10 @@ public:
         gpu::ComputePipelineDesc visibility;
         visibility.name = fmt::format("light{}.example.visibility", setup.lightIndex);
         visibility.shader = "visibility.comp";
-        visibility_ = gpu::Pipeline(context_, setup.shaders, visibility);
+        visibility_ = gpu::Pipeline(setup.context, setup.shaders, visibility);
 
         // Nearest, with the comparison the shader's sampler2DShadow makes (reversed-Z).
-        compareSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-                                             VK_COMPARE_OP_GREATER_OR_EQUAL);
+        compareSampler_ = render::createShadowCompareSampler(setup.context);
     }
 
     void update(const scene::Light& light, const scene::Aabb& sceneBounds) override
@@ -69,31 +64,19 @@ public:
         const std::string map = io.local("shadow_map");
         shadowMap_.addDepthPass(graph, map, {depthBias_, kSlopeBias, 0.0f});
 
-        graph.addPass(io.local("visibility"), graph::QueueKind::Compute)
-            .read(io.gPosition, graph::Usage::Storage)
-            .read(io.gNormal, graph::Usage::Storage)  // the horizon: V = 0 facing away from the light
-            .read(map, graph::Usage::Sampled)
-            .write(io.visibility, graph::Usage::Storage)
-            .execute([this, io, map](graph::PassContext& pass) { recordVisibility(pass, io, map); });
+        // The pass that writes V_l (plugin/VisibilityPass.h): one invocation per pixel,
+        // reading the G-buffer's position and normal (the normal for the horizon: V = 0
+        // facing away from the light). It binds those and V_l; the technique adds the map
+        // and its buffer, by the names visibility.comp gives them (a name the shader does
+        // not declare throws).
+        const auto bind = [this, map](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
+            descriptors.sampledImage("shadowMap", pass.image(map), compareSampler_, pass.layout(map))
+                .storageBuffer("shadowMapBuffer", shadowMap_.buffer());
+        };
+        plugin::addVisibilityPass(graph, io, visibility_, bind).read(map, graph::Usage::Sampled);
     }
 
 private:
-    void recordVisibility(const graph::PassContext& pass, const plugin::LightPassIo& io, const std::string& map) const
-    {
-        VkCommandBuffer cmd = pass.cmd();
-        visibility_.bind(cmd);
-        // By the names visibility.comp gives them; a name it does not declare throws.
-        gpu::DescriptorPush()
-            .storageImage("gPosition", pass.image(io.gPosition))
-            .storageImage("gNormal", pass.image(io.gNormal))
-            .sampledImage("shadowMap", pass.image(map), compareSampler_, pass.layout(map))
-            .storageImage("visibilityOut", pass.image(io.visibility))
-            .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
-            .push(context_, cmd, visibility_);
-        visibility_.dispatchOver(cmd, pass.image(io.visibility));  // one invocation per pixel
-    }
-
-    gpu::Context& context_;
     const float depthBias_;
     render::ShadowMap shadowMap_;
     gpu::Pipeline visibility_;

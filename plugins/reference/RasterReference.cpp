@@ -128,8 +128,7 @@ RasterReference::RasterReference(const plugin::TechniqueSetup& setup, const Rast
 
     // One nearest compare per sample: the hard shadow of a point (or direction) of the
     // light; the softness comes from the samples alone.
-    compareSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-                                         VK_COMPARE_OP_GREATER_OR_EQUAL);
+    compareSampler_ = render::createShadowCompareSampler(context_);
     update(setup.light, setup.sceneBounds);
 }
 

@@ -12,6 +12,7 @@
 #include "penumbra/graph/RenderGraph.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/Technique.h"
+#include "penumbra/plugin/VisibilityPass.h"
 #include "penumbra/render/ShadowMap.h"
 
 #include <fmt/format.h>
@@ -208,8 +209,8 @@ private:
     void recordBlur(const graph::PassContext& pass, const std::string& in, const std::string& out,
                     glm::ivec2 axis) const;
     void recordDownsample(const graph::PassContext& pass, const std::string& finer, const std::string& coarser) const;
-    void recordVisibility(const graph::PassContext& pass, const plugin::LightPassIo& io,
-                          const std::vector<std::string>& levels) const;
+    void bindVisibility(const graph::PassContext& pass, gpu::DescriptorPush& descriptors,
+                        const std::vector<std::string>& levels) const;
 
     gpu::Context& context_;
     const Settings settings_;
@@ -269,7 +270,7 @@ VsmShadow::VsmShadow(const plugin::TechniqueSetup& setup)
     c.pushConstantBytes = sizeof(VisibilityPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
 
-    depthSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
+    depthSampler_ = render::createShadowDepthSampler(context_);
     linearSampler_ = gpu::createSampler(context_, VK_FILTER_LINEAR, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
 }
 
@@ -333,12 +334,11 @@ void VsmShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPas
         levels.push_back(coarser);
     }
 
-    graph::PassBuilder visibility = graph.addPass(io.local("visibility"), graph::QueueKind::Compute);
-    visibility.read(io.gPosition, graph::Usage::Storage)
-        .read(io.gNormal, graph::Usage::Storage)
-        .write(io.visibility, graph::Usage::Storage);
+    graph::PassBuilder visibility = plugin::addVisibilityPass(
+        graph, io, visibility_, [this, levels](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
+            bindVisibility(pass, descriptors, levels);
+        });
     for (const std::string& level : levels) visibility.read(level, graph::Usage::Sampled);
-    visibility.execute([this, io, levels](graph::PassContext& pass) { recordVisibility(pass, io, levels); });
 }
 
 void VsmShadow::recordMoments(const graph::PassContext& pass, const std::string& depth,
@@ -382,25 +382,16 @@ void VsmShadow::recordDownsample(const graph::PassContext& pass, const std::stri
     downsample_.dispatchOver(cmd, pass.image(coarser));
 }
 
-void VsmShadow::recordVisibility(const graph::PassContext& pass, const plugin::LightPassIo& io,
-                                 const std::vector<std::string>& levels) const
+void VsmShadow::bindVisibility(const graph::PassContext& pass, gpu::DescriptorPush& descriptors,
+                               const std::vector<std::string>& levels) const
 {
-    VkCommandBuffer cmd = pass.cmd();
-    const gpu::Image& out = pass.image(io.visibility);
     std::vector<const gpu::Image*> images;
     for (const std::string& level : levels) images.push_back(&pass.image(level));
-    visibility_.bind(cmd);
-    gpu::DescriptorPush()
-        .storageImage("gPosition", pass.image(io.gPosition))
-        .storageImage("visibilityOut", out)
-        .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
-        .storageImage("gNormal", pass.image(io.gNormal))
-        .sampledImages("momentLevels", images, linearSampler_, pass.layout(levels.front()))
-        .push(context_, cmd, visibility_);
+    descriptors.storageBuffer("shadowMapBuffer", shadowMap_.buffer())
+        .sampledImages("momentLevels", images, linearSampler_, pass.layout(levels.front()));
     const VisibilityPush push{settings_.exponents, settings_.minVariance, settings_.bleedingReduction,
                               settings_.lodBias, settings_.maxAnisotropy};
-    visibility_.pushConstants(cmd, &push, sizeof(push));
-    visibility_.dispatchOver(cmd, out);
+    visibility_.pushConstants(pass.cmd(), &push, sizeof(push));
 }
 
 } // namespace

@@ -14,6 +14,7 @@
 #include "penumbra/graph/RenderGraph.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/Technique.h"
+#include "penumbra/plugin/VisibilityPass.h"
 #include "penumbra/render/ShadowMap.h"
 
 #include <fmt/format.h>
@@ -48,9 +49,7 @@ const plugin::ParamSpec kParams[] = {
     {"resolution", ParamType::Int, 1024, 16, 8192, "texels",
      "shadow-map texels per side of each face (point, rect and disk lights: six faces in a 3 x 2 atlas); the "
      "summed-area table takes 16 bytes per texel"},
-    {"light_size", ParamType::Float, -1, -1, 1e9, "world or deg",
-     "-1: the light's own size (rect: sqrt(w h), disk: diameter, directional: angular_diameter_deg; spot and "
-     "point: 0, a hard shadow); >= 0: this size instead, in world units (directional: angular diameter in degrees)"},
+    render::kLightSizeParam,
     {"subdivision", ParamType::Enum, double(Subdivision::Mixed), 0, 0, "",
      "none: one box per kernel, non-planar kernels lit (SAVSM-like); uniform: m x m blocker and n x n filter "
      "sub-kernels; adaptive: quad-trees of height H for both; mixed: m x m blocker, quad-tree filter (paper 6.3)",
@@ -69,8 +68,7 @@ const plugin::ParamSpec kParams[] = {
      "receiver_plane: each sub-kernel and tap compares against the receiver's plane there; slope: the receiver's "
      "depth and the rasterizer's slope bias",
      kBiasModeNames, uint32_t(std::size(kBiasModeNames))},
-    {"depth_bias", ParamType::Float, 4, 0, 1e6, "r",
-     "constant depth bias in Vulkan's minimum resolvable depth differences r; applied in every bias_mode"},
+    render::kShadowDepthBiasParam,  // in every bias_mode
     {"slope_bias", ParamType::Float, 2, 0, 1000, "", "slope-scaled rasterizer depth bias factor; bias_mode slope only"},
     {"debug_view", ParamType::Enum, double(DebugView::Off), 0, 0, "",
      "off: V; kernel: the penumbra kernel's half-width / max_filter_radius; classification: lit 1, non-planar "
@@ -200,8 +198,8 @@ private:
     void checkDevice() const;
     void recordSat(const graph::PassContext& pass, const std::string& map, const std::string& sat) const;
     void recordHsm(const graph::PassContext& pass, const std::string& map, const std::string& hsm) const;
-    void recordVisibility(const graph::PassContext& pass, const plugin::LightPassIo& io, const std::string& map,
-                          const std::string& sat, const std::string& hsm) const;
+    void bindVisibility(const graph::PassContext& pass, gpu::DescriptorPush& descriptors, const std::string& map,
+                        const std::string& sat, const std::string& hsm) const;
     glm::ivec2 atlasSize() const { return {int(shadowMap_.atlasWidth()), int(shadowMap_.atlasHeight())}; }
 
     gpu::Context& context_;
@@ -254,9 +252,8 @@ VssmShadow::VssmShadow(const plugin::TechniqueSetup& setup)
     c.pushConstantBytes = sizeof(VisibilityPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
 
-    compareSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-                                         VK_COMPARE_OP_GREATER_OR_EQUAL);
-    depthSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
+    compareSampler_ = render::createShadowCompareSampler(context_);
+    depthSampler_ = render::createShadowDepthSampler(context_);
     lightSize_ = render::softShadowLightSize(setup.light, settings_.lightSizeOverride);
     sceneRadius_ = boundingRadius(setup.sceneBounds);
 }
@@ -309,15 +306,13 @@ void VssmShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
         .write(hsm, graph::Usage::Storage)
         .execute([this, map, hsm](graph::PassContext& pass) { recordHsm(pass, map, hsm); });
 
-    graph::PassBuilder visibility = graph.addPass(io.local("visibility"), graph::QueueKind::Compute);
-    visibility.read(io.gPosition, graph::Usage::Storage)
-        .read(io.gNormal, graph::Usage::Storage)
+    const auto bind = [this, map, sat, hsm](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
+        bindVisibility(pass, descriptors, map, sat, hsm);
+    };
+    plugin::addVisibilityPass(graph, io, visibility_, bind)
         .read(map, graph::Usage::Sampled)
         .read(sat, graph::Usage::Storage)
-        .read(hsm, graph::Usage::Storage)
-        .write(io.visibility, graph::Usage::Storage);
-    visibility.execute(
-        [this, io, map, sat, hsm](graph::PassContext& pass) { recordVisibility(pass, io, map, sat, hsm); });
+        .read(hsm, graph::Usage::Storage);
 }
 
 constexpr gpu::MemoryAccess kComputeWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
@@ -363,22 +358,14 @@ void VssmShadow::recordHsm(const graph::PassContext& pass, const std::string& ma
     }
 }
 
-void VssmShadow::recordVisibility(const graph::PassContext& pass, const plugin::LightPassIo& io,
-                                  const std::string& map, const std::string& sat, const std::string& hsm) const
+void VssmShadow::bindVisibility(const graph::PassContext& pass, gpu::DescriptorPush& descriptors,
+                                const std::string& map, const std::string& sat, const std::string& hsm) const
 {
-    VkCommandBuffer cmd = pass.cmd();
-    const gpu::Image& out = pass.image(io.visibility);
-    visibility_.bind(cmd);
-    gpu::DescriptorPush()
-        .storageImage("gPosition", pass.image(io.gPosition))
-        .sampledImage("shadowCompare", pass.image(map), compareSampler_, pass.layout(map))
-        .storageImage("visibilityOut", out)
+    descriptors.sampledImage("shadowCompare", pass.image(map), compareSampler_, pass.layout(map))
         .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
-        .storageImage("gNormal", pass.image(io.gNormal))
         .sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map))
         .storageImage("satImage", pass.image(sat))
-        .storageBuffer("HsmBuffer", pass.buffer(hsm))
-        .push(context_, cmd, visibility_);
+        .storageBuffer("HsmBuffer", pass.buffer(hsm));
     const int most = maxNodes(settings_.blockerScheme(), settings_.blockerSubdivisions, settings_.treeHeight) +
                      maxNodes(settings_.filterScheme(), settings_.filterSubdivisions, settings_.treeHeight);
     const VisibilityPush push{atlasSize(),
@@ -393,8 +380,7 @@ void VssmShadow::recordVisibility(const graph::PassContext& pass, const plugin::
                               settings_.treeHeight,
                               int32_t(settings_.debugView),
                               1.0f / float(most)};
-    visibility_.pushConstants(cmd, &push, sizeof(push));
-    visibility_.dispatchOver(cmd, out);
+    visibility_.pushConstants(pass.cmd(), &push, sizeof(push));
 }
 
 } // namespace

@@ -226,6 +226,16 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
     vkCmdEndRendering(cmd);
 }
 
+gpu::Sampler createShadowCompareSampler(gpu::Context& context, VkFilter filter)
+{
+    return gpu::createSampler(context, filter, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, VK_COMPARE_OP_GREATER_OR_EQUAL);
+}
+
+gpu::Sampler createShadowDepthSampler(gpu::Context& context)
+{
+    return gpu::createSampler(context, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
+}
+
 float softShadowLightSize(const scene::Light& light, float overrideSize)
 {
     // Directional lights: the angular diameter is clamped below 180° (tan(θ/2) is

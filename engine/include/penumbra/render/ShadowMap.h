@@ -19,6 +19,7 @@
 #include "penumbra/gpu/Pipeline.h"
 #include "penumbra/gpu/Resources.h"
 #include "penumbra/graph/RenderGraph.h"
+#include "penumbra/plugin/Plugin.h"
 #include "penumbra/render/Casters.h"
 #include "penumbra/render/Projection.h"
 #include "penumbra/scene/Scene.h"
@@ -90,6 +91,31 @@ static_assert(sizeof(ShadowFaceData) == 96 && sizeof(ShadowMapData) == 64 + 6 * 
 // 179°, so the tangent stays finite). `overrideSize` >= 0 replaces the light's own size
 // (world units; directional: degrees).
 float softShadowLightSize(const scene::Light& light, float overrideSize);
+
+// Parameters that shadow-map techniques reflect alike (plugin/Plugin.h ParamSpec), worded
+// once: the map's texels per face side (the default and the largest are the
+// technique's), the rasterizer's constant bias, and the light size that
+// softShadowLightSize reads (-1: the light's own).
+constexpr plugin::ParamSpec shadowResolutionParam(double defaultTexels, double maxTexels)
+{
+    return {"resolution", plugin::ParamType::Int, defaultTexels, 16, maxTexels, "texels",
+            "shadow-map texels per side of each face (point, rect and disk lights: six faces in a 3 x 2 atlas)"};
+}
+inline constexpr plugin::ParamSpec kShadowDepthBiasParam{
+    "depth_bias", plugin::ParamType::Float, 4, 0, 1e6, "r",
+    "constant rasterizer depth bias away from the light, in Vulkan's minimum resolvable depth differences r"};
+inline constexpr plugin::ParamSpec kLightSizeParam{
+    "light_size", plugin::ParamType::Float, -1, -1, 1e9, "world or deg",
+    "-1: the light's own size (rect: sqrt(w h), disk: diameter, directional: angular_diameter_deg; spot and "
+    "point: 0, a hard shadow); >= 0: this size instead, in world units (directional: angular diameter in degrees)"};
+
+// Samplers that read a shadow map by its conventions, clamped to the edge (lookups stay
+// in their face: the shaders clamp them). The comparison sampler's compareOp is
+// GREATER_OR_EQUAL (reversed-Z: a receiver is lit where its depth is at least the stored
+// caster depth); NEAREST compares one texel, LINEAR is the hardware's 2 x 2 bilinear
+// compare. The depth sampler reads the stored depths, one texel per tap.
+gpu::Sampler createShadowCompareSampler(gpu::Context& context, VkFilter filter = VK_FILTER_NEAREST);
+gpu::Sampler createShadowDepthSampler(gpu::Context& context);
 
 // Receiver-side bias of shadow_receiver.glsl (its SHADOW_RECEIVER_BIAS define).
 enum class ReceiverBias : uint32_t { None = 0, NormalOffset = 1, Plane = 2 };
