@@ -1,5 +1,6 @@
 // Pipelines as plugins use them: descriptor set layouts and workgroup sizes read from the
 // shaders (gpu/ShaderInterface.h), descriptors bound by name, dispatches over a grid.
+#include "ErrorText.h"
 #include "TestContext.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
@@ -12,11 +13,11 @@
 
 #include <array>
 #include <cstring>
-#include <functional>
 #include <string>
 #include <vector>
 
 using namespace penumbra;
+using test::errorOf;
 namespace fs = std::filesystem;
 
 namespace {
@@ -24,17 +25,6 @@ namespace {
 const fs::path kData = fs::path(PENUMBRA_TEST_DATA_DIR) / "shaders";
 
 gpu::ShaderCompiler compiler() { return gpu::ShaderCompiler({kData, gpu::engineShaderDir()}); }
-
-std::string errorOf(const std::function<void()>& run)
-{
-    try {
-        run();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    ADD_FAILURE() << "no penumbra::Error thrown";
-    return {};
-}
 
 } // namespace
 

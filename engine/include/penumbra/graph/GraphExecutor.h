@@ -15,12 +15,6 @@
 #include <string_view>
 #include <vector>
 
-namespace penumbra::gpu {
-class Buffer;
-class Context;
-class Image;
-} // namespace penumbra::gpu
-
 namespace penumbra::graph {
 
 struct PassTiming {
