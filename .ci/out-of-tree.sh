@@ -2,7 +2,8 @@
 # The plugin SDK as a plugin developer meets it (docs/plugins.md): install a built Penumbra
 # into a temporary prefix, build plugins/example as a project of its own against that
 # prefix (find_package(Penumbra) + penumbra_add_plugin), install it, and check that the
-# installed penumbra runs from its prefix and loads the plugin.
+# installed penumbra runs from its prefix (its library, shaders and plugins, never the
+# build tree's) and loads the plugin.
 #
 #   .ci/out-of-tree.sh [BUILD_DIR]     (default: build/release; CTest passes its own)
 #
@@ -33,6 +34,35 @@ done
 # The package must not point back into the source or build tree it came from.
 if grep -rlF -e "$root" -e "$build" "$prefix/lib/cmake/Penumbra"; then fail "the CMake package names the build machine's tree"; fi
 
+# An installed engine searches its own plugins, <prefix>/lib/penumbra/plugins, and never
+# the build tree's plugins/, which still exists here and declares the same names
+# (plugin/PluginRegistry.h): every plugin loads, once, from the prefix.
+step "the installed penumbra lists the installed plugins, from $prefix"
+unset PENUMBRA_SHADER_DIR PENUMBRA_PLUGIN_PATH
+"$prefix/bin/penumbra" plugins --strict >"$work/plugins.txt" 2>&1 \
+  || { cat "$work/plugins.txt"; fail "the installed penumbra plugins --strict exits non-zero"; }
+if grep -q "duplicate-name" "$work/plugins.txt"; then cat "$work/plugins.txt"; fail "the installed penumbra reports duplicate-name"; fi
+"$prefix/bin/penumbra" plugins --json >"$work/installed-plugins.json" 2>"$work/plugins.log" \
+  || { cat "$work/plugins.log"; fail "penumbra plugins --json (installed)"; }
+python3 - "$work/installed-plugins.json" "$prefix/lib/penumbra/plugins" <<'PY' || fail "the installed penumbra's plugins are not the prefix's"
+import json, os, sys
+doc = json.load(open(sys.argv[1]))
+own = os.path.realpath(sys.argv[2])
+installed = sorted(f[len("penumbra-"):-len(".so")] for f in os.listdir(own) if f.startswith("penumbra-") and f.endswith(".so"))
+problems = []
+if [os.path.realpath(d) for d in doc["search_path"]] != [own]:
+    problems.append(f"search path {doc['search_path']}, expected only {own}")
+if sorted(p["name"] for p in doc["plugins"]) != installed:
+    problems.append(f"plugins {sorted(p['name'] for p in doc['plugins'])}, installed {installed}")
+for p in doc["plugins"]:
+    if os.path.realpath(p["file"]) != os.path.join(own, f"penumbra-{p['name']}.so"):
+        problems.append(f"{p['name']} loaded from {p['file']}")
+problems += [f"{e['kind']}: {e['message']}" for e in doc["errors"]]
+for problem in problems:
+    print("out-of-tree:", problem, file=sys.stderr)
+sys.exit(1 if problems else 0)
+PY
+
 step "build plugins/example against $prefix"
 # The engine's compiler and the CI's warning flags: the example is the code people copy.
 cmake -S "$root/plugins/example" -B "$example" -G Ninja -DCMAKE_BUILD_TYPE=Release \
@@ -47,7 +77,7 @@ readelf -d "$plugin" | grep -q 'NEEDED.*\[libpenumbra_engine\.so\]' || fail "$pl
 
 step "install the example into its own prefix"
 cmake --install "$example" --prefix "$work/plugin-prefix" >/dev/null
-for f in penumbra-example.so example/shadow_depth.vert example/visibility.comp; do
+for f in penumbra-example.so example/visibility.comp; do
   [[ -e "$work/plugin-prefix/lib/penumbra/plugins/$f" ]] || fail "the example's install lacks lib/penumbra/plugins/$f"
 done
 
@@ -69,9 +99,8 @@ mv "$work/shading.comp" "$prefix/share/penumbra/shaders/engine/shading.comp"
 # The installed engine loads the out-of-tree build (ABI check, entry point, name) from
 # PENUMBRA_PLUGIN_PATH.
 step "the installed penumbra loads the example from PENUMBRA_PLUGIN_PATH"
-# Only the out-of-tree build may declare "example" (DuplicateName otherwise). The build
-# tree's copy must not be on an installed engine's search path either: the registry
-# searches the build tree's plugins/ only when the engine library is the build tree's.
+# Only the out-of-tree build may declare "example" (DuplicateName otherwise); the build
+# tree's copy is on no installed engine's search path (checked above).
 rm -r "$prefix/lib/penumbra/plugins/penumbra-example.so" "$prefix/lib/penumbra/plugins/example"
 PENUMBRA_PLUGIN_PATH="$example/plugins" "$prefix/bin/penumbra" plugins --json >"$work/plugins.json" 2>"$work/plugins.log" \
   || { cat "$work/plugins.log"; fail "penumbra plugins --json"; }

@@ -12,7 +12,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <string>
+#include <vector>
 
 using namespace penumbra;
 
@@ -87,6 +89,41 @@ TEST_F(FramePlugins, AnEnumParameterChangesWhatThePassWrites)
     frame::FrameRenderer renderer(*context, scene, cfg, registry);
     renderer.renderFrame();
     EXPECT_TRUE(allEqual(renderer.readVisibility(0), 1.0f));
+}
+
+// plugins/example is hard's default variant (one nearest compare, depth bias 4, slope
+// bias 2) written as briefly as the SDK allows, on the engine's render::ShadowMap: the
+// same V as hard for every light type, the cube atlas of point and area lights included.
+TEST_F(FramePlugins, TheExamplePluginShadowsEveryLightTypeAsHardDoes)
+{
+    for (const scene::LightType type :
+         {scene::LightType::Directional, scene::LightType::Spot, scene::LightType::Point, scene::LightType::Rect}) {
+        SCOPED_TRACE(scene::lightTypeName(type));
+        config::RenderConfig cfg = test::defaultTestConfig();
+        cfg.width = 160;
+        cfg.height = 90;
+        test::setLightType(cfg.lights[0], type);
+        const scene::Scene scene = config::buildScene(cfg.scene);
+        std::vector<float> visibility[2];
+        for (const int i : {0, 1}) {
+            cfg.lights[0].shadow = {};
+            cfg.lights[0].shadow.technique = i == 0 ? "example" : "hard";
+            cfg.lights[0].shadow.required = true;
+            cfg.lights[0].shadow.setParam("resolution", 512, "test");
+            render::FrameRenderer renderer(*context, scene, cfg, registry);
+            renderer.renderFrame();
+            visibility[i] = renderer.readVisibility(0);
+        }
+        ASSERT_EQ(visibility[0].size(), visibility[1].size());
+        float worst = 0.0f;
+        size_t shadowed = 0;
+        for (size_t p = 0; p < visibility[0].size(); ++p) {
+            worst = std::max(worst, std::abs(visibility[0][p] - visibility[1][p]));
+            shadowed += visibility[1][p] < 0.5f ? 1 : 0;
+        }
+        EXPECT_LE(worst, 1e-6f);
+        EXPECT_GT(shadowed, 200u) << "too few shadowed pixels for the comparison to mean anything";
+    }
 }
 
 // Each way a light's technique can fail: the light is unshadowed (V = 1, the contract's

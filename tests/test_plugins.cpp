@@ -317,7 +317,11 @@ TEST_F(Registry, LoadsTheGoodPlugin)
 {
     const plugin::LoadedPlugin& good = registry.load("testgood");
     EXPECT_EQ(good.name(), "testgood");
+    // What PENUMBRA_DEFINE_PLUGIN (tests/plugins/testgood.cpp) put in the info.
     EXPECT_STREQ(good.info->version, "1.2.0");
+    EXPECT_STREQ(good.info->summary, "test plugin: clears V_l to a constant");
+    EXPECT_EQ(good.info->paramCount, 5u);
+    EXPECT_NE(good.info->create, nullptr);
     EXPECT_EQ(good.info->abiVersion, PENUMBRA_PLUGIN_ABI_VERSION);
     EXPECT_EQ(good.file, kPlugins / "penumbra-testgood.so");
     // Its declared shader folder exists, so it is used as is.
@@ -500,6 +504,27 @@ TEST(PluginRegistry, DefaultSearchPathFollowsTheEnvironmentThenTheBuildTree)
         EXPECT_NE(dir, kPlugins) << "the test plugins are on no default path";
         EXPECT_NE(dir, kShadowedPlugins);
     }
+}
+
+// The engine library the tests link is the build tree's: after the environment it
+// searches the build tree's plugins/ alone, never <its folder>/penumbra/plugins, where an
+// installed copy keeps its own (.ci/out-of-tree.sh checks an installed engine: its own
+// plugins, from its prefix, and no duplicate names).
+TEST(PluginRegistry, TheBuildTreesEngineSearchesTheBuildTreesPluginsAlone)
+{
+    const ScopedEnv unset("PENUMBRA_PLUGIN_PATH", "");
+    const fs::path installedLayout = fs::path(PENUMBRA_ENGINE_LIBRARY_DIR) / "penumbra";
+    struct RemoveIfCreated {
+        fs::path dir;
+        bool created;
+        ~RemoveIfCreated()
+        {
+            std::error_code ec;
+            if (created) fs::remove_all(dir, ec);
+        }
+    } cleanup{installedLayout, !fs::exists(installedLayout)};
+    fs::create_directories(installedLayout / "plugins");
+    EXPECT_EQ(plugin::defaultPluginSearchPath(), std::vector<fs::path>{PENUMBRA_BUILD_PLUGIN_DIR});
 }
 
 // --- parameters from config to plugin ------------------------------------------------

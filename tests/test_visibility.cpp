@@ -126,6 +126,7 @@ const TechniqueCase kTechniques[] = {
     {"pcss_slope", "pcss", R"({"resolution": 512, "bias_mode": "slope"})"},
     {"vsm_blur", "vsm", R"({"resolution": 512, "blur_radius": 4})"},
     {"vsm_mips", "vsm", R"({"resolution": 512, "filter": "trilinear"})"},
+    {"example", "example", R"({"resolution": 512})"},  // the SDK's example: hard's one compare, declared by hand
 };
 
 void PrintTo(const TechniqueCase& c, std::ostream* os) { *os << c.name; }

@@ -11,10 +11,12 @@
 #include "penumbra/gpu/Context.h"
 #include "penumbra/gpu/Pipeline.h"
 #include "penumbra/gpu/Resources.h"
-#include "penumbra/graph/GraphExecutor.h"
+#include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
 #include "penumbra/plugin/Plugin.h"
+#include "penumbra/plugin/ShadowMapParams.h"
 #include "penumbra/plugin/Technique.h"
+#include "penumbra/plugin/VisibilityPass.h"
 #include "penumbra/render/ShadowMap.h"
 
 #include <fmt/format.h>
@@ -32,10 +34,8 @@ using plugin::ParamType;
 // Names, defaults and ranges of the first four are what shipped configs and the config
 // schema use: keep them.
 const plugin::ParamSpec kParams[] = {
-    {"resolution", ParamType::Int, 2048, 16, 16384, "texels",
-     "shadow-map texels per side of each face (point, rect and disk lights: six faces in a 3 x 2 atlas)"},
-    {"depth_bias", ParamType::Float, 4, 0, 1e6, "r",
-     "constant depth bias in Vulkan's minimum resolvable depth differences r; applied in every bias_mode"},
+    plugin::shadowResolutionParam(2048, 16384),
+    plugin::kShadowDepthBiasParam,  // in every bias_mode
     {"slope_bias", ParamType::Float, 2, 0, 1000, "",
      "slope-scaled depth bias factor (rasterizer), per texel of the filter's width; bias_mode slope only"},
     {"bias_clamp", ParamType::Float, 0, 0, 1, "depth", "largest rasterizer bias, in NDC depth; 0: no clamp"},
@@ -116,8 +116,6 @@ public:
     void registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io) override;
 
 private:
-    void recordVisibility(const graph::PassContext& pass, const plugin::LightPassIo& io, const std::string& map) const;
-
     gpu::Context& context_;
     const Settings settings_;
     render::ShadowMap shadowMap_;
@@ -145,14 +143,12 @@ HardShadow::HardShadow(const plugin::TechniqueSetup& setup)
     c.name = fmt::format("light{}.hard.visibility", setup.lightIndex);
     c.shader = "visibility.comp";
     c.defines = visibilityDefines(settings_.variant);
-    c.bindings = visibilityBindings();
     c.pushConstantBytes = sizeof(VisibilityPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
 
     // Nearest (one texel per compare) unless the hardware bilinear compare is wanted;
     // points outside the map never reach the sampler (the shader calls them lit).
-    compareSampler_ = gpu::createSampler(context_, settings_.variant.samplerFilter(),
-                                         VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, VK_COMPARE_OP_GREATER_OR_EQUAL);
+    compareSampler_ = render::createShadowCompareSampler(context_, settings_.variant.samplerFilter());
 }
 
 void HardShadow::update(const scene::Light& light, const scene::Aabb& sceneBounds)
@@ -170,48 +166,20 @@ void HardShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
     const std::string map = io.local("shadow_map");
     shadowMap_.addDepthPass(graph, map, {settings_.depthBias, slope, settings_.biasClamp});
 
-    graph::PassBuilder visibility = graph.addPass(io.local("visibility"), graph::QueueKind::Compute);
-    visibility.read(io.gPosition, graph::Usage::Storage)
-        .read(map, graph::Usage::Sampled)
-        .read(io.gNormal, graph::Usage::Storage)
-        .write(io.visibility, graph::Usage::Storage);
-    visibility.execute([this, io, map](graph::PassContext& pass) { recordVisibility(pass, io, map); });
+    const auto bind = [this, map](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
+        descriptors.sampledImage("shadowMap", pass.image(map), compareSampler_, pass.layout(map))
+            .storageBuffer("shadowMapBuffer", shadowMap_.buffer());
+        const VisibilityPush push{settings_.normalOffsetTexels * footprintWidthTexels(settings_),
+                                  settings_.filterRadiusTexels};
+        visibility_.pushConstants(pass.cmd(), &push, sizeof(push));
+    };
+    plugin::addVisibilityPass(graph, io, visibility_, bind).read(map, graph::Usage::Sampled);
 }
-
-void HardShadow::recordVisibility(const graph::PassContext& pass, const plugin::LightPassIo& io,
-                                  const std::string& map) const
-{
-    VkCommandBuffer cmd = pass.cmd();
-    const gpu::Image& out = pass.image(io.visibility);
-    visibility_.bind(cmd);
-    gpu::DescriptorPush descriptors;
-    descriptors.storageImage(kBindingPosition, pass.image(io.gPosition))
-        .sampledImage(kBindingShadowMap, pass.image(map), compareSampler_, pass.layout(map))
-        .storageImage(kBindingVisibility, out)
-        .storageBuffer(kBindingShadowMapData, shadowMap_.buffer())
-        .storageImage(kBindingNormal, pass.image(io.gNormal));
-    descriptors.push(context_, cmd, visibility_);
-    const VisibilityPush push{settings_.normalOffsetTexels * footprintWidthTexels(settings_),
-                              settings_.filterRadiusTexels};
-    visibility_.pushConstants(cmd, &push, sizeof(push));
-    vkCmdDispatch(cmd, (out.desc().width + 7) / 8, (out.desc().height + 7) / 8, 1);
-}
-
-plugin::Technique* createHardShadow(const plugin::TechniqueSetup& setup) { return new HardShadow(setup); }
 
 } // namespace
 } // namespace penumbra::hard
 
-PENUMBRA_PLUGIN_EXPORT const PenumbraPluginInfo* penumbra_plugin_entry()
-{
-    static const PenumbraPluginInfo info{PENUMBRA_PLUGIN_ABI_VERSION,
-                                         "hard",
-                                         "1.0.0",
-                                         "shadow map with constant, slope, normal-offset or receiver-plane bias and "
-                                         "none, PCF, Poisson or bilinear filtering",
-                                         penumbra::hard::kParams,
-                                         uint32_t(std::size(penumbra::hard::kParams)),
-                                         &penumbra::hard::createHardShadow,
-                                         PENUMBRA_PLUGIN_SHADER_DIR};
-    return &info;
-}
+PENUMBRA_DEFINE_PLUGIN("hard", "1.0.0",
+                       "shadow map with constant, slope, normal-offset or receiver-plane bias and none, PCF, Poisson "
+                       "or bilinear filtering",
+                       penumbra::hard::kParams, penumbra::hard::HardShadow)

@@ -1,10 +1,9 @@
 #pragma once
 // The C++ side of visibility.comp: which shader variant a parameter set compiles (the
 // filter and the receiver-side bias are chosen by defines, not by branches on uniforms:
-// each variant is straight-line code with its tap count known to the compiler), the
-// bindings and the push constants. hard.cpp and the shader tests
+// each variant is straight-line code with its tap count known to the compiler) and the
+// push constants. hard.cpp and the shader tests
 // include it, so that the tests compile exactly the variants the plugin can ask for.
-#include "penumbra/gpu/Pipeline.h"
 #include "penumbra/gpu/ShaderCompiler.h"
 #include "penumbra/render/ShadowMap.h"
 
@@ -57,27 +56,6 @@ inline std::vector<gpu::ShaderDefine> visibilityDefines(const VisibilityVariant&
     if (variant.filter == Filter::Pcf) defines.push_back({"PCF_KERNEL", std::to_string(variant.pcfKernel)});
     if (variant.filter == Filter::Poisson) defines.push_back({"POISSON_SAMPLES", std::to_string(variant.poissonSamples)});
     return defines;
-}
-
-// Bindings of visibility.comp.
-enum VisibilityBinding : uint32_t {
-    kBindingPosition = 0,       // G-buffer world position (storage, rgba32f)
-    kBindingShadowMap = 1,      // the depth atlas (sampler2DShadow)
-    kBindingVisibility = 2,     // V_l (storage, r32f)
-    kBindingShadowMapData = 3,  // render::ShadowMap::buffer() (storage buffer, SHADOW_MAP_BINDING)
-    // G-buffer world normal (storage, rgba16f): the part of the light above the
-    // receiver's horizon; normal offset moves the receiver along it; receiver plane
-    // tells neighbours on the receiver's surface from those across a silhouette by it.
-    kBindingNormal = 4,
-};
-
-inline std::vector<gpu::Binding> visibilityBindings()
-{
-    return {{kBindingPosition, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-            {kBindingShadowMap, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-            {kBindingVisibility, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-            {kBindingShadowMapData, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-            {kBindingNormal, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
 }
 
 struct VisibilityPush {

@@ -6,10 +6,12 @@
 // compares with a rotated Poisson disk (visibility.comp).
 #include "penumbra/gpu/Context.h"
 #include "penumbra/gpu/Pipeline.h"
-#include "penumbra/graph/GraphExecutor.h"
+#include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
 #include "penumbra/plugin/Plugin.h"
+#include "penumbra/plugin/ShadowMapParams.h"
 #include "penumbra/plugin/Technique.h"
+#include "penumbra/plugin/VisibilityPass.h"
 #include "penumbra/render/ShadowMap.h"
 
 #include <fmt/format.h>
@@ -30,11 +32,8 @@ constexpr const char* kBiasModeNames[] = {"receiver_plane", "slope"};
 
 constexpr int kSamplesMin = 4, kSamplesMax = render::kPoissonDiskPoints;
 const plugin::ParamSpec kParams[] = {
-    {"resolution", ParamType::Int, 2048, 16, 16384, "texels",
-     "shadow-map texels per side of each face (point, rect and disk lights: six faces in a 3 x 2 atlas)"},
-    {"light_size", ParamType::Float, -1, -1, 1e9, "world or deg",
-     "-1: the light's own size (rect: sqrt(w h), disk: diameter, directional: angular_diameter_deg; spot and "
-     "point: 0, a hard shadow); >= 0: this size instead, in world units (directional: angular diameter in degrees)"},
+    plugin::shadowResolutionParam(2048, 16384),
+    plugin::kLightSizeParam,
     {"blocker_samples", ParamType::Int, 16, kSamplesMin, kSamplesMax, "", "depth taps of the blocker search"},
     {"filter_samples", ParamType::Int, 32, kSamplesMin, kSamplesMax, "", "compares of the penumbra filter"},
     {"max_search_radius", ParamType::Float, 16, 0.5, 128, "texels",
@@ -44,8 +43,7 @@ const plugin::ParamSpec kParams[] = {
     {"bias_mode", ParamType::Enum, double(BiasMode::ReceiverPlane), 0, 0, "",
      "receiver_plane: every tap compares against the receiver's plane at that tap; slope: rasterizer slope bias",
      kBiasModeNames, uint32_t(std::size(kBiasModeNames))},
-    {"depth_bias", ParamType::Float, 4, 0, 1e6, "r",
-     "constant depth bias in Vulkan's minimum resolvable depth differences r; applied in every bias_mode"},
+    plugin::kShadowDepthBiasParam,  // in every bias_mode
     {"slope_bias", ParamType::Float, 2, 0, 1000, "",
      "slope-scaled rasterizer depth bias factor; bias_mode slope only (it must cover the widest filter)"},
 };
@@ -77,16 +75,6 @@ Settings readSettings(const plugin::ParamValues& params)
     return s;
 }
 
-// Bindings of visibility.comp.
-enum Binding : uint32_t {
-    kBindingPosition = 0,       // G-buffer world position (storage, rgba32f)
-    kBindingShadowCompare = 1,  // the depth atlas, compare sampler (sampler2DShadow)
-    kBindingVisibility = 2,     // V_l (storage, r32f)
-    kBindingShadowMapData = 3,  // render::ShadowMap::buffer() (storage buffer)
-    kBindingNormal = 4,         // G-buffer world normal (storage, rgba16f): horizon, receiver plane
-    kBindingShadowDepth = 5,    // the depth atlas, nearest sampler without compare (sampler2D)
-};
-
 struct PcssPush {
     float lightSize = 0.0f;  // render::softShadowLightSize()
     float maxSearchTexels = 0.0f;
@@ -105,7 +93,6 @@ public:
 
 private:
     bool usesReceiverPlane() const { return settings_.bias == BiasMode::ReceiverPlane; }
-    void recordVisibility(const graph::PassContext& pass, const plugin::LightPassIo& io, const std::string& map) const;
 
     gpu::Context& context_;
     const Settings settings_;
@@ -131,20 +118,13 @@ PcssShadow::PcssShadow(const plugin::TechniqueSetup& setup)
     c.shader = "visibility.comp";
     c.defines = {{"RECEIVER_BIAS", std::to_string(uint32_t(usesReceiverPlane() ? render::ReceiverBias::Plane
                                                                                 : render::ReceiverBias::None))}};
-    c.bindings = {{kBindingPosition, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {kBindingShadowCompare, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                  {kBindingVisibility, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {kBindingShadowMapData, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                  {kBindingShadowDepth, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                  {kBindingNormal, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
     c.pushConstantBytes = sizeof(PcssPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
 
     // Every tap reads one texel (at its centre): the search averages texel depths, the
     // filter counts texel compares. Taps never leave the map (the shader clamps them).
-    compareSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-                                         VK_COMPARE_OP_GREATER_OR_EQUAL);
-    depthSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
+    compareSampler_ = render::createShadowCompareSampler(context_);
+    depthSampler_ = render::createShadowDepthSampler(context_);
     lightSize_ = render::softShadowLightSize(setup.light, settings_.lightSizeOverride);
 }
 
@@ -160,49 +140,22 @@ void PcssShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
     shadowMap_.addDepthPass(graph, map,
                             {settings_.depthBias, settings_.bias == BiasMode::Slope ? settings_.slopeBias : 0.0f, 0.0f});
 
-    graph::PassBuilder visibility = graph.addPass(io.local("visibility"), graph::QueueKind::Compute);
-    visibility.read(io.gPosition, graph::Usage::Storage)
-        .read(map, graph::Usage::Sampled)
-        .read(io.gNormal, graph::Usage::Storage)
-        .write(io.visibility, graph::Usage::Storage);
-    visibility.execute([this, io, map](graph::PassContext& pass) { recordVisibility(pass, io, map); });
+    // The search reads the map's depths, the filter compares with them.
+    const auto bind = [this, map](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
+        descriptors.sampledImage("shadowCompare", pass.image(map), compareSampler_, pass.layout(map))
+            .sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map))
+            .storageBuffer("shadowMapBuffer", shadowMap_.buffer());
+        const PcssPush push{lightSize_, settings_.maxSearchTexels, settings_.maxFilterTexels,
+                            settings_.blockerSamples, settings_.filterSamples};
+        visibility_.pushConstants(pass.cmd(), &push, sizeof(push));
+    };
+    plugin::addVisibilityPass(graph, io, visibility_, bind).read(map, graph::Usage::Sampled);
 }
-
-void PcssShadow::recordVisibility(const graph::PassContext& pass, const plugin::LightPassIo& io,
-                                  const std::string& map) const
-{
-    VkCommandBuffer cmd = pass.cmd();
-    const gpu::Image& out = pass.image(io.visibility);
-    visibility_.bind(cmd);
-    gpu::DescriptorPush descriptors;
-    descriptors.storageImage(kBindingPosition, pass.image(io.gPosition))
-        .sampledImage(kBindingShadowCompare, pass.image(map), compareSampler_, pass.layout(map))
-        .storageImage(kBindingVisibility, out)
-        .storageBuffer(kBindingShadowMapData, shadowMap_.buffer())
-        .sampledImage(kBindingShadowDepth, pass.image(map), depthSampler_, pass.layout(map))
-        .storageImage(kBindingNormal, pass.image(io.gNormal));
-    descriptors.push(context_, cmd, visibility_);
-    const PcssPush push{lightSize_, settings_.maxSearchTexels, settings_.maxFilterTexels, settings_.blockerSamples,
-                        settings_.filterSamples};
-    visibility_.pushConstants(cmd, &push, sizeof(push));
-    vkCmdDispatch(cmd, (out.desc().width + 7) / 8, (out.desc().height + 7) / 8, 1);
-}
-
-plugin::Technique* createPcssShadow(const plugin::TechniqueSetup& setup) { return new PcssShadow(setup); }
 
 } // namespace
 } // namespace penumbra::pcss
 
-PENUMBRA_PLUGIN_EXPORT const PenumbraPluginInfo* penumbra_plugin_entry()
-{
-    static const PenumbraPluginInfo info{PENUMBRA_PLUGIN_ABI_VERSION,
-                                         "pcss",
-                                         "1.0.0",
-                                         "percentage-closer soft shadows: blocker search, penumbra estimate, "
-                                         "Poisson-disk filter (Fernando 2005)",
-                                         penumbra::pcss::kParams,
-                                         uint32_t(std::size(penumbra::pcss::kParams)),
-                                         &penumbra::pcss::createPcssShadow,
-                                         PENUMBRA_PLUGIN_SHADER_DIR};
-    return &info;
-}
+PENUMBRA_DEFINE_PLUGIN("pcss", "1.0.0",
+                       "percentage-closer soft shadows: blocker search, penumbra estimate, Poisson-disk filter "
+                       "(Fernando 2005)",
+                       penumbra::pcss::kParams, penumbra::pcss::PcssShadow)

@@ -2,7 +2,7 @@
 
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Context.h"
-#include "penumbra/graph/GraphExecutor.h"
+#include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
 
 #include <fmt/format.h>
@@ -30,17 +30,6 @@ constexpr uint32_t kMaxSamples = 4096;
 // plugin's default; the receiver plane bias does the real work (no slope-scaled term: it
 // would push shadows away from their casters, which a reference must not).
 constexpr render::ShadowDepthBias kDepthBias{4.0f, 0.0f, 0.0f};
-
-// Bindings of accumulate.comp and resolve.comp.
-enum AccumulateBinding : uint32_t {
-    kBindingPosition = 0,     // G-buffer world position (storage, rgba32f)
-    kBindingNormal = 1,       // G-buffer world normal (storage, rgba16f)
-    kBindingMaps = 2,         // a batch's depth maps (sampler2DShadow, nearest, compare >=)
-    kBindingPrevious = 3,     // the sums of the batches before (storage, rg32f)
-    kBindingSums = 4,         // the sums with this batch's samples added (storage, rg32f)
-    kBindingSampleMaps = 5,   // ShadowMapData per sample (storage buffer, SHADOW_MAP_ARRAY)
-};
-enum ResolveBinding : uint32_t { kResolveSums = 0, kResolveVisibility = 1 };
 
 struct AccumulatePush {
     glm::vec4 sphere{0.0f};  // xyz centre, w radius of a sphere light; w = 0: every sample weighs 1
@@ -123,33 +112,23 @@ RasterReference::RasterReference(const plugin::TechniqueSetup& setup, const Rast
     gpu::ComputePipelineDesc c;
     c.name = fmt::format("light{}.reference.accumulate", lightIndex_);
     c.shader = "accumulate.comp";
-    c.bindings = {{kBindingPosition, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {kBindingNormal, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {kBindingMaps, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                  {kBindingPrevious, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {kBindingSums, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {kBindingSampleMaps, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
     c.pushConstantBytes = sizeof(AccumulatePush);
     accumulate_ = gpu::Pipeline(context_, setup.shaders, c);
     // The first batch has no sums to read: a variant without that binding (binding its
     // own output there instead would be a read the graph's barriers do not order).
     c.name += ".first";
     c.defines = {{"FIRST_BATCH", "1"}};
-    std::erase_if(c.bindings, [](const gpu::Binding& b) { return b.binding == kBindingPrevious; });
     accumulateFirst_ = gpu::Pipeline(context_, setup.shaders, c);
     c.defines.clear();
 
     c.name = fmt::format("light{}.reference.resolve", lightIndex_);
     c.shader = "resolve.comp";
-    c.bindings = {{kResolveSums, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {kResolveVisibility, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
     c.pushConstantBytes = 0;
     resolve_ = gpu::Pipeline(context_, setup.shaders, c);
 
     // One nearest compare per sample: the hard shadow of a point (or direction) of the
     // light; the softness comes from the samples alone.
-    compareSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-                                         VK_COMPARE_OP_GREATER_OR_EQUAL);
+    compareSampler_ = render::createShadowCompareSampler(context_);
     update(setup.light, setup.sceneBounds);
 }
 
@@ -231,12 +210,12 @@ void RasterReference::recordAccumulate(const graph::PassContext& pass, const plu
     const gpu::Pipeline& pipeline = previous.empty() ? accumulateFirst_ : accumulate_;
     pipeline.bind(cmd);
     gpu::DescriptorPush descriptors;
-    descriptors.storageImage(kBindingPosition, pass.image(io.gPosition))
-        .storageImage(kBindingNormal, pass.image(io.gNormal))
-        .sampledImage(kBindingMaps, pass.image(maps), compareSampler_, pass.layout(maps))
-        .storageImage(kBindingSums, out)
-        .storageBuffer(kBindingSampleMaps, sampleMaps_);
-    if (!previous.empty()) descriptors.storageImage(kBindingPrevious, pass.image(previous));
+    descriptors.storageImage("gPosition", pass.image(io.gPosition))
+        .storageImage("gNormal", pass.image(io.gNormal))
+        .sampledImage("sampleMaps", pass.image(maps), compareSampler_, pass.layout(maps))
+        .storageImage("sums", out)
+        .storageBuffer("shadowMapArray", sampleMaps_);
+    if (!previous.empty()) descriptors.storageImage("previousSums", pass.image(previous));
     descriptors.push(context_, cmd, pipeline);
     AccumulatePush push;
     if (light_.type == scene::LightType::Point && light_.radiusWorld > 0.0f)
@@ -246,7 +225,7 @@ void RasterReference::recordAccumulate(const graph::PassContext& pass, const plu
     push.gridColumns = gridColumns_;
     push.gridRows = batch.rows;
     pipeline.pushConstants(cmd, &push, sizeof(push));
-    vkCmdDispatch(cmd, (out.desc().width + 7) / 8, (out.desc().height + 7) / 8, 1);
+    pipeline.dispatchOver(cmd, out);
 }
 
 void RasterReference::recordResolve(const graph::PassContext& pass, const plugin::LightPassIo& io,
@@ -256,10 +235,10 @@ void RasterReference::recordResolve(const graph::PassContext& pass, const plugin
     const gpu::Image& out = pass.image(io.visibility);
     resolve_.bind(cmd);
     gpu::DescriptorPush()
-        .storageImage(kResolveSums, pass.image(sums))
-        .storageImage(kResolveVisibility, out)
+        .storageImage("sums", pass.image(sums))
+        .storageImage("visibilityOut", out)
         .push(context_, cmd, resolve_);
-    vkCmdDispatch(cmd, (out.desc().width + 7) / 8, (out.desc().height + 7) / 8, 1);
+    resolve_.dispatchOver(cmd, out);
 }
 
 } // namespace penumbra::reference

@@ -12,7 +12,7 @@
 
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Resources.h"
-#include "penumbra/graph/GraphExecutor.h"
+#include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/Technique.h"
@@ -413,20 +413,11 @@ plugin::Technique* createReferenceShadow(const plugin::TechniqueSetup& setup)
 } // namespace
 } // namespace penumbra::reference
 
-PENUMBRA_PLUGIN_EXPORT const PenumbraPluginInfo* penumbra_plugin_entry()
-{
-    static const PenumbraPluginInfo info{PENUMBRA_PLUGIN_ABI_VERSION,
-                                         "reference",
-                                         "1.0.0",
-                                         "exact area-light visibility: stratified shadow rays traced with Embree on the "
-                                         "CPU, translucent casters included, cached on disk; or (mode brute_force) the "
-                                         "mean of hard shadow maps from light samples on the GPU",
-                                         penumbra::reference::kParams,
-                                         uint32_t(std::size(penumbra::reference::kParams)),
-                                         &penumbra::reference::createReferenceShadow,
-                                         PENUMBRA_PLUGIN_SHADER_DIR};
-    return &info;
-}
+PENUMBRA_DEFINE_PLUGIN_FACTORY("reference", "1.0.0",
+                               "exact area-light visibility: stratified shadow rays traced with Embree on the CPU, "
+                               "translucent casters included, cached on disk; or (mode brute_force) the mean of hard "
+                               "shadow maps from light samples on the GPU",
+                               penumbra::reference::kParams, &penumbra::reference::createReferenceShadow)
 
 PENUMBRA_PLUGIN_EXPORT PenumbraReferenceStats penumbra_reference_stats()
 {

@@ -8,10 +8,11 @@
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/gpu/Pipeline.h"
-#include "penumbra/graph/GraphExecutor.h"
+#include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/Technique.h"
+#include "penumbra/plugin/VisibilityPass.h"
 #include "penumbra/render/ShadowMap.h"
 
 #include <fmt/format.h>
@@ -208,8 +209,8 @@ private:
     void recordBlur(const graph::PassContext& pass, const std::string& in, const std::string& out,
                     glm::ivec2 axis) const;
     void recordDownsample(const graph::PassContext& pass, const std::string& finer, const std::string& coarser) const;
-    void recordVisibility(const graph::PassContext& pass, const plugin::LightPassIo& io,
-                          const std::vector<std::string>& levels) const;
+    void bindVisibility(const graph::PassContext& pass, gpu::DescriptorPush& descriptors,
+                        const std::vector<std::string>& levels) const;
 
     gpu::Context& context_;
     const Settings settings_;
@@ -242,13 +243,9 @@ VsmShadow::VsmShadow(const plugin::TechniqueSetup& setup)
     c.name = name + "moments";
     c.shader = "moments.comp";
     c.defines = defines;
-    c.bindings = {{0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                  {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
     c.pushConstantBytes = sizeof(glm::vec2);
     moments_ = gpu::Pipeline(context_, setup.shaders, c);
 
-    c.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}, {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
     if (settings_.blurs()) {
         c.name = name + "blur";
         c.shader = "blur.comp";
@@ -270,15 +267,10 @@ VsmShadow::VsmShadow(const plugin::TechniqueSetup& setup)
     c.defines = defines;
     c.defines.push_back({"FILTER", std::to_string(settings_.mips() ? uint32_t(settings_.filter) - 1 : 0u)});
     c.defines.push_back({"LEVELS", std::to_string(levels_)});
-    c.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                  {3, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {4, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, uint32_t(levels_)}};
     c.pushConstantBytes = sizeof(VisibilityPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
 
-    depthSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
+    depthSampler_ = render::createShadowDepthSampler(context_);
     linearSampler_ = gpu::createSampler(context_, VK_FILTER_LINEAR, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
 }
 
@@ -342,17 +334,11 @@ void VsmShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPas
         levels.push_back(coarser);
     }
 
-    graph::PassBuilder visibility = graph.addPass(io.local("visibility"), graph::QueueKind::Compute);
-    visibility.read(io.gPosition, graph::Usage::Storage)
-        .read(io.gNormal, graph::Usage::Storage)
-        .write(io.visibility, graph::Usage::Storage);
+    graph::PassBuilder visibility = plugin::addVisibilityPass(
+        graph, io, visibility_, [this, levels](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
+            bindVisibility(pass, descriptors, levels);
+        });
     for (const std::string& level : levels) visibility.read(level, graph::Usage::Sampled);
-    visibility.execute([this, io, levels](graph::PassContext& pass) { recordVisibility(pass, io, levels); });
-}
-
-void dispatchOver(VkCommandBuffer cmd, const gpu::Image& image)
-{
-    vkCmdDispatch(cmd, (image.desc().width + 7) / 8, (image.desc().height + 7) / 8, 1);
 }
 
 void VsmShadow::recordMoments(const graph::PassContext& pass, const std::string& depth,
@@ -361,12 +347,12 @@ void VsmShadow::recordMoments(const graph::PassContext& pass, const std::string&
     VkCommandBuffer cmd = pass.cmd();
     moments_.bind(cmd);
     gpu::DescriptorPush()
-        .sampledImage(0, pass.image(depth), depthSampler_, pass.layout(depth))
-        .storageImage(1, pass.image(moments))
-        .storageBuffer(2, shadowMap_.buffer())
+        .sampledImage("shadowDepth", pass.image(depth), depthSampler_, pass.layout(depth))
+        .storageImage("momentsOut", pass.image(moments))
+        .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
         .push(context_, cmd, moments_);
     moments_.pushConstants(cmd, &settings_.exponents, sizeof(glm::vec2));
-    dispatchOver(cmd, pass.image(moments));
+    moments_.dispatchOver(cmd, pass.image(moments));
 }
 
 void VsmShadow::recordBlur(const graph::PassContext& pass, const std::string& in, const std::string& out,
@@ -374,10 +360,13 @@ void VsmShadow::recordBlur(const graph::PassContext& pass, const std::string& in
 {
     VkCommandBuffer cmd = pass.cmd();
     blur_.bind(cmd);
-    gpu::DescriptorPush().storageImage(0, pass.image(in)).storageImage(1, pass.image(out)).push(context_, cmd, blur_);
+    gpu::DescriptorPush()
+        .storageImage("momentsIn", pass.image(in))
+        .storageImage("momentsOut", pass.image(out))
+        .push(context_, cmd, blur_);
     const BlurPush push{axis, settings_.blurRadius, int32_t(shadowMap_.resolution()), settings_.exponents.x};
     blur_.pushConstants(cmd, &push, sizeof(push));
-    dispatchOver(cmd, pass.image(out));
+    blur_.dispatchOver(cmd, pass.image(out));
 }
 
 void VsmShadow::recordDownsample(const graph::PassContext& pass, const std::string& finer,
@@ -386,49 +375,27 @@ void VsmShadow::recordDownsample(const graph::PassContext& pass, const std::stri
     VkCommandBuffer cmd = pass.cmd();
     downsample_.bind(cmd);
     gpu::DescriptorPush()
-        .storageImage(0, pass.image(finer))
-        .storageImage(1, pass.image(coarser))
+        .storageImage("finer", pass.image(finer))
+        .storageImage("coarser", pass.image(coarser))
         .push(context_, cmd, downsample_);
     downsample_.pushConstants(cmd, &settings_.exponents.x, sizeof(float));
-    dispatchOver(cmd, pass.image(coarser));
+    downsample_.dispatchOver(cmd, pass.image(coarser));
 }
 
-void VsmShadow::recordVisibility(const graph::PassContext& pass, const plugin::LightPassIo& io,
-                                 const std::vector<std::string>& levels) const
+void VsmShadow::bindVisibility(const graph::PassContext& pass, gpu::DescriptorPush& descriptors,
+                               const std::vector<std::string>& levels) const
 {
-    VkCommandBuffer cmd = pass.cmd();
-    const gpu::Image& out = pass.image(io.visibility);
     std::vector<const gpu::Image*> images;
     for (const std::string& level : levels) images.push_back(&pass.image(level));
-    visibility_.bind(cmd);
-    gpu::DescriptorPush descriptors;
-    descriptors.storageImage(0, pass.image(io.gPosition))
-        .storageImage(1, out)
-        .storageBuffer(2, shadowMap_.buffer())
-        .storageImage(3, pass.image(io.gNormal))
-        .sampledImages(4, images, linearSampler_, pass.layout(levels.front()));
-    descriptors.push(context_, cmd, visibility_);
+    descriptors.storageBuffer("shadowMapBuffer", shadowMap_.buffer())
+        .sampledImages("momentLevels", images, linearSampler_, pass.layout(levels.front()));
     const VisibilityPush push{settings_.exponents, settings_.minVariance, settings_.bleedingReduction,
                               settings_.lodBias, settings_.maxAnisotropy};
-    visibility_.pushConstants(cmd, &push, sizeof(push));
-    dispatchOver(cmd, out);
+    visibility_.pushConstants(pass.cmd(), &push, sizeof(push));
 }
-
-plugin::Technique* createVsmShadow(const plugin::TechniqueSetup& setup) { return new VsmShadow(setup); }
 
 } // namespace
 } // namespace penumbra::vsm
 
-PENUMBRA_PLUGIN_EXPORT const PenumbraPluginInfo* penumbra_plugin_entry()
-{
-    static const PenumbraPluginInfo info{PENUMBRA_PLUGIN_ABI_VERSION,
-                                         "vsm",
-                                         "1.0.0",
-                                         "variance shadow maps: VSM, EVSM and ESM with separable blur or mip "
-                                         "filtering",
-                                         penumbra::vsm::kParams,
-                                         uint32_t(std::size(penumbra::vsm::kParams)),
-                                         &penumbra::vsm::createVsmShadow,
-                                         PENUMBRA_PLUGIN_SHADER_DIR};
-    return &info;
-}
+PENUMBRA_DEFINE_PLUGIN("vsm", "1.0.0", "variance shadow maps: VSM, EVSM and ESM with separable blur or mip filtering",
+                       penumbra::vsm::kParams, penumbra::vsm::VsmShadow)

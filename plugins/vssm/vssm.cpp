@@ -10,10 +10,12 @@
 #include "penumbra/gpu/Barrier.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/gpu/Pipeline.h"
-#include "penumbra/graph/GraphExecutor.h"
+#include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
 #include "penumbra/plugin/Plugin.h"
+#include "penumbra/plugin/ShadowMapParams.h"
 #include "penumbra/plugin/Technique.h"
+#include "penumbra/plugin/VisibilityPass.h"
 #include "penumbra/render/ShadowMap.h"
 
 #include <fmt/format.h>
@@ -48,9 +50,7 @@ const plugin::ParamSpec kParams[] = {
     {"resolution", ParamType::Int, 1024, 16, 8192, "texels",
      "shadow-map texels per side of each face (point, rect and disk lights: six faces in a 3 x 2 atlas); the "
      "summed-area table takes 16 bytes per texel"},
-    {"light_size", ParamType::Float, -1, -1, 1e9, "world or deg",
-     "-1: the light's own size (rect: sqrt(w h), disk: diameter, directional: angular_diameter_deg; spot and "
-     "point: 0, a hard shadow); >= 0: this size instead, in world units (directional: angular diameter in degrees)"},
+    plugin::kLightSizeParam,
     {"subdivision", ParamType::Enum, double(Subdivision::Mixed), 0, 0, "",
      "none: one box per kernel, non-planar kernels lit (SAVSM-like); uniform: m x m blocker and n x n filter "
      "sub-kernels; adaptive: quad-trees of height H for both; mixed: m x m blocker, quad-tree filter (paper 6.3)",
@@ -69,8 +69,7 @@ const plugin::ParamSpec kParams[] = {
      "receiver_plane: each sub-kernel and tap compares against the receiver's plane there; slope: the receiver's "
      "depth and the rasterizer's slope bias",
      kBiasModeNames, uint32_t(std::size(kBiasModeNames))},
-    {"depth_bias", ParamType::Float, 4, 0, 1e6, "r",
-     "constant depth bias in Vulkan's minimum resolvable depth differences r; applied in every bias_mode"},
+    plugin::kShadowDepthBiasParam,  // in every bias_mode
     {"slope_bias", ParamType::Float, 2, 0, 1000, "", "slope-scaled rasterizer depth bias factor; bias_mode slope only"},
     {"debug_view", ParamType::Enum, double(DebugView::Off), 0, 0, "",
      "off: V; kernel: the penumbra kernel's half-width / max_filter_radius; classification: lit 1, non-planar "
@@ -143,18 +142,6 @@ int maxNodes(Scheme scheme, int perSide, int height)
     return 1;
 }
 
-// Bindings of visibility.comp.
-enum Binding : uint32_t {
-    kBindingPosition = 0,
-    kBindingShadowCompare = 1,
-    kBindingVisibility = 2,
-    kBindingShadowMapData = 3,
-    kBindingNormal = 4,
-    kBindingShadowDepth = 5,
-    kBindingSat = 6,
-    kBindingHsm = 7,
-};
-
 struct VisibilityPush {
     glm::ivec2 atlasSize{0};
     float lightSize = 0.0f;
@@ -212,8 +199,8 @@ private:
     void checkDevice() const;
     void recordSat(const graph::PassContext& pass, const std::string& map, const std::string& sat) const;
     void recordHsm(const graph::PassContext& pass, const std::string& map, const std::string& hsm) const;
-    void recordVisibility(const graph::PassContext& pass, const plugin::LightPassIo& io, const std::string& map,
-                          const std::string& sat, const std::string& hsm) const;
+    void bindVisibility(const graph::PassContext& pass, gpu::DescriptorPush& descriptors, const std::string& map,
+                        const std::string& sat, const std::string& hsm) const;
     glm::ivec2 atlasSize() const { return {int(shadowMap_.atlasWidth()), int(shadowMap_.atlasHeight())}; }
 
     gpu::Context& context_;
@@ -248,15 +235,11 @@ VssmShadow::VssmShadow(const plugin::TechniqueSetup& setup)
     gpu::ComputePipelineDesc c;
     c.name = name + "sat";
     c.shader = "sat.comp";
-    c.bindings = {{0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                  {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
     c.pushConstantBytes = sizeof(SatPush);
     sat_ = gpu::Pipeline(context_, setup.shaders, c);
 
     c.name = name + "hsm";
     c.shader = "hsm.comp";
-    c.bindings[1].type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     c.pushConstantBytes = sizeof(HsmPush);
     hsm_ = gpu::Pipeline(context_, setup.shaders, c);
 
@@ -267,20 +250,11 @@ VssmShadow::VssmShadow(const plugin::TechniqueSetup& setup)
                                                               : render::ReceiverBias::None))},
                  {"BLOCKER_SUBDIVISION", std::to_string(uint32_t(settings_.blockerScheme()))},
                  {"FILTER_SUBDIVISION", std::to_string(uint32_t(settings_.filterScheme()))}};
-    c.bindings = {{kBindingPosition, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {kBindingShadowCompare, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                  {kBindingVisibility, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {kBindingShadowMapData, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                  {kBindingNormal, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {kBindingShadowDepth, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                  {kBindingSat, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {kBindingHsm, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
     c.pushConstantBytes = sizeof(VisibilityPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
 
-    compareSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-                                         VK_COMPARE_OP_GREATER_OR_EQUAL);
-    depthSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
+    compareSampler_ = render::createShadowCompareSampler(context_);
+    depthSampler_ = render::createShadowDepthSampler(context_);
     lightSize_ = render::softShadowLightSize(setup.light, settings_.lightSizeOverride);
     sceneRadius_ = boundingRadius(setup.sceneBounds);
 }
@@ -333,15 +307,13 @@ void VssmShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
         .write(hsm, graph::Usage::Storage)
         .execute([this, map, hsm](graph::PassContext& pass) { recordHsm(pass, map, hsm); });
 
-    graph::PassBuilder visibility = graph.addPass(io.local("visibility"), graph::QueueKind::Compute);
-    visibility.read(io.gPosition, graph::Usage::Storage)
-        .read(io.gNormal, graph::Usage::Storage)
+    const auto bind = [this, map, sat, hsm](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
+        bindVisibility(pass, descriptors, map, sat, hsm);
+    };
+    plugin::addVisibilityPass(graph, io, visibility_, bind)
         .read(map, graph::Usage::Sampled)
         .read(sat, graph::Usage::Storage)
-        .read(hsm, graph::Usage::Storage)
-        .write(io.visibility, graph::Usage::Storage);
-    visibility.execute(
-        [this, io, map, sat, hsm](graph::PassContext& pass) { recordVisibility(pass, io, map, sat, hsm); });
+        .read(hsm, graph::Usage::Storage);
 }
 
 constexpr gpu::MemoryAccess kComputeWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
@@ -353,18 +325,18 @@ void VssmShadow::recordSat(const graph::PassContext& pass, const std::string& ma
     VkCommandBuffer cmd = pass.cmd();
     sat_.bind(cmd);
     gpu::DescriptorPush()
-        .sampledImage(0, pass.image(map), depthSampler_, pass.layout(map))
-        .storageImage(1, pass.image(sat))
-        .storageBuffer(2, shadowMap_.buffer())
+        .sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map))
+        .storageImage("satImage", pass.image(sat))
+        .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
         .push(context_, cmd, sat_);
     const glm::ivec2 size = atlasSize();
     SatPush push{size, 0};
     sat_.pushConstants(cmd, &push, sizeof(push));
-    vkCmdDispatch(cmd, (uint32_t(size.y) + 63) / 64, 1, 1);  // one invocation per row
+    sat_.dispatchOver(cmd, uint32_t(size.y));  // one invocation per row
     gpu::memoryBarrier(cmd, kComputeWrite, kComputeReadWrite);
     push.vertical = 1;
     sat_.pushConstants(cmd, &push, sizeof(push));
-    vkCmdDispatch(cmd, (uint32_t(size.x) + 63) / 64, 1, 1);  // one per column
+    sat_.dispatchOver(cmd, uint32_t(size.x));  // one per column
 }
 
 void VssmShadow::recordHsm(const graph::PassContext& pass, const std::string& map, const std::string& hsm) const
@@ -372,9 +344,9 @@ void VssmShadow::recordHsm(const graph::PassContext& pass, const std::string& ma
     VkCommandBuffer cmd = pass.cmd();
     hsm_.bind(cmd);
     gpu::DescriptorPush()
-        .sampledImage(0, pass.image(map), depthSampler_, pass.layout(map))
-        .storageBuffer(1, pass.buffer(hsm))
-        .storageBuffer(2, shadowMap_.buffer())
+        .sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map))
+        .storageBuffer("HsmBuffer", pass.buffer(hsm))
+        .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
         .push(context_, cmd, hsm_);
     const glm::ivec2 size = atlasSize();
     const int levels = hsmLevelCount(uint32_t(size.x), uint32_t(size.y));
@@ -383,26 +355,18 @@ void VssmShadow::recordHsm(const graph::PassContext& pass, const std::string& ma
         const HsmPush push{size, level};
         hsm_.pushConstants(cmd, &push, sizeof(push));
         const glm::ivec2 texels = (size + (1 << level) - 1) >> level;
-        vkCmdDispatch(cmd, (uint32_t(texels.x) + 7) / 8, (uint32_t(texels.y) + 7) / 8, 1);
+        hsm_.dispatchOver(cmd, uint32_t(texels.x), uint32_t(texels.y));
     }
 }
 
-void VssmShadow::recordVisibility(const graph::PassContext& pass, const plugin::LightPassIo& io,
-                                  const std::string& map, const std::string& sat, const std::string& hsm) const
+void VssmShadow::bindVisibility(const graph::PassContext& pass, gpu::DescriptorPush& descriptors,
+                                const std::string& map, const std::string& sat, const std::string& hsm) const
 {
-    VkCommandBuffer cmd = pass.cmd();
-    const gpu::Image& out = pass.image(io.visibility);
-    visibility_.bind(cmd);
-    gpu::DescriptorPush()
-        .storageImage(kBindingPosition, pass.image(io.gPosition))
-        .sampledImage(kBindingShadowCompare, pass.image(map), compareSampler_, pass.layout(map))
-        .storageImage(kBindingVisibility, out)
-        .storageBuffer(kBindingShadowMapData, shadowMap_.buffer())
-        .storageImage(kBindingNormal, pass.image(io.gNormal))
-        .sampledImage(kBindingShadowDepth, pass.image(map), depthSampler_, pass.layout(map))
-        .storageImage(kBindingSat, pass.image(sat))
-        .storageBuffer(kBindingHsm, pass.buffer(hsm))
-        .push(context_, cmd, visibility_);
+    descriptors.sampledImage("shadowCompare", pass.image(map), compareSampler_, pass.layout(map))
+        .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
+        .sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map))
+        .storageImage("satImage", pass.image(sat))
+        .storageBuffer("HsmBuffer", pass.buffer(hsm));
     const int most = maxNodes(settings_.blockerScheme(), settings_.blockerSubdivisions, settings_.treeHeight) +
                      maxNodes(settings_.filterScheme(), settings_.filterSubdivisions, settings_.treeHeight);
     const VisibilityPush push{atlasSize(),
@@ -417,26 +381,13 @@ void VssmShadow::recordVisibility(const graph::PassContext& pass, const plugin::
                               settings_.treeHeight,
                               int32_t(settings_.debugView),
                               1.0f / float(most)};
-    visibility_.pushConstants(cmd, &push, sizeof(push));
-    vkCmdDispatch(cmd, (out.desc().width + 7) / 8, (out.desc().height + 7) / 8, 1);
+    visibility_.pushConstants(pass.cmd(), &push, sizeof(push));
 }
-
-plugin::Technique* createVssmShadow(const plugin::TechniqueSetup& setup) { return new VssmShadow(setup); }
 
 } // namespace
 } // namespace penumbra::vssm
 
-PENUMBRA_PLUGIN_EXPORT const PenumbraPluginInfo* penumbra_plugin_entry()
-{
-    static const PenumbraPluginInfo info{PENUMBRA_PLUGIN_ABI_VERSION,
-                                         "vssm",
-                                         "1.0.0",
-                                         "variance soft shadow mapping: summed-area table of 64-bit moments, min-max "
-                                         "hierarchy, eq. 4 blocker depth, uniform and adaptive kernel subdivision "
-                                         "(Yang et al. 2010)",
-                                         penumbra::vssm::kParams,
-                                         uint32_t(std::size(penumbra::vssm::kParams)),
-                                         &penumbra::vssm::createVssmShadow,
-                                         PENUMBRA_PLUGIN_SHADER_DIR};
-    return &info;
-}
+PENUMBRA_DEFINE_PLUGIN("vssm", "1.0.0",
+                       "variance soft shadow mapping: summed-area table of 64-bit moments, min-max hierarchy, eq. 4 "
+                       "blocker depth, uniform and adaptive kernel subdivision (Yang et al. 2010)",
+                       penumbra::vssm::kParams, penumbra::vssm::VssmShadow)

@@ -3,7 +3,7 @@
 // visibility image V_l to `fill` (or to 1 with mode "unshadowed"). It also reports the
 // parameter values its factory received (penumbra_testgood_received), so that tests can
 // check what a plugin sees end to end: config JSON -> ParamValues -> plugin.
-#include "penumbra/graph/GraphExecutor.h"
+#include "penumbra/graph/PassContext.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/Technique.h"
 
@@ -70,17 +70,11 @@ private:
     float fill_;
 };
 
-plugin::Technique* createFill(const plugin::TechniqueSetup& setup) { return new FillTechnique(setup); }
-
 } // namespace
 
-PENUMBRA_PLUGIN_EXPORT const PenumbraPluginInfo* penumbra_plugin_entry()
-{
-    static const PenumbraPluginInfo info{PENUMBRA_PLUGIN_ABI_VERSION, "testgood", "1.2.0",
-                                         "test plugin: clears V_l to a constant", kParams, std::size(kParams),
-                                         &createFill, PENUMBRA_TEST_PLUGIN_SHADER_DIR};
-    return &info;
-}
+// The SDK's entry-point macro, as a plugin uses it (the other test plugins build their
+// entries by hand, malformed on purpose).
+PENUMBRA_DEFINE_PLUGIN("testgood", "1.2.0", "test plugin: clears V_l to a constant", kParams, FillTechnique)
 
 // The parameters the last technique was created with, as JSON ("" before the first).
 PENUMBRA_PLUGIN_EXPORT const char* penumbra_testgood_received() { return received().c_str(); }

@@ -5,6 +5,8 @@
 #include "penumbra/gpu/Context.h"
 #include "penumbra/gpu/Resources.h"
 
+#include "core/Text.h"
+
 #include <fmt/format.h>
 
 #include <utility>
@@ -31,25 +33,38 @@ struct ModuleGuard {
     }
 };
 
+std::vector<VkDescriptorImageInfo> sampledInfos(const std::vector<const Image*>& images, VkSampler sampler,
+                                                VkImageLayout layout)
+{
+    std::vector<VkDescriptorImageInfo> infos;
+    for (const Image* image : images) infos.push_back({sampler, image->view(), layout});
+    return infos;
+}
+
+VkDescriptorBufferInfo wholeBuffer(const Buffer& buffer) { return {buffer.handle(), 0, VK_WHOLE_SIZE}; }
+
 } // namespace
 
-void Pipeline::createLayout(const std::vector<Binding>& bindings, uint32_t pushConstantBytes,
-                            const std::string& name)
+void Pipeline::reflect(const std::vector<uint32_t>& spirv, VkShaderStageFlagBits stage,
+                       const std::filesystem::path& shader)
+{
+    const ShaderInterface declared = reflectShaderInterface(spirv, stage, fmt::format("{} ({})", shader.string(), name_));
+    interface_.merge(declared, name_);
+    if (stage == VK_SHADER_STAGE_COMPUTE_BIT) interface_.localSize = declared.localSize;
+}
+
+void Pipeline::createLayout(const std::vector<Binding>& bindings, uint32_t pushConstantBytes)
 {
     std::vector<VkDescriptorSetLayoutBinding> vkBindings;
-    for (const Binding& b : bindings) {
-        VkDescriptorSetLayoutBinding vb{};
-        vb.binding = b.binding;
-        vb.descriptorType = b.type;
-        vb.descriptorCount = b.count;
-        vb.stageFlags = stages_;
-        vkBindings.push_back(vb);
+    for (const Binding& b : bindings) vkBindings.push_back({b.binding, b.type, b.count, stages_, nullptr});
+    if (bindings.empty()) {
+        for (const ShaderBinding& b : interface_.bindings) vkBindings.push_back({b.binding, b.type, b.count, b.stages, nullptr});
     }
     VkDescriptorSetLayoutCreateInfo setInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     setInfo.flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR;
     setInfo.bindingCount = static_cast<uint32_t>(vkBindings.size());
     setInfo.pBindings = vkBindings.data();
-    check(vkCreateDescriptorSetLayout(device_, &setInfo, nullptr, &setLayout_), "vkCreateDescriptorSetLayout " + name);
+    check(vkCreateDescriptorSetLayout(device_, &setInfo, nullptr, &setLayout_), "vkCreateDescriptorSetLayout " + name_);
 
     VkPushConstantRange range{stages_, 0, pushConstantBytes};
     VkPipelineLayoutCreateInfo layoutInfo{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
@@ -57,15 +72,20 @@ void Pipeline::createLayout(const std::vector<Binding>& bindings, uint32_t pushC
     layoutInfo.pSetLayouts = &setLayout_;
     layoutInfo.pushConstantRangeCount = pushConstantBytes ? 1 : 0;
     layoutInfo.pPushConstantRanges = &range;
-    check(vkCreatePipelineLayout(device_, &layoutInfo, nullptr, &layout_), "vkCreatePipelineLayout " + name);
+    check(vkCreatePipelineLayout(device_, &layoutInfo, nullptr, &layout_), "vkCreatePipelineLayout " + name_);
 }
 
 Pipeline::Pipeline(Context& context, const ShaderCompiler& compiler, const ComputePipelineDesc& desc)
-    : device_(context.device()), bindPoint_(VK_PIPELINE_BIND_POINT_COMPUTE), stages_(VK_SHADER_STAGE_COMPUTE_BIT)
+    : device_(context.device()),
+      bindPoint_(VK_PIPELINE_BIND_POINT_COMPUTE),
+      stages_(VK_SHADER_STAGE_COMPUTE_BIT),
+      name_(desc.name)
 {
     try {
-        ModuleGuard guard{device_, {createModule(device_, compiler.compile(desc.shader, desc.defines), desc.name)}};
-        createLayout(desc.bindings, desc.pushConstantBytes, desc.name);
+        const std::vector<uint32_t> spirv = compiler.compile(desc.shader, desc.defines);
+        reflect(spirv, VK_SHADER_STAGE_COMPUTE_BIT, desc.shader);
+        ModuleGuard guard{device_, {createModule(device_, spirv, desc.name)}};
+        createLayout(desc.bindings, desc.pushConstantBytes);
         VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
         info.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
         info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
@@ -82,13 +102,15 @@ Pipeline::Pipeline(Context& context, const ShaderCompiler& compiler, const Compu
 }
 
 Pipeline::Pipeline(Context& context, const ShaderCompiler& compiler, const GraphicsPipelineDesc& desc)
-    : device_(context.device()), bindPoint_(VK_PIPELINE_BIND_POINT_GRAPHICS)
+    : device_(context.device()), bindPoint_(VK_PIPELINE_BIND_POINT_GRAPHICS), name_(desc.name)
 {
     try {
         ModuleGuard guard{device_, {}};
         std::vector<VkPipelineShaderStageCreateInfo> stageInfos;
         auto addStage = [&](const std::filesystem::path& path, VkShaderStageFlagBits stage) {
-            guard.modules.push_back(createModule(device_, compiler.compile(path, desc.defines), desc.name));
+            const std::vector<uint32_t> spirv = compiler.compile(path, desc.defines);
+            reflect(spirv, stage, path);
+            guard.modules.push_back(createModule(device_, spirv, desc.name));
             VkPipelineShaderStageCreateInfo s{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
             s.stage = stage;
             s.module = guard.modules.back();
@@ -100,7 +122,7 @@ Pipeline::Pipeline(Context& context, const ShaderCompiler& compiler, const Graph
         if (desc.fragmentShader) {
             addStage(*desc.fragmentShader, VK_SHADER_STAGE_FRAGMENT_BIT);
         }
-        createLayout(desc.bindings, desc.pushConstantBytes, desc.name);
+        createLayout(desc.bindings, desc.pushConstantBytes);
 
         VkVertexInputBindingDescription vertexBinding{0, desc.vertexLayout.stride, VK_VERTEX_INPUT_RATE_VERTEX};
         VkPipelineVertexInputStateCreateInfo vertexInput{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
@@ -183,6 +205,8 @@ Pipeline& Pipeline::operator=(Pipeline&& other) noexcept
         pipeline_ = std::exchange(other.pipeline_, VK_NULL_HANDLE);
         bindPoint_ = other.bindPoint_;
         stages_ = other.stages_;
+        name_ = std::move(other.name_);
+        interface_ = std::move(other.interface_);
     }
     return *this;
 }
@@ -206,41 +230,105 @@ void Pipeline::pushConstants(VkCommandBuffer cmd, const void* data, uint32_t byt
     vkCmdPushConstants(cmd, layout_, stages_, 0, bytes, data);
 }
 
+const ShaderBinding& Pipeline::binding(std::string_view name) const
+{
+    if (const ShaderBinding* b = interface_.find(name)) return *b;
+    std::vector<std::string> names;
+    for (const ShaderBinding& b : interface_.bindings) {
+        names.push_back(b.name);
+        if (!b.blockName.empty() && b.blockName != b.name) names.push_back(b.blockName);
+    }
+    const std::string suggestion = core::closestMatch(name, names);
+    throw Error(fmt::format("pipeline '{}': its shaders declare no binding '{}'{}; they declare: {}", name_, name,
+                            suggestion.empty() ? "" : fmt::format(" (did you mean '{}'?)", suggestion),
+                            names.empty() ? "none" : fmt::format("{}", fmt::join(names, ", "))));
+}
+
+void Pipeline::dispatchOver(VkCommandBuffer cmd, uint32_t width, uint32_t height) const
+{
+    if (bindPoint_ != VK_PIPELINE_BIND_POINT_COMPUTE) {
+        throw Error(fmt::format("pipeline '{}': dispatchOver needs a compute pipeline", name_));
+    }
+    const auto groups = [](uint32_t invocations, uint32_t local) { return (invocations + local - 1) / local; };
+    vkCmdDispatch(cmd, groups(width, interface_.localSize[0]), groups(height, interface_.localSize[1]), 1);
+}
+
+void Pipeline::dispatchOver(VkCommandBuffer cmd, const Image& image) const
+{
+    dispatchOver(cmd, image.desc().width, image.desc().height);
+}
+
+DescriptorPush& DescriptorPush::add(Target target, VkDescriptorType type, std::vector<VkDescriptorImageInfo> images,
+                                    VkDescriptorBufferInfo buffer)
+{
+    entries_.push_back({std::move(target), type, std::move(images), buffer});
+    return *this;
+}
+
+DescriptorPush& DescriptorPush::storageImage(std::string_view name, const Image& image)
+{
+    return add({std::string(name)}, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, {{VK_NULL_HANDLE, image.view(), VK_IMAGE_LAYOUT_GENERAL}});
+}
+
+DescriptorPush& DescriptorPush::sampledImage(std::string_view name, const Image& image, VkSampler sampler,
+                                             VkImageLayout layout)
+{
+    return add({std::string(name)}, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, {{sampler, image.view(), layout}});
+}
+
+DescriptorPush& DescriptorPush::sampledImages(std::string_view name, const std::vector<const Image*>& images,
+                                              VkSampler sampler, VkImageLayout layout)
+{
+    return add({std::string(name)}, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, sampledInfos(images, sampler, layout));
+}
+
+DescriptorPush& DescriptorPush::storageBuffer(std::string_view name, const Buffer& buffer)
+{
+    return add({std::string(name)}, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, {}, wholeBuffer(buffer));
+}
+
+DescriptorPush& DescriptorPush::uniformBuffer(std::string_view name, const Buffer& buffer)
+{
+    return add({std::string(name)}, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, {}, wholeBuffer(buffer));
+}
+
 DescriptorPush& DescriptorPush::storageImage(uint32_t binding, const Image& image)
 {
-    entries_.push_back({binding, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
-                        {{VK_NULL_HANDLE, image.view(), VK_IMAGE_LAYOUT_GENERAL}}, {}});
-    return *this;
+    return add({{}, binding}, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, {{VK_NULL_HANDLE, image.view(), VK_IMAGE_LAYOUT_GENERAL}});
 }
 
 DescriptorPush& DescriptorPush::sampledImage(uint32_t binding, const Image& image, VkSampler sampler,
                                              VkImageLayout layout)
 {
-    entries_.push_back({binding, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, {{sampler, image.view(), layout}}, {}});
-    return *this;
+    return add({{}, binding}, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, {{sampler, image.view(), layout}});
 }
 
 DescriptorPush& DescriptorPush::sampledImages(uint32_t binding, const std::vector<const Image*>& images,
                                               VkSampler sampler, VkImageLayout layout)
 {
-    Entry e{binding, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, {}, {}};
-    for (const Image* image : images) {
-        e.images.push_back({sampler, image->view(), layout});
-    }
-    entries_.push_back(std::move(e));
-    return *this;
+    return add({{}, binding}, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, sampledInfos(images, sampler, layout));
 }
 
 DescriptorPush& DescriptorPush::storageBuffer(uint32_t binding, const Buffer& buffer)
 {
-    entries_.push_back({binding, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, {}, {buffer.handle(), 0, VK_WHOLE_SIZE}});
-    return *this;
+    return add({{}, binding}, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, {}, wholeBuffer(buffer));
 }
 
 DescriptorPush& DescriptorPush::uniformBuffer(uint32_t binding, const Buffer& buffer)
 {
-    entries_.push_back({binding, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, {}, {buffer.handle(), 0, VK_WHOLE_SIZE}});
-    return *this;
+    return add({{}, binding}, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, {}, wholeBuffer(buffer));
+}
+
+// A named entry's binding number, checked against what the shaders declare there.
+uint32_t DescriptorPush::resolve(const Entry& entry, const Pipeline& pipeline)
+{
+    if (entry.target.name.empty()) return entry.target.binding;
+    const ShaderBinding& b = pipeline.binding(entry.target.name);
+    if (b.type != entry.type) {
+        throw Error(fmt::format("pipeline '{}': binding '{}' is a {} in its shaders, set here as a {}", pipeline.name(),
+                                entry.target.name, descriptorTypeName(b.type), descriptorTypeName(entry.type)));
+    }
+    return b.binding;
 }
 
 void DescriptorPush::push(const Context& context, VkCommandBuffer cmd, const Pipeline& pipeline)
@@ -249,7 +337,7 @@ void DescriptorPush::push(const Context& context, VkCommandBuffer cmd, const Pip
     writes.reserve(entries_.size());
     for (const Entry& e : entries_) {
         VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-        w.dstBinding = e.binding;
+        w.dstBinding = resolve(e, pipeline);
         w.descriptorType = e.type;
         if (e.images.empty()) {
             w.descriptorCount = 1;

@@ -85,14 +85,26 @@ std::vector<fs::path> uniqueFolders(std::vector<fs::path> folders)
     return out;
 }
 
-// <libdir>/penumbra/plugins beside the engine library that holds this code: where an
-// installed tree keeps its plugins, wherever it was installed to.
-fs::path installedPluginDir()
+// The folder of the engine library that holds this code; empty if the loader cannot say.
+fs::path engineLibraryDir()
 {
     static const int anchor = 0;
     Dl_info info{};
     if (dladdr(&anchor, &info) == 0 || !info.dli_fname) return {};
-    return fs::path(info.dli_fname).parent_path() / "penumbra" / "plugins";
+    return fs::path(info.dli_fname).parent_path();
+}
+
+// The engine's own plugins: the build tree's plugins/ for the library the build tree made,
+// <libdir>/penumbra/plugins beside any other copy of it (an install, wherever it was
+// installed to). Never both: an installed engine must not load the plugins of the tree
+// it was built in, which may still exist on the build machine and declare the same names.
+fs::path enginePluginDir()
+{
+    const fs::path library = engineLibraryDir();
+    if (library.empty()) return {};
+    std::error_code ec;
+    if (fs::equivalent(library, PENUMBRA_BUILD_LIBRARY_DIR, ec)) return PENUMBRA_BUILD_PLUGIN_DIR;
+    return library / "penumbra" / "plugins";
 }
 
 std::string searchPathHint()
@@ -205,10 +217,7 @@ std::vector<fs::path> defaultPluginSearchPath()
             rest = colon == std::string_view::npos ? std::string_view{} : rest.substr(colon + 1);
         }
     }
-#ifdef PENUMBRA_BUILD_PLUGIN_DIR
-    candidates.emplace_back(PENUMBRA_BUILD_PLUGIN_DIR);
-#endif
-    if (fs::path installed = installedPluginDir(); !installed.empty()) candidates.push_back(std::move(installed));
+    if (fs::path own = enginePluginDir(); !own.empty()) candidates.push_back(std::move(own));
 
     std::vector<fs::path> existing;
     for (fs::path& dir : candidates) {

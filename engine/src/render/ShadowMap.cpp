@@ -2,7 +2,7 @@
 
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Context.h"
-#include "penumbra/graph/GraphExecutor.h"
+#include "penumbra/graph/PassContext.h"
 
 #include <fmt/format.h>
 
@@ -223,6 +223,16 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
         }
     }
     vkCmdEndRendering(cmd);
+}
+
+gpu::Sampler createShadowCompareSampler(gpu::Context& context, VkFilter filter)
+{
+    return gpu::createSampler(context, filter, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE, VK_COMPARE_OP_GREATER_OR_EQUAL);
+}
+
+gpu::Sampler createShadowDepthSampler(gpu::Context& context)
+{
+    return gpu::createSampler(context, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
 }
 
 float softShadowLightSize(const scene::Light& light, float overrideSize)

@@ -1,14 +1,20 @@
 #pragma once
 // Compute and graphics pipelines with one push-descriptor set (VK_KHR_push_descriptor:
 // no descriptor pools to size; lavapipe has no descriptor indexing, so bindings are
-// plain and few) and push constants.
+// plain and few) and push constants. The set's layout and a compute shader's workgroup
+// size come from the shaders themselves (gpu/ShaderInterface.h): the C++ names bindings
+// as the GLSL does (`DescriptorPush().storageImage("visibilityOut", image)`) and
+// dispatches over an image with dispatchOver, so no number is kept equal to the GLSL by
+// hand.
 #include "penumbra/gpu/ShaderCompiler.h"
+#include "penumbra/gpu/ShaderInterface.h"
 
 #include <vulkan/vulkan.h>
 
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -18,6 +24,7 @@ class Context;
 class Buffer;
 class Image;
 
+// A binding of a layout given by hand (the descriptions' `bindings`).
 struct Binding {
     uint32_t binding = 0;
     VkDescriptorType type = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
@@ -34,6 +41,8 @@ struct GraphicsPipelineDesc {
     std::filesystem::path vertexShader;
     std::optional<std::filesystem::path> fragmentShader;  // none: depth-only pass
     std::vector<ShaderDefine> defines;
+    // Empty (the rule): the layout is every binding the shaders declare. A list given here
+    // replaces it (the engine's frame passes still list theirs).
     std::vector<Binding> bindings;
     uint32_t pushConstantBytes = 0;
     VertexLayout vertexLayout;
@@ -49,7 +58,7 @@ struct ComputePipelineDesc {
     std::string name;
     std::filesystem::path shader;
     std::vector<ShaderDefine> defines;
-    std::vector<Binding> bindings;
+    std::vector<Binding> bindings;  // as GraphicsPipelineDesc::bindings
     uint32_t pushConstantBytes = 0;
 };
 
@@ -68,12 +77,27 @@ public:
     VkPipelineLayout layout() const { return layout_; }
     VkPipelineBindPoint bindPoint() const { return bindPoint_; }
     VkShaderStageFlags stages() const { return stages_; }
+    const std::string& name() const { return name_; }
+    // What the shaders declare: bindings by name, the compute shader's local size.
+    const ShaderInterface& shaderInterface() const { return interface_; }
+    // The binding the shaders call `name` (a variable's name, or a buffer's block name).
+    // Throws penumbra::Error naming the pipeline, `name` and the names there are.
+    const ShaderBinding& binding(std::string_view name) const;
 
     void bind(VkCommandBuffer cmd) const;
     void pushConstants(VkCommandBuffer cmd, const void* data, uint32_t bytes) const;
+    // Dispatches a compute pipeline over a width x height grid of invocations (one per
+    // pixel of an image, say): ceil(width / local_size_x) x ceil(height / local_size_y)
+    // workgroups, with the shader's own local size. The last groups overhang a size that
+    // is no multiple of it: the shader skips invocations outside (gl_GlobalInvocationID
+    // against imageSize). Throws penumbra::Error for a graphics pipeline.
+    void dispatchOver(VkCommandBuffer cmd, uint32_t width, uint32_t height = 1) const;
+    // The same over every texel of `image` (its full size).
+    void dispatchOver(VkCommandBuffer cmd, const Image& image) const;
 
 private:
-    void createLayout(const std::vector<Binding>& bindings, uint32_t pushConstantBytes, const std::string& name);
+    void reflect(const std::vector<uint32_t>& spirv, VkShaderStageFlagBits stage, const std::filesystem::path& shader);
+    void createLayout(const std::vector<Binding>& bindings, uint32_t pushConstantBytes);
     void release();
 
     VkDevice device_ = VK_NULL_HANDLE;
@@ -82,28 +106,51 @@ private:
     VkPipeline pipeline_ = VK_NULL_HANDLE;
     VkPipelineBindPoint bindPoint_ = VK_PIPELINE_BIND_POINT_COMPUTE;
     VkShaderStageFlags stages_ = 0;
+    std::string name_;
+    ShaderInterface interface_;
 };
 
-// Collects the descriptors of one draw or dispatch and pushes them.
+// Collects the descriptors of one draw or dispatch and pushes them. A binding is named as
+// the shader names it (`"gPosition"`; a buffer by its instance or block name), or given
+// by number; names are looked up in the pipeline at push(), which throws penumbra::Error
+// naming the pipeline and the binding for a name its shaders do not declare or a
+// descriptor of another type than they declare there.
 class DescriptorPush {
 public:
+    DescriptorPush& storageImage(std::string_view name, const Image& image);
+    DescriptorPush& sampledImage(std::string_view name, const Image& image, VkSampler sampler,
+                                 VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    // One array binding of combined image samplers, all in `layout`.
+    DescriptorPush& sampledImages(std::string_view name, const std::vector<const Image*>& images, VkSampler sampler,
+                                  VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    DescriptorPush& storageBuffer(std::string_view name, const Buffer& buffer);
+    DescriptorPush& uniformBuffer(std::string_view name, const Buffer& buffer);
+
     DescriptorPush& storageImage(uint32_t binding, const Image& image);
     DescriptorPush& sampledImage(uint32_t binding, const Image& image, VkSampler sampler,
                                  VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
-    // One array binding of combined image samplers, all in `layout`.
     DescriptorPush& sampledImages(uint32_t binding, const std::vector<const Image*>& images, VkSampler sampler,
                                   VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
     DescriptorPush& storageBuffer(uint32_t binding, const Buffer& buffer);
     DescriptorPush& uniformBuffer(uint32_t binding, const Buffer& buffer);
+
     void push(const Context& context, VkCommandBuffer cmd, const Pipeline& pipeline);
 
 private:
+    // Where a descriptor goes: a binding's name, or its number (name empty).
+    struct Target {
+        std::string name;
+        uint32_t binding = 0;
+    };
     struct Entry {
-        uint32_t binding;
+        Target target;
         VkDescriptorType type;
         std::vector<VkDescriptorImageInfo> images;
         VkDescriptorBufferInfo buffer{};
     };
+    DescriptorPush& add(Target target, VkDescriptorType type, std::vector<VkDescriptorImageInfo> images,
+                        VkDescriptorBufferInfo buffer = {});
+    static uint32_t resolve(const Entry& entry, const Pipeline& pipeline);
     std::vector<Entry> entries_;
 };
 

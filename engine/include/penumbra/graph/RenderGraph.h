@@ -164,7 +164,7 @@ struct CompiledGraph {
 void verifyAliasing(const CompiledGraph& graph);
 
 class RenderGraph;
-class PassContext;  // graph/GraphExecutor.h
+class PassContext;  // graph/PassContext.h
 
 // Records a pass's commands. Called once per executed frame, only for passes that
 // survived culling, with the resources the pass declared bound in `PassContext`.

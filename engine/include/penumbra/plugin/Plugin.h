@@ -7,15 +7,12 @@
 //
 // Plugins are C++ and share the engine's C++ types (they are built against these headers
 // with the same compiler), so the ABI version is raised whenever any public engine header
-// changes a type that crosses the boundary. A minimal plugin (docs/plugins.md):
+// changes a type that crosses the boundary. A plugin defines its entry point with one
+// line (docs/plugins.md):
 //
-//   PENUMBRA_PLUGIN_EXPORT const PenumbraPluginInfo* penumbra_plugin_entry()
-//   {
-//       static const PenumbraPluginInfo info{PENUMBRA_PLUGIN_ABI_VERSION, "mine", "1.0",
-//           "what it does", kParams, std::size(kParams), &createMine, PENUMBRA_PLUGIN_SHADER_DIR};
-//       return &info;
-//   }
+//   PENUMBRA_DEFINE_PLUGIN("mine", "1.0.0", "what it does", kParams, MineShadow)
 #include <cstdint>
+#include <iterator>
 
 #define PENUMBRA_PLUGIN_ABI_VERSION 5u
 #define PENUMBRA_PLUGIN_ENTRY_SYMBOL "penumbra_plugin_entry"
@@ -47,6 +44,13 @@ struct ParamSpec {
 // registration, naming the plugin and the light.
 using CreateTechniqueFn = Technique* (*)(const TechniqueSetup& setup);
 
+// The factory of PENUMBRA_DEFINE_PLUGIN: a `T` (a Technique) constructed from the setup.
+template <class T>
+Technique* createTechnique(const TechniqueSetup& setup)
+{
+    return new T(setup);
+}
+
 } // namespace penumbra::plugin
 
 extern "C" {
@@ -68,3 +72,31 @@ struct PenumbraPluginInfo {
 using PenumbraPluginEntryFn = const PenumbraPluginInfo* (*)();
 
 } // extern "C"
+
+// Defines the plugin's entry point, penumbra_plugin_entry, returning a static
+// PenumbraPluginInfo: this ABI version, the name (configs' "technique"; the file is
+// penumbra-<name>.so), the plugin's version, a one-line summary, the ParamSpec array
+// `params`, a factory that constructs `TechniqueClass` from the TechniqueSetup (a
+// constructor may throw penumbra::Error: an unsupported light, a bad parameter), and
+// PENUMBRA_PLUGIN_SHADER_DIR (penumbra_add_plugin defines it). Use it once, at global
+// scope:
+//
+//   PENUMBRA_DEFINE_PLUGIN("hard", "1.0.0", "shadow map with ...", kParams, penumbra::hard::HardShadow)
+#define PENUMBRA_DEFINE_PLUGIN(name, version, summary, params, TechniqueClass)                                    \
+    PENUMBRA_DEFINE_PLUGIN_FACTORY(name, version, summary, params, &::penumbra::plugin::createTechnique<TechniqueClass>)
+
+// The same with a factory of the plugin's own (a CreateTechniqueFn), for a plugin that
+// picks its Technique class per light.
+#define PENUMBRA_DEFINE_PLUGIN_FACTORY(name, version, summary, params, factory)                                   \
+    PENUMBRA_PLUGIN_EXPORT const PenumbraPluginInfo* penumbra_plugin_entry()                                     \
+    {                                                                                                            \
+        static const PenumbraPluginInfo info{PENUMBRA_PLUGIN_ABI_VERSION,                                        \
+                                             name,                                                               \
+                                             version,                                                            \
+                                             summary,                                                            \
+                                             std::data(params),                                                  \
+                                             uint32_t(std::size(params)),                                        \
+                                             factory,                                                            \
+                                             PENUMBRA_PLUGIN_SHADER_DIR};                                        \
+        return &info;                                                                                            \
+    }

@@ -1,7 +1,8 @@
 #pragma once
 // Finds and loads technique plugins (shared libraries named penumbra-<name>.so) from a
-// search path: $PENUMBRA_PLUGIN_PATH (colon-separated) first, then the build tree's
-// plugin folder, then the install tree's (<libdir>/penumbra/plugins). Only the plugins
+// search path: $PENUMBRA_PLUGIN_PATH (colon-separated) first, then the engine's own
+// plugin folder: the build tree's for the library the build tree made, the install
+// tree's (<libdir>/penumbra/plugins) for an installed one, never both. Only the plugins
 // a config names are loaded. Each failure has its own error kind and message.
 #include "penumbra/core/Error.h"
 #include "penumbra/plugin/Params.h"

@@ -3,7 +3,6 @@
 // the frame's render graph and writes that light's visibility image V_l (DESIGN.md: the
 // one contract between the engine and a technique), drawing casters only through the
 // engine's caster interface (render/Casters.h).
-#include "penumbra/config/Config.h"
 #include "penumbra/gpu/ShaderCompiler.h"
 #include "penumbra/graph/RenderGraph.h"
 #include "penumbra/plugin/Params.h"

@@ -88,6 +88,14 @@ static_assert(sizeof(ShadowFaceData) == 96 && sizeof(ShadowMapData) == 64 + 6 * 
 // (world units; directional: degrees).
 float softShadowLightSize(const scene::Light& light, float overrideSize);
 
+// Samplers that read a shadow map by its conventions, clamped to the edge (lookups stay
+// in their face: the shaders clamp them). The comparison sampler's compareOp is
+// GREATER_OR_EQUAL (reversed-Z: a receiver is lit where its depth is at least the stored
+// caster depth); NEAREST compares one texel, LINEAR is the hardware's 2 x 2 bilinear
+// compare. The depth sampler reads the stored depths, one texel per tap.
+gpu::Sampler createShadowCompareSampler(gpu::Context& context, VkFilter filter = VK_FILTER_NEAREST);
+gpu::Sampler createShadowDepthSampler(gpu::Context& context);
+
 // Receiver-side bias of shadow_receiver.glsl (its SHADOW_RECEIVER_BIAS define).
 enum class ReceiverBias : uint32_t { None = 0, NormalOffset = 1, Plane = 2 };
 

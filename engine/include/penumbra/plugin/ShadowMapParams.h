@@ -1,0 +1,26 @@
+#pragma once
+// Parameters that shadow-map techniques reflect alike, worded once so that hard, pcss,
+// vssm and the example describe them in the same words. In the plugin module, not beside
+// render::ShadowMap: a ParamSpec is plugin ABI (plugin/Plugin.h), and render sits below
+// plugin.
+#include "penumbra/plugin/Plugin.h"
+
+namespace penumbra::plugin {
+
+// The map's texels per face side (the default and the largest are the technique's), the
+// rasterizer's constant bias, and the light size that render::softShadowLightSize reads
+// (-1: the light's own).
+constexpr ParamSpec shadowResolutionParam(double defaultTexels, double maxTexels)
+{
+    return {"resolution", ParamType::Int, defaultTexels, 16, maxTexels, "texels",
+            "shadow-map texels per side of each face (point, rect and disk lights: six faces in a 3 x 2 atlas)"};
+}
+inline constexpr ParamSpec kShadowDepthBiasParam{
+    "depth_bias", ParamType::Float, 4, 0, 1e6, "r",
+    "constant rasterizer depth bias away from the light, in Vulkan's minimum resolvable depth differences r"};
+inline constexpr ParamSpec kLightSizeParam{
+    "light_size", ParamType::Float, -1, -1, 1e9, "world or deg",
+    "-1: the light's own size (rect: sqrt(w h), disk: diameter, directional: angular_diameter_deg; spot and "
+    "point: 0, a hard shadow); >= 0: this size instead, in world units (directional: angular diameter in degrees)"};
+
+} // namespace penumbra::plugin

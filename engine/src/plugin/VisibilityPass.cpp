@@ -1,0 +1,29 @@
+#include "penumbra/plugin/VisibilityPass.h"
+
+#include <utility>
+
+namespace penumbra::plugin {
+
+graph::PassBuilder addVisibilityPass(graph::RenderGraph& graph, const LightPassIo& io, const gpu::Pipeline& pipeline,
+                                     BindVisibilityFn bind)
+{
+    graph::PassBuilder builder = graph.addPass(io.local("visibility"), graph::QueueKind::Compute);
+    builder.read(io.gPosition, graph::Usage::Storage)
+        .read(io.gNormal, graph::Usage::Storage)
+        .write(io.visibility, graph::Usage::Storage)
+        .execute([io, &pipeline, bind = std::move(bind)](graph::PassContext& pass) {
+            const VkCommandBuffer cmd = pass.cmd();
+            const gpu::Image& out = pass.image(io.visibility);
+            pipeline.bind(cmd);
+            gpu::DescriptorPush descriptors;
+            descriptors.storageImage("gPosition", pass.image(io.gPosition))
+                .storageImage("gNormal", pass.image(io.gNormal))
+                .storageImage("visibilityOut", out);
+            bind(pass, descriptors);
+            descriptors.push(pass.context(), cmd, pipeline);
+            pipeline.dispatchOver(cmd, out);
+        });
+    return builder;
+}
+
+} // namespace penumbra::plugin
