@@ -110,7 +110,7 @@ TEST_F(FramePlugins, TheExamplePluginShadowsEveryLightTypeAsHardDoes)
             cfg.lights[0].shadow.technique = i == 0 ? "example" : "hard";
             cfg.lights[0].shadow.required = true;
             cfg.lights[0].shadow.setParam("resolution", 512, "test");
-            render::FrameRenderer renderer(*context, scene, cfg, registry);
+            frame::FrameRenderer renderer(*context, scene, cfg, registry);
             renderer.renderFrame();
             visibility[i] = renderer.readVisibility(0);
         }
