@@ -6,7 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config git
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
-  glslang-dev glslang-tools spirv-tools
+  glslang-dev glslang-tools spirv-tools libspirv-cross-c-shared-dev
   libglfw3-dev libglm-dev libtinygltf-dev libopenmesh-dev libstb-dev
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
