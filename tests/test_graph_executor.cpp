@@ -175,15 +175,9 @@ TEST_F(GraphExecutorTest, ComputeChainProducesTheExpectedValues)
     constexpr uint32_t kCount = kEdge * kEdge;
     const gpu::ShaderCompiler compiler({gpu::engineShaderDir(), kShaders});
     const gpu::Pipeline ramp(*context, compiler,
-                             gpu::ComputePipelineDesc{"graph ramp", "graph_ramp.comp", {},
-                                                      {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}}, 8});
+                             gpu::ComputePipelineDesc{"graph ramp", "graph_ramp.comp", {}, 8});
     const gpu::Pipeline square(*context, compiler,
-                               gpu::ComputePipelineDesc{"graph square",
-                                                        "graph_square_to_image.comp",
-                                                        {},
-                                                        {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                                                         {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}},
-                                                        0});
+                               gpu::ComputePipelineDesc{"graph square", "graph_square_to_image.comp", {}, 0});
 
     RenderGraph graph;
     graph.declareBuffer({"values", kCount * sizeof(float), false});
@@ -200,13 +194,13 @@ TEST_F(GraphExecutorTest, ComputeChainProducesTheExpectedValues)
         .write("values", Usage::Storage)
         .execute([&](PassContext& pass) {
             ramp.bind(pass.cmd());
-            gpu::DescriptorPush().storageBuffer(0, pass.buffer("values")).push(pass.context(), pass.cmd(), ramp);
+            gpu::DescriptorPush().storageBuffer("Values", pass.buffer("values")).push(pass.context(), pass.cmd(), ramp);
             const struct {
                 float scale;
                 uint32_t count;
             } push{3.0f, kCount};
             ramp.pushConstants(pass.cmd(), &push, sizeof push);
-            vkCmdDispatch(pass.cmd(), (kCount + 63) / 64, 1, 1);
+            ramp.dispatchOver(pass.cmd(), kCount);
         });
     graph.addPass("square", QueueKind::Compute)
         .read("values", Usage::Storage)
@@ -215,10 +209,10 @@ TEST_F(GraphExecutorTest, ComputeChainProducesTheExpectedValues)
             EXPECT_EQ(pass.layout("field"), VK_IMAGE_LAYOUT_GENERAL);
             square.bind(pass.cmd());
             gpu::DescriptorPush()
-                .storageBuffer(0, pass.buffer("values"))
-                .storageImage(1, pass.image("field"))
+                .storageBuffer("Values", pass.buffer("values"))
+                .storageImage("field", pass.image("field"))
                 .push(pass.context(), pass.cmd(), square);
-            vkCmdDispatch(pass.cmd(), kEdge / 8, kEdge / 8, 1);
+            square.dispatchOver(pass.cmd(), kEdge, kEdge);
         });
     graph.addPass("copy out", QueueKind::Transfer)
         .read("field", Usage::TransferSrc)

@@ -128,14 +128,13 @@ protected:
         gpu::ComputePipelineDesc desc;
         desc.name = "depth_compare_probe";
         desc.shader = "depth_compare_probe.comp";
-        desc.bindings = {{0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}, {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
         const gpu::Pipeline pipeline(*context, compiler, desc);
         const gpu::Sampler sampler = gpu::createSampler(*context, filter, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
                                                VK_COMPARE_OP_GREATER_OR_EQUAL);
         context->submitAndWait([&](VkCommandBuffer cmd) {
             pipeline.bind(cmd);
-            gpu::DescriptorPush().sampledImage(0, map, sampler).storageBuffer(1, probes).push(*context, cmd, pipeline);
-            vkCmdDispatch(cmd, uint32_t(points.size()), 1, 1);
+            gpu::DescriptorPush().sampledImage("depthMap", map, sampler).storageBuffer("Probes", probes).push(*context, cmd, pipeline);
+            pipeline.dispatchOver(cmd, uint32_t(points.size()));
         });
         std::vector<float> results;
         for (size_t i = 0; i < points.size(); ++i) results.push_back(static_cast<const glm::vec4*>(probes.mapped())[i].w);

@@ -100,7 +100,7 @@ class PipelineTest : public test::GpuTest {};
 TEST_F(PipelineTest, DispatchOverCoversAGridExactlyOnce)
 {
     const gpu::Pipeline count(*context, compiler(),
-                              gpu::ComputePipelineDesc{"dispatch count", "dispatch_count.comp", {}, {}, 8});
+                              gpu::ComputePipelineDesc{"dispatch count", "dispatch_count.comp", {}, 8});
     EXPECT_EQ(count.shaderInterface().localSize, (std::array<uint32_t, 3>{16, 4, 1}));
     const std::array<uint32_t, 2> grids[] = {{37, 11}, {16, 4}, {1, 1}, {129, 3}};
     for (const auto& [width, height] : grids) {
@@ -132,7 +132,7 @@ TEST_F(PipelineTest, DispatchOverCoversAGridExactlyOnce)
 TEST_F(PipelineTest, AnUnknownBindingNameNamesThePipelineAndTheBinding)
 {
     const gpu::Pipeline count(*context, compiler(),
-                              gpu::ComputePipelineDesc{"light3.mine.count", "dispatch_count.comp", {}, {}, 8});
+                              gpu::ComputePipelineDesc{"light3.mine.count", "dispatch_count.comp", {}, 8});
     const std::string what = errorOf([&] { count.binding("Hit"); });
     EXPECT_NE(what.find("pipeline 'light3.mine.count': its shaders declare no binding 'Hit' (did you mean 'Hits'?)"),
               std::string::npos)
@@ -152,7 +152,7 @@ TEST_F(PipelineTest, AnUnknownBindingNameNamesThePipelineAndTheBinding)
 TEST_F(PipelineTest, ADescriptorOfAnotherTypeThanTheShadersNamesBoth)
 {
     const gpu::Pipeline count(*context, compiler(),
-                              gpu::ComputePipelineDesc{"light3.mine.count", "dispatch_count.comp", {}, {}, 8});
+                              gpu::ComputePipelineDesc{"light3.mine.count", "dispatch_count.comp", {}, 8});
     gpu::Buffer buffer(*context, 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, "b");
     const std::string what = errorOf([&] {
         context->submitAndWait(

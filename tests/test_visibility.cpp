@@ -525,7 +525,6 @@ TEST_F(VisibilityCulling, ReceiverDepthsSpreadOverTheTapsExactly)
     gpu::ComputePipelineDesc desc;
     desc.name = "test.receiver_depth_min";
     desc.shader = "engine/receiver_depth_min.comp";
-    desc.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}, {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
     desc.pushConstantBytes = 3 * sizeof(int32_t);
     const gpu::Pipeline spread(*context, compiler, desc);
     std::mt19937 random(6);
@@ -561,11 +560,11 @@ TEST_F(VisibilityCulling, ReceiverDepthsSpreadOverTheTapsExactly)
                              VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT});
             gpu::transition(cmd, prefix, gpu::access::kUndefined, gpu::access::kComputeWrite);
             spread.bind(cmd);
-            gpu::DescriptorPush().storageImage(0, depth).storageImage(1, prefix).push(*context, cmd, spread);
+            gpu::DescriptorPush().storageImage("depth", depth).storageImage("prefix", prefix).push(*context, cmd, spread);
             for (int32_t vertical = 0; vertical < 2; ++vertical) {
                 const int32_t push[3] = {c.size, c.radius, vertical};
                 spread.pushConstants(cmd, push, sizeof(push));
-                vkCmdDispatch(cmd, (uint32_t(n) + 63) / 64, 1, 1);
+                spread.dispatchOver(cmd, uint32_t(n));
                 gpu::memoryBarrier(cmd, write, readWrite);
             }
         });

@@ -130,17 +130,11 @@ protected:
         gpu::ComputePipelineDesc scanDesc;
         scanDesc.name = "sat_test.scan";
         scanDesc.shader = "sat.comp";
-        scanDesc.bindings = {{0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                             {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                             {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
         scanDesc.pushConstantBytes = 3 * sizeof(int32_t);
         const gpu::Pipeline scan(*context, compiler, scanDesc);
         gpu::ComputePipelineDesc probeDesc;
         probeDesc.name = "sat_test.probe";
         probeDesc.shader = "sat_probe.comp";
-        probeDesc.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                              {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                              {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
         probeDesc.pushConstantBytes = 3 * sizeof(int32_t);
         const gpu::Pipeline probe(*context, compiler, probeDesc);
         const gpu::Sampler sampler = gpu::createSampler(*context, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
@@ -151,22 +145,30 @@ protected:
         context->submitAndWait([&](VkCommandBuffer cmd) {
             gpu::transition(cmd, sat, gpu::access::kUndefined, gpu::access::kComputeWrite);
             scan.bind(cmd);
-            gpu::DescriptorPush().sampledImage(0, depth, sampler).storageImage(1, sat).storageBuffer(2, mapData).push(
+            gpu::DescriptorPush()
+                .sampledImage("shadowDepth", depth, sampler)
+                .storageImage("satImage", sat)
+                .storageBuffer("shadowMapBuffer", mapData)
+                .push(
                 *context, cmd, scan);
             int32_t push[3] = {int32_t(size), int32_t(size), 0};
             scan.pushConstants(cmd, push, sizeof(push));
-            vkCmdDispatch(cmd, (size + 63) / 64, 1, 1);
+            scan.dispatchOver(cmd, size);
             gpu::memoryBarrier(cmd, write, readWrite);
             push[2] = 1;
             scan.pushConstants(cmd, push, sizeof(push));
-            vkCmdDispatch(cmd, (size + 63) / 64, 1, 1);
+            scan.dispatchOver(cmd, size);
             gpu::memoryBarrier(cmd, write, readWrite);
             probe.bind(cmd);
-            gpu::DescriptorPush().storageImage(0, sat).storageBuffer(1, boxBuffer).storageBuffer(2, results).push(
+            gpu::DescriptorPush()
+                .storageImage("satImage", sat)
+                .storageBuffer("Boxes", boxBuffer)
+                .storageBuffer("Results", results)
+                .push(
                 *context, cmd, probe);
             const int32_t probePush[3] = {int32_t(size), int32_t(size), int32_t(boxes.size())};
             probe.pushConstants(cmd, probePush, sizeof(probePush));
-            vkCmdDispatch(cmd, uint32_t(boxes.size() + 63) / 64, 1, 1);
+            probe.dispatchOver(cmd, uint32_t(boxes.size()));
         });
         const auto* out = static_cast<const glm::dvec4*>(results.mapped());
         return {out, out + boxes.size()};

@@ -69,9 +69,6 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
     g.name = "gbuffer";
     g.vertexShader = "engine/gbuffer.vert";
     g.fragmentShader = "engine/gbuffer.frag";
-    g.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                  {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                  {2, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}};
     g.pushConstantBytes = sizeof(glm::mat4);
     g.vertexLayout = {sceneGpu_.vertexStride(),
                       {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(scene::Vertex, position)},
@@ -89,12 +86,6 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
     s.name = "shading";
     s.shader = "engine/shading.comp";
     s.defines = {{"LIGHT_COUNT", std::to_string(config.lights.size())}};
-    s.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {2, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {3, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, static_cast<uint32_t>(config.lights.size())},
-                  {4, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                  {5, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
     s.pushConstantBytes = sizeof(ShadingPush);
     shadingPipeline_ = gpu::Pipeline(context, compiler_, s);
     nearestSampler_ = gpu::createSampler(context, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
@@ -351,9 +342,9 @@ void FrameRenderer::recordGBuffer(graph::PassContext& pass)
         cmd, render::DrawFilter::All,
         [&](const gpu::Image& texture) {
             gpu::DescriptorPush()
-                .storageBuffer(0, sceneGpu_.instanceBuffer())
-                .storageBuffer(1, sceneGpu_.materialBuffer())
-                .sampledImage(2, texture, sceneGpu_.textureSampler())
+                .storageBuffer("Instances", sceneGpu_.instanceBuffer())
+                .storageBuffer("Materials", sceneGpu_.materialBuffer())
+                .sampledImage("baseColorTexture", texture, sceneGpu_.textureSampler())
                 .push(context_, cmd, gbufferPipeline_);
         },
         visibility_->receivers());
@@ -367,16 +358,16 @@ void FrameRenderer::recordShading(graph::PassContext& pass)
     for (const LightSlot& slot : lights_) visibility.push_back(&pass.image(slot.visibility));
     shadingPipeline_.bind(cmd);
     gpu::DescriptorPush()
-        .storageImage(0, pass.image(kGPosition))
-        .storageImage(1, pass.image(kGNormal))
-        .storageImage(2, pass.image(kGAlbedo))
-        .sampledImages(3, visibility, nearestSampler_)
-        .storageBuffer(4, lightBuffer_)
-        .storageImage(5, pass.image(kColor))
+        .storageImage("gPosition", pass.image(kGPosition))
+        .storageImage("gNormal", pass.image(kGNormal))
+        .storageImage("gAlbedo", pass.image(kGAlbedo))
+        .sampledImages("visibility", visibility, nearestSampler_)
+        .storageBuffer("Lights", lightBuffer_)
+        .storageImage("outColor", pass.image(kColor))
         .push(context_, cmd, shadingPipeline_);
     const ShadingPush push{ambient_, background_};
     shadingPipeline_.pushConstants(cmd, &push, sizeof(push));
-    vkCmdDispatch(cmd, (width_ + 7) / 8, (height_ + 7) / 8, 1);
+    shadingPipeline_.dispatchOver(cmd, width_, height_);
 }
 
 std::vector<uint8_t> FrameRenderer::readColor() const

@@ -53,13 +53,10 @@ void Pipeline::reflect(const std::vector<uint32_t>& spirv, VkShaderStageFlagBits
     if (stage == VK_SHADER_STAGE_COMPUTE_BIT) interface_.localSize = declared.localSize;
 }
 
-void Pipeline::createLayout(const std::vector<Binding>& bindings, uint32_t pushConstantBytes)
+void Pipeline::createLayout(uint32_t pushConstantBytes)
 {
     std::vector<VkDescriptorSetLayoutBinding> vkBindings;
-    for (const Binding& b : bindings) vkBindings.push_back({b.binding, b.type, b.count, stages_, nullptr});
-    if (bindings.empty()) {
-        for (const ShaderBinding& b : interface_.bindings) vkBindings.push_back({b.binding, b.type, b.count, b.stages, nullptr});
-    }
+    for (const ShaderBinding& b : interface_.bindings) vkBindings.push_back({b.binding, b.type, b.count, b.stages, nullptr});
     VkDescriptorSetLayoutCreateInfo setInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     setInfo.flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR;
     setInfo.bindingCount = static_cast<uint32_t>(vkBindings.size());
@@ -85,7 +82,7 @@ Pipeline::Pipeline(Context& context, const ShaderCompiler& compiler, const Compu
         const std::vector<uint32_t> spirv = compiler.compile(desc.shader, desc.defines);
         reflect(spirv, VK_SHADER_STAGE_COMPUTE_BIT, desc.shader);
         ModuleGuard guard{device_, {createModule(device_, spirv, desc.name)}};
-        createLayout(desc.bindings, desc.pushConstantBytes);
+        createLayout(desc.pushConstantBytes);
         VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
         info.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
         info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
@@ -122,7 +119,7 @@ Pipeline::Pipeline(Context& context, const ShaderCompiler& compiler, const Graph
         if (desc.fragmentShader) {
             addStage(*desc.fragmentShader, VK_SHADER_STAGE_FRAGMENT_BIT);
         }
-        createLayout(desc.bindings, desc.pushConstantBytes);
+        createLayout(desc.pushConstantBytes);
 
         VkVertexInputBindingDescription vertexBinding{0, desc.vertexLayout.stride, VK_VERTEX_INPUT_RATE_VERTEX};
         VkPipelineVertexInputStateCreateInfo vertexInput{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
@@ -258,75 +255,47 @@ void Pipeline::dispatchOver(VkCommandBuffer cmd, const Image& image) const
     dispatchOver(cmd, image.desc().width, image.desc().height);
 }
 
-DescriptorPush& DescriptorPush::add(Target target, VkDescriptorType type, std::vector<VkDescriptorImageInfo> images,
-                                    VkDescriptorBufferInfo buffer)
+DescriptorPush& DescriptorPush::add(std::string_view name, VkDescriptorType type,
+                                    std::vector<VkDescriptorImageInfo> images, VkDescriptorBufferInfo buffer)
 {
-    entries_.push_back({std::move(target), type, std::move(images), buffer});
+    entries_.push_back({std::string(name), type, std::move(images), buffer});
     return *this;
 }
 
 DescriptorPush& DescriptorPush::storageImage(std::string_view name, const Image& image)
 {
-    return add({std::string(name)}, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, {{VK_NULL_HANDLE, image.view(), VK_IMAGE_LAYOUT_GENERAL}});
+    return add(name, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, {{VK_NULL_HANDLE, image.view(), VK_IMAGE_LAYOUT_GENERAL}});
 }
 
 DescriptorPush& DescriptorPush::sampledImage(std::string_view name, const Image& image, VkSampler sampler,
                                              VkImageLayout layout)
 {
-    return add({std::string(name)}, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, {{sampler, image.view(), layout}});
+    return add(name, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, {{sampler, image.view(), layout}});
 }
 
 DescriptorPush& DescriptorPush::sampledImages(std::string_view name, const std::vector<const Image*>& images,
                                               VkSampler sampler, VkImageLayout layout)
 {
-    return add({std::string(name)}, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, sampledInfos(images, sampler, layout));
+    return add(name, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, sampledInfos(images, sampler, layout));
 }
 
 DescriptorPush& DescriptorPush::storageBuffer(std::string_view name, const Buffer& buffer)
 {
-    return add({std::string(name)}, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, {}, wholeBuffer(buffer));
+    return add(name, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, {}, wholeBuffer(buffer));
 }
 
 DescriptorPush& DescriptorPush::uniformBuffer(std::string_view name, const Buffer& buffer)
 {
-    return add({std::string(name)}, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, {}, wholeBuffer(buffer));
+    return add(name, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, {}, wholeBuffer(buffer));
 }
 
-DescriptorPush& DescriptorPush::storageImage(uint32_t binding, const Image& image)
-{
-    return add({{}, binding}, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, {{VK_NULL_HANDLE, image.view(), VK_IMAGE_LAYOUT_GENERAL}});
-}
-
-DescriptorPush& DescriptorPush::sampledImage(uint32_t binding, const Image& image, VkSampler sampler,
-                                             VkImageLayout layout)
-{
-    return add({{}, binding}, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, {{sampler, image.view(), layout}});
-}
-
-DescriptorPush& DescriptorPush::sampledImages(uint32_t binding, const std::vector<const Image*>& images,
-                                              VkSampler sampler, VkImageLayout layout)
-{
-    return add({{}, binding}, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, sampledInfos(images, sampler, layout));
-}
-
-DescriptorPush& DescriptorPush::storageBuffer(uint32_t binding, const Buffer& buffer)
-{
-    return add({{}, binding}, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, {}, wholeBuffer(buffer));
-}
-
-DescriptorPush& DescriptorPush::uniformBuffer(uint32_t binding, const Buffer& buffer)
-{
-    return add({{}, binding}, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, {}, wholeBuffer(buffer));
-}
-
-// A named entry's binding number, checked against what the shaders declare there.
+// An entry's binding number, checked against what the shaders declare there.
 uint32_t DescriptorPush::resolve(const Entry& entry, const Pipeline& pipeline)
 {
-    if (entry.target.name.empty()) return entry.target.binding;
-    const ShaderBinding& b = pipeline.binding(entry.target.name);
+    const ShaderBinding& b = pipeline.binding(entry.name);
     if (b.type != entry.type) {
         throw Error(fmt::format("pipeline '{}': binding '{}' is a {} in its shaders, set here as a {}", pipeline.name(),
-                                entry.target.name, descriptorTypeName(b.type), descriptorTypeName(entry.type)));
+                                entry.name, descriptorTypeName(b.type), descriptorTypeName(entry.type)));
     }
     return b.binding;
 }

@@ -78,7 +78,6 @@ ShadowMap::ShadowMap(const ShadowMapSetup& setup, uint32_t resolution, std::stri
     gpu::GraphicsPipelineDesc d;
     d.name = name_ + ".shadow_map";
     d.vertexShader = "engine/shadow_depth.vert";
-    d.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
     d.pushConstantBytes = sizeof(glm::mat4);
     d.vertexLayout = casters_.positionLayout();
     d.depthFormat = kShadowDepthFormat;
@@ -92,9 +91,6 @@ ShadowMap::ShadowMap(const ShadowMapSetup& setup, uint32_t resolution, std::stri
         d.name += ".masked";
         d.fragmentShader = "engine/shadow_masked.frag";
         d.defines = {{"ALPHA_MASK", "1"}};
-        d.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                      {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                      {2, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER}};
         d.vertexLayout = casters_.positionUvLayout();
         depthMasked_ = gpu::Pipeline(context_, setup.shaders, d);
     }
@@ -204,7 +200,7 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
             // The solid pipeline stays bound across faces unless the masked one replaced it.
             if (!solidBound) {
                 depth_.bind(cmd);
-                gpu::DescriptorPush().storageBuffer(0, casters_.instanceBuffer()).push(context_, cmd, depth_);
+                gpu::DescriptorPush().storageBuffer("Instances", casters_.instanceBuffer()).push(context_, cmd, depth_);
                 solidBound = true;
             }
             depth_.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
@@ -214,9 +210,9 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
             depthMasked_.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
             casters_.draw(cmd, view, DrawFilter::AlphaMasked, [&](const gpu::Image& texture) {
                 gpu::DescriptorPush()
-                    .storageBuffer(0, casters_.instanceBuffer())
-                    .storageBuffer(1, casters_.materialBuffer())
-                    .sampledImage(2, texture, casters_.textureSampler())
+                    .storageBuffer("Instances", casters_.instanceBuffer())
+                    .storageBuffer("Materials", casters_.materialBuffer())
+                    .sampledImage("baseColorTexture", texture, casters_.textureSampler())
                     .push(context_, cmd, depthMasked_);
             });
             solidBound = false;

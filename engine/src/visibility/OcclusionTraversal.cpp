@@ -235,10 +235,13 @@ private:
         const ReceiverMask* mask = t_.view.mask;
         const bool ownDepth = mask && mask->hasReceiverDepth;
         gpu::DescriptorPush push;
-        push.storageBuffer(0, boxPipeline ? owner_.boxes_ : owner_.sceneGpu_.instanceBuffer());
+        if (boxPipeline)
+            push.storageBuffer("Boxes", owner_.boxes_);
+        else
+            push.storageBuffer("Instances", owner_.sceneGpu_.instanceBuffer());
         if (mask) {
-            push.sampledImage(1, mask->dilated, owner_.nearest_, VK_IMAGE_LAYOUT_GENERAL)
-                .storageImage(2, ownDepth ? mask->receiverDepth : owner_.noReceiverDepth_);
+            push.sampledImage("receiverMask", mask->dilated, owner_.nearest_, VK_IMAGE_LAYOUT_GENERAL)
+                .storageImage("receiverDepth", ownDepth ? mask->receiverDepth : owner_.noReceiverDepth_);
         }
         push.push(owner_.context_, cmd_, p);
         // Leaf draws take the technique's bias in a light view, so that what they draw and
@@ -330,7 +333,6 @@ OcclusionTraversal::OcclusionTraversal(gpu::Context& context, const gpu::ShaderC
                                       {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(scene::Vertex, position)}}};
     gpu::GraphicsPipelineDesc d;
     d.vertexShader = "engine/shadow_depth.vert";
-    d.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
     d.pushConstantBytes = sizeof(glm::mat4);
     d.vertexLayout = positions;
     d.depthFormat = kDepthFormat;
@@ -354,15 +356,11 @@ OcclusionTraversal::OcclusionTraversal(gpu::Context& context, const gpu::ShaderC
         d.fragmentShader = "engine/culling_mask.frag";
         d.defines = {{"CULLING_WORLD", "1"}};
         d.pushConstantBytes = sizeof(CulledQueryPush);
-        d.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
-                      {1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                      {2, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
         maskLeafDepth_ = make("mask_leaf", true);
         maskLeafCount_ = make("mask_leaf_count", false);
         boxDesc.fragmentShader = d.fragmentShader;
         boxDesc.defines = d.defines;
         boxDesc.pushConstantBytes = d.pushConstantBytes;
-        boxDesc.bindings = d.bindings;
         boxDesc.name = "visibility.mask_box";
         maskBox_ = gpu::Pipeline(context_, shaders, boxDesc);
         noReceiverDepth_ = gpu::Image(context_, {1, 1, kReceiverDepthFormat, VK_IMAGE_USAGE_STORAGE_BIT,

@@ -63,22 +63,17 @@ ReceiverMaskBuilder::ReceiverMaskBuilder(gpu::Context& context, const gpu::Shade
     gpu::ComputePipelineDesc c;
     c.name = "visibility.receiver_scatter";
     c.shader = "engine/receiver_scatter.comp";
-    c.bindings = {{0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER},
-                  {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE},
-                  {2, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}};
     c.pushConstantBytes = sizeof(ScatterPush);
     scatter_ = gpu::Pipeline(context_, shaders, c);
     c.name = "visibility.receiver_depth_scatter";
     c.defines = {{"RECEIVER_DEPTH", "1"}};
-    c.bindings.push_back({3, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE});
     scatterDepth_ = gpu::Pipeline(context_, shaders, c);
-    // Separable filters over a radius, one axis per dispatch: bindings (source,
-    // destination), push (size, radius, vertical).
+    // Separable filters over a radius, one axis per dispatch: push (size, radius,
+    // vertical).
     const auto imageFilter = [&](const char* name, const char* shader) {
         gpu::ComputePipelineDesc f;
         f.name = name;
         f.shader = shader;
-        f.bindings = {{0, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}, {1, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE}};
         f.pushConstantBytes = 3 * sizeof(int32_t);
         return gpu::Pipeline(context_, shaders, f);
     };
@@ -185,15 +180,14 @@ void ReceiverMaskBuilder::recordMask(VkCommandBuffer cmd, const render::CasterVi
     const gpu::Pipeline& scatter = ownDepth ? scatterDepth_ : scatter_;
     scatter.bind(cmd);
     gpu::DescriptorPush scatterBindings;
-    scatterBindings.sampledImage(0, *cameraDepth_, nearest_, VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL)
-        .storageImage(1, mask.marked)
-        .storageBuffer(2, cameraData_);
-    if (ownDepth) scatterBindings.storageImage(3, mask.receiverDepth);
+    scatterBindings.sampledImage("cameraDepth", *cameraDepth_, nearest_, VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL)
+        .storageImage("receiverMask", mask.marked)
+        .storageBuffer("camera", cameraData_);
+    if (ownDepth) scatterBindings.storageImage("receiverDepth", mask.receiverDepth);
     scatterBindings.push(context_, cmd, scatter);
     const ScatterPush scatterPush{view.viewProj, int32_t(mask.block), int32_t(size)};
     scatter.pushConstants(cmd, &scatterPush, sizeof(scatterPush));
-    const gpu::ImageDesc& camera = cameraDepth_->desc();
-    vkCmdDispatch(cmd, (camera.width + 7) / 8, (camera.height + 7) / 8, 1);
+    scatter.dispatchOver(cmd, *cameraDepth_);
 
     const gpu::MemoryAccess stores{VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                                    VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
@@ -205,13 +199,13 @@ void ReceiverMaskBuilder::recordMask(VkCommandBuffer cmd, const render::CasterVi
         // Each receiver's depth over the texels its taps read (receiver_depth_min.comp).
         depthMin_.bind(cmd);
         gpu::DescriptorPush()
-            .storageImage(0, mask.receiverDepth)
-            .storageImage(1, mask.receiverDepthPrefix)
+            .storageImage("depth", mask.receiverDepth)
+            .storageImage("prefix", mask.receiverDepthPrefix)
             .push(context_, cmd, depthMin_);
         for (int32_t vertical = 0; vertical < 2; ++vertical) {
             const int32_t push[3] = {int32_t(size), tapRadius, vertical};
             depthMin_.pushConstants(cmd, push, sizeof(push));
-            vkCmdDispatch(cmd, (size + 63) / 64, 1, 1);
+            depthMin_.dispatchOver(cmd, size);
             gpu::memoryBarrier(cmd, stores, loads);
         }
     }
@@ -219,12 +213,12 @@ void ReceiverMaskBuilder::recordMask(VkCommandBuffer cmd, const render::CasterVi
     const gpu::Image* passes[2][2] = {{&mask.marked, &mask.dilatedRows}, {&mask.dilatedRows, &mask.dilated}};
     for (int32_t vertical = 0; vertical < 2; ++vertical) {
         gpu::DescriptorPush()
-            .storageImage(0, *passes[vertical][0])
-            .storageImage(1, *passes[vertical][1])
+            .storageImage("source", *passes[vertical][0])
+            .storageImage("target", *passes[vertical][1])
             .push(context_, cmd, dilate_);
         const int32_t push[3] = {int32_t(mask.size), radius, vertical};
         dilate_.pushConstants(cmd, push, sizeof(push));
-        vkCmdDispatch(cmd, (mask.size + 63) / 64, 1, 1);
+        dilate_.dispatchOver(cmd, mask.size);
         gpu::memoryBarrier(cmd, stores, loads);
     }
     const gpu::ImageAccess general{VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,

@@ -24,13 +24,6 @@ class Context;
 class Buffer;
 class Image;
 
-// A binding of a layout given by hand (the descriptions' `bindings`).
-struct Binding {
-    uint32_t binding = 0;
-    VkDescriptorType type = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
-    uint32_t count = 1;
-};
-
 struct VertexLayout {
     uint32_t stride = 0;                        // 0: no vertex buffer
     std::vector<VkVertexInputAttributeDescription> attributes;
@@ -41,9 +34,6 @@ struct GraphicsPipelineDesc {
     std::filesystem::path vertexShader;
     std::optional<std::filesystem::path> fragmentShader;  // none: depth-only pass
     std::vector<ShaderDefine> defines;
-    // Empty (the rule): the layout is every binding the shaders declare. A list given here
-    // replaces it (the engine's frame passes still list theirs).
-    std::vector<Binding> bindings;
     uint32_t pushConstantBytes = 0;
     VertexLayout vertexLayout;
     std::vector<VkFormat> colorFormats;
@@ -58,7 +48,6 @@ struct ComputePipelineDesc {
     std::string name;
     std::filesystem::path shader;
     std::vector<ShaderDefine> defines;
-    std::vector<Binding> bindings;  // as GraphicsPipelineDesc::bindings
     uint32_t pushConstantBytes = 0;
 };
 
@@ -97,7 +86,7 @@ public:
 
 private:
     void reflect(const std::vector<uint32_t>& spirv, VkShaderStageFlagBits stage, const std::filesystem::path& shader);
-    void createLayout(const std::vector<Binding>& bindings, uint32_t pushConstantBytes);
+    void createLayout(uint32_t pushConstantBytes);
     void release();
 
     VkDevice device_ = VK_NULL_HANDLE;
@@ -111,10 +100,10 @@ private:
 };
 
 // Collects the descriptors of one draw or dispatch and pushes them. A binding is named as
-// the shader names it (`"gPosition"`; a buffer by its instance or block name), or given
-// by number; names are looked up in the pipeline at push(), which throws penumbra::Error
-// naming the pipeline and the binding for a name its shaders do not declare or a
-// descriptor of another type than they declare there.
+// the shader names it (`"gPosition"`; a buffer by its instance or block name); names are
+// looked up in the pipeline at push(), which throws penumbra::Error naming the pipeline
+// and the binding for a name its shaders do not declare or a descriptor of another type
+// than they declare there. There are no binding numbers on the C++ side.
 class DescriptorPush {
 public:
     DescriptorPush& storageImage(std::string_view name, const Image& image);
@@ -126,29 +115,16 @@ public:
     DescriptorPush& storageBuffer(std::string_view name, const Buffer& buffer);
     DescriptorPush& uniformBuffer(std::string_view name, const Buffer& buffer);
 
-    DescriptorPush& storageImage(uint32_t binding, const Image& image);
-    DescriptorPush& sampledImage(uint32_t binding, const Image& image, VkSampler sampler,
-                                 VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
-    DescriptorPush& sampledImages(uint32_t binding, const std::vector<const Image*>& images, VkSampler sampler,
-                                  VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
-    DescriptorPush& storageBuffer(uint32_t binding, const Buffer& buffer);
-    DescriptorPush& uniformBuffer(uint32_t binding, const Buffer& buffer);
-
     void push(const Context& context, VkCommandBuffer cmd, const Pipeline& pipeline);
 
 private:
-    // Where a descriptor goes: a binding's name, or its number (name empty).
-    struct Target {
-        std::string name;
-        uint32_t binding = 0;
-    };
     struct Entry {
-        Target target;
+        std::string name;  // the binding's, as the shaders name it
         VkDescriptorType type;
         std::vector<VkDescriptorImageInfo> images;
         VkDescriptorBufferInfo buffer{};
     };
-    DescriptorPush& add(Target target, VkDescriptorType type, std::vector<VkDescriptorImageInfo> images,
+    DescriptorPush& add(std::string_view name, VkDescriptorType type, std::vector<VkDescriptorImageInfo> images,
                         VkDescriptorBufferInfo buffer = {});
     static uint32_t resolve(const Entry& entry, const Pipeline& pipeline);
     std::vector<Entry> entries_;
