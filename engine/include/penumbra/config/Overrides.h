@@ -2,7 +2,7 @@
 // Technique parameters set on the command line: `--set hard.pcf_kernel=5` sets
 // pcf_kernel for every light whose shadow technique is "hard", on top of the config
 // (the plugin's reflection checks the value later, naming "--set hard.pcf_kernel").
-#include "penumbra/config/Config.h"
+#include "penumbra/config/RenderConfig.h"
 
 #include <nlohmann/json.hpp>
 
