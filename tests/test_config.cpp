@@ -571,3 +571,52 @@ TEST(Config, MissingFile)
         EXPECT_NE(std::string(e.what()).find("/nonexistent/penumbra.json: config file not found"), std::string::npos);
     }
 }
+
+TEST(Run, TheScenesLightsExistBeforeTheOverridesApply)
+{
+    // "lights": "scene": the lights come with the glTF file, so --set (which names their
+    // technique, "hard" by default) can reach them only once the scene is loaded.
+    config::RunOptions options;
+    options.overrides = config::parseParamOverrides({"hard.resolution=512"});
+    options.width = 32;
+    options.height = 24;
+    options.frames = 3;
+    options.culling = config::CullingMode::ReceiverMask;
+    const config::PreparedRun run = config::prepareRun(kConfigs / "gltf_scene_lights.json", options);
+    ASSERT_EQ(run.config.lights.size(), 3u);
+    for (const config::LightConfig& light : run.config.lights) {
+        ASSERT_NE(light.shadow.param("resolution"), nullptr) << light.name;
+        EXPECT_EQ(*light.shadow.param("resolution"), 512) << light.name;
+        EXPECT_EQ(light.shadow.params[0].where, "--set hard.resolution");
+    }
+    EXPECT_EQ(run.config.width, 32u);
+    EXPECT_EQ(run.config.height, 24u);
+    EXPECT_EQ(run.config.frames, 3u);
+    EXPECT_EQ(run.config.culling, config::CullingMode::ReceiverMask);
+    EXPECT_EQ(run.rest.lights.size(), 3u);
+    EXPECT_FALSE(run.scene.instances.empty());
+
+    // An override that no light uses is an error, unless the run takes only the overrides
+    // of the techniques it uses (a sweep variant's share).
+    options.overrides = config::parseParamOverrides({"pcss.light_size=1"});
+    try {
+        config::prepareRun(kConfigs / "gltf_scene_lights.json", options);
+        ADD_FAILURE() << "expected ConfigError";
+    } catch (const ConfigError& e) {
+        EXPECT_TRUE(has(e.what(), "--set pcss.light_size: no light of")) << e.what();
+    }
+    options.overridesOfUsedTechniquesOnly = true;
+    EXPECT_EQ(config::prepareRun(kConfigs / "gltf_scene_lights.json", options).config.lights[0].shadow.params.size(), 0u);
+}
+
+TEST(Run, EveryPoseStartsFromTheRestState)
+{
+    config::PreparedRun run = config::prepareRun(fs::path(PENUMBRA_SOURCE_DIR) / "config/animated.json", {});
+    const glm::vec3 restCamera = run.rest.camera.position;
+    EXPECT_EQ(run.config.camera.position, restCamera) << "unposed until poseAt";
+    EXPECT_EQ(run.poseAt(1.0f).size(), 1u);  // the sphere moved
+    EXPECT_FLOAT_EQ(run.config.camera.position.x, -4.0f);
+    run.poseAtFrame(0);
+    EXPECT_FLOAT_EQ(run.config.camera.position.x, 15.0f);
+    EXPECT_EQ(run.rest.camera.position, restCamera);
+}

@@ -9,8 +9,8 @@
 #include "TimingSummary.h"
 
 #include "penumbra/config/Animation.h"
-#include "penumbra/config/Config.h"
-#include "penumbra/config/Overrides.h"
+#include "penumbra/config/Run.h"
+#include "penumbra/config/Sweep.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/io/StagedFile.h"
 #include "penumbra/metrics/ImageComparison.h"
@@ -212,37 +212,22 @@ std::string choicesText(const config::SweepVariant& variant, size_t light, bool 
     return fmt::format("{}", fmt::join(parts, ", "));
 }
 
-// The --set overrides that apply to `config`: those whose technique one of its lights
-// uses. Others belong to other variants.
-std::vector<config::ParamOverride> overridesFor(const std::vector<config::ParamOverride>& overrides,
-                                                const config::RenderConfig& config)
-{
-    std::vector<config::ParamOverride> used;
-    for (const config::ParamOverride& o : overrides) {
-        const bool named = std::any_of(config.lights.begin(), config.lights.end(),
-                                       [&](const config::LightConfig& l) { return l.shadow.technique == o.technique; });
-        if (named) used.push_back(o);
-    }
-    return used;
-}
-
-// Everything a variant would fail on, for every variant, before the first renders: each
-// light's plugin loaded and its parameters checked (--set included), and every --set
-// used by some variant. Lights from a glTF file ("lights": "scene") need its scene loaded.
-void checkVariants(const std::vector<config::SweepVariant>& variants, const std::vector<config::ParamOverride>& overrides,
+// Everything a variant would fail on, for every variant, before the first renders: its
+// run prepared (scene, lights, the --set overrides of the techniques it uses), each
+// light's plugin loaded and its parameters checked, and every --set used by some variant.
+void checkVariants(const std::vector<config::SweepVariant>& variants, const config::RunOptions& options,
                    plugin::PluginRegistry& plugins)
 {
     PluginCheck check;
     std::set<std::string> usedOverrides;
     for (const config::SweepVariant& variant : variants) {
-        config::RenderConfig config = variant.config;
-        if (config.lightsFromScene) config::buildScene(config);
-        const std::vector<config::ParamOverride> used = overridesFor(overrides, config);
-        for (const config::ParamOverride& o : used) usedOverrides.insert(o.where);
-        config::applyParamOverrides(config, used);
-        check.check(config, plugins, false);
+        const config::PreparedRun run = config::prepareRun(variant.config, options);
+        for (const config::ParamOverride& o : config::overridesUsedBy(options.overrides, run.config)) {
+            usedOverrides.insert(o.where);
+        }
+        check.check(run.config, plugins, false);
     }
-    for (const config::ParamOverride& o : overrides) {
+    for (const config::ParamOverride& o : options.overrides) {
         if (!usedOverrides.count(o.where)) {
             throw Error(fmt::format("{}: no light of any sweep variant uses technique '{}'", o.where, o.technique));
         }
@@ -356,7 +341,7 @@ struct BenchSession {
     const BenchFlags& flags;
     gpu::Context& context;
     plugin::PluginRegistry& plugins;
-    const std::vector<config::ParamOverride>& overrides;
+    const config::RunOptions& options;
     ReferenceCache& references;
     Progress& progress;
     std::vector<std::string>& warnings;
@@ -364,8 +349,10 @@ struct BenchSession {
 
 BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& variant, size_t index)
 {
-    config::RenderConfig config = variant.config;
-    const scene::Scene scene = buildFirstFrame(config, overridesFor(session.overrides, config));
+    config::PreparedRun run = config::prepareRun(variant.config, session.options);
+    run.poseAtFrame(0);  // an animated config is measured at its first frame, as `render` shows it
+    const config::RenderConfig& config = run.config;
+    const scene::Scene& scene = run.scene;
     const std::vector<const ReferenceVisibility*> references = session.references.lookUp(config, scene, session.progress);
 
     render::FrameRenderer renderer(session.context, scene, config, session.plugins);
@@ -444,16 +431,16 @@ int runBench(const BenchFlags& flags, const gpu::ContextOptions& device)
 {
     if (flags.frames == 0) throw Error("--frames must be at least 1 (the measured frames)");
     const config::ConfigDocument document = config::loadDocument(flags.config);
-    std::vector<config::SweepVariant> variants = config::expandSweep(document);
-    for (config::SweepVariant& v : variants) {
-        if (flags.width) v.config.width = *flags.width;
-        if (flags.height) v.config.height = *flags.height;
-    }
-    const std::vector<config::ParamOverride> overrides = config::parseParamOverrides(flags.settings);
+    const std::vector<config::SweepVariant> variants = config::expandSweep(document);
+    config::RunOptions options;
+    options.overrides = config::parseParamOverrides(flags.settings);
+    options.overridesOfUsedTechniquesOnly = true;
+    options.width = flags.width;
+    options.height = flags.height;
 
     plugin::PluginRegistry plugins;
     const ReferenceTechnique reference = loadReferenceTechnique(flags.reference, flags.referenceSettings, plugins);
-    checkVariants(variants, overrides, plugins);
+    checkVariants(variants, options, plugins);
 
     const fs::path dir = outputFolder(flags.output);
     const fs::path csvFile = dir / "results.csv", jsonFile = dir / "results.json", plotFile = dir / "pareto.svg";
@@ -476,7 +463,7 @@ int runBench(const BenchFlags& flags, const gpu::ContextOptions& device)
     try {
         ReferenceCache references(context, plugins, reference);
         Progress progress(variants.size(), flags.warmup + flags.frames);
-        BenchSession session{flags, context, plugins, overrides, references, progress, run.warnings};
+        BenchSession session{flags, context, plugins, options, references, progress, run.warnings};
         for (size_t i = 0; i < variants.size(); ++i) {
             progress.startVariant(i, variants[i].label.empty() ? "(no sweep)" : variants[i].label);
             run.variants.push_back(measureVariant(session, variants[i], i));

@@ -4,8 +4,7 @@
 #include "OutputFolder.h"
 #include "ReferenceTechnique.h"
 
-#include "penumbra/config/Config.h"
-#include "penumbra/config/Overrides.h"
+#include "penumbra/config/Run.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/io/Png.h"
 #include "penumbra/io/StagedFile.h"
@@ -159,14 +158,18 @@ int runCompare(const CompareFlags& flags, const gpu::ContextOptions& device)
     if (!(flags.diffScale > 0.0f && flags.diffScale <= 1.0f)) {
         throw Error(fmt::format("--diff-scale must be in (0, 1], got {}", flags.diffScale));
     }
-    config::RenderConfig config = config::loadConfig(flags.config);
-    const std::vector<config::ParamOverride> overrides = config::parseParamOverrides(flags.settings);
-    if (flags.width) config.width = *flags.width;
-    if (flags.height) config.height = *flags.height;
+    config::RenderConfig loaded = config::loadConfig(flags.config);
+    config::RunOptions options;
+    options.overrides = config::parseParamOverrides(flags.settings);
+    options.width = flags.width;
+    options.height = flags.height;
 
     plugin::PluginRegistry plugins;
     const ReferenceTechnique reference = loadReferenceTechnique(flags.reference, flags.referenceSettings, plugins);
-    const scene::Scene scene = buildFirstFrame(config, overrides);
+    config::PreparedRun run = config::prepareRun(std::move(loaded), options);
+    run.poseAtFrame(0);  // an animated config is measured at its first frame, as `render` shows it
+    const config::RenderConfig& config = run.config;
+    const scene::Scene& scene = run.scene;
     const config::RenderConfig referenceConfig = withReferenceShadows(config, reference);
 
     const fs::path dir = outputFolder(flags.output);

@@ -1,7 +1,6 @@
 #include "GraphCommand.h"
 
-#include "penumbra/config/Config.h"
-#include "penumbra/config/Overrides.h"
+#include "penumbra/config/Run.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/io/StagedFile.h"
 #include "penumbra/plugin/PluginRegistry.h"
@@ -21,17 +20,17 @@ std::string mebibytes(VkDeviceSize bytes) { return fmt::format("{:.2f} MiB", dou
 
 int runGraph(const GraphFlags& flags, const gpu::ContextOptions& device)
 {
-    config::RenderConfig config = config::loadConfig(flags.config);
-    const std::vector<config::ParamOverride> overrides = config::parseParamOverrides(flags.settings);
-    if (flags.width) config.width = *flags.width;
-    if (flags.height) config.height = *flags.height;
+    config::RenderConfig loaded = config::loadConfig(flags.config);
+    config::RunOptions options;
+    options.overrides = config::parseParamOverrides(flags.settings);
+    options.width = flags.width;
+    options.height = flags.height;
     if (!flags.output.empty()) io::checkWritable(flags.output);
 
     gpu::Context context(device);
-    const scene::Scene scene = config::buildScene(config);
-    config::applyParamOverrides(config, overrides);  // after buildScene: "lights": "scene"
+    const config::PreparedRun run = config::prepareRun(std::move(loaded), options);
     plugin::PluginRegistry plugins;
-    render::FrameRenderer renderer(context, scene, config, plugins);
+    render::FrameRenderer renderer(context, run.scene, run.config, plugins);
     for (const std::string& warning : renderer.warnings()) spdlog::warn("{}", warning);
     renderer.renderFrame();
 

@@ -96,38 +96,32 @@ std::string framePath(const std::string& pattern, uint32_t frame)
 
 int runRender(const RenderFlags& flags, const DeviceFlags& deviceFlags)
 {
-    penumbra::config::RenderConfig config = penumbra::config::loadConfig(flags.config);
-    const std::vector<penumbra::config::ParamOverride> overrides = penumbra::config::parseParamOverrides(flags.settings);
-    if (flags.width) config.width = *flags.width;
-    if (flags.height) config.height = *flags.height;
-    if (flags.frames) config.frames = *flags.frames;
-    if (flags.culling) config.culling = penumbra::config::parseCullingMode(*flags.culling);
+    penumbra::config::RenderConfig loaded = penumbra::config::loadConfig(flags.config);
+    penumbra::config::RunOptions options;
+    options.overrides = penumbra::config::parseParamOverrides(flags.settings);
+    options.width = flags.width;
+    options.height = flags.height;
+    options.frames = flags.frames;
+    if (flags.culling) options.culling = penumbra::config::parseCullingMode(*flags.culling);
     // Fail on a bad output path before spending seconds rendering.
     penumbra::io::checkWritable(outputPerFrame(flags.output) ? framePath(flags.output, 0) : flags.output);
 
     penumbra::gpu::Context context(contextOptions(deviceFlags));
     spdlog::info("device: {} ({})", context.deviceInfo().name, context.deviceInfo().type);
-    penumbra::scene::Scene scene = penumbra::config::buildScene(config);
-    // After buildScene: "lights": "scene" configs have their lights only then.
-    penumbra::config::applyParamOverrides(config, overrides);
-    const penumbra::config::RenderConfig rest = config;  // the animation's starting point
+    penumbra::config::PreparedRun run = penumbra::config::prepareRun(std::move(loaded), options);
+    const penumbra::config::RenderConfig& config = run.config;
     penumbra::plugin::PluginRegistry plugins;
-    penumbra::render::FrameRenderer renderer(context, scene, config, plugins);
+    penumbra::render::FrameRenderer renderer(context, run.scene, config, plugins);
     for (const std::string& warning : renderer.warnings()) spdlog::warn("{}", warning);
-    spdlog::info("scene: {} instances, {} triangles; {}x{}, {} light(s), {} frame(s)", scene.instances.size(),
-                 scene.triangleCount(), config.width, config.height, config.lights.size(), config.frames);
+    spdlog::info("scene: {} instances, {} triangles; {}x{}, {} light(s), {} frame(s)", run.scene.instances.size(),
+                 run.scene.triangleCount(), config.width, config.height, config.lights.size(), config.frames);
 
     // Warm-up frames absorb one-time costs (lavapipe JIT-compiles pipelines at first use).
     const uint32_t warmup = config.frames > 1 ? flags.warmup : 0;
     std::vector<penumbra::render::FrameTimings> measured;
     for (uint32_t i = 0; i < warmup + config.frames; ++i) {
         const uint32_t frame = i < warmup ? 0 : i - warmup;
-        if (!config.animation.empty()) {
-            // Frame f shows time f / fps; every frame starts from the config's own values.
-            config = rest;
-            penumbra::config::applyAnimation(config.animation, float(frame) / config.animation.fps, config, scene);
-            renderer.update(config, scene, scene.updateTransforms());
-        }
+        if (!config.animation.empty()) renderer.update(config, run.scene, run.poseAtFrame(frame));
         penumbra::render::FrameTimings t = renderer.renderFrame();
         if (i < warmup) continue;
         measured.push_back(std::move(t));
@@ -277,13 +271,13 @@ int runValidateGltf(const ValidateFlags& flags)
 int runValidateConfig(const ValidateFlags& flags)
 {
     namespace config = penumbra::config;
-    const std::vector<config::ParamOverride> overrides = config::parseParamOverrides(flags.settings);
+    config::RunOptions options;
+    options.overrides = config::parseParamOverrides(flags.settings);
     const config::ConfigDocument document = config::loadDocument(flags.file);
     const std::vector<config::SweepVariant> variants = config::expandSweep(document);
-    config::RenderConfig base = config::parseConfig(document);
-    const penumbra::scene::Scene scene = config::buildScene(base);
-    const std::vector<config::LightConfig> sceneLights = base.lights;
-    config::applyParamOverrides(base, overrides);
+    const config::PreparedRun run = config::prepareRun(config::parseConfig(document), options);
+    const config::RenderConfig& base = run.config;
+    const penumbra::scene::Scene& scene = run.scene;
     const config::SceneSource& source = base.scene;
     fmt::print("scene: {} (scale {}): {} meshes, {} instances, {} triangles, {} materials, {} textures\n",
                source.kind == config::SceneSource::Kind::Gltf ? source.gltf.string() : "generator " + source.generator,
@@ -302,17 +296,8 @@ int runValidateConfig(const ValidateFlags& flags)
                base.frames, config::cullingModeName(base.culling), base.animation.tracks.size(), base.animation.fps);
     if (variants.size() > 1 || !variants.front().label.empty()) {
         fmt::print("sweep: {} variants\n", variants.size());
-        for (config::SweepVariant v : variants) {
-            // A swept scene source must build too.
-            if (v.config.scene.kind != source.kind || v.config.scene.generator != source.generator ||
-                v.config.scene.params != source.params || v.config.scene.scale != source.scale ||
-                v.config.scene.gltf != source.gltf) {
-                config::buildScene(v.config);
-            } else if (v.config.lightsFromScene) {
-                v.config.lights = sceneLights;
-            }
-            config::applyParamOverrides(v.config, overrides);
-            pluginCheck.check(v.config, plugins, false);
+        for (const config::SweepVariant& v : variants) {
+            pluginCheck.check(config::prepareRun(v.config, options).config, plugins, false);
             fmt::print("  {}\n", v.label);
         }
     }

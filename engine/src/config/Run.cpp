@@ -1,5 +1,6 @@
 #include "penumbra/config/Run.h"
 
+#include "penumbra/config/Animation.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/scene/GltfLoader.h"
 
@@ -71,6 +72,33 @@ scene::Scene buildScene(RenderConfig& config)
         }
     }
     return scene;
+}
+
+PreparedRun prepareRun(RenderConfig config, const RunOptions& options)
+{
+    PreparedRun run;
+    run.scene = buildScene(config);
+    applyParamOverrides(config, options.overridesOfUsedTechniquesOnly ? overridesUsedBy(options.overrides, config)
+                                                                       : options.overrides);
+    if (options.width) config.width = *options.width;
+    if (options.height) config.height = *options.height;
+    if (options.frames) config.frames = *options.frames;
+    if (options.culling) config.culling = *options.culling;
+    run.rest = config;
+    run.config = std::move(config);
+    return run;
+}
+
+PreparedRun prepareRun(const std::filesystem::path& file, const RunOptions& options)
+{
+    return prepareRun(loadConfig(file), options);
+}
+
+std::vector<uint32_t> PreparedRun::poseAt(float timeS)
+{
+    config = rest;
+    applyAnimation(rest.animation, timeS, config, scene);
+    return scene.updateTransforms();
 }
 
 } // namespace penumbra::config

@@ -72,7 +72,7 @@ struct RenderConfig {
     scene::Camera camera;
     std::vector<LightConfig> lights;
     // "lights": "scene": the lights come from the glTF file (KHR_lights_punctual), with
-    // default shadow settings; resolved by buildScene.
+    // default shadow settings; resolved by buildScene (config/Run.h).
     bool lightsFromScene = false;
     CullingMode culling = CullingMode::None;
     // Fit directional and spot lights' shadow maps to what the camera sees (render/Visibility.h,
