@@ -36,6 +36,18 @@ namespace fs = std::filesystem;
 namespace penumbra::app {
 namespace {
 
+struct BenchFlags {
+    std::string config;
+    std::string output;                // -o DIR; empty: print the table only
+    std::string summary;               // --summary FILE.md; empty: none
+    uint32_t frames = 10;              // measured frames per variant
+    uint32_t warmup = 1;               // untimed frames before them
+    ReferenceFlags reference;
+    RunFlags run;                      // --set and the size, every variant
+    DeviceFlags device;
+    std::vector<std::string> command;  // argv, for the reports
+};
+
 // ---- interruption ---------------------------------------------------------------------
 // SIGINT or SIGTERM ends the run after the frame in flight, through the normal unwinding
 // (every renderer destroyed, nothing written): a run stopped half-way has no results to
@@ -425,21 +437,16 @@ void printTable(const BenchRun& run)
     }
 }
 
-} // namespace
-
-int runBench(const BenchFlags& flags, const gpu::ContextOptions& device)
+int runBench(const BenchFlags& flags)
 {
     if (flags.frames == 0) throw Error("--frames must be at least 1 (the measured frames)");
     const config::ConfigDocument document = config::loadDocument(flags.config);
     const std::vector<config::SweepVariant> variants = config::expandSweep(document);
-    config::RunOptions options;
-    options.overrides = config::parseParamOverrides(flags.settings);
+    config::RunOptions options = runOptions(flags.run);
     options.overridesOfUsedTechniquesOnly = true;
-    options.width = flags.width;
-    options.height = flags.height;
 
     plugin::PluginRegistry plugins;
-    const ReferenceTechnique reference = loadReferenceTechnique(flags.reference, flags.referenceSettings, plugins);
+    const ReferenceTechnique reference = loadReferenceTechnique(flags.reference.technique, flags.reference.settings, plugins);
     checkVariants(variants, options, plugins);
 
     const fs::path dir = outputFolder(flags.output);
@@ -448,7 +455,7 @@ int runBench(const BenchFlags& flags, const gpu::ContextOptions& device)
     if (!flags.summary.empty()) io::checkWritable(flags.summary);
 
     const InterruptHandler interruptHandler;
-    gpu::Context context(device);
+    gpu::Context context(contextOptions(flags.device));
     spdlog::info("device: {} ({})", context.deviceInfo().name, context.deviceInfo().type);
     BenchRun run;
     run.config = flags.config;
@@ -458,7 +465,7 @@ int runBench(const BenchFlags& flags, const gpu::ContextOptions& device)
     run.device = deviceJson(context.deviceInfo());
     run.frames = flags.frames;
     run.warmup = flags.warmup;
-    run.reference = flags.reference;
+    run.reference = flags.reference.technique;
     run.referenceParams = reference.params;
     try {
         ReferenceCache references(context, plugins, reference);
@@ -491,11 +498,34 @@ int runBench(const BenchFlags& flags, const gpu::ContextOptions& device)
     }
     printTable(run);
 
-    if (context.validationEnabled() && context.validationMessageCount() > 0) {
-        spdlog::error("the Vulkan validation layer reported {} message(s)", context.validationMessageCount());
-        return 3;
-    }
-    return 0;
+    return validationExitCode(context);
+}
+
+} // namespace
+
+Command addBenchCommand(CLI::App& app, std::vector<std::string> commandLine)
+{
+    auto flags = std::make_shared<BenchFlags>();
+    flags->command = std::move(commandLine);
+    CLI::App* cmd = app.add_subcommand("bench", "Run a config's sweep (techniques x parameters x scenes x lights): "
+                                                "GPU and CPU time per pass, memory per technique and each light's "
+                                                "error against the reference technique; write CSV, JSON and a Pareto plot");
+    cmd->add_option("config", flags->config, "Scene config (JSON) with a \"sweep\"")->required();
+    cmd->add_option("-o,--output", flags->output,
+                    "Write results.csv, results.json and pareto.svg into this folder (created if missing; other "
+                    "files in it are left alone)");
+    cmd->add_option("--summary", flags->summary, "Also write the results as a Markdown summary to this file");
+    cmd->add_option("--frames", flags->frames, "Measured frames per variant (medians)")
+        ->check(CLI::Range(1u, 100000u))
+        ->capture_default_str();
+    cmd->add_option("--warmup", flags->warmup, "Untimed frames before the measured ones, per variant")
+        ->check(CLI::Range(0u, 100000u))
+        ->capture_default_str();
+    addReferenceFlags(*cmd, flags->reference);
+    addSizeFlags(*cmd, flags->run, "every variant");
+    addParamOverrideFlag(*cmd, flags->run.settings);
+    addDeviceFlags(*cmd, flags->device);
+    return {cmd, [flags] { return runBench(*flags); }};
 }
 
 } // namespace penumbra::app

@@ -10,24 +10,28 @@
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
+#include <memory>
 
 namespace penumbra::app {
 namespace {
 
+struct GraphFlags {
+    std::string config;
+    std::string format = "text";  // "text" or "dot"
+    std::string output;           // empty: stdout
+    RunFlags run;
+    DeviceFlags device;
+};
+
 std::string mebibytes(VkDeviceSize bytes) { return fmt::format("{:.2f} MiB", double(bytes) / (1024.0 * 1024.0)); }
 
-} // namespace
-
-int runGraph(const GraphFlags& flags, const gpu::ContextOptions& device)
+int runGraph(const GraphFlags& flags)
 {
     config::RenderConfig loaded = config::loadConfig(flags.config);
-    config::RunOptions options;
-    options.overrides = config::parseParamOverrides(flags.settings);
-    options.width = flags.width;
-    options.height = flags.height;
+    const config::RunOptions options = runOptions(flags.run);
     if (!flags.output.empty()) io::checkWritable(flags.output);
 
-    gpu::Context context(device);
+    gpu::Context context(contextOptions(flags.device));
     const config::PreparedRun run = config::prepareRun(std::move(loaded), options);
     plugin::PluginRegistry plugins;
     render::FrameRenderer renderer(context, run.scene, run.config, plugins);
@@ -59,6 +63,24 @@ int runGraph(const GraphFlags& flags, const gpu::ContextOptions& device)
         spdlog::info("wrote {}", flags.output);
     }
     return 0;
+}
+
+} // namespace
+
+Command addGraphCommand(CLI::App& app)
+{
+    auto flags = std::make_shared<GraphFlags>();
+    CLI::App* cmd = app.add_subcommand("graph", "Print the frame's compiled render graph: passes in order with their "
+                                                "barriers, culled passes and why, resources with size and aliasing");
+    cmd->add_option("config", flags->config, "Scene config (JSON)")->required();
+    cmd->add_option("--format", flags->format, "text, or dot (Graphviz)")
+        ->check(CLI::IsMember({"text", "dot"}))
+        ->capture_default_str();
+    cmd->add_option("-o,--output", flags->output, "Write to this file instead of stdout");
+    addSizeFlags(*cmd, flags->run);
+    addParamOverrideFlag(*cmd, flags->run.settings);
+    addDeviceFlags(*cmd, flags->device);
+    return {cmd, [flags] { return runGraph(*flags); }};
 }
 
 } // namespace penumbra::app

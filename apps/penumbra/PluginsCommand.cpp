@@ -6,12 +6,19 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <memory>
 
 using nlohmann::json;
 namespace fs = std::filesystem;
 
 namespace penumbra::app {
 namespace {
+
+struct PluginsFlags {
+    bool json = false;
+    bool strict = false;
+    std::vector<std::string> path;  // searched first, before the default search path
+};
 
 // "5 in [1, 15] texels", "true", "clear of clear|unshadowed": a spec's default and what
 // it may be, from its JSON form so that text and --json agree.
@@ -57,8 +64,6 @@ void printPlugin(const plugin::LoadedPlugin& p)
     }
 }
 
-} // namespace
-
 int runPlugins(const PluginsFlags& flags)
 {
     std::vector<fs::path> searchPath(flags.path.begin(), flags.path.end());
@@ -95,6 +100,22 @@ int runPlugins(const PluginsFlags& flags)
         }
     }
     return flags.strict && !found.errors.empty() ? 1 : 0;
+}
+
+} // namespace
+
+Command addPluginsCommand(CLI::App& app)
+{
+    auto flags = std::make_shared<PluginsFlags>();
+    CLI::App* cmd = app.add_subcommand("plugins", "List the technique plugins on the search path with their parameters, "
+                                                  "and every plugin file that fails to load with the reason");
+    cmd->add_flag("--json", flags->json, "Print a JSON document: {abi, search_path, plugins, errors}");
+    cmd->add_option("--path", flags->path,
+                    "Also search this folder, before $PENUMBRA_PLUGIN_PATH and the build and install trees (repeatable)")
+        ->check(CLI::ExistingDirectory)
+        ->allow_extra_args(false);
+    cmd->add_flag("--strict", flags->strict, "Exit 1 when any plugin file fails to load (default: list it, exit 0)");
+    return {cmd, [flags] { return runPlugins(*flags); }};
 }
 
 void PluginCheck::addOnce(std::vector<std::string>& list, std::string message)

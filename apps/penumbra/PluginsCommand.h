@@ -2,7 +2,8 @@
 // `penumbra plugins`: every technique plugin on the search path with its reflected
 // parameters, and every plugin file that fails to load with the reason; and the plugin
 // half of `penumbra validate`: each light's plugin loaded and its parameters checked.
-#include "penumbra/config/Config.h"
+#include "CommandLine.h"
+#include "penumbra/config/RenderConfig.h"
 #include "penumbra/plugin/PluginRegistry.h"
 
 #include <string>
@@ -10,15 +11,9 @@
 
 namespace penumbra::app {
 
-struct PluginsFlags {
-    bool json = false;
-    // Exit 1 when any plugin file fails to load (by default the listing succeeds and
-    // lists the failures: exit 0).
-    bool strict = false;
-    std::vector<std::string> path;  // searched first, before the default search path
-};
-
-int runPlugins(const PluginsFlags& flags);
+// Exit 0 when the listing succeeds, even if it lists files that fail to load (--strict:
+// exit 1 then).
+Command addPluginsCommand(CLI::App& app);
 
 // What validating a config's plugins found. A light whose plugin fails to load is a
 // warning (it renders unshadowed) unless its technique is required; a bad parameter value
