@@ -100,7 +100,13 @@ void readAxis(ObjectReader& r, LightConfig& lc, bool positioned)
 {
     const std::string& at = r.pointer();
     const json* direction = r.find("direction");
-    const json* target = positioned ? r.find("target") : nullptr;
+    const json* target = r.find("target");
+    // Aiming a sun from a position it does not have would give a direction that depends
+    // on an invisible default: "direction" says what is meant.
+    if (target && !positioned) {
+        r.fail(at + "/target", "a directional light has no position to aim from: give its \"direction\" (the way its "
+                               "light travels) instead");
+    }
     if (direction && target) r.fail(at, "give either \"direction\" or \"target\", not both");
     if (!direction && !target) r.fail(at + (positioned ? "/target" : "/direction"), "is required but missing");
     if (target) {
@@ -223,6 +229,11 @@ RenderConfig parseConfig(const ConfigDocument& document)
     config.file = document.file;
     ObjectReader r(document.json, locator, "");
     r.find("sweep");  // expanded by expandSweep(); the base run ignores it
+    // Editors read "$schema" (config/schema/penumbra-config.schema.json); the engine has
+    // its own checks.
+    if (const json* schema = r.find("$schema"); schema && !schema->is_string()) {
+        r.fail("/$schema", fmt::format("must be the JSON Schema's path or URL (a string), got {}", schema->dump()));
+    }
     config.scene = readScene(r, document.file);
     config.camera = readCamera(r);
     const json& lights = r.require("lights");
@@ -263,7 +274,7 @@ RenderConfig parseConfig(const ConfigDocument& document)
         o.finish();
     }
     config.frames = r.integer("frames", config.frames, 1, 1000000);
-    config.animation = readAnimation(r, config.lights.size());
+    config.animation = readAnimation(r, config.lights);
     r.finish();
     return config;
 }
