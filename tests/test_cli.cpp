@@ -1070,6 +1070,20 @@ TEST_F(Cli, BenchSummaryIsAMarkdownTablePerPanel)
     EXPECT_TRUE(has(md, fmt::format("bench {} --reference testgood", cfg.string()))) << md;
 }
 
+TEST_F(Cli, BenchCreatesTheSummarysFolderAsItCreatesOutputs)
+{
+    // The summary beside the results: its folder does not exist until -o creates it.
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << benchConfig();
+    const fs::path out = dir / "out";
+    const CliResult r = run(fmt::format("bench '{}' {} --frames 1 --warmup 0 -o '{}' --summary '{}/summary.md'", cfg.string(),
+                                        kTestGoodReference, out.string(), out.string()),
+                            pluginPath());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_EQ(filesIn(out), (std::set<std::string>{"results.csv", "results.json", "pareto.svg", "summary.md"}));
+    EXPECT_TRUE(has(slurp(out / "summary.md"), "# Speed–accuracy trade-off\n"));
+}
+
 TEST_F(Cli, BenchRefusesBadInputBeforeRenderingOrWriting)
 {
     const fs::path cfg = dir / "cfg.json";
@@ -1100,8 +1114,14 @@ TEST_F(Cli, BenchRefusesBadInputBeforeRenderingOrWriting)
     refused(cfg.string(), kTestGoodReference + " --set other.size=1",
             "--set other.size: no light of any sweep variant uses technique 'other'");
     refused(cfg.string(), kTestGoodReference + " --set testgood.kernel=99", "--set testgood.kernel: must be an integer in [1, 15]");
-    // Outputs: the summary's folder missing; -o a file or under a missing folder.
-    refused(cfg.string(), kTestGoodReference + fmt::format(" --summary '{}/no/where.md'", dir.string()), "/no/where.md: output folder");
+    // Outputs: a summary's folder that cannot be created (its parent missing; where no
+    // folder can be made, even by root); -o a file or under a missing folder.
+    refused(cfg.string(), kTestGoodReference + fmt::format(" --summary '{}/no/such/where.md'", dir.string()),
+            fmt::format("--summary {0}/no/such/where.md (folder {0}/no/such): cannot create the folder: '{0}/no' does not exist",
+                        dir.string()));
+    refused(cfg.string(), kTestGoodReference + " --summary /proc/penumbra-summary/where.md",
+            "--summary /proc/penumbra-summary/where.md (folder /proc/penumbra-summary): cannot create the folder: ");
+    EXPECT_FALSE(fs::exists(dir / "no"));
     expectBadOutputFoldersRefused(fmt::format("bench '{}' {}", cfg.string(), kTestGoodReference), pluginPath());
     EXPECT_NE(run("bench").exitCode, 0) << "the config is required";
 }

@@ -451,8 +451,13 @@ int runBench(const BenchFlags& flags)
 
     const fs::path dir = outputFolder(flags.output);
     const fs::path csvFile = dir / "results.csv", jsonFile = dir / "results.json", plotFile = dir / "pareto.svg";
-    if (!flags.output.empty()) checkOutputFolder(dir, {csvFile, jsonFile, plotFile});
-    if (!flags.summary.empty()) io::checkWritable(flags.summary);
+    const std::string outputFlag = fmt::format("-o {}", dir.string());
+    if (!flags.output.empty()) checkOutputFolder(dir, {csvFile, jsonFile, plotFile}, outputFlag);
+    // The summary's folder is made like -o's (often it is -o's: -o out --summary out/summary.md).
+    const fs::path summary = flags.summary;
+    const fs::path summaryDir = summary.has_parent_path() ? summary.parent_path() : fs::path(".");
+    const std::string summaryFlag = fmt::format("--summary {} (folder {})", flags.summary, summaryDir.string());
+    if (!flags.summary.empty()) checkOutputFolder(summaryDir, {summary}, summaryFlag);
 
     const InterruptHandler interruptHandler;
     gpu::Context context(contextOptions(flags.device));
@@ -486,14 +491,15 @@ int runBench(const BenchFlags& flags)
     // Files first, results.json last: a results.json newer than the others says the set
     // is complete. Figures on stdout mean that the files are there too.
     if (!flags.output.empty()) {
-        createOutputFolder(dir);
+        createOutputFolder(dir, outputFlag);
         io::writeTextFile(plotFile, paretoSvg(run));
         io::writeTextFile(csvFile, resultsCsv(run));
         io::writeTextFile(jsonFile, resultsJson(run).dump(2) + "\n");
         spdlog::info("wrote {}, {} and {}", csvFile.string(), jsonFile.string(), plotFile.string());
     }
     if (!flags.summary.empty()) {
-        io::writeTextFile(flags.summary, summaryMarkdown(run));
+        createOutputFolder(summaryDir, summaryFlag);
+        io::writeTextFile(summary, summaryMarkdown(run));
         spdlog::info("wrote {}", flags.summary);
     }
     printTable(run);

@@ -149,7 +149,7 @@ void printTable(const json& doc, const std::vector<metrics::VisibilityComparison
 void writeOutputs(const fs::path& dir, const OutputFiles& files, const FrameImages& test, const FrameImages& reference,
                   const metrics::PixelMask& mask, float diffScale, const json& doc)
 {
-    createOutputFolder(dir);
+    createOutputFolder(dir, fmt::format("-o {}", dir.string()));
     const uint32_t w = test.width, h = test.height;
     for (size_t i = 0; i < files.lights.size(); ++i) {
         const metrics::FloatImageView v{w, h, test.visibility[i]}, vRef{w, h, reference.visibility[i]};
@@ -181,7 +181,7 @@ int runCompare(const CompareFlags& flags)
 
     const fs::path dir = outputFolder(flags.output);
     const OutputFiles files = outputFiles(dir, config);
-    if (!flags.output.empty()) checkOutputFolder(dir, files.all());
+    if (!flags.output.empty()) checkOutputFolder(dir, files.all(), fmt::format("-o {}", dir.string()));
 
     gpu::Context context(contextOptions(flags.device));
     spdlog::info("device: {} ({})", context.deviceInfo().name, context.deviceInfo().type);
