@@ -647,15 +647,21 @@ json withSun(const char* tracks)
     return doc;
 }
 
+// withSun(tracks) posed at `timeS`.
+config::RenderConfig posedAt(const char* tracks, float timeS)
+{
+    config::RenderConfig c = config::parseConfig(withSun(tracks), "scene.json");
+    scene::Scene s;
+    config::applyAnimation(c.animation, timeS, c, s);
+    return c;
+}
+
 } // namespace
 
 TEST(Animation, TurnsASunsDirection)
 {
-    config::RenderConfig c = config::parseConfig(
-        withSun(R"([{"target": "/lights/0/direction", "keys": [{"t": 0, "value": [0, -2, 0]}, {"t": 1, "value": [2, -2, 0]}]}])"),
-        "scene.json");
-    scene::Scene s;
-    config::applyAnimation(c.animation, 0.5f, c, s);
+    const config::RenderConfig c =
+        posedAt(R"([{"target": "/lights/0/direction", "keys": [{"t": 0, "value": [0, -2, 0]}, {"t": 1, "value": [2, -2, 0]}]}])", 0.5f);
     const glm::vec3 d = c.lights[0].light.direction;
     EXPECT_NEAR(glm::length(d), 1.0f, 1e-6f);  // normalised when applied
     EXPECT_NEAR(d.x, 1.0f / std::sqrt(5.0f), 1e-6f);
@@ -724,11 +730,8 @@ TEST(Animation, TracksOnlyWhatTheLightHas)
 
 TEST(Animation, ARectLightsWidthAxisTurnsWithIt)
 {
-    config::RenderConfig c = config::parseConfig(
-        withSun(R"([{"target": "/lights/3/target", "keys": [{"t": 0, "value": [0, 0, 0]}, {"t": 1, "value": [9, 5, 0]}]}])"),
-        "scene.json");
-    scene::Scene s;
-    config::applyAnimation(c.animation, 1.0f, c, s);
+    const config::RenderConfig c =
+        posedAt(R"([{"target": "/lights/3/target", "keys": [{"t": 0, "value": [0, 0, 0]}, {"t": 1, "value": [9, 5, 0]}]}])", 1.0f);
     const scene::Light& rect = c.lights[3].light;
     EXPECT_NEAR(rect.direction.x, 1.0f, 1e-6f);  // now facing +x, where its width axis was
     EXPECT_NEAR(glm::dot(rect.tangent, rect.direction), 0.0f, 1e-6f);
