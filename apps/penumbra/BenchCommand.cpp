@@ -1,10 +1,10 @@
 #include "BenchCommand.h"
 
 #include "BenchResults.h"
+#include "ConfigCheck.h"
 #include "FrameCapture.h"
 #include "OutputFolder.h"
 #include "ParetoPlot.h"
-#include "PluginsCommand.h"
 #include "ReferenceTechnique.h"
 #include "TimingSummary.h"
 
@@ -224,27 +224,17 @@ std::string choicesText(const config::SweepVariant& variant, size_t light, bool 
     return fmt::format("{}", fmt::join(parts, ", "));
 }
 
-// Everything a variant would fail on, for every variant, before the first renders: its
-// run prepared (scene, lights, the --set overrides of the techniques it uses), each
-// light's plugin loaded and its parameters checked, and every --set used by some variant.
+// Everything a variant would fail on, for every variant, before the first renders
+// (ConfigCheck.h): each distinct error once, with the variants it is in.
 void checkVariants(const std::vector<config::SweepVariant>& variants, const config::RunOptions& options,
                    plugin::PluginRegistry& plugins)
 {
-    PluginCheck check;
-    std::set<std::string> usedOverrides;
-    for (const config::SweepVariant& variant : variants) {
-        const config::PreparedRun run = config::prepareRun(variant.config, options);
-        for (const config::ParamOverride& o : config::overridesUsedBy(options.overrides, run.config)) {
-            usedOverrides.insert(o.where);
-        }
-        check.check(run.config, plugins, false);
-    }
-    for (const config::ParamOverride& o : options.overrides) {
-        if (!usedOverrides.count(o.where)) {
-            throw Error(fmt::format("{}: no light of any sweep variant uses technique '{}'", o.where, o.technique));
-        }
-    }
-    if (!check.errors().empty()) throw Error(fmt::format("{}", fmt::join(check.errors(), "\n")));
+    ConfigCheck check(options, plugins, variants.size());
+    for (size_t i = 0; i < variants.size(); ++i) check.checkVariant(variants[i], i);
+    check.checkOverridesUsed();
+    std::vector<std::string> errors;
+    for (const ConfigCheck::Finding& error : check.errors()) errors.push_back(check.describe(error));
+    if (!errors.empty()) throw Error(fmt::format("{}", fmt::join(errors, "\n")));
 }
 
 std::string sceneName(const config::SceneSource& source)

@@ -1,6 +1,8 @@
 #include "PluginsCommand.h"
 
 #include "penumbra/core/Error.h"
+#include "penumbra/plugin/Params.h"
+#include "penumbra/plugin/PluginRegistry.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -116,43 +118,6 @@ Command addPluginsCommand(CLI::App& app)
         ->allow_extra_args(false);
     cmd->add_flag("--strict", flags->strict, "Exit 1 when any plugin file fails to load (default: list it, exit 0)");
     return {cmd, [flags] { return runPlugins(*flags); }};
-}
-
-void PluginCheck::addOnce(std::vector<std::string>& list, std::string message)
-{
-    if (std::find(list.begin(), list.end(), message) == list.end()) list.push_back(std::move(message));
-}
-
-void PluginCheck::check(const config::RenderConfig& config, plugin::PluginRegistry& registry, bool print)
-{
-    for (size_t i = 0; i < config.lights.size(); ++i) {
-        const config::LightConfig& light = config.lights[i];
-        const std::string who = fmt::format("light {} ('{}')", i, light.name);
-        const plugin::LoadedPlugin* loaded = nullptr;
-        try {
-            loaded = &registry.load(light.shadow.technique);
-        } catch (const plugin::PluginError& e) {
-            if (light.shadow.required) {
-                addOnce(errors_, fmt::format("{}: required technique '{}' cannot be used: {}", who,
-                                             light.shadow.technique, e.what()));
-            } else {
-                addOnce(warnings_, fmt::format("{} would render without shadows: {}", who, e.what()));
-            }
-            continue;
-        }
-        std::vector<std::string> badValues;
-        const plugin::ParamValues values = plugin::resolveParams(*loaded, light.shadow, &badValues);
-        for (std::string& message : badValues) addOnce(errors_, std::move(message));
-        if (print && badValues.empty()) {
-            const json current = values.toJson();
-            std::vector<std::string> settings;
-            for (const plugin::ParamSpec& spec : values.specs()) {
-                settings.push_back(fmt::format("{}={}", spec.name, current[spec.name].dump()));
-            }
-            fmt::print("{}: plugin {} {} ({}): {}\n", who, loaded->name(), loaded->info->version, loaded->file.string(),
-                       settings.empty() ? "no parameters" : fmt::format("{}", fmt::join(settings, " ")));
-        }
-    }
 }
 
 } // namespace penumbra::app

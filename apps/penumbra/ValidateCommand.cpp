@@ -1,6 +1,6 @@
 #include "ValidateCommand.h"
 
-#include "PluginsCommand.h"
+#include "ConfigCheck.h"
 #include "penumbra/config/Run.h"
 #include "penumbra/config/Sweep.h"
 #include "penumbra/core/Error.h"
@@ -88,15 +88,19 @@ int runValidateGltf(const ValidateFlags& flags)
     return 0;
 }
 
-// Checks everything a render would read: includes, every sweep variant, the scene (a
-// glTF file is loaded, a generator run), the animation's node tracks, and each light's
-// technique plugin with its parameters (--set overrides applied).
+// Checks everything a run would read: includes, every sweep variant, the scene (a glTF
+// file is loaded, a generator run), the animation's node tracks, and each light's
+// technique plugin with its parameters (--set overrides applied). Each distinct error is
+// listed once, with the variants it was found in, and the last line counts them.
 int runValidateConfig(const ValidateFlags& flags)
 {
-    config::RunOptions options;
-    options.overrides = config::parseParamOverrides(flags.settings);
     const config::ConfigDocument document = config::loadDocument(flags.file);
     const std::vector<config::SweepVariant> variants = config::expandSweep(document);
+    const bool swept = variants.size() > 1 || !variants.front().label.empty();
+    config::RunOptions options;
+    options.overrides = config::parseParamOverrides(flags.settings);
+    // A --set is for the variants whose lights use its technique, as `bench` applies it.
+    options.overridesOfUsedTechniquesOnly = swept;
     const config::PreparedRun run = config::prepareRun(config::parseConfig(document), options);
     const config::RenderConfig& base = run.config;
     const scene::Scene& scene = run.scene;
@@ -112,22 +116,29 @@ int runValidateConfig(const ValidateFlags& flags)
                    l.light.intensity, l.shadow.technique, l.shadow.required ? " (required)" : "", params);
     }
     plugin::PluginRegistry plugins;
-    PluginCheck pluginCheck;
-    pluginCheck.check(base, plugins, true);
+    ConfigCheck check(options, plugins, swept ? variants.size() : 0);
+    check.checkConfig(base, true);
     fmt::print("output {}x{}, {} frame(s), culling {}, {} animation track(s) at {} fps\n", base.width, base.height,
                base.frames, config::cullingModeName(base.culling), base.animation.tracks.size(), base.animation.fps);
-    if (variants.size() > 1 || !variants.front().label.empty()) {
+    if (swept) {
         fmt::print("sweep: {} variants\n", variants.size());
-        for (const config::SweepVariant& v : variants) {
-            pluginCheck.check(config::prepareRun(v.config, options).config, plugins, false);
-            fmt::print("  {}\n", v.label);
+        for (size_t i = 0; i < variants.size(); ++i) {
+            check.checkVariant(variants[i], i);
+            fmt::print("  variant {}: {}\n", i + 1, variants[i].label);
         }
+        check.checkOverridesUsed();
     }
-    for (const std::string& warning : pluginCheck.warnings()) fmt::print("warning: {}\n", warning);
-    for (const std::string& error : pluginCheck.errors()) fmt::print(stderr, "penumbra: error: {}\n", error);
-    if (!pluginCheck.errors().empty()) return 1;
-    fmt::print("{}: config ok\n", flags.file);
-    return 0;
+    for (const ConfigCheck::Finding& warning : check.warnings()) fmt::print("warning: {}\n", check.describe(warning));
+    const size_t errors = check.errors().size();
+    if (errors == 0) {
+        fmt::print("{}: config ok\n", flags.file);
+        return 0;
+    }
+    // The errors after everything else, however stdout and stderr are interleaved.
+    std::fflush(stdout);
+    for (const ConfigCheck::Finding& error : check.errors()) fmt::print(stderr, "penumbra: error: {}\n", check.describe(error));
+    fmt::print(stderr, "{}: {} error{}\n", flags.file, errors, errors == 1 ? "" : "s");
+    return 1;
 }
 
 int runValidate(const ValidateFlags& flags)
