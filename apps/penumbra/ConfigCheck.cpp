@@ -54,7 +54,8 @@ void ConfigCheck::checkPlugins(const config::RenderConfig& config, std::optional
             loaded = &registry_.load(light.shadow.technique);
         } catch (const plugin::PluginError& e) {
             if (light.shadow.required) {
-                add(errors_, fmt::format("{}: required technique '{}' cannot be used: {}", who, light.shadow.technique, e.what()),
+                add(errors_,
+                    fmt::format("{}: required technique '{}' cannot be used: {}", who, light.shadow.technique, e.what()),
                     variant);
             } else {
                 add(warnings_, fmt::format("{} would render without shadows: {}", who, e.what()), variant);

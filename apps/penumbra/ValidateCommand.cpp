@@ -136,7 +136,9 @@ int runValidateConfig(const ValidateFlags& flags)
     }
     // The errors after everything else, however stdout and stderr are interleaved.
     std::fflush(stdout);
-    for (const ConfigCheck::Finding& error : check.errors()) fmt::print(stderr, "penumbra: error: {}\n", check.describe(error));
+    for (const ConfigCheck::Finding& error : check.errors()) {
+        fmt::print(stderr, "penumbra: error: {}\n", check.describe(error));
+    }
     fmt::print(stderr, "{}: {} error{}\n", flags.file, errors, errors == 1 ? "" : "s");
     return 1;
 }

@@ -137,7 +137,8 @@ Animation readAnimation(ObjectReader& parent, const std::vector<LightConfig>& li
         std::string why;
         const size_t size = targetSize(track.target, lights, why);
         if (size == 0) t.fail(at + "/target", why);
-        if (isDirectionTrack(track.target) || (track.target.rfind("/lights/", 0) == 0 && track.target.ends_with("/target"))) {
+        const bool lightTarget = track.target.rfind("/lights/", 0) == 0 && track.target.ends_with("/target");
+        if (lightTarget || isDirectionTrack(track.target)) {
             const std::string light = track.target.substr(0, track.target.rfind('/'));
             const size_t first = aimingTrack.emplace(light, i).first->second;
             const std::string& other = tracks[first]["target"].get_ref<const std::string&>();
