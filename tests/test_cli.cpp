@@ -648,6 +648,56 @@ TEST_F(Cli, ValidateChecksTheParametersOfEverySweepVariant)
         << r.err;
 }
 
+TEST_F(Cli, ValidateReportsEachErrorOnceAndEndsWithTheirCount)
+{
+    // kernel 40 is in two of the four variants, mode "soft" in all: each is one error,
+    // naming the variants it is in; the last line counts them, and the exit code is 1.
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << testGoodConfig("", R"(, "sweep": [{"path": "/lights/0/shadow/kernel", "values": [3, 40]},
+                                                           {"path": "/lights/0/shadow/fill", "values": [0.25, 0.5]},
+                                                           {"path": "/lights/0/shadow/mode", "values": ["soft"]}])");
+    const CliResult r = run(fmt::format("validate '{}'", cfg.string()), pluginPath());
+    EXPECT_EQ(r.exitCode, 1);
+    const std::string kernel = cfg.string() + " (/sweep/0/values/1): /lights/0/shadow/kernel: must be an integer in [1, 15]";
+    EXPECT_TRUE(has(r.err, kernel)) << r.err;
+    EXPECT_EQ(r.err.find(kernel), r.err.rfind(kernel)) << "once: " << r.err;
+    EXPECT_TRUE(has(r.err, "got 40 (in variants 3, 4 of 4)\n")) << r.err;
+    EXPECT_TRUE(has(r.err, " (/sweep/2/values/0): /lights/0/shadow/mode: must be one of \"clear\", \"unshadowed\"")) << r.err;
+    EXPECT_TRUE(has(r.err, "got \"soft\" (in every variant)\n")) << r.err;
+    EXPECT_TRUE(r.err.ends_with(cfg.string() + ": 2 errors\n")) << r.err;
+    EXPECT_TRUE(has(r.out, "  variant 3: /lights/0/shadow/kernel=40, /lights/0/shadow/fill=0.25, /lights/0/shadow/mode=\"soft\"\n"))
+        << r.out;
+    EXPECT_FALSE(has(r.out, "config ok")) << r.out;
+
+    // A --set error is the run's own, whichever variants it is found in: one error.
+    std::ofstream(cfg) << testGoodConfig("", R"(, "sweep": [{"path": "/lights/0/shadow/fill", "values": [0.25, 0.5]}])");
+    const CliResult set = run(fmt::format("validate '{}' --set testgood.kernel=99", cfg.string()), pluginPath());
+    EXPECT_EQ(set.exitCode, 1);
+    const std::string bad = "penumbra: error: --set testgood.kernel: must be an integer in [1, 15] (plugin testgood, "
+                            "parameter kernel: a kernel width, unused), got 99\n";
+    EXPECT_TRUE(has(set.err, bad)) << set.err;
+    EXPECT_EQ(set.err.find(bad), set.err.rfind(bad)) << "once: " << set.err;
+    EXPECT_TRUE(set.err.ends_with(cfg.string() + ": 1 error\n")) << set.err;
+}
+
+TEST_F(Cli, ValidateAppliesASetToTheVariantsThatUseItsTechnique)
+{
+    // As bench does: light 0 is testgood in one variant, nosuch in the other.
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << testGoodConfig("", R"(, "sweep": [{"path": "/lights/0/shadow/technique", "values": ["testgood", "nosuch"]}])");
+    CliResult r = run(fmt::format("validate '{}' --set testgood.kernel=5", cfg.string()), pluginPath());
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(has(r.out, "config ok")) << r.out;
+    const size_t warning = r.out.find("warning: light 0 ('key') would render without shadows: plugin 'nosuch'");
+    ASSERT_NE(warning, std::string::npos) << r.out;
+    const std::string line = r.out.substr(warning, r.out.find('\n', warning) - warning);
+    EXPECT_TRUE(line.ends_with(" (in variant 2 of 2)")) << line;
+    r = run(fmt::format("validate '{}' --set other.kernel=5", cfg.string()), pluginPath());
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(has(r.err, "--set other.kernel: no light of any sweep variant uses technique 'other'")) << r.err;
+    EXPECT_TRUE(r.err.ends_with(": 1 error\n")) << r.err;
+}
+
 TEST_F(Cli, ValidateRequiredPluginThatCannotLoadIsAnError)
 {
     const fs::path cfg = dir / "cfg.json";
@@ -1084,6 +1134,20 @@ TEST_F(Cli, BenchSummaryIsAMarkdownTablePerPanel)
     EXPECT_TRUE(has(md, fmt::format("bench {} --reference testgood", cfg.string()))) << md;
 }
 
+TEST_F(Cli, BenchCreatesTheSummarysFolderAsItCreatesOutputs)
+{
+    // The summary beside the results: its folder does not exist until -o creates it.
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << benchConfig();
+    const fs::path out = dir / "out";
+    const CliResult r = run(fmt::format("bench '{}' {} --frames 1 --warmup 0 -o '{}' --summary '{}/summary.md'", cfg.string(),
+                                        kTestGoodReference, out.string(), out.string()),
+                            pluginPath());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_EQ(filesIn(out), (std::set<std::string>{"results.csv", "results.json", "pareto.svg", "summary.md"}));
+    EXPECT_TRUE(has(slurp(out / "summary.md"), "# Speed–accuracy trade-off\n"));
+}
+
 TEST_F(Cli, BenchRefusesBadInputBeforeRenderingOrWriting)
 {
     const fs::path cfg = dir / "cfg.json";
@@ -1114,8 +1178,14 @@ TEST_F(Cli, BenchRefusesBadInputBeforeRenderingOrWriting)
     refused(cfg.string(), kTestGoodReference + " --set other.size=1",
             "--set other.size: no light of any sweep variant uses technique 'other'");
     refused(cfg.string(), kTestGoodReference + " --set testgood.kernel=99", "--set testgood.kernel: must be an integer in [1, 15]");
-    // Outputs: the summary's folder missing; -o a file or under a missing folder.
-    refused(cfg.string(), kTestGoodReference + fmt::format(" --summary '{}/no/where.md'", dir.string()), "/no/where.md: output folder");
+    // Outputs: a summary's folder that cannot be created (its parent missing; where no
+    // folder can be made, even by root); -o a file or under a missing folder.
+    refused(cfg.string(), kTestGoodReference + fmt::format(" --summary '{}/no/such/where.md'", dir.string()),
+            fmt::format("--summary {0}/no/such/where.md (folder {0}/no/such): cannot create the folder: '{0}/no' does not exist",
+                        dir.string()));
+    refused(cfg.string(), kTestGoodReference + " --summary /proc/penumbra-summary/where.md",
+            "--summary /proc/penumbra-summary/where.md (folder /proc/penumbra-summary): cannot create the folder: ");
+    EXPECT_FALSE(fs::exists(dir / "no"));
     expectBadOutputFoldersRefused(fmt::format("bench '{}' {}", cfg.string(), kTestGoodReference), pluginPath());
     EXPECT_NE(run("bench").exitCode, 0) << "the config is required";
 }

@@ -1,6 +1,7 @@
 #include "penumbra/config/Config.h"
 #include "penumbra/core/Error.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -570,4 +571,169 @@ TEST(Config, MissingFile)
     } catch (const ConfigError& e) {
         EXPECT_NE(std::string(e.what()).find("/nonexistent/penumbra.json: config file not found"), std::string::npos);
     }
+}
+
+TEST(Run, TheScenesLightsExistBeforeTheOverridesApply)
+{
+    // "lights": "scene": the lights come with the glTF file, so --set (which names their
+    // technique, "hard" by default) can reach them only once the scene is loaded.
+    config::RunOptions options;
+    options.overrides = config::parseParamOverrides({"hard.resolution=512"});
+    options.width = 32;
+    options.height = 24;
+    options.frames = 3;
+    options.culling = config::CullingMode::ReceiverMask;
+    const config::PreparedRun run = config::prepareRun(kConfigs / "gltf_scene_lights.json", options);
+    ASSERT_EQ(run.config.lights.size(), 3u);
+    for (const config::LightConfig& light : run.config.lights) {
+        ASSERT_NE(light.shadow.param("resolution"), nullptr) << light.name;
+        EXPECT_EQ(*light.shadow.param("resolution"), 512) << light.name;
+        EXPECT_EQ(light.shadow.params[0].where, "--set hard.resolution");
+    }
+    EXPECT_EQ(run.config.width, 32u);
+    EXPECT_EQ(run.config.height, 24u);
+    EXPECT_EQ(run.config.frames, 3u);
+    EXPECT_EQ(run.config.culling, config::CullingMode::ReceiverMask);
+    EXPECT_EQ(run.rest.lights.size(), 3u);
+    EXPECT_FALSE(run.scene.instances.empty());
+
+    // An override that no light uses is an error, unless the run takes only the overrides
+    // of the techniques it uses (a sweep variant's share).
+    options.overrides = config::parseParamOverrides({"pcss.light_size=1"});
+    try {
+        config::prepareRun(kConfigs / "gltf_scene_lights.json", options);
+        ADD_FAILURE() << "expected ConfigError";
+    } catch (const ConfigError& e) {
+        EXPECT_TRUE(has(e.what(), "--set pcss.light_size: no light of")) << e.what();
+    }
+    options.overridesOfUsedTechniquesOnly = true;
+    EXPECT_EQ(config::prepareRun(kConfigs / "gltf_scene_lights.json", options).config.lights[0].shadow.params.size(), 0u);
+}
+
+TEST(Run, EveryPoseStartsFromTheRestState)
+{
+    config::PreparedRun run = config::prepareRun(fs::path(PENUMBRA_SOURCE_DIR) / "config/animated.json", {});
+    const glm::vec3 restCamera = run.rest.camera.position;
+    EXPECT_EQ(run.config.camera.position, restCamera) << "unposed until poseAt";
+    EXPECT_EQ(run.poseAt(1.0f).size(), 1u);  // the sphere moved
+    EXPECT_FLOAT_EQ(run.config.camera.position.x, -4.0f);
+    run.poseAtFrame(0);
+    EXPECT_FLOAT_EQ(run.config.camera.position.x, 15.0f);
+    EXPECT_EQ(run.rest.camera.position, restCamera);
+}
+
+TEST(Config, SchemaKeyIsForEditors)
+{
+    // The README's advice: "$schema" lets an editor validate and complete a config.
+    json doc = minimal();
+    doc["$schema"] = "schema/penumbra-config.schema.json";
+    EXPECT_EQ(config::parseConfig(doc, "scene.json").lights.size(), 1u);
+    doc["$schema"] = 3;
+    EXPECT_TRUE(has(errorOf(doc), "scene.json: /$schema: must be the JSON Schema's path or URL (a string), got 3"))
+        << errorOf(doc);
+}
+
+namespace {
+
+// minimal() lit by a sun along (0, -1, 0) with `tracks` as its animation.
+json withSun(const char* tracks)
+{
+    json doc = minimal();
+    doc["lights"] = json::parse(R"([{"type": "directional", "direction": [0, -1, 0]},
+        {"type": "spot", "position": [0, 10, 0], "direction": [0, -1, 0]},
+        {"type": "point", "position": [0, 5, 0]},
+        {"type": "rect", "position": [0, 5, 0], "target": [0, 0, 0], "size": [2, 1], "tangent": [1, 0, 0]}])");
+    doc["animation"] = json::parse(fmt::format(R"({{"tracks": {}}})", tracks));
+    return doc;
+}
+
+// withSun(tracks) posed at `timeS`.
+config::RenderConfig posedAt(const char* tracks, float timeS)
+{
+    config::RenderConfig c = config::parseConfig(withSun(tracks), "scene.json");
+    scene::Scene s;
+    config::applyAnimation(c.animation, timeS, c, s);
+    return c;
+}
+
+} // namespace
+
+TEST(Animation, TurnsASunsDirection)
+{
+    const config::RenderConfig c =
+        posedAt(R"([{"target": "/lights/0/direction", "keys": [{"t": 0, "value": [0, -2, 0]}, {"t": 1, "value": [2, -2, 0]}]}])", 0.5f);
+    const glm::vec3 d = c.lights[0].light.direction;
+    EXPECT_NEAR(glm::length(d), 1.0f, 1e-6f);  // normalised when applied
+    EXPECT_NEAR(d.x, 1.0f / std::sqrt(5.0f), 1e-6f);
+    EXPECT_NEAR(d.y, -2.0f / std::sqrt(5.0f), 1e-6f);
+}
+
+TEST(Animation, DirectionKeysCannotPassThroughZero)
+{
+    const auto error = [](const char* tracks) { return errorOf(withSun(tracks)); };
+    EXPECT_TRUE(has(error(R"([{"target": "/lights/0/direction", "keys": [{"t": 0, "value": [0, -1, 0]}, {"t": 1, "value": [0, 0, 0]}]}])"),
+                    "scene.json: /animation/tracks/0/keys/1/value: a direction must be non-zero"));
+    EXPECT_TRUE(has(error(R"([{"target": "/lights/1/direction", "interpolation": "smooth",
+                               "keys": [{"t": 0, "value": [0, -1, 1]}, {"t": 1, "value": [0, 2, -2]}]}])"),
+                    "scene.json: /animation/tracks/0/keys/1/value: points opposite to key 0: the direction would pass "
+                    "through zero between them; add a key in between"));
+    // A stepped track jumps from one key to the next: opposite keys are fine.
+    EXPECT_NO_THROW(config::parseConfig(withSun(R"([{"target": "/lights/0/direction", "interpolation": "step",
+        "keys": [{"t": 0, "value": [1, -1, 0]}, {"t": 1, "value": [-1, 1, 0]}]}])"), "scene.json"));
+
+    // A curve that comes through zero anyway (here, keys that were never validated) keeps
+    // the direction the light had.
+    config::RenderConfig c = config::parseConfig(minimal(), "scene.json");
+    const glm::vec3 before = c.lights[0].light.direction;
+    config::Animation animation;
+    animation.tracks.push_back({"/lights/0/direction", config::Interpolation::Linear,
+                                {{0.0f, {1.0f, 0.0f, 0.0f}}, {1.0f, {-1.0f, 0.0f, 0.0f}}}});
+    scene::Scene s;
+    config::applyAnimation(animation, 0.5f, c, s);
+    EXPECT_EQ(c.lights[0].light.direction, before);
+}
+
+TEST(Animation, TracksOnlyWhatTheLightHas)
+{
+    const std::vector<std::pair<const char*, const char*>> cases = {
+        // A sun has no position: neither its position nor a target can be animated.
+        {R"([{"target": "/lights/0/target", "keys": [{"t": 0, "value": [0, 0, 0]}]}])",
+         "/animation/tracks/0/target: \"/lights/0/target\" cannot be animated: a directional light has no position, it "
+         "shines along its direction; animate /lights/0/direction"},
+        {R"([{"target": "/lights/0/position", "keys": [{"t": 0, "value": [0, 9, 0]}]}])",
+         "/animation/tracks/0/target: \"/lights/0/position\" cannot be animated: a directional light has no position"},
+        {R"([{"target": "/lights/2/direction", "keys": [{"t": 0, "value": [0, -1, 0]}]}])",
+         "/animation/tracks/0/target: \"/lights/2/direction\" cannot be animated: a point light shines every way"},
+        // A light aimed at a target takes its direction from it.
+        {R"([{"target": "/lights/3/direction", "keys": [{"t": 0, "value": [0, -1, 0]}]}])",
+         "/animation/tracks/0/target: \"/lights/3/direction\" cannot be animated: light 3 is aimed at its \"target\", "
+         "which sets its direction; animate /lights/3/target, or give the light a \"direction\""},
+        {R"([{"target": "/lights/1/target", "keys": [{"t": 0, "value": [1, 0, 0]}]},
+             {"target": "/lights/1/direction", "keys": [{"t": 0, "value": [0, -1, 0]}]}])",
+         "/animation/tracks/1/target: \"/lights/1/direction\" cannot be animated: /animation/tracks/0 animates "
+         "\"/lights/1/target\"; a light follows either a target or a direction"},
+        {R"([{"target": "/lights/1/colour", "keys": [{"t": 0, "value": [1, 0, 0]}]}])",
+         "/animation/tracks/0/target: unknown target \"/lights/1/colour\": a light's animatable values are position, "
+         "target, direction, intensity and color"},
+    };
+    for (const auto& [tracks, message] : cases) {
+        const std::string what = errorOf(withSun(tracks));
+        EXPECT_TRUE(has(what, message)) << tracks << "\n  got: " << what;
+    }
+    // A sun aimed at a target in the config: the same reason, at the light's own path.
+    json doc = minimal();
+    doc["lights"] = json::parse(R"([{"type": "directional", "target": [0, 0, 0]}])");
+    EXPECT_TRUE(has(errorOf(doc), "scene.json: /lights/0/target: a directional light has no position to aim from: give "
+                                  "its \"direction\" (the way its light travels) instead"))
+        << errorOf(doc);
+}
+
+TEST(Animation, ARectLightsWidthAxisTurnsWithIt)
+{
+    const config::RenderConfig c =
+        posedAt(R"([{"target": "/lights/3/target", "keys": [{"t": 0, "value": [0, 0, 0]}, {"t": 1, "value": [9, 5, 0]}]}])", 1.0f);
+    const scene::Light& rect = c.lights[3].light;
+    EXPECT_NEAR(rect.direction.x, 1.0f, 1e-6f);  // now facing +x, where its width axis was
+    EXPECT_NEAR(glm::dot(rect.tangent, rect.direction), 0.0f, 1e-6f);
+    EXPECT_NEAR(glm::length(rect.tangent), 1.0f, 1e-6f);
 }

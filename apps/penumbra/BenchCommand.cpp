@@ -1,16 +1,16 @@
 #include "BenchCommand.h"
 
 #include "BenchResults.h"
+#include "ConfigCheck.h"
 #include "FrameCapture.h"
 #include "OutputFolder.h"
 #include "ParetoPlot.h"
-#include "PluginsCommand.h"
 #include "ReferenceTechnique.h"
 #include "TimingSummary.h"
 
 #include "penumbra/config/Animation.h"
-#include "penumbra/config/Config.h"
-#include "penumbra/config/Overrides.h"
+#include "penumbra/config/Run.h"
+#include "penumbra/config/Sweep.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/io/StagedFile.h"
@@ -35,6 +35,18 @@ namespace fs = std::filesystem;
 
 namespace penumbra::app {
 namespace {
+
+struct BenchFlags {
+    std::string config;
+    std::string output;                // -o DIR; empty: print the table only
+    std::string summary;               // --summary FILE.md; empty: none
+    uint32_t frames = 10;              // measured frames per variant
+    uint32_t warmup = 1;               // untimed frames before them
+    ReferenceFlags reference;
+    RunFlags run;                      // --set and the size, every variant
+    DeviceFlags device;
+    std::vector<std::string> command;  // argv, for the reports
+};
 
 // ---- interruption ---------------------------------------------------------------------
 // SIGINT or SIGTERM ends the run after the frame in flight, through the normal unwinding
@@ -212,42 +224,17 @@ std::string choicesText(const config::SweepVariant& variant, size_t light, bool 
     return fmt::format("{}", fmt::join(parts, ", "));
 }
 
-// The --set overrides that apply to `config`: those whose technique one of its lights
-// uses. Others belong to other variants.
-std::vector<config::ParamOverride> overridesFor(const std::vector<config::ParamOverride>& overrides,
-                                                const config::RenderConfig& config)
-{
-    std::vector<config::ParamOverride> used;
-    for (const config::ParamOverride& o : overrides) {
-        const bool named = std::any_of(config.lights.begin(), config.lights.end(),
-                                       [&](const config::LightConfig& l) { return l.shadow.technique == o.technique; });
-        if (named) used.push_back(o);
-    }
-    return used;
-}
-
-// Everything a variant would fail on, for every variant, before the first renders: each
-// light's plugin loaded and its parameters checked (--set included), and every --set
-// used by some variant. Lights from a glTF file ("lights": "scene") need its scene loaded.
-void checkVariants(const std::vector<config::SweepVariant>& variants, const std::vector<config::ParamOverride>& overrides,
+// Everything a variant would fail on, for every variant, before the first renders
+// (ConfigCheck.h): each distinct error once, with the variants it is in.
+void checkVariants(const std::vector<config::SweepVariant>& variants, const config::RunOptions& options,
                    plugin::PluginRegistry& plugins)
 {
-    PluginCheck check;
-    std::set<std::string> usedOverrides;
-    for (const config::SweepVariant& variant : variants) {
-        config::RenderConfig config = variant.config;
-        if (config.lightsFromScene) config::buildScene(config);
-        const std::vector<config::ParamOverride> used = overridesFor(overrides, config);
-        for (const config::ParamOverride& o : used) usedOverrides.insert(o.where);
-        config::applyParamOverrides(config, used);
-        check.check(config, plugins, false);
-    }
-    for (const config::ParamOverride& o : overrides) {
-        if (!usedOverrides.count(o.where)) {
-            throw Error(fmt::format("{}: no light of any sweep variant uses technique '{}'", o.where, o.technique));
-        }
-    }
-    if (!check.errors().empty()) throw Error(fmt::format("{}", fmt::join(check.errors(), "\n")));
+    ConfigCheck check(options, plugins, variants.size());
+    for (size_t i = 0; i < variants.size(); ++i) check.checkVariant(variants[i], i);
+    check.checkOverridesUsed();
+    std::vector<std::string> errors;
+    for (const ConfigCheck::Finding& error : check.errors()) errors.push_back(check.describe(error));
+    if (!errors.empty()) throw Error(fmt::format("{}", fmt::join(errors, "\n")));
 }
 
 std::string sceneName(const config::SceneSource& source)
@@ -356,7 +343,7 @@ struct BenchSession {
     const BenchFlags& flags;
     gpu::Context& context;
     plugin::PluginRegistry& plugins;
-    const std::vector<config::ParamOverride>& overrides;
+    const config::RunOptions& options;
     ReferenceCache& references;
     Progress& progress;
     std::vector<std::string>& warnings;
@@ -364,8 +351,10 @@ struct BenchSession {
 
 BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& variant, size_t index)
 {
-    config::RenderConfig config = variant.config;
-    const scene::Scene scene = buildFirstFrame(config, overridesFor(session.overrides, config));
+    config::PreparedRun run = config::prepareRun(variant.config, session.options);
+    run.poseAtFrame(0);  // an animated config is measured at its first frame, as `render` shows it
+    const config::RenderConfig& config = run.config;
+    const scene::Scene& scene = run.scene;
     const std::vector<const ReferenceVisibility*> references = session.references.lookUp(config, scene, session.progress);
 
     frame::FrameRenderer renderer(session.context, scene, config, session.plugins);
@@ -438,30 +427,30 @@ void printTable(const BenchRun& run)
     }
 }
 
-} // namespace
-
-int runBench(const BenchFlags& flags, const gpu::ContextOptions& device)
+int runBench(const BenchFlags& flags)
 {
     if (flags.frames == 0) throw Error("--frames must be at least 1 (the measured frames)");
     const config::ConfigDocument document = config::loadDocument(flags.config);
-    std::vector<config::SweepVariant> variants = config::expandSweep(document);
-    for (config::SweepVariant& v : variants) {
-        if (flags.width) v.config.width = *flags.width;
-        if (flags.height) v.config.height = *flags.height;
-    }
-    const std::vector<config::ParamOverride> overrides = config::parseParamOverrides(flags.settings);
+    const std::vector<config::SweepVariant> variants = config::expandSweep(document);
+    config::RunOptions options = runOptions(flags.run);
+    options.overridesOfUsedTechniquesOnly = true;
 
     plugin::PluginRegistry plugins;
-    const ReferenceTechnique reference = loadReferenceTechnique(flags.reference, flags.referenceSettings, plugins);
-    checkVariants(variants, overrides, plugins);
+    const ReferenceTechnique reference = loadReferenceTechnique(flags.reference.technique, flags.reference.settings, plugins);
+    checkVariants(variants, options, plugins);
 
     const fs::path dir = outputFolder(flags.output);
     const fs::path csvFile = dir / "results.csv", jsonFile = dir / "results.json", plotFile = dir / "pareto.svg";
-    if (!flags.output.empty()) checkOutputFolder(dir, {csvFile, jsonFile, plotFile});
-    if (!flags.summary.empty()) io::checkWritable(flags.summary);
+    const std::string outputFlag = fmt::format("-o {}", dir.string());
+    if (!flags.output.empty()) checkOutputFolder(dir, {csvFile, jsonFile, plotFile}, outputFlag);
+    // The summary's folder is made like -o's (often it is -o's: -o out --summary out/summary.md).
+    const fs::path summary = flags.summary;
+    const fs::path summaryDir = summary.has_parent_path() ? summary.parent_path() : fs::path(".");
+    const std::string summaryFlag = fmt::format("--summary {} (folder {})", flags.summary, summaryDir.string());
+    if (!flags.summary.empty()) checkOutputFolder(summaryDir, {summary}, summaryFlag);
 
     const InterruptHandler interruptHandler;
-    gpu::Context context(device);
+    gpu::Context context(contextOptions(flags.device));
     spdlog::info("device: {} ({})", context.deviceInfo().name, context.deviceInfo().type);
     BenchRun run;
     run.config = flags.config;
@@ -471,12 +460,12 @@ int runBench(const BenchFlags& flags, const gpu::ContextOptions& device)
     run.device = deviceJson(context.deviceInfo());
     run.frames = flags.frames;
     run.warmup = flags.warmup;
-    run.reference = flags.reference;
+    run.reference = flags.reference.technique;
     run.referenceParams = reference.params;
     try {
         ReferenceCache references(context, plugins, reference);
         Progress progress(variants.size(), flags.warmup + flags.frames);
-        BenchSession session{flags, context, plugins, overrides, references, progress, run.warnings};
+        BenchSession session{flags, context, plugins, options, references, progress, run.warnings};
         for (size_t i = 0; i < variants.size(); ++i) {
             progress.startVariant(i, variants[i].label.empty() ? "(no sweep)" : variants[i].label);
             run.variants.push_back(measureVariant(session, variants[i], i));
@@ -492,23 +481,47 @@ int runBench(const BenchFlags& flags, const gpu::ContextOptions& device)
     // Files first, results.json last: a results.json newer than the others says the set
     // is complete. Figures on stdout mean that the files are there too.
     if (!flags.output.empty()) {
-        createOutputFolder(dir);
+        createOutputFolder(dir, outputFlag);
         io::writeTextFile(plotFile, paretoSvg(run));
         io::writeTextFile(csvFile, resultsCsv(run));
         io::writeTextFile(jsonFile, resultsJson(run).dump(2) + "\n");
         spdlog::info("wrote {}, {} and {}", csvFile.string(), jsonFile.string(), plotFile.string());
     }
     if (!flags.summary.empty()) {
-        io::writeTextFile(flags.summary, summaryMarkdown(run));
+        createOutputFolder(summaryDir, summaryFlag);
+        io::writeTextFile(summary, summaryMarkdown(run));
         spdlog::info("wrote {}", flags.summary);
     }
     printTable(run);
 
-    if (context.validationEnabled() && context.validationMessageCount() > 0) {
-        spdlog::error("the Vulkan validation layer reported {} message(s)", context.validationMessageCount());
-        return 3;
-    }
-    return 0;
+    return validationExitCode(context);
+}
+
+} // namespace
+
+Command addBenchCommand(CLI::App& app, std::vector<std::string> commandLine)
+{
+    auto flags = std::make_shared<BenchFlags>();
+    flags->command = std::move(commandLine);
+    CLI::App* cmd = app.add_subcommand("bench", "Run a config's sweep (techniques x parameters x scenes x lights): "
+                                                "GPU and CPU time per pass, memory per technique and each light's "
+                                                "error against the reference technique; write CSV, JSON and a Pareto plot");
+    cmd->add_option("config", flags->config, "Scene config (JSON) with a \"sweep\"")->required();
+    cmd->add_option("-o,--output", flags->output,
+                    "Write results.csv, results.json and pareto.svg into this folder (created if missing; other "
+                    "files in it are left alone)");
+    cmd->add_option("--summary", flags->summary, "Also write the results as a Markdown summary to this file");
+    cmd->add_option("--frames", flags->frames, "Measured frames per variant (medians)")
+        ->check(CLI::Range(1u, 100000u))
+        ->capture_default_str();
+    cmd->add_option("--warmup", flags->warmup, "Untimed frames before the measured ones, per variant")
+        ->check(CLI::Range(0u, 100000u))
+        ->capture_default_str();
+    addReferenceFlags(*cmd, flags->reference);
+    addSizeFlags(*cmd, flags->run, "every variant");
+    addParamOverrideFlag(*cmd, flags->run.settings);
+    addDeviceFlags(*cmd, flags->device);
+    return {cmd, [flags] { return runBench(*flags); }};
 }
 
 } // namespace penumbra::app

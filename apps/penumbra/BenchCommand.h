@@ -5,32 +5,17 @@
 // the reference technique (rendered once per distinct scene, camera, light and image
 // size, and reused for every technique variant that shares them). Writes results.csv,
 // results.json and pareto.svg into -o DIR, and a Markdown summary with --summary.
-#include "penumbra/gpu/Context.h"
+// Exit codes as `render`: 0 done, 3 when the validation layer reported anything, 128 +
+// the signal when interrupted (130 SIGINT, 143 SIGTERM; nothing is written then); bad
+// input fails before anything renders (exit 1).
+#include "CommandLine.h"
 
-#include <cstdint>
-#include <optional>
 #include <string>
 #include <vector>
 
 namespace penumbra::app {
 
-struct BenchFlags {
-    std::string config;
-    std::string output;                          // -o DIR; empty: print the table only
-    std::string summary;                         // --summary FILE.md; empty: none
-    uint32_t frames = 10;                        // measured frames per variant
-    uint32_t warmup = 1;                         // untimed frames before them
-    std::string reference = "reference";         // --reference NAME
-    std::vector<std::string> referenceSettings;  // --reference-set param=value
-    std::vector<std::string> settings;           // --set technique.param=value, every variant
-    std::optional<uint32_t> width;
-    std::optional<uint32_t> height;
-    std::vector<std::string> command;            // argv, for the reports
-};
-
-// Exit codes as `render`: 0 done, 3 when the validation layer reported anything, 128 +
-// the signal when interrupted (130 SIGINT, 143 SIGTERM; nothing is written then); bad input throws
-// penumbra::Error before anything renders (the caller prints it and exits 1).
-int runBench(const BenchFlags& flags, const gpu::ContextOptions& device);
+// `commandLine`: the whole command (argv), for the reports.
+Command addBenchCommand(CLI::App& app, std::vector<std::string> commandLine);
 
 } // namespace penumbra::app

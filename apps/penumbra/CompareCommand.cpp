@@ -4,12 +4,12 @@
 #include "OutputFolder.h"
 #include "ReferenceTechnique.h"
 
-#include "penumbra/config/Config.h"
-#include "penumbra/config/Overrides.h"
+#include "penumbra/config/Run.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/io/Png.h"
 #include "penumbra/io/StagedFile.h"
+#include "penumbra/metrics/DifferenceImage.h"
 #include "penumbra/metrics/ImageComparison.h"
 #include "penumbra/plugin/PluginRegistry.h"
 
@@ -18,6 +18,7 @@
 
 #include <cctype>
 #include <chrono>
+#include <memory>
 #include <set>
 
 using nlohmann::json;
@@ -25,6 +26,16 @@ namespace fs = std::filesystem;
 
 namespace penumbra::app {
 namespace {
+
+struct CompareFlags {
+    std::string config;
+    std::string output;  // -o DIR; empty: print the figures only
+    ReferenceFlags reference;
+    RunFlags run;        // --set: the test render's techniques
+    bool json = false;   // print the JSON document instead of the table
+    double diffScale = metrics::kDefaultDifferenceFullScale;  // --diff-scale: |ΔV| of full colour
+    DeviceFlags device;
+};
 
 // Renders one frame of `config` and reads back what the comparison needs. The renderer
 // is gone when this returns, so that the two renders never hold device memory together.
@@ -138,7 +149,7 @@ void printTable(const json& doc, const std::vector<metrics::VisibilityComparison
 void writeOutputs(const fs::path& dir, const OutputFiles& files, const FrameImages& test, const FrameImages& reference,
                   const metrics::PixelMask& mask, float diffScale, const json& doc)
 {
-    createOutputFolder(dir);
+    createOutputFolder(dir, fmt::format("-o {}", dir.string()));
     const uint32_t w = test.width, h = test.height;
     for (size_t i = 0; i < files.lights.size(); ++i) {
         const metrics::FloatImageView v{w, h, test.visibility[i]}, vRef{w, h, reference.visibility[i]};
@@ -152,28 +163,27 @@ void writeOutputs(const fs::path& dir, const OutputFiles& files, const FrameImag
     io::writeTextFile(files.metrics, doc.dump(2) + "\n");
 }
 
-} // namespace
-
-int runCompare(const CompareFlags& flags, const gpu::ContextOptions& device)
+int runCompare(const CompareFlags& flags)
 {
     if (!(flags.diffScale > 0.0f && flags.diffScale <= 1.0f)) {
         throw Error(fmt::format("--diff-scale must be in (0, 1], got {}", flags.diffScale));
     }
-    config::RenderConfig config = config::loadConfig(flags.config);
-    const std::vector<config::ParamOverride> overrides = config::parseParamOverrides(flags.settings);
-    if (flags.width) config.width = *flags.width;
-    if (flags.height) config.height = *flags.height;
+    config::RenderConfig loaded = config::loadConfig(flags.config);
+    const config::RunOptions options = runOptions(flags.run);
 
     plugin::PluginRegistry plugins;
-    const ReferenceTechnique reference = loadReferenceTechnique(flags.reference, flags.referenceSettings, plugins);
-    const scene::Scene scene = buildFirstFrame(config, overrides);
+    const ReferenceTechnique reference = loadReferenceTechnique(flags.reference.technique, flags.reference.settings, plugins);
+    config::PreparedRun run = config::prepareRun(std::move(loaded), options);
+    run.poseAtFrame(0);  // an animated config is measured at its first frame, as `render` shows it
+    const config::RenderConfig& config = run.config;
+    const scene::Scene& scene = run.scene;
     const config::RenderConfig referenceConfig = withReferenceShadows(config, reference);
 
     const fs::path dir = outputFolder(flags.output);
     const OutputFiles files = outputFiles(dir, config);
-    if (!flags.output.empty()) checkOutputFolder(dir, files.all());
+    if (!flags.output.empty()) checkOutputFolder(dir, files.all(), fmt::format("-o {}", dir.string()));
 
-    gpu::Context context(device);
+    gpu::Context context(contextOptions(flags.device));
     spdlog::info("device: {} ({})", context.deviceInfo().name, context.deviceInfo().type);
     std::vector<std::string> warnings;
     const FrameImages test = renderOnce(context, scene, config, plugins, "test", warnings);
@@ -186,7 +196,7 @@ int runCompare(const CompareFlags& flags, const gpu::ContextOptions& device)
     json doc = {{"config", flags.config},
                 {"width", w},
                 {"height", h},
-                {"reference", {{"technique", flags.reference}, {"params", reference.params}}},
+                {"reference", {{"technique", flags.reference.technique}, {"params", reference.params}}},
                 {"lights", json::array()}};
     for (size_t i = 0; i < config.lights.size(); ++i) {
         comparisons.push_back(metrics::compareVisibility({w, h, test.visibility[i]}, {w, h, ref.visibility[i]}, &mask));
@@ -231,11 +241,30 @@ int runCompare(const CompareFlags& flags, const gpu::ContextOptions& device)
         printTable(doc, comparisons, color);
     }
 
-    if (context.validationEnabled() && context.validationMessageCount() > 0) {
-        spdlog::error("the Vulkan validation layer reported {} message(s)", context.validationMessageCount());
-        return 3;
-    }
-    return 0;
+    return validationExitCode(context);
+}
+
+} // namespace
+
+Command addCompareCommand(CLI::App& app)
+{
+    auto flags = std::make_shared<CompareFlags>();
+    CLI::App* cmd = app.add_subcommand("compare", "Render a config with its techniques and with the reference "
+                                                  "technique; print each light's error figures (RMSE, MAE, max, % "
+                                                  "wrong, by umbra/penumbra/lit; SSIM) and the colour image's");
+    cmd->add_option("config", flags->config, "Scene config (JSON)")->required();
+    cmd->add_option("-o,--output", flags->output,
+                    "Write <light>.test.png, <light>.reference.png, <light>.diff.png, color.test.png, "
+                    "color.reference.png and metrics.json into this folder (created if missing; other files "
+                    "in it are left alone)");
+    addReferenceFlags(*cmd, flags->reference);
+    cmd->add_option("--diff-scale", flags->diffScale, "|dV| at which the difference image's colours saturate, in (0, 1]")
+        ->capture_default_str();
+    cmd->add_flag("--json", flags->json, "Print the figures as one JSON document (as metrics.json)");
+    addSizeFlags(*cmd, flags->run);
+    addParamOverrideFlag(*cmd, flags->run.settings);
+    addDeviceFlags(*cmd, flags->device);
+    return {cmd, [flags] { return runCompare(*flags); }};
 }
 
 } // namespace penumbra::app

@@ -2,17 +2,6 @@
 
 namespace penumbra::app {
 
-scene::Scene buildFirstFrame(config::RenderConfig& config, const std::vector<config::ParamOverride>& overrides)
-{
-    scene::Scene scene = config::buildScene(config);
-    config::applyParamOverrides(config, overrides);
-    if (!config.animation.empty()) {
-        config::applyAnimation(config.animation, 0.0f, config, scene);
-        scene.updateTransforms();
-    }
-    return scene;
-}
-
 FrameImages captureFrame(const frame::FrameRenderer& renderer)
 {
     FrameImages images;

@@ -1,21 +1,12 @@
 #pragma once
-// What `compare` and `bench` share about a rendered frame: the frame they measure a
-// config at, and what they read back from the renderer for the metrics.
-#include "penumbra/config/Config.h"
-#include "penumbra/config/Overrides.h"
+// What `compare` and `bench` read back from the renderer for the metrics.
 #include "penumbra/frame/FrameRenderer.h"
-#include "penumbra/scene/Scene.h"
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
 namespace penumbra::app {
-
-// Builds the config's scene, applies the --set overrides (after buildScene: "lights":
-// "scene" configs have their lights only then) and poses an animated config at its first
-// frame, as `render` shows it: compare and bench measure frame 0.
-scene::Scene buildFirstFrame(config::RenderConfig& config, const std::vector<config::ParamOverride>& overrides);
 
 // A rendered frame as the metrics read it.
 struct FrameImages {

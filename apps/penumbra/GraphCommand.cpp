@@ -2,8 +2,7 @@
 
 #include "TimingSummary.h"
 
-#include "penumbra/config/Config.h"
-#include "penumbra/config/Overrides.h"
+#include "penumbra/config/Run.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/io/StagedFile.h"
@@ -13,9 +12,18 @@
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
+#include <memory>
 
 namespace penumbra::app {
 namespace {
+
+struct GraphFlags {
+    std::string config;
+    std::string format = "text";  // "text" or "dot"
+    std::string output;           // empty: stdout
+    RunFlags run;
+    DeviceFlags device;
+};
 
 std::string mebibytes(VkDeviceSize bytes) { return fmt::format("{:.2f} MiB", double(bytes) / (1024.0 * 1024.0)); }
 
@@ -40,21 +48,16 @@ std::string cullingSection(const visibility::CullingStats& stats, config::Cullin
     return text;
 }
 
-} // namespace
-
-int runGraph(const GraphFlags& flags, const gpu::ContextOptions& device)
+int runGraph(const GraphFlags& flags)
 {
-    config::RenderConfig config = config::loadConfig(flags.config);
-    const std::vector<config::ParamOverride> overrides = config::parseParamOverrides(flags.settings);
-    if (flags.width) config.width = *flags.width;
-    if (flags.height) config.height = *flags.height;
+    config::RenderConfig loaded = config::loadConfig(flags.config);
+    const config::RunOptions options = runOptions(flags.run);
     if (!flags.output.empty()) io::checkWritable(flags.output);
 
-    gpu::Context context(device);
-    const scene::Scene scene = config::buildScene(config);
-    config::applyParamOverrides(config, overrides);  // after buildScene: "lights": "scene"
+    gpu::Context context(contextOptions(flags.device));
+    const config::PreparedRun run = config::prepareRun(std::move(loaded), options);
     plugin::PluginRegistry plugins;
-    frame::FrameRenderer renderer(context, scene, config, plugins);
+    frame::FrameRenderer renderer(context, run.scene, run.config, plugins);
     for (const std::string& warning : renderer.warnings()) spdlog::warn("{}", warning);
     const frame::FrameTimings timings = renderer.renderFrame();
 
@@ -70,7 +73,7 @@ int runGraph(const GraphFlags& flags, const gpu::ContextOptions& device)
         const double saved = unaliased > 0 ? 100.0 * double(unaliased - std::min(allocated, unaliased)) / double(unaliased) : 0.0;
         text += fmt::format("device memory for transient resources: {} allocated, {} without aliasing ({:.1f}% saved)\n",
                             mebibytes(allocated), mebibytes(unaliased), saved);
-        text += cullingSection(timings.culling, config.culling);
+        text += cullingSection(timings.culling, run.config.culling);
     }
     if (flags.output.empty()) {
         std::fputs(text.c_str(), stdout);
@@ -84,6 +87,24 @@ int runGraph(const GraphFlags& flags, const gpu::ContextOptions& device)
         spdlog::info("wrote {}", flags.output);
     }
     return 0;
+}
+
+} // namespace
+
+Command addGraphCommand(CLI::App& app)
+{
+    auto flags = std::make_shared<GraphFlags>();
+    CLI::App* cmd = app.add_subcommand("graph", "Print the frame's compiled render graph: passes in order with their "
+                                                "barriers, culled passes and why, resources with size and aliasing");
+    cmd->add_option("config", flags->config, "Scene config (JSON)")->required();
+    cmd->add_option("--format", flags->format, "text, or dot (Graphviz)")
+        ->check(CLI::IsMember({"text", "dot"}))
+        ->capture_default_str();
+    cmd->add_option("-o,--output", flags->output, "Write to this file instead of stdout");
+    addSizeFlags(*cmd, flags->run);
+    addParamOverrideFlag(*cmd, flags->run.settings);
+    addDeviceFlags(*cmd, flags->device);
+    return {cmd, [flags] { return runGraph(*flags); }};
 }
 
 } // namespace penumbra::app

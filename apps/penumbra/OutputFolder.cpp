@@ -16,26 +16,35 @@ fs::path outputFolder(const std::string& flag)
     return dir;
 }
 
-void checkOutputFolder(const fs::path& dir, const std::vector<fs::path>& files)
+void checkOutputFolder(const fs::path& dir, const std::vector<fs::path>& files, const std::string& who)
 {
     std::error_code ec;
     if (!fs::exists(dir, ec)) {
         const fs::path parent = dir.has_parent_path() ? dir.parent_path() : fs::path(".");
-        if (!fs::is_directory(parent, ec)) {
-            throw Error(fmt::format("-o {}: cannot create the folder: '{}' does not exist", dir.string(), parent.string()));
+        if (!fs::exists(parent, ec)) {
+            throw Error(fmt::format("{}: cannot create the folder: '{}' does not exist", who, parent.string()));
         }
-        io::checkWritable(dir);  // the parent is writable
+        if (!fs::is_directory(parent, ec)) {
+            throw Error(fmt::format("{}: cannot create the folder: '{}' is not a folder", who, parent.string()));
+        }
+        // Only creating it tells for sure (permissions that root ignores, read-only or
+        // special file systems); removed again, so that a run that fails or is
+        // interrupted leaves nothing behind.
+        if (!fs::create_directory(dir, ec)) {
+            throw Error(fmt::format("{}: cannot create the folder: {}", who, ec.message()));
+        }
+        fs::remove(dir, ec);
         return;
     }
-    if (!fs::is_directory(dir, ec)) throw Error(fmt::format("-o {}: exists and is not a folder", dir.string()));
+    if (!fs::is_directory(dir, ec)) throw Error(fmt::format("{}: exists and is not a folder", who));
     for (const fs::path& file : files) io::checkWritable(file);
 }
 
-void createOutputFolder(const fs::path& dir)
+void createOutputFolder(const fs::path& dir, const std::string& who)
 {
     std::error_code ec;
     if (!fs::is_directory(dir, ec) && !fs::create_directory(dir, ec) && ec) {
-        throw Error(fmt::format("-o {}: cannot create the folder: {}", dir.string(), ec.message()));
+        throw Error(fmt::format("{}: cannot create the folder: {}", who, ec.message()));
     }
 }
 

@@ -1,17 +1,26 @@
 #include "PluginsCommand.h"
 
 #include "penumbra/core/Error.h"
+#include "penumbra/plugin/Params.h"
+#include "penumbra/plugin/PluginRegistry.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <memory>
 
 using nlohmann::json;
 namespace fs = std::filesystem;
 
 namespace penumbra::app {
 namespace {
+
+struct PluginsFlags {
+    bool json = false;
+    bool strict = false;
+    std::vector<std::string> path;  // searched first, before the default search path
+};
 
 // "5 in [1, 15] texels", "true", "clear of clear|unshadowed": a spec's default and what
 // it may be, from its JSON form so that text and --json agree.
@@ -57,8 +66,6 @@ void printPlugin(const plugin::LoadedPlugin& p)
     }
 }
 
-} // namespace
-
 int runPlugins(const PluginsFlags& flags)
 {
     std::vector<fs::path> searchPath(flags.path.begin(), flags.path.end());
@@ -97,41 +104,20 @@ int runPlugins(const PluginsFlags& flags)
     return flags.strict && !found.errors.empty() ? 1 : 0;
 }
 
-void PluginCheck::addOnce(std::vector<std::string>& list, std::string message)
-{
-    if (std::find(list.begin(), list.end(), message) == list.end()) list.push_back(std::move(message));
-}
+} // namespace
 
-void PluginCheck::check(const config::RenderConfig& config, plugin::PluginRegistry& registry, bool print)
+Command addPluginsCommand(CLI::App& app)
 {
-    for (size_t i = 0; i < config.lights.size(); ++i) {
-        const config::LightConfig& light = config.lights[i];
-        const std::string who = fmt::format("light {} ('{}')", i, light.name);
-        const plugin::LoadedPlugin* loaded = nullptr;
-        try {
-            loaded = &registry.load(light.shadow.technique);
-        } catch (const plugin::PluginError& e) {
-            if (light.shadow.required) {
-                addOnce(errors_, fmt::format("{}: required technique '{}' cannot be used: {}", who,
-                                             light.shadow.technique, e.what()));
-            } else {
-                addOnce(warnings_, fmt::format("{} would render without shadows: {}", who, e.what()));
-            }
-            continue;
-        }
-        std::vector<std::string> badValues;
-        const plugin::ParamValues values = plugin::resolveParams(*loaded, light.shadow, &badValues);
-        for (std::string& message : badValues) addOnce(errors_, std::move(message));
-        if (print && badValues.empty()) {
-            const json current = values.toJson();
-            std::vector<std::string> settings;
-            for (const plugin::ParamSpec& spec : values.specs()) {
-                settings.push_back(fmt::format("{}={}", spec.name, current[spec.name].dump()));
-            }
-            fmt::print("{}: plugin {} {} ({}): {}\n", who, loaded->name(), loaded->info->version, loaded->file.string(),
-                       settings.empty() ? "no parameters" : fmt::format("{}", fmt::join(settings, " ")));
-        }
-    }
+    auto flags = std::make_shared<PluginsFlags>();
+    CLI::App* cmd = app.add_subcommand("plugins", "List the technique plugins on the search path with their parameters, "
+                                                  "and every plugin file that fails to load with the reason");
+    cmd->add_flag("--json", flags->json, "Print a JSON document: {abi, search_path, plugins, errors}");
+    cmd->add_option("--path", flags->path,
+                    "Also search this folder, before $PENUMBRA_PLUGIN_PATH and the build and install trees (repeatable)")
+        ->check(CLI::ExistingDirectory)
+        ->allow_extra_args(false);
+    cmd->add_flag("--strict", flags->strict, "Exit 1 when any plugin file fails to load (default: list it, exit 0)");
+    return {cmd, [flags] { return runPlugins(*flags); }};
 }
 
 } // namespace penumbra::app

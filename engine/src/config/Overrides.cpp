@@ -62,4 +62,15 @@ void applyParamOverrides(RenderConfig& config, const std::vector<ParamOverride>&
     }
 }
 
+std::vector<ParamOverride> overridesUsedBy(const std::vector<ParamOverride>& overrides, const RenderConfig& config)
+{
+    std::vector<ParamOverride> used;
+    for (const ParamOverride& o : overrides) {
+        const bool named = std::any_of(config.lights.begin(), config.lights.end(),
+                                       [&](const LightConfig& l) { return l.shadow.technique == o.technique; });
+        if (named) used.push_back(o);
+    }
+    return used;
+}
+
 } // namespace penumbra::config

@@ -5,7 +5,13 @@
 #include <string>
 #include <vector>
 
+namespace penumbra::scene {
+class Scene;
+}
+
 namespace penumbra::config {
+
+struct RenderConfig;  // config/Config.h
 
 enum class Interpolation {
     Step,    // hold each key until the next
@@ -36,5 +42,11 @@ struct Animation {
 // The track's value at `timeS`; before the first key the first value, after the last
 // key the last value.
 std::vector<float> evaluate(const AnimationTrack& track, float timeS);
+
+// Moves camera, lights and scene nodes to time `timeS` of the config's animation.
+// `config` holds the animated values afterwards; nodes are set in `scene`'s graph (call
+// scene.updateTransforms() after). config/Run.h's PreparedRun::poseAt does both, from the
+// config's rest state.
+void applyAnimation(const Animation& animation, float timeS, RenderConfig& config, scene::Scene& scene);
 
 } // namespace penumbra::config

@@ -2,7 +2,7 @@
 // Technique parameters set on the command line: `--set hard.pcf_kernel=5` sets
 // pcf_kernel for every light whose shadow technique is "hard", on top of the config
 // (the plugin's reflection checks the value later, naming "--set hard.pcf_kernel").
-#include "penumbra/config/Config.h"
+#include "penumbra/config/RenderConfig.h"
 
 #include <nlohmann/json.hpp>
 
@@ -27,7 +27,12 @@ std::vector<ParamOverride> parseParamOverrides(const std::vector<std::string>& s
 
 // Sets each override on every light whose technique it names, in order (a later one
 // wins). Throws ConfigError when no light uses the technique. Lights that come from a
-// glTF file ("lights": "scene") exist only after buildScene: apply overrides after it.
+// glTF file ("lights": "scene") exist only after buildScene: config::prepareRun
+// (config/Run.h) applies the overrides after it.
 void applyParamOverrides(RenderConfig& config, const std::vector<ParamOverride>& overrides);
+
+// The overrides whose technique one of `config`'s lights uses (a sweep variant's share of
+// overrides meant for several variants).
+std::vector<ParamOverride> overridesUsedBy(const std::vector<ParamOverride>& overrides, const RenderConfig& config);
 
 } // namespace penumbra::config

@@ -1,0 +1,64 @@
+#include "CommandLine.h"
+
+#include <spdlog/spdlog.h>
+
+namespace penumbra::app {
+
+void addDeviceFlags(CLI::App& cmd, DeviceFlags& flags)
+{
+    cmd.add_option("--device", flags.name, "Use the Vulkan device whose name contains this text (env PENUMBRA_DEVICE)");
+    cmd.add_option("--device-type", flags.type, "Use a device of this type")
+        ->check(CLI::IsMember({"discrete", "integrated", "virtual", "cpu"}));
+    cmd.add_flag("--validation", flags.validation,
+                 "Enable the Vulkan validation layer; exit 3 if it reports anything (env PENUMBRA_VALIDATION=1)");
+}
+
+gpu::ContextOptions contextOptions(const DeviceFlags& flags)
+{
+    gpu::ContextOptions options;
+    options.device.nameContains = flags.name;
+    options.device.type = flags.type;
+    options = gpu::contextOptionsFromEnvironment(options);
+    if (flags.validation) options.validation = true;
+    return options;
+}
+
+int validationExitCode(const gpu::Context& context)
+{
+    if (!context.validationEnabled() || context.validationMessageCount() == 0) return 0;
+    spdlog::error("the Vulkan validation layer reported {} message(s)", context.validationMessageCount());
+    return 3;
+}
+
+void addParamOverrideFlag(CLI::App& cmd, std::vector<std::string>& settings)
+{
+    cmd.add_option("--set", settings,
+                   "Set a technique parameter for every light that uses the technique: --set hard.pcf_kernel=5 "
+                   "(repeatable; the value is JSON, or plain text for enum choices; `penumbra plugins` lists them)")
+        ->allow_extra_args(false);
+}
+
+void addSizeFlags(CLI::App& cmd, RunFlags& flags, const std::string& overrides)
+{
+    cmd.add_option("--width", flags.width, "Output width (overrides " + overrides + ")")->check(CLI::Range(1u, 16384u));
+    cmd.add_option("--height", flags.height, "Output height (overrides " + overrides + ")")->check(CLI::Range(1u, 16384u));
+}
+
+config::RunOptions runOptions(const RunFlags& flags)
+{
+    config::RunOptions options;
+    options.overrides = config::parseParamOverrides(flags.settings);
+    options.width = flags.width;
+    options.height = flags.height;
+    return options;
+}
+
+void addReferenceFlags(CLI::App& cmd, ReferenceFlags& flags)
+{
+    cmd.add_option("--reference", flags.technique, "The reference technique plugin")->capture_default_str();
+    cmd.add_option("--reference-set", flags.settings,
+                   "Set a parameter of the reference technique: --reference-set samples=64 (repeatable)")
+        ->allow_extra_args(false);
+}
+
+} // namespace penumbra::app

@@ -1,0 +1,175 @@
+#include "ValidateCommand.h"
+
+#include "ConfigCheck.h"
+#include "penumbra/config/Run.h"
+#include "penumbra/config/Sweep.h"
+#include "penumbra/core/Error.h"
+#include "penumbra/plugin/PluginRegistry.h"
+#include "penumbra/scene/GltfLoader.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+namespace penumbra::app {
+namespace {
+
+struct ValidateFlags {
+    std::string file;
+    bool weld = false;
+    bool verbose = false;
+    std::vector<std::string> settings;  // technique.param=value
+};
+
+void printLight(const scene::GltfLight& gltfLight)
+{
+    const scene::Light& l = gltfLight.light;
+    fmt::print("light '{}': {}", gltfLight.name, scene::lightTypeName(l.type));
+    if (l.type != scene::LightType::Directional) {
+        fmt::print(" at ({:.3g}, {:.3g}, {:.3g})", l.position.x, l.position.y, l.position.z);
+    }
+    if (l.type != scene::LightType::Point) {
+        fmt::print(" pointing ({:.3g}, {:.3g}, {:.3g})", l.direction.x, l.direction.y, l.direction.z);
+    }
+    if (l.type == scene::LightType::Spot) fmt::print(", cone {:.3g}..{:.3g} deg", l.innerConeDeg, l.outerConeDeg);
+    fmt::print(", intensity {:.4g}, color ({:.3g}, {:.3g}, {:.3g})\n", l.intensity, l.color.r, l.color.g, l.color.b);
+}
+
+std::string describeRepair(const scene::RepairReport& r)
+{
+    std::vector<std::string> parts;
+    auto add = [&](uint32_t count, const char* what) {
+        if (count > 0) parts.push_back(fmt::format("{} {}", count, what));
+    };
+    add(r.nonFiniteTriangles, "non-finite triangles dropped");
+    add(r.degenerateTriangles, "degenerate triangles dropped");
+    add(r.unusedVertices, "unused vertices removed");
+    add(r.weldedVertices, "vertices welded");
+    add(r.generatedNormals, "normals generated");
+    add(r.replacedNormals, "NaN normals replaced");
+    add(r.renormalizedNormals, "normals normalized");
+    std::string text = parts.empty() ? "nothing to repair" : fmt::format("{}", fmt::join(parts, ", "));
+    if (r.topologyAnalyzed) {
+        text += fmt::format("; {} boundary edges, {} non-manifold triangles", r.boundaryEdges, r.nonManifoldTriangles);
+    }
+    return text;
+}
+
+int runValidateGltf(const ValidateFlags& flags)
+{
+    scene::GltfLoadOptions options;
+    options.repair.weld = flags.weld;
+    options.repair.analyzeTopology = true;
+    // The report lists every warning on stdout; logging them on stderr too would say
+    // everything twice.
+    if (!flags.verbose) spdlog::set_level(spdlog::level::err);
+    scene::GltfLoadReport report;
+    const scene::Scene scene = scene::loadGltf(flags.file, report, options);
+
+    size_t meshTriangles = 0;
+    for (const auto& mesh : scene.meshes) meshTriangles += mesh.indices.size() / 3;
+    fmt::print("{}: {} meshes, {} triangles ({} drawn by {} instances), {} nodes, {} materials, {} textures, {} lights\n",
+               flags.file, scene.meshes.size(), meshTriangles, scene.triangleCount(), scene.instances.size(),
+               scene.graph.size(), scene.materials.size(), scene.textures.size(), report.lights.size());
+    for (const auto& light : report.lights) printLight(light);
+    for (size_t i = 0; i < scene.meshes.size(); ++i) {
+        const scene::Mesh& mesh = scene.meshes[i];
+        fmt::print("mesh {} '{}' ({}): {} triangles, {} vertices; {}\n", i, mesh.name, report.meshes[i].element,
+                   mesh.indices.size() / 3, mesh.vertices.size(), describeRepair(report.meshes[i].repair));
+    }
+    for (const std::string& warning : report.warnings) fmt::print("warning: {}\n", warning);
+    for (const std::string& note : report.notes) fmt::print("note: {}\n", note);
+    fmt::print("ok: {} warnings\n", report.warnings.size());
+    return 0;
+}
+
+// Checks everything a run would read: includes, every sweep variant, the scene (a glTF
+// file is loaded, a generator run), the animation's node tracks, and each light's
+// technique plugin with its parameters (--set overrides applied). Each distinct error is
+// listed once, with the variants it was found in, and the last line counts them.
+int runValidateConfig(const ValidateFlags& flags)
+{
+    const config::ConfigDocument document = config::loadDocument(flags.file);
+    const std::vector<config::SweepVariant> variants = config::expandSweep(document);
+    const bool swept = variants.size() > 1 || !variants.front().label.empty();
+    config::RunOptions options;
+    options.overrides = config::parseParamOverrides(flags.settings);
+    // A --set is for the variants whose lights use its technique, as `bench` applies it.
+    options.overridesOfUsedTechniquesOnly = swept;
+    const config::PreparedRun run = config::prepareRun(config::parseConfig(document), options);
+    const config::RenderConfig& base = run.config;
+    const scene::Scene& scene = run.scene;
+    const config::SceneSource& source = base.scene;
+    fmt::print("scene: {} (scale {}): {} meshes, {} instances, {} triangles, {} materials, {} textures\n",
+               source.kind == config::SceneSource::Kind::Gltf ? source.gltf.string() : "generator " + source.generator,
+               source.scale, scene.meshes.size(), scene.instances.size(), scene.triangleCount(), scene.materials.size(),
+               scene.textures.size());
+    for (const config::LightConfig& l : base.lights) {
+        std::string params;
+        for (const config::ShadowParam& p : l.shadow.params) params += fmt::format(" {}={}", p.name, p.value.dump());
+        fmt::print("light '{}': {}, intensity {:.4g}, shadow {}{}{}\n", l.name, scene::lightTypeName(l.light.type),
+                   l.light.intensity, l.shadow.technique, l.shadow.required ? " (required)" : "", params);
+    }
+    plugin::PluginRegistry plugins;
+    ConfigCheck check(options, plugins, swept ? variants.size() : 0);
+    check.checkConfig(base, true);
+    fmt::print("output {}x{}, {} frame(s), culling {}, {} animation track(s) at {} fps\n", base.width, base.height,
+               base.frames, config::cullingModeName(base.culling), base.animation.tracks.size(), base.animation.fps);
+    if (swept) {
+        fmt::print("sweep: {} variants\n", variants.size());
+        for (size_t i = 0; i < variants.size(); ++i) {
+            check.checkVariant(variants[i], i);
+            fmt::print("  variant {}: {}\n", i + 1, variants[i].label);
+        }
+        check.checkOverridesUsed();
+    }
+    for (const ConfigCheck::Finding& warning : check.warnings()) fmt::print("warning: {}\n", check.describe(warning));
+    const size_t errors = check.errors().size();
+    if (errors == 0) {
+        fmt::print("{}: config ok\n", flags.file);
+        return 0;
+    }
+    // The errors after everything else, however stdout and stderr are interleaved.
+    std::fflush(stdout);
+    for (const ConfigCheck::Finding& error : check.errors()) {
+        fmt::print(stderr, "penumbra: error: {}\n", check.describe(error));
+    }
+    fmt::print(stderr, "{}: {} error{}\n", flags.file, errors, errors == 1 ? "" : "s");
+    return 1;
+}
+
+int runValidate(const ValidateFlags& flags)
+{
+    std::string extension = std::filesystem::path(flags.file).extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if ((extension == ".gltf" || extension == ".glb") && !flags.settings.empty()) {
+        throw Error(fmt::format("{}: --set sets technique parameters of a config (.json), not of a glTF file",
+                                          flags.file));
+    }
+    if (extension == ".gltf" || extension == ".glb") return runValidateGltf(flags);
+    if (extension == ".json") return runValidateConfig(flags);
+    throw Error(fmt::format("{}: unknown file type '{}': validate reads .gltf, .glb and .json", flags.file, extension));
+}
+
+} // namespace
+
+Command addValidateCommand(CLI::App& app, const bool& verbose)
+{
+    auto flags = std::make_shared<ValidateFlags>();
+    CLI::App* cmd = app.add_subcommand("validate", "Load a glTF file (.gltf/.glb) or a config (.json) and report what "
+                                                   "was found and repaired; exit 1 with the error if it cannot be loaded");
+    cmd->add_option("file", flags->file, "glTF file or scene config")->required();
+    cmd->add_flag("--weld", flags->weld, "Also weld coincident vertices with equal attributes");
+    addParamOverrideFlag(*cmd, flags->settings);
+    return {cmd, [flags, &verbose] {
+                flags->verbose = verbose;
+                return runValidate(*flags);
+            }};
+}
+
+} // namespace penumbra::app

@@ -1,0 +1,98 @@
+#pragma once
+// What one run of a config renders (config/Config.h lists the rest of the config API):
+// scene source (a glTF file or a generator with parameters), camera, lights with their
+// shadow technique and its parameters, culling mode, output size, frame count and
+// animation tracks, read from a ConfigDocument and validated. Every error names the file
+// (the one the value came from, through includes), the JSON path and what is expected:
+//   "scene.json: /lights/0/outer_cone_deg: must be in (0, 89], got 120".
+#include "penumbra/config/Animation.h"
+#include "penumbra/config/Document.h"
+#include "penumbra/scene/Generators.h"
+#include "penumbra/scene/Scene.h"
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace penumbra::config {
+
+// One technique parameter as the config (or --set) gives it; the plugin's reflection
+// (plugin/Params.h) checks it when the technique is created.
+struct ShadowParam {
+    std::string name;
+    nlohmann::json value;
+    std::string where;  // "scene.json: /lights/0/shadow/pcf_kernel" or "--set hard.pcf_kernel"
+};
+
+// "shadow": {"technique": "hard", "required": true, "pcf_kernel": 5, ...}: the technique
+// plugin, whether a failure to load it ends the run, and every other key as a parameter.
+struct ShadowSettings {
+    std::string technique = "hard";
+    // A required technique that fails to load or register stops the run (exit != 0);
+    // otherwise the light is rendered unshadowed (V = 1) with a warning.
+    bool required = false;
+    std::vector<ShadowParam> params;
+
+    // The parameter's value as given, or null when the config leaves it at the default.
+    const nlohmann::json* param(std::string_view name) const;
+    // Sets (or replaces) a parameter.
+    void setParam(std::string name, nlohmann::json value, std::string where);
+};
+
+struct LightConfig {
+    std::string name;                 // for messages and animation targets; "light<i>" by default
+    scene::Light light;
+    std::optional<glm::vec3> target;  // when given, direction = normalize(target - position)
+    ShadowSettings shadow;
+};
+
+// Which casters the shadow passes draw (the visibility-culling issue implements them).
+enum class CullingMode { None, Frustum, LightOcclusion, ReceiverMask };
+const char* cullingModeName(CullingMode mode);
+// "none", "frustum", "light-occlusion", "receiver-mask"; throws ConfigError otherwise.
+CullingMode parseCullingMode(std::string_view name);
+
+struct SceneSource {
+    enum class Kind { Generator, Gltf };
+    Kind kind = Kind::Generator;
+    std::filesystem::path gltf;       // Kind::Gltf, resolved against the config's folder
+    std::string generator = "box-grid";  // one of scene::generatorNames()
+    // The generator's parameters that the config sets, by name, values as text (the
+    // generator parses and validates them: scene/Generators.h).
+    std::vector<std::pair<std::string, std::string>> params;
+    float scale = 1.0f;               // every length times this (1e-3 ... 1e5 are tested)
+};
+
+struct RenderConfig {
+    std::filesystem::path file;  // where it was read from, for messages
+    SceneSource scene;
+    scene::Camera camera;
+    std::vector<LightConfig> lights;
+    // "lights": "scene": the lights come from the glTF file (KHR_lights_punctual), with
+    // default shadow settings; resolved by buildScene (config/Run.h).
+    bool lightsFromScene = false;
+    CullingMode culling = CullingMode::None;
+    // Fit directional and spot lights' shadow maps to what the camera sees (the visibility
+    // service's "focusing", engine/src/visibility/); needs culling receiver-mask or light-occlusion.
+    bool shadowFocus = false;
+    uint32_t width = 1280;
+    uint32_t height = 720;
+    uint32_t frames = 1;
+    Animation animation;
+};
+
+// Validates a document (its "sweep" is ignored: the unswept values are the base run).
+RenderConfig parseConfig(const ConfigDocument& document);
+RenderConfig parseConfig(const nlohmann::json& json, const std::filesystem::path& file);
+
+// Reads, merges and validates a config file. Throws ConfigError naming file and path.
+RenderConfig loadConfig(const std::filesystem::path& file);
+
+// The most lights one frame shades: the shading pass binds one visibility image each
+// and reads them with constant indices (shaders/engine/shading.comp).
+inline constexpr uint32_t kMaxLights = 8;
+
+} // namespace penumbra::config

@@ -1,0 +1,56 @@
+#pragma once
+// Preparing a run of a config, the one way every command and the viewer do it: the scene
+// built from its source, the lights of a glTF file when the config says "lights":
+// "scene", the --set overrides on the lights' techniques, and the command line's size,
+// frames and culling. The order is the point: overrides name the techniques of lights
+// that exist only once the scene is loaded.
+#include "penumbra/config/Overrides.h"
+#include "penumbra/config/RenderConfig.h"
+#include "penumbra/scene/Scene.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <vector>
+
+namespace penumbra::config {
+
+// What the command line changes in a config.
+struct RunOptions {
+    std::vector<ParamOverride> overrides;  // --set, in order (a later one wins)
+    // A sweep variant takes only the overrides whose technique one of its lights uses:
+    // the others are for other variants (the caller checks that each is used by one).
+    // Otherwise an override that no light uses is an error.
+    bool overridesOfUsedTechniquesOnly = false;
+    std::optional<uint32_t> width;
+    std::optional<uint32_t> height;
+    std::optional<uint32_t> frames;
+    std::optional<CullingMode> culling;
+};
+
+// A config ready to render, and its scene.
+struct PreparedRun {
+    RenderConfig rest;    // resolved (lights, overrides, options): where every frame starts
+    RenderConfig config;  // as the last poseAt left it (rest until then): what a frame draws
+    scene::Scene scene;   // its nodes as the last poseAt left them
+
+    // Poses config and scene at time `timeS` of the animation, starting from `rest`;
+    // returns the instances that moved (Scene::updateTransforms) for FrameRenderer::update.
+    std::vector<uint32_t> poseAt(float timeS);
+    // Frame `frame` of the run shows time frame / fps.
+    std::vector<uint32_t> poseAtFrame(uint32_t frame) { return poseAt(float(frame) / rest.animation.fps); }
+};
+
+// Throws ConfigError naming the file and JSON path (or the flag).
+PreparedRun prepareRun(RenderConfig config, const RunOptions& options);
+PreparedRun prepareRun(const std::filesystem::path& file, const RunOptions& options);
+
+// Builds the scene that the config's scene source describes (at its scale), and checks
+// that the animation's node tracks name nodes of that scene. With "lights": "scene" it
+// also fills config.lights from the glTF file's lights. prepareRun does this first.
+scene::Scene buildScene(RenderConfig& config);
+// `fileLights` (optional) receives a glTF file's KHR_lights_punctual lights, placed and
+// scaled with the scene.
+scene::Scene buildScene(const SceneSource& source, std::vector<scene::Light>* fileLights = nullptr);
+
+} // namespace penumbra::config

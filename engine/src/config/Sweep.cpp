@@ -1,0 +1,176 @@
+#include "penumbra/config/Sweep.h"
+
+#include "config/JsonReader.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+
+using nlohmann::json;
+
+namespace penumbra::config {
+namespace {
+
+// One sweep entry: the JSON pointers it sets together and the values it takes.
+struct SweepAxis {
+    std::vector<json::json_pointer> paths;
+    std::vector<std::string> pathTexts;
+    std::vector<json> values;          // per value: one JSON value per path
+    std::vector<std::string> labels;   // per value: "labels"[i], or the value as JSON
+    bool labelled = false;             // "labels" was given
+};
+
+json::json_pointer readSweepPointer(const json& text, const ObjectReader& r, const std::string& at)
+{
+    if (!text.is_string()) r.fail(at, "must be a JSON pointer string such as \"/lights/0/shadow/resolution\"");
+    const std::string s = text.get<std::string>();
+    json::json_pointer pointer;
+    try {
+        pointer = json::json_pointer(s);
+    } catch (const json::exception& e) {
+        r.fail(at, fmt::format("\"{}\" is not a JSON pointer ({})", s, e.what()));
+    }
+    if (s.empty() || s.rfind("/sweep", 0) == 0 || s.rfind("/include", 0) == 0) r.fail(at, fmt::format("cannot sweep \"{}\"", s));
+    return pointer;
+}
+
+// "path": one pointer, each value sets it; "paths": several pointers set together (a
+// scene with its camera), each value an array with one entry per path. "labels" names
+// the values for tables and plots.
+SweepAxis readSweepAxis(const json& entry, const Locator& locator, const std::string& at)
+{
+    ObjectReader r(entry, locator, at);
+    const json* path = r.find("path");
+    const json* paths = r.find("paths");
+    const json& values = r.require("values");
+    const json* labels = r.find("labels");
+    r.finish();
+    SweepAxis axis;
+    if ((path != nullptr) == (paths != nullptr)) r.fail(at, "give either \"path\" (one JSON pointer) or \"paths\" (several)");
+    if (path) {
+        axis.paths.push_back(readSweepPointer(*path, r, at + "/path"));
+    } else {
+        if (!paths->is_array() || paths->empty()) r.fail(at + "/paths", "must be a non-empty array of JSON pointers");
+        for (size_t k = 0; k < paths->size(); ++k) {
+            axis.paths.push_back(readSweepPointer((*paths)[k], r, fmt::format("{}/paths/{}", at, k)));
+        }
+    }
+    for (const json::json_pointer& p : axis.paths) axis.pathTexts.push_back(p.to_string());
+    for (size_t a = 0; a < axis.paths.size(); ++a) {
+        for (size_t b = 0; b < axis.paths.size(); ++b) {
+            const std::string& outer = axis.pathTexts[a];
+            const std::string& inner = axis.pathTexts[b];
+            if (a != b && inner.rfind(outer, 0) == 0 && (inner.size() == outer.size() || inner[outer.size()] == '/')) {
+                r.fail(fmt::format("{}/paths/{}", at, b), fmt::format("\"{}\" lies inside \"{}\", which the same entry sets",
+                                                                      inner, outer));
+            }
+        }
+    }
+    if (!values.is_array() || values.empty()) r.fail(at + "/values", "must be a non-empty array");
+    for (size_t i = 0; i < values.size(); ++i) {
+        if (paths && (!values[i].is_array() || values[i].size() != axis.paths.size())) {
+            r.fail(fmt::format("{}/values/{}", at, i),
+                   fmt::format("must be an array of {} values, one per path, got {}", axis.paths.size(), values[i].dump()));
+        }
+        axis.values.push_back(values[i]);
+    }
+    if (labels) {
+        if (!labels->is_array() || labels->size() != values.size()) {
+            r.fail(at + "/labels", fmt::format("must be an array of {} strings, one per value", values.size()));
+        }
+        for (size_t i = 0; i < labels->size(); ++i) {
+            const json& label = (*labels)[i];
+            const std::string where = fmt::format("{}/labels/{}", at, i);
+            if (!label.is_string() || label.get<std::string>().empty()) r.fail(where, fmt::format("must be a non-empty string, got {}", label.dump()));
+            if (std::find(axis.labels.begin(), axis.labels.end(), label.get<std::string>()) != axis.labels.end()) {
+                r.fail(where, fmt::format("\"{}\" labels another value already", label.get<std::string>()));
+            }
+            axis.labels.push_back(label.get<std::string>());
+        }
+        axis.labelled = true;
+    } else {
+        for (const json& v : axis.values) axis.labels.push_back(v.dump());
+    }
+    return axis;
+}
+
+// Sets `pointer` in `doc` to `value`. The parent must exist (a missing one is a typo far
+// more often than an intent) and, when it is an array, hold the element: setting past
+// the end would pad the array with nulls.
+void setSwept(json& doc, const json::json_pointer& pointer, const json& value, const Locator& locator,
+              const std::string& at, const std::string& variant)
+{
+    const std::string text = pointer.to_string();
+    const json::json_pointer parent = pointer.parent_pointer();
+    const std::string in = variant.empty() ? "" : fmt::format(" (in the variant {})", variant);
+    if (!doc.contains(parent) || !(doc[parent].is_object() || doc[parent].is_array())) {
+        locator.fail(at, fmt::format("\"{}\": the config has no \"{}\" to set it in{}", text, parent.to_string(), in));
+    }
+    if (doc[parent].is_array()) {
+        const std::string& index = pointer.back();
+        const bool digits = !index.empty() && std::all_of(index.begin(), index.end(), [](unsigned char c) { return std::isdigit(c); });
+        if (!digits || index.size() > 9 || std::stoul(index) >= doc[parent].size()) {
+            locator.fail(at, fmt::format("\"{}\": \"{}\" has {} elements; a sweep replaces an element, it does not add one{}",
+                                         text, parent.to_string(), doc[parent].size(), in));
+        }
+    }
+    doc[pointer] = value;
+}
+
+} // namespace
+
+std::vector<SweepVariant> expandSweep(const ConfigDocument& document)
+{
+    const Locator locator(document);
+    auto it = document.json.find("sweep");
+    if (it == document.json.end()) return {{"", {}, parseConfig(document)}};
+    const json& sweep = *it;
+    if (!sweep.is_array() || sweep.empty()) locator.fail("/sweep", "must be a non-empty array of {\"path\", \"values\"}");
+    std::vector<SweepAxis> axes;
+    size_t combinations = 1;
+    for (size_t i = 0; i < sweep.size(); ++i) {
+        const std::string at = fmt::format("/sweep/{}", i);
+        axes.push_back(readSweepAxis(sweep[i], locator, at));
+        combinations *= axes.back().values.size();
+        if (combinations > 100000) locator.fail(at + "/values", "the sweep has more than 100000 combinations");
+    }
+    std::vector<SweepVariant> variants;
+    for (size_t c = 0; c < combinations; ++c) {
+        // The first entry varies slowest. Entries are applied in order, so a later one may
+        // set a value inside one that an earlier entry replaced (a technique's parameter
+        // inside a swept "shadow" object).
+        std::vector<size_t> picks(axes.size());
+        for (size_t a = axes.size(), rest = c; a-- > 0; rest /= axes[a].values.size()) picks[a] = rest % axes[a].values.size();
+        ConfigDocument variant = document;
+        variant.json.erase("sweep");
+        SweepVariant out;
+        std::vector<std::string> label;
+        for (size_t a = 0; a < axes.size(); ++a) {
+            const SweepAxis& axis = axes[a];
+            const size_t pick = picks[a];
+            const bool several = axis.paths.size() > 1;
+            for (size_t k = 0; k < axis.paths.size(); ++k) {
+                const std::string& text = axis.pathTexts[k];
+                const std::string at = several ? fmt::format("/sweep/{}/paths/{}", a, k) : fmt::format("/sweep/{}/path", a);
+                setSwept(variant.json, axis.paths[k], several ? axis.values[pick][k] : axis.values[pick], locator, at,
+                         fmt::format("{}", fmt::join(label, ", ")));
+                // The value replaced whatever was there, including where its parts came from.
+                for (auto o = variant.origin.lower_bound(text); o != variant.origin.end() && o->first.rfind(text, 0) == 0;) {
+                    const bool inside = o->first.size() == text.size() || o->first[text.size()] == '/';
+                    o = inside ? variant.origin.erase(o) : std::next(o);
+                }
+                variant.origin[text] = several ? fmt::format("{} (/sweep/{}/values/{}/{})", document.file.string(), a, pick, k)
+                                               : fmt::format("{} (/sweep/{}/values/{})", document.file.string(), a, pick);
+            }
+            label.push_back(fmt::format("{}={}", fmt::join(axis.pathTexts, "+"), axis.labels[pick]));
+            out.choices.push_back({axis.pathTexts, pick, axis.labels[pick], axis.labelled});
+        }
+        out.label = fmt::format("{}", fmt::join(label, ", "));
+        out.config = parseConfig(variant);
+        variants.push_back(std::move(out));
+    }
+    return variants;
+}
+
+} // namespace penumbra::config
