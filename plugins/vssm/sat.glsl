@@ -15,7 +15,7 @@
 // largest atlas the plugin allows (3 x 2 faces of 8192^2, 2^28.6 texels) sums to below
 // 2^60. A box's sums are then exact for the rounded depths, so its mean and E(t^2) are
 // within 2^-32 of those of the map's fp32 depths whatever the map's size, and its
-// variance within about 2^-31 (tests/test_vssm_plugin.cpp measures it against fp64 at
+// variance within about 2^-31 (tests/techniques/test_vssm_plugin.cpp measures it against fp64 at
 // 512^2, 2048^2 and 4096^2). Boxes with fractional edges (the kernels are not
 // texel-aligned) interpolate the table bilinearly, which is the exact integral of the
 // piecewise-constant map; that arithmetic runs in fp64 on entries relative to the box's

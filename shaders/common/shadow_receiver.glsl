@@ -71,7 +71,7 @@ float shadowCompareTap(sampler2DShadow map, ShadowReceiver r, vec2 offsetTexels)
 // from their normal by its light as a spot (hard, receiver plane, 2048 texels, 480 x
 // 270): 1/16 of a texel left acne on 0.70% of the pixels, 1/8 on 0.44%, 1/4 on 0.17%,
 // 1/2 on 0.06% (those at the boxes' edges). Half a texel is what a slope-scaled bias of
-// 0.5 would shift shadows by: contact shadows stay (tests/test_pcss_plugin.cpp,
+// 0.5 would shift shadows by: contact shadows stay (tests/techniques/test_pcss_plugin.cpp,
 // BlockerTouchingTheReceiverCastsAHardShadow).
 const float kShadowRoundingTexels = 1.0 / 2.0;
 // Beyond 88 degrees between a receiver and the map's iso-depth surface the bias a

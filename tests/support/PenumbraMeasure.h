@@ -3,7 +3,7 @@
 // ground under a square light of side w at height 3, whose penumbra along x is
 // w h / (H - h) wide) seen from straight above, and the measures the soft-shadow
 // plugin tests take of a visibility image on it: the width of a shadow edge and the
-// RMSE against the exact visibility (tests/test_pcss_plugin.cpp, test_vssm_plugin.cpp).
+// RMSE against the exact visibility (tests/techniques/test_pcss_plugin.cpp, test_vssm_plugin.cpp).
 #include "PluginFrame.h"
 
 #include "penumbra/config/Config.h"

@@ -1,5 +1,5 @@
 #version 460
-// tests/test_vssm_plugin.cpp: box queries of plugins/vssm's summed-area table
+// tests/techniques/test_vssm_plugin.cpp: box queries of plugins/vssm's summed-area table
 // (sat.glsl satBoxMoments), one per invocation, written in fp64.
 layout(local_size_x = 64) in;
 

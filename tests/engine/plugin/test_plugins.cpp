@@ -1,7 +1,7 @@
 // The plugin module: loading from the search path, one error kind (and a message that
 // names plugin, file and what to do) per way a plugin can fail, the registry still
 // working after each failure, reflected parameters from spec to config to the plugin's
-// own view, and --set overrides. The test plugins are in tests/plugins/.
+// own view, and --set overrides. The test plugins are in tests/fixtures/plugins/.
 #include "TestContext.h"
 
 #include "penumbra/config/Config.h"
@@ -317,7 +317,7 @@ TEST_F(Registry, LoadsTheGoodPlugin)
 {
     const plugin::LoadedPlugin& good = registry.load("testgood");
     EXPECT_EQ(good.name(), "testgood");
-    // What PENUMBRA_DEFINE_PLUGIN (tests/plugins/testgood.cpp) put in the info.
+    // What PENUMBRA_DEFINE_PLUGIN (tests/fixtures/plugins/testgood.cpp) put in the info.
     EXPECT_STREQ(good.info->version, "1.2.0");
     EXPECT_STREQ(good.info->summary, "test plugin: clears V_l to a constant");
     EXPECT_EQ(good.info->paramCount, 5u);

@@ -483,7 +483,7 @@ namespace {
 const std::string kTestPlugins = PENUMBRA_TEST_PLUGIN_DIR;
 const std::string kShadowedPlugins = PENUMBRA_TEST_SHADOWED_PLUGIN_DIR;
 
-// The test plugins (tests/plugins/) on the search path, the shadowed folder second.
+// The test plugins (tests/fixtures/plugins/) on the search path, the shadowed folder second.
 std::string pluginPath() { return fmt::format("PENUMBRA_PLUGIN_PATH='{}:{}'", kTestPlugins, kShadowedPlugins); }
 
 bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
