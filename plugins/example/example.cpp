@@ -22,7 +22,7 @@ using namespace penumbra;
 
 // Reflected parameters: configs set them as "shadow": {"technique": "example",
 // "resolution": 2048}, the command line as --set example.resolution=2048.
-// Both are parameters every shadow-map technique has, worded once in render/ShadowMap.h.
+// Both are parameters every shadow-map technique has, worded once in plugin/ShadowMapParams.h.
 const plugin::ParamSpec kParams[] = {plugin::shadowResolutionParam(1024, 8192), plugin::kShadowDepthBiasParam};
 
 // Slope-scaled bias, fixed here to keep the example short (plugins/hard reflects it).
