@@ -1,5 +1,6 @@
 // Per-instance and per-material data shared by every pass that draws scene geometry.
-// The draw's firstInstance is the instance index, so gl_InstanceIndex finds the row.
+// Rows are ordered for batched draws (render/DrawBatches.h): a draw's firstInstance is
+// the row of its first instance, so gl_InstanceIndex finds each instance's row.
 #ifndef PENUMBRA_SCENE_GLSL
 #define PENUMBRA_SCENE_GLSL
 

@@ -267,6 +267,7 @@ RenderConfig parseConfig(const ConfigDocument& document)
                                                 cullingModeName(config.culling)));
         }
     }
+    config.batchDraws = r.choice("draw_batching", "batched", {"batched", "per-instance"}) == "batched";
     if (const json* out = r.find("output")) {
         ObjectReader o(*out, locator, "/output");
         config.width = o.integer("width", config.width, 1, 16384);

@@ -53,7 +53,7 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
       compiler_({gpu::engineShaderDir()}),
       width_(config.width),
       height_(config.height),
-      sceneGpu_(context, scene),
+      sceneGpu_(context, scene, config.batchDraws ? render::DrawBatching::Batched : render::DrawBatching::PerInstance),
       casters_(sceneGpu_),
       lightBuffer_(context, sizeof(LightData) * config::kMaxLights, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "lights"),
       executor_(context)
@@ -290,6 +290,8 @@ FrameTimings FrameRenderer::renderFrame()
 {
     const auto frameStart = std::chrono::steady_clock::now();
     FrameTimings timings;
+    // The previous frame has finished (execute() waits): its indirect commands are spent.
+    sceneGpu_.beginFrame();
     // Step 1 of the visibility service: the camera's receivers (the G-buffer draws them);
     // light views are culled when their casters are first drawn.
     visibility_->beginFrame(cameraViewProj_);

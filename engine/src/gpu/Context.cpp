@@ -349,7 +349,10 @@ void Context::createDevice()
     features.features.shaderInt64 = have.features.shaderInt64;
     features.features.shaderFloat64 = have.features.shaderFloat64;
     features.features.geometryShader = have.features.geometryShader;
+    // Batched scene draws (render::SceneGpu): one indirect call per texture, each command
+    // with its own first instance.
     features.features.multiDrawIndirect = have.features.multiDrawIndirect;
+    features.features.drawIndirectFirstInstance = have.features.drawIndirectFirstInstance;
     features.features.occlusionQueryPrecise = have.features.occlusionQueryPrecise;
     features.features.pipelineStatisticsQuery = have.features.pipelineStatisticsQuery;
     features.features.fragmentStoresAndAtomics = have.features.fragmentStoresAndAtomics;
@@ -368,6 +371,7 @@ void Context::createDevice()
     info.enabledExtensionCount = 1;
     info.ppEnabledExtensionNames = extensions;
     check(vkCreateDevice(physicalDevice_, &info, nullptr, &device_), "vkCreateDevice");
+    enabledFeatures_ = features.features;
     pinLoadedLibrariesForLeakReports();
     vkGetDeviceQueue(device_, queueFamily_, 0, &queue_);
     cmdPushDescriptorSet_ = reinterpret_cast<PFN_vkCmdPushDescriptorSetKHR>(

@@ -4,6 +4,9 @@
 #include "penumbra/gpu/Context.h"
 #include "penumbra/gpu/Pipeline.h"
 
+#include "render/DrawBatches.h"
+#include "render/IndirectCommandArena.h"
+
 #include <glm/gtc/matrix_inverse.hpp>
 
 #include <fmt/format.h>
@@ -33,20 +36,29 @@ std::span<const std::byte> bytesOf(const std::vector<T>& v)
     return std::as_bytes(std::span<const T>(v));
 }
 
-std::vector<InstanceData> instanceTable(const scene::Scene& scene)
+// One row per slot (DrawBatches: ordered by texture, mesh, instance).
+std::vector<InstanceData> instanceTable(const scene::Scene& scene, const DrawBatches& batches)
 {
     std::vector<InstanceData> table;
-    table.reserve(scene.instances.size());
-    for (const scene::Instance& inst : scene.instances) {
+    table.reserve(batches.slotInstances().size());
+    for (const uint32_t instance : batches.slotInstances()) {
+        const scene::Instance& inst = scene.instances.at(instance);
         const glm::mat4& model = scene.instanceTransform(inst);
         table.push_back({model, glm::inverseTranspose(model), glm::uvec4(scene.meshes.at(inst.mesh).material, 0, 0, 0)});
     }
     return table;
 }
 
+// Indirect commands per arena buffer (20 bytes each): the first buffer holds a small
+// scene's whole frame; larger frames add buffers once.
+constexpr uint32_t kIndirectCommandsPerBuffer = 16384;
+
 } // namespace
 
-SceneGpu::SceneGpu(gpu::Context& context, const scene::Scene& scene)
+SceneGpu::SceneGpu(gpu::Context& context, const scene::Scene& scene, DrawBatching batching)
+    : batching_(batching),
+      multiDrawIndirect_(context.enabledFeatures().multiDrawIndirect && context.enabledFeatures().drawIndirectFirstInstance),
+      maxDrawIndirectCount_(std::max(context.properties().limits.maxDrawIndirectCount, 1u))
 {
     if (scene.instances.empty()) {
         throw Error("scene has no instances: nothing to render");
@@ -82,42 +94,44 @@ SceneGpu::SceneGpu(gpu::Context& context, const scene::Scene& scene)
         }
         materials.push_back({m.baseColor, m.alphaCutoff, static_cast<uint32_t>(m.alphaMode), 0, 0});
     }
-    for (uint32_t i = 0; i < scene.instances.size(); ++i) {
-        const scene::Mesh& mesh = scene.meshes.at(scene.instances[i].mesh);
-        const scene::Material& m = scene.materials.at(mesh.material);
-        const Range& r = ranges.at(scene.instances[i].mesh);
-        if (r.indexCount > 0) {
-            const uint32_t texture = m.baseColorTexture == scene::kNoTexture ? defaultTexture : uint32_t(m.baseColorTexture);
-            draws_.push_back({r.indexCount, r.firstIndex, r.vertexOffset, i, texture, m.alphaMode == scene::AlphaMode::Mask});
-            triangles_ += r.indexCount / 3;
-        }
+    std::vector<MeshRange> meshRanges;
+    for (size_t m = 0; m < scene.meshes.size(); ++m) {
+        const scene::Material& material = scene.materials.at(scene.meshes[m].material);
+        const uint32_t texture =
+            material.baseColorTexture == scene::kNoTexture ? defaultTexture : uint32_t(material.baseColorTexture);
+        meshRanges.push_back({ranges[m].indexCount, ranges[m].firstIndex, ranges[m].vertexOffset, texture,
+                              material.alphaMode == scene::AlphaMode::Mask});
     }
-    std::stable_sort(draws_.begin(), draws_.end(), [](const Draw& a, const Draw& b) { return a.texture < b.texture; });
-    instanceDraw_.assign(scene.instances.size(), kNoDraw);
-    instanceAlphaMasked_.assign(scene.instances.size(), 0);
-    for (uint32_t d = 0; d < draws_.size(); ++d) {
-        instanceDraw_[draws_[d].instance] = d;
-        instanceAlphaMasked_[draws_[d].instance] = draws_[d].alphaMasked ? 1 : 0;
+    std::vector<uint32_t> instanceMesh;
+    for (const scene::Instance& inst : scene.instances) {
+        instanceMesh.push_back(inst.mesh);
+        triangles_ += meshRanges.at(inst.mesh).indexCount / 3;
     }
-    if (vertices.empty() || indices.empty()) {
+    batches_ = std::make_unique<DrawBatches>(instanceMesh, meshRanges, batching == DrawBatching::PerInstance);
+    scratch_ = std::make_unique<DrawBatch>();
+    arena_ = std::make_unique<IndirectCommandArena>(context, kIndirectCommandsPerBuffer);
+    if (vertices.empty() || indices.empty() || batches_->slotInstances().empty()) {
         throw Error("scene has no triangles: nothing to render");
     }
     vertices_ = gpu::uploadBuffer(context, bytesOf(vertices), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, "scene vertices");
     indices_ = gpu::uploadBuffer(context, bytesOf(indices), VK_BUFFER_USAGE_INDEX_BUFFER_BIT, "scene indices");
-    instances_ = gpu::uploadBuffer(context, bytesOf(instanceTable(scene)), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+    instances_ = gpu::uploadBuffer(context, bytesOf(instanceTable(scene, *batches_)), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                    "scene instances");
     materials_ = gpu::uploadBuffer(context, bytesOf(materials), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "scene materials");
     sampler_ = gpu::createSampler(context, VK_FILTER_LINEAR, VK_SAMPLER_ADDRESS_MODE_REPEAT);
 }
 
-bool SceneGpu::hasAlphaMasked() const
-{
-    return std::any_of(draws_.begin(), draws_.end(), [](const Draw& d) { return d.alphaMasked; });
-}
+SceneGpu::~SceneGpu() = default;
+
+bool SceneGpu::hasAlphaMasked() const { return batches_->hasAlphaMasked(); }
+
+bool SceneGpu::isAlphaMasked(uint32_t instance) const { return batches_->isAlphaMasked(instance); }
+
+void SceneGpu::beginFrame() { arena_->beginFrame(); }
 
 void SceneGpu::updateInstances(gpu::Context& context, const scene::Scene& scene)
 {
-    gpu::updateBuffer(context, instances_, bytesOf(instanceTable(scene)), &instanceStaging_);
+    gpu::updateBuffer(context, instances_, bytesOf(instanceTable(scene, *batches_)), &instanceStaging_);
 }
 
 void SceneGpu::bindGeometry(VkCommandBuffer cmd) const
@@ -128,47 +142,47 @@ void SceneGpu::bindGeometry(VkCommandBuffer cmd) const
     vkCmdBindIndexBuffer(cmd, indices_.handle(), 0, VK_INDEX_TYPE_UINT32);
 }
 
-DrawCounts SceneGpu::draw(VkCommandBuffer cmd, DrawFilter filter,
-                          const std::function<void(const gpu::Image& texture)>& bindTexture,
-                          const std::vector<uint8_t>* instanceMask) const
+DrawCounts SceneGpu::record(VkCommandBuffer cmd, const std::function<void(const gpu::Image& texture)>& bindTexture) const
 {
-    if (instanceMask && instanceMask->size() != instanceDraw_.size()) {
-        throw Error(fmt::format("SceneGpu::draw: an instance mask of {} entries for {} instances", instanceMask->size(),
-                                instanceDraw_.size()));
-    }
+    const DrawBatch& batch = *scratch_;
+    DrawCounts counts = batch.counts;
+    if (batch.commands.empty()) return counts;
     bindGeometry(cmd);
-    DrawCounts counts;
-    uint32_t bound = UINT32_MAX;
-    for (const Draw& d : draws_) {
-        if ((filter == DrawFilter::Solid && d.alphaMasked) || (filter == DrawFilter::AlphaMasked && !d.alphaMasked)) {
+    const bool indirect = multiDrawIndirect_ && batching_ == DrawBatching::Batched;
+    const IndirectCommandArena::Region region = indirect ? arena_->store(batch.commands) : IndirectCommandArena::Region{};
+    constexpr uint32_t stride = sizeof(VkDrawIndexedIndirectCommand);
+    for (const DrawBatch::Group& group : batch.groups) {
+        if (bindTexture) bindTexture(textures_[group.texture]);
+        if (indirect) {
+            for (uint32_t first = 0; first < group.commandCount; first += maxDrawIndirectCount_) {
+                const uint32_t count = std::min(group.commandCount - first, maxDrawIndirectCount_);
+                vkCmdDrawIndexedIndirect(cmd, region.buffer, region.offset + VkDeviceSize(group.firstCommand + first) * stride,
+                                         count, stride);
+                ++counts.drawCalls;
+            }
             continue;
         }
-        if (instanceMask && !(*instanceMask)[d.instance]) continue;
-        if (bindTexture && d.texture != bound) {
-            bindTexture(textures_[d.texture]);
-            bound = d.texture;
+        for (uint32_t c = group.firstCommand; c < group.firstCommand + group.commandCount; ++c) {
+            const VkDrawIndexedIndirectCommand& d = batch.commands[c];
+            vkCmdDrawIndexed(cmd, d.indexCount, d.instanceCount, d.firstIndex, d.vertexOffset, d.firstInstance);
+            ++counts.drawCalls;
         }
-        vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, d.vertexOffset, d.instance);
-        counts.instances += 1;
-        counts.triangles += d.indexCount / 3;
     }
     return counts;
 }
 
+DrawCounts SceneGpu::draw(VkCommandBuffer cmd, DrawFilter filter,
+                          const std::function<void(const gpu::Image& texture)>& bindTexture,
+                          const std::vector<uint8_t>* instanceMask) const
+{
+    batches_->build(filter, instanceMask, bool(bindTexture), *scratch_);
+    return record(cmd, bindTexture);
+}
+
 DrawCounts SceneGpu::drawInstances(VkCommandBuffer cmd, std::span<const uint32_t> instances, bool alphaMasked) const
 {
-    bindGeometry(cmd);
-    DrawCounts counts;
-    for (const uint32_t instance : instances) {
-        const uint32_t index = instanceDraw_.at(instance);
-        if (index == kNoDraw) continue;
-        const Draw& d = draws_[index];
-        if (d.alphaMasked != alphaMasked) continue;
-        vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, d.vertexOffset, d.instance);
-        counts.instances += 1;
-        counts.triangles += d.indexCount / 3;
-    }
-    return counts;
+    batches_->buildInstances(instances, alphaMasked, *scratch_);
+    return record(cmd, {});
 }
 
 } // namespace penumbra::render

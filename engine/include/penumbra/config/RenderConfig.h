@@ -78,6 +78,10 @@ struct RenderConfig {
     // Fit directional and spot lights' shadow maps to what the camera sees (the visibility
     // service's "focusing", engine/src/visibility/); needs culling receiver-mask or light-occlusion.
     bool shadowFocus = false;
+    // "draw_batching": "batched" (instanced, indirect multi-draws: render::SceneGpu) or
+    // "per-instance" (one draw call per instance: the reference batching is checked and
+    // measured against).
+    bool batchDraws = true;
     uint32_t width = 1280;
     uint32_t height = 720;
     uint32_t frames = 1;

@@ -61,6 +61,8 @@ public:
     const VkPhysicalDeviceProperties& properties() const { return properties_; }
     const VkPhysicalDeviceMemoryProperties& memoryProperties() const { return memoryProperties_; }
     bool validationEnabled() const { return validation_; }
+    // The core features the device was created with (the optional ones where it has them).
+    const VkPhysicalDeviceFeatures& enabledFeatures() const { return enabledFeatures_; }
 
     // Warnings and errors reported by the validation layer since creation.
     uint32_t validationMessageCount() const { return validationMessages_.load(); }
@@ -121,6 +123,7 @@ private:
     PFN_vkCmdBeginDebugUtilsLabelEXT cmdBeginLabel_ = nullptr;
     PFN_vkCmdEndDebugUtilsLabelEXT cmdEndLabel_ = nullptr;
     PFN_vkCmdPushDescriptorSetKHR cmdPushDescriptorSet_ = nullptr;
+    VkPhysicalDeviceFeatures enabledFeatures_{};
 };
 
 } // namespace penumbra::gpu
