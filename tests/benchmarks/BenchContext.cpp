@@ -14,4 +14,17 @@ plugin::PluginRegistry& registry()
     return instance;
 }
 
+config::LightConfig hardSun(glm::vec3 direction)
+{
+    config::LightConfig light;
+    light.name = "sun";
+    light.light.type = scene::LightType::Directional;
+    light.light.direction = glm::normalize(direction);
+    light.light.intensity = 3.0f;
+    light.shadow.technique = "hard";
+    light.shadow.required = true;
+    light.shadow.setParam("resolution", 2048, "benchmark");
+    return light;
+}
+
 } // namespace penumbra::bench

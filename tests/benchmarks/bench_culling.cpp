@@ -76,15 +76,7 @@ config::RenderConfig cityConfig(View view, config::CullingMode mode)
     }
     cfg.camera.fovYDeg = 60.0f;
     cfg.camera.nearWorld = 0.1f;
-    config::LightConfig light;
-    light.name = "sun";
-    light.light.type = scene::LightType::Directional;
-    light.light.direction = glm::normalize(glm::vec3(0.6f, -0.35f, 0.35f));  // about 25° above the horizon
-    light.light.intensity = 3.0f;
-    light.shadow.technique = "hard";
-    light.shadow.required = true;
-    light.shadow.setParam("resolution", 2048, "benchmark");
-    cfg.lights.push_back(light);
+    cfg.lights.push_back(bench::hardSun({0.6f, -0.35f, 0.35f}));  // about 25° above the horizon
     return cfg;
 }
 

@@ -353,6 +353,17 @@ TEST(Config, ShadowFocusNeedsAnOcclusionMode)
     EXPECT_NE(errorOf(doc).find("/shadow_focus: needs culling \"receiver-mask\""), std::string::npos) << errorOf(doc);
 }
 
+TEST(Config, DrawBatchingIsBatchedOrPerInstance)
+{
+    json doc = minimal();
+    EXPECT_TRUE(config::parseConfig(doc, "scene.json").batchDraws);
+    doc["draw_batching"] = "per-instance";
+    EXPECT_FALSE(config::parseConfig(doc, "scene.json").batchDraws);
+    doc["draw_batching"] = "instanced";
+    EXPECT_NE(errorOf(doc).find("/draw_batching: must be one of batched, per-instance"), std::string::npos)
+        << errorOf(doc);
+}
+
 TEST(Config, AnimationTracksAreValidated)
 {
     json doc = minimal();
