@@ -22,19 +22,27 @@ layout(binding = 4) uniform sampler2DShadow shadowMaps[LIGHT_COUNT];
 #define SHADOW_MAP_ARRAY
 #include "common/shadow_map.glsl"
 
+layout(location = 4) in vec4 inShadowClip[LIGHT_COUNT];
+
 // 1 lit, 0 shadowed; points outside the map are lit (as the hard technique calls them).
 // The caller passes shadowMaps[I] with a constant I (ADD_LIGHT): lavapipe has no dynamic
 // indexing of sampler arrays.
 float shadowCompare(sampler2DShadow map, uint light, vec3 world)
 {
     shadowMapIndex = light;
-    uint face = shadowFaceOf(world);
     vec3 uvDepth;
+    if (shadowMapData.faceCount == 1u) {
+        // The vertex shader's clip coordinates: one divide, one compare.
+        vec4 clip = inShadowClip[light];
+        if (!(clip.w > 0.0)) return 1.0;
+        uvDepth = vec3(clip.xy / clip.w * 0.5 + 0.5, clip.z / clip.w);
+        if (any(lessThan(uvDepth.xy, vec2(0.0))) || any(greaterThan(uvDepth.xy, vec2(1.0)))) return 1.0;
+        return texture(map, uvDepth);
+    }
+    uint face = shadowFaceOf(world);
     float w;
     if (!shadowProject(face, world, uvDepth, w)) return 1.0;
-    if (any(lessThan(uvDepth.xy, vec2(0.0))) || any(greaterThan(uvDepth.xy, vec2(1.0)))) return 1.0;
-    vec2 uv = shadowAtlasUv(face, shadowClampToFace(uvDepth.xy, 0.5));
-    return texture(map, vec3(uv, uvDepth.z));
+    return texture(map, vec3(shadowAtlasUv(face, shadowClampToFace(uvDepth.xy, 0.5)), uvDepth.z));
 }
 #define VISIBILITY(I) shadowCompare(shadowMaps[I], I, inPositionWorld)
 #else

@@ -18,6 +18,15 @@ layout(location = 0) out vec3 outPositionWorld;
 layout(location = 1) out vec3 outNormalWorld;
 layout(location = 2) out vec2 outUv;
 layout(location = 3) flat out uint outMaterial;
+#if SHADOWED
+// As a classic engine's shadow texgen: each light's first face's clip coordinates per
+// vertex, interpolated (projective: linear in clip space). A one-face map (spot,
+// directional) needs nothing more per fragment; cube atlases pick their face there.
+#define SHADOW_MAP_BINDING 5
+#define SHADOW_MAP_ARRAY
+#include "common/shadow_map.glsl"
+layout(location = 4) out vec4 outShadowClip[LIGHT_COUNT];
+#endif
 
 void main()
 {
@@ -27,5 +36,11 @@ void main()
     outNormalWorld = mat3(inst.normalMatrix) * inNormal;
     outUv = inUv;
     outMaterial = inst.info.x;
+#if SHADOWED
+    for (uint i = 0u; i < uint(LIGHT_COUNT); ++i) {
+        shadowMapIndex = i;
+        outShadowClip[i] = shadowMapData.faces[0].viewProj * world;
+    }
+#endif
     gl_Position = pc.viewProj * world;
 }
