@@ -2,6 +2,7 @@
 
 #include "BenchResults.h"
 #include "ConfigCheck.h"
+#include "FloorComparison.h"
 #include "FrameCapture.h"
 #include "OutputFolder.h"
 #include "ParetoPlot.h"
@@ -12,6 +13,7 @@
 #include "penumbra/config/Run.h"
 #include "penumbra/config/Sweep.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/frame/FloorRenderer.h"
 #include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/io/StagedFile.h"
 #include "penumbra/metrics/ImageComparison.h"
@@ -363,10 +365,17 @@ BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& v
         session.warnings.push_back(fmt::format("variant {} ({}): {}", index, variant.label, warning));
         spdlog::warn("{}", session.warnings.back());
     }
-    std::vector<frame::FrameTimings> measured;
+    // The floor of the same config (frame/FloorRenderer.h), drawn after every frame so that
+    // both are measured side by side.
+    frame::FloorRenderer floor(session.context, scene, config);
+    std::vector<frame::FrameTimings> measured, floorMeasured;
     for (uint32_t frame = 0; frame < session.flags.warmup + session.flags.frames; ++frame) {
         frame::FrameTimings timings = renderer.renderFrame();
-        if (frame >= session.flags.warmup) measured.push_back(std::move(timings));
+        frame::FrameTimings floorTimings = floor.renderFrame();
+        if (frame >= session.flags.warmup) {
+            measured.push_back(std::move(timings));
+            floorMeasured.push_back(std::move(floorTimings));
+        }
         session.progress.frameDone();
         InterruptHandler::check();
     }
@@ -386,6 +395,8 @@ BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& v
     result.width = images.width;
     result.height = images.height;
     result.frame = summarizeTimings(measured, "", hostPasses);
+    result.floor = compareWithFloor(result.frame, cameraPasses(*renderer.executor().compiled(), images.width, images.height),
+                                    summarizeFloor(floorMeasured, config.lights.size()), anyLightShadowed(renderer));
     result.culling = config::cullingModeName(config.culling);
     result.cullingStats = medianCulling(measured);
     for (size_t l = 0; l < config.lights.size(); ++l) {
@@ -416,15 +427,19 @@ void printTable(const BenchRun& run)
     fmt::print("bench {}: {} variant(s), medians of {} frame(s) after {} warm-up; reference {} {} ({} render(s))\n",
                run.config, run.variants.size(), run.frames, run.warmup, run.reference, run.referenceParams.dump(),
                run.referenceRenders);
-    fmt::print("  {:>3} {:<12} {:<12} {:>10} {:>10} {:>12} {:>9} {:>9}  {}\n", "#", "light", "technique", "ms", "frame ms",
-               "memory B", "RMSE", "SSIM", "variant (* Pareto front)");
+    fmt::print("  {:>3} {:<12} {:<12} {:>10} {:>10} {:>8} {:>12} {:>9} {:>9}  {}\n", "#", "light", "technique", "ms",
+               "frame ms", "x floor", "memory B", "RMSE", "SSIM", "variant (* Pareto front)");
     for (const BenchVariant& v : run.variants) {
         for (const BenchLight& l : v.lights) {
-            fmt::print("  {:>3} {:<12} {:<12} {:>10.3f} {:>10.3f} {:>12} {:>9.5f} {:>9.5f}  {}{}\n", v.index, l.name, l.technique,
-                       l.timing.workMs, v.frame.frameWallMs, l.memoryBytes(), l.visibility.all.rmse, l.visibility.ssim,
-                       l.paretoFront ? "* " : "  ", v.label.empty() ? "(no sweep)" : v.label);
+            fmt::print("  {:>3} {:<12} {:<12} {:>10.3f} {:>10.3f} {:>8.2f} {:>12} {:>9.5f} {:>9.5f}  {}{}\n", v.index, l.name,
+                       l.technique, l.timing.workMs, v.frame.frameWallMs, v.floor.frameMultiple, l.memoryBytes(),
+                       l.visibility.all.rmse, l.visibility.ssim, l.paretoFront ? "* " : "  ",
+                       v.label.empty() ? "(no sweep)" : v.label);
         }
     }
+    // Every pass against the floor, per variant (FloorComparison.h states the rule).
+    fmt::print("against the floor (GPU ms of passes; {})\n", kFloorRule);
+    for (const BenchVariant& v : run.variants) fmt::print("  {:>3} {}\n", v.index, floorLine(v));
 }
 
 int runBench(const BenchFlags& flags)

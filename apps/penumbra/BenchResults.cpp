@@ -27,6 +27,24 @@ json timingJson(const TimingSummary& t)
             {"cpu_ms", t.cpuMs},   {"wall_ms", t.frameWallMs}, {"passes", std::move(passes)}};
 }
 
+json floorJson(const FloorComparison& c)
+{
+    json passes = json::array();
+    for (const PassAgainstFloor& p : c.passes) {
+        passes.push_back({{"name", p.name}, {"against", floorDrawName(p.draw)}, {"floor_ms", p.floorMs}, {"multiple", p.multiple}});
+    }
+    json floorPasses = json::array();
+    for (const PassTimes& p : c.floor.passes.passes) floorPasses.push_back({{"name", p.name}, {"gpu_ms", p.gpuMs}});
+    return {{"rule", kFloorRule},
+            {"shadowed", c.shadowed},
+            {"floor_frame_ms", c.floorFrameMs},
+            {"frame_multiple", c.frameMultiple},
+            {"shadowed_frame_ms", c.floor.shadowedFrameMs},
+            {"unshadowed_frame_ms", c.floor.unshadowedFrameMs},
+            {"floor_passes", std::move(floorPasses)},
+            {"passes", std::move(passes)}};
+}
+
 json cullingJson(const std::string& mode, const visibility::CullingStats& s)
 {
     json out = {{"mode", mode}};
@@ -57,7 +75,8 @@ std::vector<std::string> csvHeader()
                                         "params",      "scene",        "scene_params", "width",           "height",
                                         "light_index", "light",        "technique_ms", "technique_gpu_ms",
                                         "technique_host_ms", "technique_cpu_ms", "frame_gpu_ms", "frame_wall_ms",
-                                        "pass_ms", "memory_bytes", "culling", "casters_drawn", "triangles_drawn",
+                                        "pass_ms", "floor_frame_ms", "frame_floor_multiple", "memory_bytes",
+                                        "culling", "casters_drawn", "triangles_drawn",
                                         "culling_queries", "culling_ms"};
     const auto statsColumns = [&](const std::string& prefix) {
         for (const char* figure : {"pixels", "rmse", "mae", "max_abs_error"}) columns.push_back(prefix + figure);
@@ -101,6 +120,8 @@ std::vector<std::string> csvRow(const BenchVariant& v, const BenchLight& l)
                                        number(v.frame.gpuMs),
                                        number(v.frame.frameWallMs),
                                        passMs.dump(),
+                                       number(v.floor.floorFrameMs),
+                                       number(v.floor.frameMultiple),
                                        std::to_string(l.memoryBytes()),
                                        v.culling,
                                        std::to_string(v.cullingStats.castersDrawn),
@@ -212,6 +233,16 @@ std::string shellCommand(const std::vector<std::string>& command)
     return fmt::format("{}", fmt::join(words, " "));
 }
 
+std::string floorLine(const BenchVariant& v)
+{
+    std::vector<std::string> passes;
+    for (const PassAgainstFloor& p : v.floor.passes) {
+        passes.push_back(fmt::format("{} {:.2f} x {}", p.name, p.multiple, floorDrawName(p.draw)));
+    }
+    return fmt::format("frame {:.1f} ms = {:.2f} x {} floor frame {:.1f} ms; {}", v.frame.workMs, v.floor.frameMultiple,
+                       v.floor.shadowed ? "shadowed" : "unshadowed", v.floor.floorFrameMs, fmt::join(passes, ", "));
+}
+
 std::string resultsCsv(const BenchRun& run)
 {
     std::string text = csvLine(csvHeader());
@@ -239,6 +270,7 @@ json resultsJson(const BenchRun& run)
                             {"width", v.width},
                             {"height", v.height},
                             {"timing", timingJson(v.frame)},
+                            {"floor", floorJson(v.floor)},
                             {"culling", cullingJson(v.culling, v.cullingStats)},
                             {"lights", std::move(lights)}});
     }
@@ -289,6 +321,18 @@ std::string summaryMarkdown(const BenchRun& run)
                               all.rmse, l->visibility.region(metrics::Region::Penumbra).rmse, all.mae, all.maxAbsError,
                               all.percentAbove(0), all.percentAbove(1), l->visibility.ssim, l->paretoFront ? "✓" : "");
         }
+    }
+    md += "\n## Against the floor\n\n";
+    md += fmt::format("The frame's passes as multiples of the floor's (the config's scene drawn once forward, "
+                      "frame/FloorRenderer.h), measured side by side; {}.\n\n",
+                      kFloorRule);
+    md += "| variant | frame ms | floor frame ms | x floor | passes (x floor) |\n|---|---:|---:|---:|---|\n";
+    for (const BenchVariant& v : run.variants) {
+        std::vector<std::string> passes;
+        for (const PassAgainstFloor& p : v.floor.passes) passes.push_back(fmt::format("{} {:.2f}", p.name, p.multiple));
+        md += fmt::format("| {} | {:.3f} | {:.3f} ({}) | {:.2f} | {} |\n", cell(v.label.empty() ? "(no sweep)" : v.label),
+                          v.frame.workMs, v.floor.floorFrameMs, v.floor.shadowed ? "shadowed" : "unshadowed",
+                          v.floor.frameMultiple, cell(fmt::format("{}", fmt::join(passes, ", "))));
     }
     if (!run.warnings.empty()) {
         md += "\n## Warnings\n\n";

@@ -3,6 +3,7 @@
 // per sweep variant × light), results.json (the same, structured, with the machine, the
 // device and the command), and the Markdown summary of `--summary`. ParetoPlot.h draws
 // the same results.
+#include "FloorComparison.h"
 #include "TimingSummary.h"
 
 #include "penumbra/config/Config.h"
@@ -45,6 +46,7 @@ struct BenchVariant {
     uint32_t width = 0;
     uint32_t height = 0;
     TimingSummary frame;          // every pass of the frame
+    FloorComparison floor;        // the frame against the floor of its config
     std::string culling;          // the config's culling mode
     visibility::CullingStats cullingStats;  // medians per frame (render --stats)
     std::vector<BenchLight> lights;
@@ -84,6 +86,10 @@ void markParetoFronts(BenchRun& run);
 
 // The shell command that `command` was, quoted where needed ("penumbra bench 'a b.json'").
 std::string shellCommand(const std::vector<std::string>& command);
+
+// One line of a variant's frame against the floor: "frame 142.0 ms = 3.09 x shadowed floor
+// frame 46.0 ms; gbuffer 3.40 x forward, ...".
+std::string floorLine(const BenchVariant& variant);
 
 // results.csv: RFC 4180, a header, one row per variant × light; numbers as the shortest
 // text that reads back to the same double. Columns in BenchResults.cpp (kCsvColumns).

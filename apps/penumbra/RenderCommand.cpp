@@ -1,8 +1,10 @@
 #include "RenderCommand.h"
 
+#include "FloorComparison.h"
 #include "TimingSummary.h"
 #include "penumbra/config/Run.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/frame/FloorRenderer.h"
 #include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/io/Png.h"
 #include "penumbra/plugin/PluginRegistry.h"
@@ -20,7 +22,7 @@ struct RenderFlags {
     std::string config;
     std::string output;
     std::optional<uint32_t> frames;
-    uint32_t warmup = 1;
+    std::optional<uint32_t> warmup;
     bool timings = false;
     bool stats = false;
     std::optional<std::string> culling;
@@ -59,20 +61,41 @@ int runRender(const RenderFlags& flags)
     spdlog::info("scene: {} instances, {} triangles; {}x{}, {} light(s), {} frame(s)", run.scene.instances.size(),
                  run.scene.triangleCount(), resolved.width, resolved.height, resolved.lights.size(), resolved.frames);
 
-    // Warm-up frames absorb one-time costs (lavapipe JIT-compiles pipelines at first use).
-    const uint32_t warmup = run.config.frames > 1 ? flags.warmup : 0;
-    std::vector<frame::FrameTimings> measured;
+    // Warm-up frames absorb one-time costs (lavapipe JIT-compiles pipelines at first use):
+    // as many as --warmup asks for, at any frame count; without it, one when measuring
+    // (several frames or --timings), none for a plain still.
+    const uint32_t warmup = flags.warmup.value_or(run.config.frames > 1 || flags.timings ? 1u : 0u);
+    spdlog::info("{} warm-up frame(s), {} measured", warmup, run.config.frames);
+    // With --timings the floor (frame/FloorRenderer.h) is drawn after every frame, with the
+    // frame's pose, so that both are measured side by side under the same load.
+    std::unique_ptr<frame::FloorRenderer> floor;
+    if (flags.timings) floor = std::make_unique<frame::FloorRenderer>(context, run.scene, run.config);
+    std::vector<frame::FrameTimings> measured, floorMeasured;
     for (uint32_t i = 0; i < warmup + run.config.frames; ++i) {
         const uint32_t frame = i < warmup ? 0 : i - warmup;
-        if (!run.config.animation.empty()) renderer.update(run.config, run.scene, run.poseAtFrame(frame));
+        if (!run.config.animation.empty()) {
+            const std::vector<uint32_t> moved = run.poseAtFrame(frame);
+            renderer.update(run.config, run.scene, moved);
+            if (floor) floor->update(run.config, run.scene, moved);
+        }
         frame::FrameTimings t = renderer.renderFrame();
-        if (i < warmup) continue;
+        if (i < warmup) {
+            if (floor) floor->renderFrame();
+            continue;
+        }
         measured.push_back(std::move(t));
         if (outputPerFrame(flags.output)) {
             io::writePng(framePath(flags.output, frame), renderer.width(), renderer.height(), renderer.readColor());
         }
+        if (floor) floorMeasured.push_back(floor->renderFrame());
     }
-    if (flags.timings) printTimings(summarizeTimings(measured));
+    if (flags.timings) {
+        const TimingSummary frameSummary = summarizeTimings(measured);
+        const FloorComparison comparison =
+            compareWithFloor(frameSummary, cameraPasses(*renderer.executor().compiled(), renderer.width(), renderer.height()),
+                             summarizeFloor(floorMeasured, resolved.lights.size()), anyLightShadowed(renderer));
+        printTimings(frameSummary, warmup, &comparison);
+    }
     if (flags.stats) printCulling(medianCulling(measured), config::cullingModeName(run.config.culling));
 
     if (outputPerFrame(flags.output)) {
@@ -96,9 +119,12 @@ Command addRenderCommand(CLI::App& app)
     cmd->add_option("-o,--output", flags->output, "Output PNG; a name with {frame} (e.g. f{frame:04}.png) gets every frame")
         ->required();
     cmd->add_option("--frames", flags->frames, "Frames to render (overrides the config)")->check(CLI::Range(1u, 100000u));
-    cmd->add_option("--warmup", flags->warmup, "Untimed frames before the measured ones (with --frames > 1)")
-        ->capture_default_str();
-    cmd->add_flag("--timings", flags->timings, "Print the median GPU and CPU ms of every pass");
+    cmd->add_option("--warmup", flags->warmup,
+                    "Untimed frames before the measured ones (default: 1 with --frames > 1 or --timings, else 0)")
+        ->check(CLI::Range(0u, 100000u));
+    cmd->add_flag("--timings", flags->timings,
+                  "Print the median GPU and CPU ms of every pass, and each as a multiple of the floor (the scene "
+                  "drawn once forward)");
     cmd->add_flag("--stats", flags->stats,
                   "Print the median per-frame culling figures: receivers, casters and triangles drawn, nodes "
                   "visited, queries issued, ms of each step");

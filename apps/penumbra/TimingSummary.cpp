@@ -1,5 +1,7 @@
 #include "TimingSummary.h"
 
+#include "FloorComparison.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -58,13 +60,29 @@ TimingSummary summarizeTimings(const std::vector<frame::FrameTimings>& frames, s
     return summary;
 }
 
-void printTimings(const TimingSummary& summary)
+void printTimings(const TimingSummary& summary, uint32_t warmup, const FloorComparison* floor)
 {
-    fmt::print("timings: median of {} frame(s)\n", summary.frames);
-    fmt::print("  {:<28} {:>10} {:>12}\n", "pass", "GPU ms", "CPU ms");
-    for (const PassTimes& pass : summary.passes) fmt::print("  {:<28} {:>10.3f} {:>12.3f}\n", pass.name, pass.gpuMs, pass.cpuMs);
-    fmt::print("  {:<28} {:>10.3f}\n", "sum of passes (GPU)", summary.gpuMs);
-    fmt::print("  {:<28} {:>10.3f}\n", "frame wall clock (CPU)", summary.frameWallMs);
+    fmt::print("timings: median of {} frame(s) after {} warm-up\n", summary.frames, warmup);
+    if (!floor) {
+        fmt::print("  {:<34} {:>10} {:>12}\n", "pass", "GPU ms", "CPU ms");
+        for (const PassTimes& pass : summary.passes)
+            fmt::print("  {:<34} {:>10.3f} {:>12.3f}\n", pass.name, pass.gpuMs, pass.cpuMs);
+        fmt::print("  {:<34} {:>10.3f}\n", "sum of passes (GPU)", summary.gpuMs);
+        fmt::print("  {:<34} {:>10.3f}\n", "frame wall clock (CPU)", summary.frameWallMs);
+        return;
+    }
+    fmt::print("  {}\n", kFloorRule);
+    fmt::print("  {:<34} {:>10} {:>12} {:>9}  {}\n", "pass", "GPU ms", "CPU ms", "x floor", "against");
+    for (size_t i = 0; i < summary.passes.size(); ++i) {
+        const PassTimes& pass = summary.passes[i];
+        const PassAgainstFloor& a = floor->passes.at(i);
+        fmt::print("  {:<34} {:>10.3f} {:>12.3f} {:>9.2f}  {}\n", pass.name, pass.gpuMs, pass.cpuMs, a.multiple,
+                   floorDrawName(a.draw));
+    }
+    fmt::print("  {:<34} {:>10.3f} {:>12} {:>9.2f}  {} floor frame\n", "sum of passes (GPU)", summary.gpuMs, "",
+               floor->frameMultiple, floor->shadowed ? "shadowed" : "unshadowed");
+    fmt::print("  {:<34} {:>10.3f}\n", "frame wall clock (CPU)", summary.frameWallMs);
+    printFloor(*floor);
 }
 
 std::span<const CullingFigure> cullingFigures()

@@ -12,6 +12,8 @@
 
 namespace penumbra::app {
 
+struct FloorComparison;  // FloorComparison.h
+
 // The median of `samples` (the mean of the middle two for an even count); 0 for none.
 double median(std::vector<double> samples);
 
@@ -42,8 +44,9 @@ struct TimingSummary {
 TimingSummary summarizeTimings(const std::vector<frame::FrameTimings>& frames, std::string_view prefix = "",
                                const std::set<std::string, std::less<>>& hostPasses = {});
 
-// The table `render --timings` prints on stdout.
-void printTimings(const TimingSummary& summary);
+// The table `render --timings` prints on stdout, with each pass's multiple of the floor
+// (FloorComparison.h) when `floor` is given.
+void printTimings(const TimingSummary& summary, uint32_t warmup, const FloorComparison* floor = nullptr);
 
 // One figure of visibility::CullingStats: its key in bench's results.json, its label in
 // `render --stats`, and its member (a count, or a time in ms).

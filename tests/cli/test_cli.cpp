@@ -11,6 +11,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -101,6 +102,99 @@ TEST_F(Cli, TimingsListEveryPass)
     for (const char* pass : {"gbuffer", "light0.hard.shadow_map", "light0.hard.visibility", "shading", "median of 3 frame(s)"}) {
         EXPECT_NE(r.out.find(pass), std::string::npos) << pass << "\n" << r.out;
     }
+}
+
+namespace {
+
+bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// One row of `render --timings`: a pass, its GPU ms, and its multiple of the floor.
+struct TimingRow {
+    double gpuMs = 0.0;
+    double multiple = 0.0;
+    std::string against;
+};
+
+// The rows of the frame's table ("name gpu cpu multiple against...") and of the floor's
+// ("name gpu"), by name.
+std::map<std::string, TimingRow> timingRows(const std::string& out)
+{
+    std::map<std::string, TimingRow> rows;
+    std::istringstream lines(out);
+    for (std::string line; std::getline(lines, line);) {
+        std::istringstream words(line);
+        std::string name;
+        TimingRow row;
+        double cpuMs = 0.0;
+        if (!(words >> name >> row.gpuMs)) continue;
+        if (words >> cpuMs >> row.multiple) std::getline(words >> std::ws, row.against);
+        rows[name] = row;
+    }
+    return rows;
+}
+
+} // namespace
+
+TEST_F(Cli, TimingsGiveEveryPassAsAMultipleOfTheFloor)
+{
+    const fs::path png = dir / "out.png";
+    const CliResult r = run(fmt::format("render {} -o '{}' --width 160 --height 90 --frames 3 --warmup 1 --timings",
+                                        config("default.json"), png.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    // The rule heads the table.
+    EXPECT_TRUE(has(r.out, "x floor: a camera pass (writes an image of the frame's size) over the floor's forward draw, "
+                           "any other pass over the floor's shadow-map draw of its light"))
+        << r.out;
+    const std::map<std::string, TimingRow> rows = timingRows(r.out);
+    for (const char* name : {"gbuffer", "light0.hard.shadow_map", "light0.hard.visibility", "shading",
+                             "floor.shadowed.light0.shadow_map", "floor.shadowed.forward", "floor.unshadowed.forward"}) {
+        ASSERT_TRUE(rows.count(name)) << name << "\n" << r.out;
+        EXPECT_GT(rows.at(name).gpuMs, 0.0) << name;
+    }
+    const double forward = rows.at("floor.shadowed.forward").gpuMs, map = rows.at("floor.shadowed.light0.shadow_map").gpuMs;
+    // Camera passes against the forward draw, the light's map against the floor's map;
+    // the multiples are the printed times' ratios up to their rounding.
+    const auto expectMultiple = [&](const char* name, const char* against, double floorMs) {
+        const TimingRow& row = rows.at(name);
+        EXPECT_EQ(row.against, against) << name;
+        EXPECT_NEAR(row.multiple, row.gpuMs / floorMs, 0.006 + 0.002 * row.gpuMs / floorMs) << name << "\n" << r.out;
+    };
+    expectMultiple("gbuffer", "forward", forward);
+    expectMultiple("light0.hard.visibility", "forward", forward);
+    expectMultiple("shading", "forward", forward);
+    expectMultiple("light0.hard.shadow_map", "shadow map", map);
+    // The frame's sum against the shadowed floor frame (the light is shadowed).
+    double sum = 0.0, multiple = 0.0, floorFrame = 0.0;
+    std::istringstream lines(r.out);
+    for (std::string line; std::getline(lines, line);) {
+        if (has(line, "sum of passes (GPU)")) {
+            ASSERT_EQ(std::sscanf(line.c_str(), " sum of passes (GPU) %lf %lf", &sum, &multiple), 2) << line;
+            EXPECT_TRUE(has(line, "shadowed floor frame")) << line;
+        }
+        if (line.rfind("  shadowed floor frame", 0) == 0) {
+            ASSERT_EQ(std::sscanf(line.c_str(), " shadowed floor frame %lf", &floorFrame), 1) << line;
+        }
+    }
+    ASSERT_GT(sum, 0.0) << r.out;
+    ASSERT_GT(floorFrame, 0.0) << r.out;
+    EXPECT_NEAR(multiple, sum / floorFrame, 0.006 + 0.002 * sum / floorFrame) << r.out;
+}
+
+// Warm-up frames run whatever the frame count; without --warmup, one when timing.
+TEST_F(Cli, WarmupAppliesAtOneFrameToo)
+{
+    const fs::path png = dir / "out.png";
+    CliResult r = run(fmt::format("render {} -o '{}' --width 64 --height 36 --frames 1 --warmup 3 --timings",
+                                  config("default.json"), png.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(has(r.out, "timings: median of 1 frame(s) after 3 warm-up")) << r.out;
+    EXPECT_TRUE(has(r.err, "3 warm-up frame(s), 1 measured")) << r.err;
+    r = run(fmt::format("render {} -o '{}' --width 64 --height 36 --frames 1 --timings", config("default.json"), png.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(has(r.out, "timings: median of 1 frame(s) after 1 warm-up")) << r.out;
+    r = run(fmt::format("render {} -o '{}' --width 64 --height 36", config("default.json"), png.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(has(r.err, "0 warm-up frame(s), 1 measured")) << r.err;
 }
 
 TEST_F(Cli, StatsReportWhatCullingDrew)
@@ -486,7 +580,6 @@ const std::string kShadowedPlugins = PENUMBRA_TEST_SHADOWED_PLUGIN_DIR;
 // The test plugins (tests/fixtures/plugins/) on the search path, the shadowed folder second.
 std::string pluginPath() { return fmt::format("PENUMBRA_PLUGIN_PATH='{}:{}'", kTestPlugins, kShadowedPlugins); }
 
-bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 // A light using testgood with `shadow`'s extra keys, and one whose plugin exists nowhere.
 std::string testGoodConfig(const std::string& shadow, const std::string& extra = "")
@@ -1108,6 +1201,36 @@ TEST_F(Cli, BenchMeasuresEveryVariantAgainstOneReferenceRender)
         EXPECT_TRUE(has(svg, text)) << text;
     }
     EXPECT_TRUE(has(r.out, "2 variant(s), medians of 2 frame(s) after 1 warm-up; reference testgood")) << r.out;
+
+    // Every variant against its floor (apps/penumbra/FloorComparison.h): each pass with
+    // the floor draw it is set against and the ratio of the two times; the frame's sum
+    // against the shadowed floor frame (the key light has a technique).
+    for (size_t v = 0; v < 2; ++v) {
+        SCOPED_TRACE(v);
+        const nlohmann::json& variant = doc["variants"][v];
+        const nlohmann::json& floor = variant["floor"];
+        EXPECT_TRUE(floor["shadowed"].get<bool>());
+        EXPECT_TRUE(has(floor["rule"].get<std::string>(), "over the floor's forward draw")) << floor.dump();
+        const double floorFrame = floor["floor_frame_ms"].get<double>();
+        ASSERT_GT(floorFrame, 0.0);
+        EXPECT_EQ(floorFrame, floor["shadowed_frame_ms"].get<double>());
+        EXPECT_NEAR(floor["frame_multiple"].get<double>(), variant["timing"]["work_ms"].get<double>() / floorFrame, 1e-9);
+        std::map<std::string, double> frameMs, floorMs;
+        for (const nlohmann::json& p : variant["timing"]["passes"]) frameMs[p["name"]] = p["gpu_ms"].get<double>();
+        for (const nlohmann::json& p : floor["floor_passes"]) floorMs[p["name"]] = p["gpu_ms"].get<double>();
+        EXPECT_EQ(floorMs.size(), 4u) << floor.dump();  // two maps (key and fill), two forward draws
+        ASSERT_EQ(floor["passes"].size(), frameMs.size());
+        for (const nlohmann::json& p : floor["passes"]) {
+            // Every pass of this frame writes an image of its size (G-buffer, V_l, shading).
+            EXPECT_EQ(p["against"], "forward") << p.dump();
+            EXPECT_EQ(p["floor_ms"].get<double>(), floorMs.at("floor.shadowed.forward")) << p.dump();
+            EXPECT_NEAR(p["multiple"].get<double>(), frameMs.at(p["name"]) / p["floor_ms"].get<double>(), 1e-9) << p.dump();
+        }
+        EXPECT_EQ(std::stod(rows[2 * v].at("frame_floor_multiple")), floor["frame_multiple"].get<double>());
+        EXPECT_EQ(std::stod(rows[2 * v].at("floor_frame_ms")), floorFrame);
+    }
+    EXPECT_TRUE(has(r.out, "against the floor (GPU ms of passes; x floor: a camera pass")) << r.out;
+    EXPECT_TRUE(has(r.out, "shadowed floor frame")) << r.out;
 }
 
 TEST_F(Cli, BenchSummaryIsAMarkdownTablePerPanel)
@@ -1128,7 +1251,8 @@ TEST_F(Cli, BenchSummaryIsAMarkdownTablePerPanel)
                              "| 0 B | 0.5000 | 0.5000 | 0.5000 | 0.500 | 100.00% | 100.00% | 0.6001 |",
                              "| 0 B | 0.2500 | 0.2500 | 0.2500 | 0.250 | 100.00% | 100.00% |", "| testgood | fill=0.25 |",
                              "| unshadowed | – |", "- reference: `testgood` `{", "- frames: 1 measured after 0 warm-up",
-                             "Regenerate with:\n\n```sh\n"}) {
+                             "Regenerate with:\n\n```sh\n", "\n## Against the floor\n",
+                             "| variant | frame ms | floor frame ms | x floor | passes (x floor) |"}) {
         EXPECT_TRUE(has(md, text)) << text << "\n" << md;
     }
     EXPECT_TRUE(has(md, fmt::format("bench {} --reference testgood", cfg.string()))) << md;

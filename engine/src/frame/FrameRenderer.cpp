@@ -2,6 +2,7 @@
 
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
+#include "frame/LightTable.h"
 #include "penumbra/plugin/Params.h"
 #include "visibility/Visibility.h"
 
@@ -19,12 +20,6 @@ constexpr VkFormat kAlbedoFormat = VK_FORMAT_R8G8B8A8_UNORM;
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
 constexpr VkFormat kColorFormat = VK_FORMAT_R8G8B8A8_UNORM;
 constexpr VkFormat kVisibilityFormat = VK_FORMAT_R32_SFLOAT;  // shaders/common/visibility.glsl
-
-struct LightData {  // matches shaders/common/light.glsl
-    glm::vec4 positionWorld;
-    glm::vec4 direction;
-    glm::vec4 radiance;
-};
 
 struct ShadingPush {
     glm::vec4 ambient;
@@ -62,8 +57,8 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
         throw Error(fmt::format("{} lights: expected 1 to {}", config.lights.size(), config::kMaxLights));
     }
     cameraViewProj_ = render::cameraViewProj(config.camera, float(width_) / float(height_));
-    ambient_ = {0.035f, 0.04f, 0.05f, 1.0f};
-    background_ = {0.55f, 0.65f, 0.8f, 1.0f};
+    ambient_ = kSkyAmbient;
+    background_ = kBackground;
 
     gpu::GraphicsPipelineDesc g;
     g.name = "gbuffer";
@@ -270,20 +265,12 @@ void FrameRenderer::update(const config::RenderConfig& config, const scene::Scen
 
 void FrameRenderer::updateLights(const config::RenderConfig& config, const scene::Aabb& sceneBounds)
 {
-    static_assert(int(scene::LightType::Directional) == 0 && int(scene::LightType::Spot) == 1 &&
-                      int(scene::LightType::Point) == 2 && int(scene::LightType::Rect) == 3 &&
-                      int(scene::LightType::Disk) == 4,
-                  "type codes in shaders/common/light.glsl");
-    auto* lights = static_cast<LightData*>(lightBuffer_.mapped());
     currentLights_.resize(config.lights.size());
     for (size_t i = 0; i < config.lights.size(); ++i) {
-        const scene::Light& l = config.lights[i].light;
-        currentLights_[i] = l;
-        lights[i].positionWorld = glm::vec4(l.position, float(int(l.type)));
-        lights[i].direction = glm::vec4(glm::normalize(l.direction), std::cos(glm::radians(l.outerConeDeg)));
-        lights[i].radiance = glm::vec4(l.color * l.intensity, std::cos(glm::radians(l.innerConeDeg)));
-        if (lights_[i].instance) lights_[i].instance->update(l, sceneBounds);
+        currentLights_[i] = config.lights[i].light;
+        if (lights_[i].instance) lights_[i].instance->update(currentLights_[i], sceneBounds);
     }
+    writeLightTable(currentLights_, static_cast<LightData*>(lightBuffer_.mapped()));
 }
 
 FrameTimings FrameRenderer::renderFrame()

@@ -153,6 +153,36 @@ Mesh makeCylinder(const std::string& name, uint32_t segments)
     return mesh;
 }
 
+// The unit cube [-0.5, 0.5]^3 with each face split into `divisions` x `divisions` quads
+// (flat normals, each face its own vertices): makeBox's cube for divisions = 1.
+Mesh makeDividedBox(const std::string& name, uint32_t divisions)
+{
+    Mesh mesh{name, {}, {}};
+    const glm::vec3 normals[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    const uint32_t side = divisions + 1;
+    for (const glm::vec3& n : normals) {
+        const glm::vec3 t = std::abs(n.y) > 0.5f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+        const glm::vec3 b = glm::cross(n, t);
+        const auto base = static_cast<uint32_t>(mesh.vertices.size());
+        for (uint32_t j = 0; j < side; ++j) {
+            for (uint32_t i = 0; i < side; ++i) {
+                const glm::vec2 uv{float(i) / float(divisions), float(j) / float(divisions)};
+                const glm::vec2 c = 2.0f * uv - 1.0f;
+                mesh.vertices.push_back({0.5f * (n + c.x * t + c.y * b), n, uv});
+            }
+        }
+        // t × b = n, so (i, j) -> (i + 1, j) -> (i + 1, j + 1) runs counter-clockwise
+        // seen from outside.
+        for (uint32_t j = 0; j < divisions; ++j) {
+            for (uint32_t i = 0; i < divisions; ++i) {
+                const uint32_t v00 = base + j * side + i, v10 = v00 + 1, v01 = v00 + side, v11 = v01 + 1;
+                mesh.indices.insert(mesh.indices.end(), {v00, v10, v11, v00, v11, v01});
+            }
+        }
+    }
+    return mesh;
+}
+
 // Assembles a generated scene under one root node: meshes (each with its own
 // material), nodes and instances.
 class SceneBuilder {
@@ -542,6 +572,18 @@ template <class Visit> void visitParams(HairParams& p, Visit&& visit)
     visit("seed", p.seed);
 }
 
+template <class Visit> void visitParams(BoxFieldParams& p, Visit&& visit)
+{
+    visit("boxes", p.boxes);
+    visit("box_size", p.boxSize);
+    visit("spacing", p.spacing);
+    visit("min_height", p.minHeight);
+    visit("max_height", p.maxHeight);
+    visit("face_divisions", p.faceDivisions);
+    visit("margin", p.margin);
+    visit("seed", p.seed);
+}
+
 template <class Visit> void visitParams(FenceParams& p, Visit&& visit)
 {
     visit("holes_x", p.holesX);
@@ -617,6 +659,7 @@ const std::vector<RegisteredGenerator>& registry()
         registerGenerator<CityParams>("city", generateCity),
         registerGenerator<HairParams>("hair", generateHair),
         registerGenerator<FenceParams>("fence", generateFence),
+        registerGenerator<BoxFieldParams>("box-field", generateBoxField),
     };
     return generators;
 }
@@ -777,6 +820,46 @@ Scene generateCity(const CityParams& p)
             }
             for (const auto& [start, along] : edges) addKerbside(b, p, meshes, rng, block, start, along);
         }
+    }
+    return b.finish();
+}
+
+// ---- box-field ------------------------------------------------------------------------------------
+
+Scene generateBoxField(const BoxFieldParams& p)
+{
+    const ParamCheck check("box-field");
+    check.count("boxes", p.boxes, 1, 1000000);
+    check.positive("box_size", p.boxSize);
+    check.positive("spacing", p.spacing);
+    if (!(p.spacing > p.boxSize)) {
+        check.fail("spacing", fmt::format("> box_size ({}) so that boxes never touch", p.boxSize), fmt::format("{}", p.spacing));
+    }
+    check.positive("min_height", p.minHeight);
+    check.atLeast("max_height", p.maxHeight, "min_height", p.minHeight);
+    check.count("face_divisions", p.faceDivisions, 1, 64);
+    check.range("margin", p.margin, 0.0f, kFloatMax);
+
+    Random rng(p.seed);
+    SceneBuilder b("box-field");
+    const auto perSide = static_cast<uint32_t>(std::ceil(std::sqrt(double(p.boxes))));
+    const float span = p.spacing * float(perSide);
+    addGround(b, span + 2.0f * p.margin);
+    // Each box keeps a clearance of (spacing - box_size) / 2 split between its jitter and
+    // its neighbour's: it moves at most a quarter of the gap either way.
+    const float jitter = 0.25f * (p.spacing - p.boxSize);
+    const Mesh box = makeDividedBox("box", p.faceDivisions);
+    for (uint32_t i = 0; i < p.boxes; ++i) {
+        const uint32_t row = i / perSide, col = i % perSide;
+        const float h = rng.uniform(p.minHeight, p.maxHeight);
+        const glm::vec3 centre{-0.5f * span + p.spacing * (float(col) + 0.5f) + rng.uniform(-jitter, jitter), 0.5f * h,
+                               -0.5f * span + p.spacing * (float(row) + 0.5f) + rng.uniform(-jitter, jitter)};
+        const float t = rng.uniform();
+        const std::string name = fmt::format("box_{}", i);
+        Mesh mesh = box;
+        mesh.name = name;
+        const Material material{name, {0.5f + 0.4f * t, 0.55f - 0.15f * t, 0.4f + 0.2f * (1.0f - t), 1.0f}};
+        b.place(b.addMesh(std::move(mesh), material), name, b.root(), translationScale(centre, {p.boxSize, h, p.boxSize}));
     }
     return b.finish();
 }

@@ -58,6 +58,7 @@ std::vector<std::pair<std::string, Scene>> everyGenerator()
     scenes.emplace_back("penumbra thickness 0", generateScene("penumbra", {{"occluder_thickness", "0"}}));
     scenes.emplace_back("fence tilt 0", generateScene("fence", {{"tilt_deg", "0"}, {"elevation", "0.5"}}));
     scenes.emplace_back("fence tilt 30", generateScene("fence", {{"tilt_deg", "30"}}));
+    scenes.emplace_back("box-field divided", generateScene("box-field", {{"boxes", "20"}, {"face_divisions", "3"}}));
     return scenes;
 }
 
@@ -75,7 +76,7 @@ const Material& materialOf(const Scene& s, const std::string& mesh) { return s.m
 
 TEST(Generators, ListedByName)
 {
-    EXPECT_EQ(generatorNames(), (std::vector<std::string>{"box-grid", "penumbra", "city", "hair", "fence"}));
+    EXPECT_EQ(generatorNames(), (std::vector<std::string>{"box-grid", "penumbra", "city", "hair", "fence", "box-field"}));
     EXPECT_TRUE(sameScene(generateScene("box-grid", {}), generateBoxGrid({})));
     EXPECT_TRUE(sameScene(generateScene("fence", {}), generateFence({})));
     CityParams city;
@@ -118,7 +119,7 @@ TEST(Generators, ConfigSchemaListsEveryParameterWithItsDefault)
 
 TEST(Generators, DeterministicBySeed)
 {
-    for (const char* name : {"box-grid", "city", "hair"}) {
+    for (const char* name : {"box-grid", "city", "hair", "box-field"}) {
         SCOPED_TRACE(name);
         const Scene a = generateScene(name, {{"seed", "7"}}), b = generateScene(name, {{"seed", "7"}});
         const Scene c = generateScene(name, {{"seed", "8"}});
@@ -166,7 +167,10 @@ TEST(Generators, BadParametersAreNamed)
         {"city", "min_height", "nan"},           {"hair", "strands", "0"},
         {"hair", "alpha", "1.5"},                {"hair", "strand_length", "inf"},
         {"fence", "bar_width", "0.2"},           {"fence", "elevation", "0.1"},
-        {"fence", "tilt_deg", "91"},
+        {"fence", "tilt_deg", "91"},            {"box-field", "boxes", "0"},
+        {"box-field", "spacing", "0.5"},         {"box-field", "max_height", "0.2"},
+        {"box-field", "face_divisions", "0"},    {"box-field", "margin", "-1"},
+        {"box-field", "box_size", "nan"},
     };
     for (const auto& [generator, key, value] : cases) {
         const std::string message = errorOf([&] { generateScene(generator, {{key, value}}); });
@@ -179,7 +183,7 @@ TEST(Generators, BadParametersAreNamed)
     EXPECT_NE(unparsable.find("city: blocks must be a whole number"), std::string::npos) << unparsable;
     EXPECT_NE(unparsable.find("'4x'"), std::string::npos) << unparsable;
     const std::string generator = errorOf([] { generateScene("castle", {}); });
-    EXPECT_NE(generator.find("unknown generator 'castle'; known: box-grid, penumbra, city, hair, fence"), std::string::npos)
+    EXPECT_NE(generator.find("unknown generator 'castle'; known: box-grid, penumbra, city, hair, fence, box-field"), std::string::npos)
         << generator;
 }
 
@@ -327,6 +331,62 @@ double visibility(const PenumbraParams& p, const RectAreaLight& light, double x,
 }
 
 } // namespace
+
+// The osgShadow benchmark's scene: 1,000 boxes in 1,001 meshes, 12k triangles; face
+// divisions take the same field to the 972k-triangle variant.
+TEST(BoxField, TheBenchmarkSceneAndItsMillionTriangleVariant)
+{
+    const Scene field = generateScene("box-field", {});
+    EXPECT_EQ(field.meshes.size(), 1001u);
+    EXPECT_EQ(field.instances.size(), 1001u);
+    EXPECT_EQ(field.triangleCount(), 12002u);
+    const Scene dense = generateScene("box-field", {{"face_divisions", "9"}});
+    EXPECT_EQ(dense.meshes.size(), 1001u);
+    EXPECT_EQ(dense.triangleCount(), 972002u);
+    // Same seed, same boxes: only the tessellation differs.
+    ASSERT_EQ(dense.instances.size(), field.instances.size());
+    for (size_t i = 0; i < field.instances.size(); ++i) {
+        const Aabb &a = field.instances[i].worldBounds, &b = dense.instances[i].worldBounds;
+        EXPECT_LT(glm::length(a.min - b.min) + glm::length(a.max - b.max), 1e-4f) << i;
+    }
+}
+
+TEST(BoxField, BoxesStandOnTheGroundInsideItApartAndInTheirHeightRange)
+{
+    BoxFieldParams p;
+    p.boxes = 50;  // not a square: the last row is partly filled
+    p.minHeight = 1.0f;
+    p.maxHeight = 3.0f;
+    const Scene field = generateBoxField(p);
+    ASSERT_EQ(field.instances.size(), 51u);
+    const Aabb& ground = field.instances[0].worldBounds;
+    // 8 cells per side of 2.5, plus the margin both ways.
+    EXPECT_NEAR(ground.max.x - ground.min.x, 8 * p.spacing + 2 * p.margin, 1e-4f);
+    std::vector<Aabb> boxes;
+    float lowest = 1e9f, highest = 0.0f;
+    for (size_t i = 1; i < field.instances.size(); ++i) {
+        const Aabb& box = field.instances[i].worldBounds;
+        EXPECT_NEAR(box.min.y, 0.0f, 1e-5f) << i;
+        EXPECT_NEAR(box.max.x - box.min.x, p.boxSize, 1e-5f) << i;
+        EXPECT_NEAR(box.max.z - box.min.z, p.boxSize, 1e-5f) << i;
+        lowest = std::min(lowest, box.max.y);
+        highest = std::max(highest, box.max.y);
+        EXPECT_GE(box.max.y, p.minHeight - 1e-5f) << i;
+        EXPECT_LE(box.max.y, p.maxHeight + 1e-5f) << i;
+        // Inside the ground, at least the margin from its edge.
+        EXPECT_GE(box.min.x, ground.min.x + p.margin - 1e-4f) << i;
+        EXPECT_LE(box.max.z, ground.max.z - p.margin + 1e-4f) << i;
+        for (const Aabb& other : boxes) {
+            const bool apart = box.min.x >= other.max.x || other.min.x >= box.max.x || box.min.z >= other.max.z ||
+                               other.min.z >= box.max.z;
+            EXPECT_TRUE(apart) << i;
+        }
+        boxes.push_back(box);
+    }
+    // Random heights spread over the range.
+    EXPECT_LT(lowest, 1.5f);
+    EXPECT_GT(highest, 2.5f);
+}
 
 TEST(PenumbraVisibility, FullyLitFarAway)
 {

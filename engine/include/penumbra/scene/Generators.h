@@ -1,6 +1,7 @@
 #pragma once
 // Procedural scenes, deterministic for a seed: the box grid (the default scene), an
-// analytic penumbra set-up, a city, hair and a lattice fence; scaleScene() puts any of
+// analytic penumbra set-up, a city, hair, a lattice fence and the box field of the
+// classic shadow benchmark; scaleScene() puts any of
 // them at another scale, and generateScene() builds one by name for the command line.
 //
 // Conventions: y is up and the ground is the plane y = 0; lengths are in world units
@@ -145,6 +146,27 @@ struct FenceParams {
 
 Scene generateFence(const FenceParams& params);
 
+// ---- box-field: the classic shadow benchmark ---------------------------------------
+// `boxes` boxes of random height on a ground plane, as in the osgShadow benchmark scene
+// (1,000 boxes: 12,002 triangles in 1,001 meshes): the boxes stand on a square grid of
+// ceil(sqrt(boxes)) cells per side, `spacing` apart, each jittered inside its cell, with a
+// random height; each box is its own mesh (and material), as a scene graph without
+// instancing holds them. `face_divisions` splits each box face into d x d quads, so the
+// same field reaches a million triangles (d = 9: 972,002) without changing its shape. The
+// ground reaches `margin` beyond the outermost boxes on every side.
+struct BoxFieldParams {
+    uint32_t boxes = 1000;
+    float boxSize = 1.0f;        // footprint edge (world units)
+    float spacing = 2.5f;        // cell pitch; > box_size so that boxes never touch
+    float minHeight = 0.5f;
+    float maxHeight = 4.0f;
+    uint32_t faceDivisions = 1;  // quads per box face side: 12 d^2 triangles per box
+    float margin = 10.0f;        // ground beyond the field on each side
+    uint32_t seed = 1;
+};
+
+Scene generateBoxField(const BoxFieldParams& params);
+
 // ---- any scene at any scale ----------------------------------------------------------
 // Scales every root node's transform by `factor` about the origin, hence every world
 // position and instance bound (meshes stay shared and untouched), and returns `scene`.
@@ -157,7 +179,7 @@ struct GeneratorParameter {
     std::string defaultValue;  // as text, e.g. "60"
 };
 
-// "box-grid", "penumbra", "city", "hair", "fence".
+// "box-grid", "penumbra", "city", "hair", "fence", "box-field".
 std::vector<std::string> generatorNames();
 
 // The parameters of `generator` in declaration order. Throws Error for an unknown name.
