@@ -51,38 +51,7 @@ struct CulledQueryPush {  // culling_mask.frag / occlusion_box.vert Push
     float biasClamp;
 };
 
-bool outside(const scene::Frustum& f, const scene::Aabb& box)
-{
-    for (uint32_t i = 0; i < f.planeCount; ++i) {
-        const glm::vec4& p = f.planes[i];
-        const glm::vec3 far(p.x >= 0 ? box.max.x : box.min.x, p.y >= 0 ? box.max.y : box.min.y,
-                            p.z >= 0 ? box.max.z : box.min.z);
-        if (glm::dot(glm::vec3(p), far) + p.w < 0.0f) return true;
-    }
-    return false;
-}
 
-// The view texels a box's projection can cover (with a texel of margin for the proxy's
-// inflation and rounding), or nothing when any part of the box lies in front of the
-// near plane (or behind the eye): its proxy would be clipped there, and a query could
-// miss geometry inside it that the view does see, so such a node is treated as visible
-// without a query.
-std::optional<TexelRect> projectedRect(const glm::mat4& viewProj, const scene::Aabb& box, uint32_t width,
-                                       uint32_t height)
-{
-    glm::vec2 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
-    for (int c = 0; c < 8; ++c) {
-        const glm::vec4 clip = viewProj * glm::vec4(box.corner(c), 1.0f);
-        if (!(clip.w > 0.0f) || clip.z > clip.w) return std::nullopt;
-        const glm::vec2 p = (glm::vec2(clip) / clip.w * 0.5f + 0.5f) * glm::vec2(float(width), float(height));
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
-    }
-    // Clamped to the view: only covered texels cost, and a box larger than the view
-    // still covers it whole.
-    const glm::vec2 size{float(width), float(height)};
-    return TexelRect{glm::clamp(lo - 1.0f, glm::vec2(-1.0f), size), glm::clamp(hi + 1.0f, glm::vec2(-1.0f), size)};
-}
 
 // A box a little larger than `box`, so that no rasterization tie rule lets geometry on
 // its faces produce a sample that the box does not.
@@ -101,6 +70,37 @@ float distanceSq(const glm::vec3& p, const scene::Aabb& box)
 }
 
 } // namespace
+
+bool outside(const scene::Frustum& f, const scene::Aabb& box)
+{
+    for (uint32_t i = 0; i < f.planeCount; ++i) {
+        const glm::vec4& p = f.planes[i];
+        const glm::vec3 far(p.x >= 0 ? box.max.x : box.min.x, p.y >= 0 ? box.max.y : box.min.y,
+                            p.z >= 0 ? box.max.z : box.min.z);
+        if (glm::dot(glm::vec3(p), far) + p.w < 0.0f) return true;
+    }
+    return false;
+}
+
+std::optional<ProjectedBox> projectBox(const glm::mat4& viewProj, const scene::Aabb& box, uint32_t width,
+                                       uint32_t height)
+{
+    glm::vec2 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+    float nearest = -std::numeric_limits<float>::max();
+    for (int c = 0; c < 8; ++c) {
+        const glm::vec4 clip = viewProj * glm::vec4(box.corner(c), 1.0f);
+        if (!(clip.w > 0.0f) || clip.z > clip.w) return std::nullopt;
+        const glm::vec2 p = (glm::vec2(clip) / clip.w * 0.5f + 0.5f) * glm::vec2(float(width), float(height));
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+        nearest = std::max(nearest, clip.z / clip.w);
+    }
+    // Clamped to the view: only covered texels cost, and a box larger than the view
+    // still covers it whole.
+    const glm::vec2 size{float(width), float(height)};
+    return ProjectedBox{
+        {glm::clamp(lo - 1.0f, glm::vec2(-1.0f), size), glm::clamp(hi + 1.0f, glm::vec2(-1.0f), size)}, nearest};
+}
 
 glm::vec3 viewOrigin(const glm::mat4& viewProj, float sceneRadius)
 {
@@ -468,7 +468,8 @@ void OcclusionTraversal::walkFrontToBack(Traversal& t, RoundRecorder& round)
         ++t.stats.nodesVisited;
         const scene::Aabb& box = bvh_.nodeBounds(e.node);
         if (outside(t.frustum, box)) continue;
-        const std::optional<TexelRect> rect = projectedRect(t.view.viewProj, box, width, height);
+        const std::optional<ProjectedBox> projected = projectBox(t.view.viewProj, box, width, height);
+        const std::optional<TexelRect> rect = projected ? std::optional(projected->rect) : std::nullopt;
         if (t.view.mask && rect && t.view.mask->rejects(*rect)) {
             ++t.stats.maskRejected;
             continue;

@@ -19,10 +19,12 @@
 #include "penumbra/scene/Bvh.h"
 #include "penumbra/scene/Scene.h"
 #include "penumbra/visibility/CullingStats.h"
+#include "visibility/ReceiverMask.h"
 
 #include <glm/glm.hpp>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -32,8 +34,6 @@ class ShaderCompiler;
 } // namespace penumbra::gpu
 
 namespace penumbra::visibility {
-
-struct ReceiverMask;
 
 // Per BVH node, what the last frames' traversals of one view found.
 struct NodeHistory {
@@ -67,6 +67,24 @@ struct TraversalView {
     // texel are culled without a query.
     const ReceiverMask* mask = nullptr;
 };
+
+// Whether `box` lies wholly outside a plane of `frustum`.
+bool outside(const scene::Frustum& frustum, const scene::Aabb& box);
+
+// A box's projection into a view: the texels it can cover (with a texel of margin for the
+// proxy's inflation and rounding) and its nearest depth (reversed-Z: the largest; at a
+// corner, since depth is monotonic along the view for both projections).
+struct ProjectedBox {
+    TexelRect rect;
+    float nearestDepth;
+};
+
+// A box's projection into a `width` x `height` view, or nothing when any part of the box
+// lies in front of the near plane (or behind the eye): its proxy would be clipped there,
+// and a query could miss geometry inside it that the view does see, so such a node is
+// treated as visible without a query.
+std::optional<ProjectedBox> projectBox(const glm::mat4& viewProj, const scene::Aabb& box, uint32_t width,
+                                       uint32_t height);
 
 // Where a front-to-back traversal of a view starts: the eye of a perspective view; for an
 // orthographic one a point far behind the near plane's centre, so that distance from it
