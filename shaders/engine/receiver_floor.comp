@@ -9,7 +9,7 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 0, r8) uniform readonly image2D mask;             // dilated, mask texels
-layout(binding = 1, r32ui) uniform readonly uimage2D receiverDepth;  // view texels
+layout(std430, binding = 1) readonly buffer ReceiverDepth { uint receiverDepth[]; };  // view texels, row by row
 layout(binding = 2, r32ui) uniform writeonly uimage2D receiverFloor;  // mask texels
 
 layout(push_constant) uniform Push {
@@ -29,7 +29,7 @@ void main()
         ivec2 lo = cell * pc.maskBlock;
         ivec2 hi = min(lo + pc.maskBlock, ivec2(pc.resolution));
         for (int y = lo.y; y < hi.y; ++y)
-            for (int x = lo.x; x < hi.x; ++x) floorBits = min(floorBits, imageLoad(receiverDepth, ivec2(x, y)).r);
+            for (int x = lo.x; x < hi.x; ++x) floorBits = min(floorBits, receiverDepth[y * pc.resolution + x]);
     }
     imageStore(receiverFloor, cell, uvec4(floorBits));
 }

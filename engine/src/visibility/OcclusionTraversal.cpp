@@ -46,9 +46,6 @@ struct GpuBox {
 struct CulledQueryPush {  // culling_mask.frag / occlusion_box.vert Push
     glm::mat4 viewProj;
     int32_t maskBlock;
-    int32_t ownDepth;
-    float biasSlope;
-    float biasClamp;
 };
 
 
@@ -233,16 +230,12 @@ private:
         if (bound_ == &p) return;
         p.bind(cmd_);
         const ReceiverMask* mask = t_.view.mask;
-        const bool ownDepth = mask && mask->hasReceiverDepth;
         gpu::DescriptorPush push;
         if (boxPipeline)
             push.storageBuffer("Boxes", owner_.boxes_);
         else
             push.storageBuffer("Instances", owner_.sceneGpu_.instanceBuffer());
-        if (mask) {
-            push.sampledImage("receiverMask", mask->dilated, owner_.nearest_, VK_IMAGE_LAYOUT_GENERAL)
-                .storageImage("receiverDepth", ownDepth ? mask->receiverDepth : owner_.noReceiverDepth_);
-        }
+        if (mask) push.sampledImage("receiverMask", mask->dilated, owner_.nearest_, VK_IMAGE_LAYOUT_GENERAL);
         push.push(owner_.context_, cmd_, p);
         // Leaf draws take the technique's bias in a light view, so that what they draw and
         // what their queries count is the technique's own map (reversed-Z: negated, as in
@@ -251,8 +244,7 @@ private:
         const render::ShadowDepthBias bias =
             t_.view.lightView && !boxPipeline ? t_.view.bias : render::ShadowDepthBias{};
         vkCmdSetDepthBias(cmd_, -bias.constant, -bias.clamp, -bias.slope);
-        const CulledQueryPush constants{t_.view.viewProj, int32_t(mask ? mask->block : 1), ownDepth ? 1 : 0,
-                                        bias.slope, bias.clamp};
+        const CulledQueryPush constants{t_.view.viewProj, int32_t(mask ? mask->block : 1)};
         p.pushConstants(cmd_, &constants, mask ? sizeof(constants) : sizeof(glm::mat4));
         bound_ = &p;
     }
@@ -354,21 +346,13 @@ OcclusionTraversal::OcclusionTraversal(gpu::Context& context, const gpu::ShaderC
     box_ = gpu::Pipeline(context_, shaders, boxDesc);
     if (withMask) {
         d.fragmentShader = "engine/culling_mask.frag";
-        d.defines = {{"CULLING_WORLD", "1"}};
         d.pushConstantBytes = sizeof(CulledQueryPush);
         maskLeafDepth_ = make("mask_leaf", true);
         maskLeafCount_ = make("mask_leaf_count", false);
         boxDesc.fragmentShader = d.fragmentShader;
-        boxDesc.defines = d.defines;
         boxDesc.pushConstantBytes = d.pushConstantBytes;
         boxDesc.name = "visibility.mask_box";
         maskBox_ = gpu::Pipeline(context_, shaders, boxDesc);
-        noReceiverDepth_ = gpu::Image(context_, {1, 1, kReceiverDepthFormat, VK_IMAGE_USAGE_STORAGE_BIT,
-                                                 "visibility.no_receiver_depth"});
-        context_.submitAndWait([&](VkCommandBuffer cmd) {
-            gpu::transition(cmd, noReceiverDepth_, gpu::access::kUndefined,
-                            {VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0});
-        });
         nearest_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
     }
 

@@ -62,9 +62,9 @@ struct TraversalView {
     // kept only when its draw finds samples. The camera keeps every leaf it draws.
     bool lightView = false;
     render::ShadowDepthBias bias;
-    // Receiver-mask mode: queries count only samples on the mask (and in front of its
-    // receiver depths, when it has them), and nodes whose projection meets no marked
-    // texel are culled without a query.
+    // Receiver-mask mode (views without receiver depths): queries count only samples on
+    // the mask, and nodes whose projection meets no marked texel are culled without a
+    // query.
     const ReceiverMask* mask = nullptr;
 };
 
@@ -123,11 +123,9 @@ private:
     const scene::InstanceBvh& bvh_;
 
     // Pipelines: depth-only leaf draws (writing depth, or only counting samples for
-    // alpha-masked instances), box queries; the same behind the receiver mask (or the
-    // receiver depths).
+    // alpha-masked instances), box queries; the same behind the receiver mask.
     gpu::Pipeline leafDepth_, leafCount_, box_;
     gpu::Pipeline maskLeafDepth_, maskLeafCount_, maskBox_;
-    gpu::Image noReceiverDepth_;  // bound in place of a mask's receiver depths when it has none
     gpu::Sampler nearest_;
     gpu::Buffer boxes_;
     VkQueryPool queries_ = VK_NULL_HANDLE;

@@ -167,36 +167,24 @@ ReceiverMask& ReceiverMaskBuilder::maskFor(uint32_t resolution)
 
 void ReceiverMaskBuilder::makeReceiverDepth(ReceiverMask& mask, bool withPrefix)
 {
-    const VkImageUsageFlags usage = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
     const std::string name = fmt::format("visibility.light{}", mask.resolution);
-    const uint32_t r = mask.resolution;
-    std::vector<gpu::Image*> made;
-    if (!mask.receiverDepth.handle()) {
-        mask.receiverDepth = gpu::Image(context_, {r, r, kReceiverDepthFormat, usage | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                                                   name + ".receiver_depth"});
-        made.push_back(&mask.receiverDepth);
-    }
-    if (!mask.receiverFloor.handle()) {
-        const uint32_t m = mask.size;
-        mask.receiverFloor = gpu::Image(context_, {m, m, kReceiverDepthFormat, usage | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                                                   name + ".receiver_floor"});
-        mask.floorReadback = gpu::Buffer(context_, VkDeviceSize(m) * m * sizeof(uint32_t),
-                                         VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, name + ".receiver_floor_readback");
-        made.push_back(&mask.receiverFloor);
-        mask.receiverDepthReadback = gpu::Buffer(context_, VkDeviceSize(r) * r * sizeof(uint32_t),
-                                                 VK_BUFFER_USAGE_TRANSFER_DST_BIT, true,
-                                                 name + ".receiver_depth_readback");
-    }
-    if (withPrefix && !mask.receiverDepthPrefix.handle()) {
-        mask.receiverDepthPrefix =
-            gpu::Image(context_, {r, r, kReceiverDepthFormat, usage, name + ".receiver_depth_prefix"});
-        made.push_back(&mask.receiverDepthPrefix);
-    }
-    if (made.empty()) return;
+    const VkDeviceSize depthBytes = VkDeviceSize(mask.resolution) * mask.resolution * sizeof(uint32_t);
+    const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+    // Host-visible: the CPU culling reads the receiver depths where they are written.
+    if (!mask.receiverDepth.handle())
+        mask.receiverDepth = gpu::Buffer(context_, depthBytes, storage, true, name + ".receiver_depth");
+    if (withPrefix && !mask.receiverDepthPrefix.handle())
+        mask.receiverDepthPrefix = gpu::Buffer(context_, depthBytes, storage, false, name + ".receiver_depth_prefix");
+    if (mask.receiverFloor.handle()) return;
+    const uint32_t m = mask.size;
+    mask.receiverFloor =
+        gpu::Image(context_, {m, m, kReceiverDepthFormat,
+                              VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, name + ".receiver_floor"});
+    mask.floorReadback = gpu::Buffer(context_, VkDeviceSize(m) * m * sizeof(uint32_t), VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                     true, name + ".receiver_floor_readback");
     context_.submitAndWait([&](VkCommandBuffer cmd) {
-        for (gpu::Image* image : made)
-            gpu::transition(cmd, *image, gpu::access::kUndefined,
-                            {VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0});
+        gpu::transition(cmd, mask.receiverFloor, gpu::access::kUndefined,
+                        {VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0});
     });
 }
 
@@ -230,8 +218,7 @@ void ReceiverMaskBuilder::recordMask(VkCommandBuffer cmd, const render::CasterVi
     const VkImageSubresourceRange colorRange{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
     vkCmdClearColorImage(cmd, mask.marked.handle(), VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &colorRange);
     if (ownDepth) {
-        const VkClearColorValue none{.uint32 = {~0u, 0u, 0u, 0u}};
-        vkCmdClearColorImage(cmd, mask.receiverDepth.handle(), VK_IMAGE_LAYOUT_GENERAL, &none, 1, &colorRange);
+        vkCmdFillBuffer(cmd, mask.receiverDepth.handle(), 0, VK_WHOLE_SIZE, ~0u);  // no receiver
     }
     gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT},
                        {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT});
@@ -242,7 +229,7 @@ void ReceiverMaskBuilder::recordMask(VkCommandBuffer cmd, const render::CasterVi
     scatterBindings.sampledImage("cameraDepth", *cameraDepth_, nearest_, VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL)
         .storageImage("receiverMask", mask.marked)
         .storageBuffer("camera", cameraData_);
-    if (ownDepth) scatterBindings.storageImage("receiverDepth", mask.receiverDepth);
+    if (ownDepth) scatterBindings.storageBuffer("ReceiverDepth", mask.receiverDepth);
     scatterBindings.push(context_, cmd, scatter);
     const ScatterPush scatterPush{view.viewProj, int32_t(mask.block), int32_t(size)};
     scatter.pushConstants(cmd, &scatterPush, sizeof(scatterPush));
@@ -258,8 +245,8 @@ void ReceiverMaskBuilder::recordMask(VkCommandBuffer cmd, const render::CasterVi
         // Each receiver's depth over the texels its taps read (receiver_depth_min.comp).
         depthMin_.bind(cmd);
         gpu::DescriptorPush()
-            .storageImage("depth", mask.receiverDepth)
-            .storageImage("prefix", mask.receiverDepthPrefix)
+            .storageBuffer("Depth", mask.receiverDepth)
+            .storageBuffer("Prefix", mask.receiverDepthPrefix)
             .push(context_, cmd, depthMin_);
         for (int32_t vertical = 0; vertical < 2; ++vertical) {
             const int32_t push[3] = {int32_t(size), tapRadius, vertical};
@@ -286,7 +273,7 @@ void ReceiverMaskBuilder::recordMask(VkCommandBuffer cmd, const render::CasterVi
         floor_.bind(cmd);
         gpu::DescriptorPush()
             .storageImage("mask", mask.dilated)
-            .storageImage("receiverDepth", mask.receiverDepth)
+            .storageBuffer("ReceiverDepth", mask.receiverDepth)
             .storageImage("receiverFloor", mask.receiverFloor)
             .push(context_, cmd, floor_);
         const int32_t push[3] = {int32_t(mask.size), int32_t(mask.block), int32_t(size)};
@@ -311,9 +298,10 @@ void ReceiverMaskBuilder::recordMask(VkCommandBuffer cmd, const render::CasterVi
              {VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT});
     if (ownDepth) {
         readBack(mask.receiverFloor, mask.floorReadback, general);
-        readBack(mask.receiverDepth, mask.receiverDepthReadback, general);
     }
-    gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT},
+    gpu::memoryBarrier(cmd,
+                       {VK_PIPELINE_STAGE_2_COPY_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                        VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT},
                        {VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT});
 }
 

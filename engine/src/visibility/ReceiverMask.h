@@ -36,8 +36,8 @@ class ShaderCompiler;
 
 namespace penumbra::visibility {
 
-// Receiver depths (engine/receiver_scatter.comp RECEIVER_DEPTH): the bits of a
-// non-negative float, all ones where no receiver reads the texel.
+// Receiver depths (engine/receiver_scatter.comp RECEIVER_DEPTH) and the receiver floor: the
+// bits of a non-negative float, all ones where no receiver reads the texel.
 inline constexpr VkFormat kReceiverDepthFormat = VK_FORMAT_R32_UINT;
 
 // The view texels a box's projection can cover (OcclusionTraversal.cpp projectedRect).
@@ -57,14 +57,14 @@ struct ReceiverMask {
     // Views whose technique compares with the receivers' own depth: the farthest receiver
     // depth per view texel, and the scratch of its spreading over the taps; made on
     // first use.
-    gpu::Image receiverDepth, receiverDepthPrefix;
+    // Row by row, host-visible (the CPU culling reads it).
+    gpu::Buffer receiverDepth, receiverDepthPrefix;
     bool hasReceiverDepth = false;  // this view's receiver depths are in receiverDepth
     // With receiver depths: per mask texel the least receiver depth of its block (the bits
     // of a non-negative float, all ones for none), read back; floorLevels[0] holds it as
-    // floats (+infinity for none) and each next level the least of 2 x 2 of the last. The
-    // receiver depths themselves are read back too, for tests texel by texel.
+    // floats (+infinity for none) and each next level the least of 2 x 2 of the last.
     gpu::Image receiverFloor;
-    gpu::Buffer floorReadback, receiverDepthReadback;
+    gpu::Buffer floorReadback;
     std::vector<std::vector<float>> floorLevels;
     // The view texels that the marked mask texels cover: the queries render only there.
     VkRect2D bounds{};
@@ -83,7 +83,7 @@ struct ReceiverMask {
     // (x, y), all ones for none.
     uint32_t receiverDepthBits(uint32_t x, uint32_t y) const
     {
-        return static_cast<const uint32_t*>(receiverDepthReadback.mapped())[size_t(y) * resolution + x];
+        return static_cast<const uint32_t*>(receiverDepth.mapped())[size_t(y) * resolution + x];
     }
 };
 
