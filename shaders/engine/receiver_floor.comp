@@ -2,10 +2,10 @@
 // visibility::ReceiverMaskBuilder, step 2, for views with receiver depths: the receiver
 // floor, per mask texel the least (farthest from the light) receiver depth over the block
 // of view texels it stands for, after the spreading over the technique's taps
-// (engine/receiver_depth_min.comp). Read back with the mask, it lets the traversal cull
-// on the CPU, without a query, every node whose box lies behind that depth at every mask
-// texel it covers: no sample of it could pass engine/culling_mask.frag's receiver-depth
-// test there. Only texels of the dilated mask are read; elsewhere the floor is none.
+// (engine/receiver_depth_min.comp). Read back with the mask, it lets the CPU cull, without
+// a query (visibility/ReceiverFloorCulling.h), every node whose box lies behind that depth
+// at every mask texel it covers: it can shadow no receiver there. Only texels of the
+// dilated mask are read; elsewhere the floor is none.
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 0, r8) uniform readonly image2D mask;             // dilated, mask texels

@@ -17,8 +17,8 @@ namespace {
 // reaches towards the light far from where its surface lies, and is kept by the box test
 // though its surface is behind every receiver depth it meets.
 constexpr size_t kTriangleTestMaxTriangles = 256;
-// Depth rounding between this plane fit (in double) and the rasterizer's interpolation,
-// as in ReceiverMask.cpp's kFloorMargin (four times culling_mask.frag's 4 ulps of 1).
+// Depth rounding between this plane fit (in double) and the rasterizer's interpolation
+// (a few fp32 ulps of depths <= 1), as ReceiverMask.cpp's kFloorMargin: 16 ulps of 1.
 constexpr double kPlaneMargin = 16.0 / 16777216.0;
 
 // Whether a triangle with depth plane(x, y) (texel units), at most `nearest`, after its
@@ -35,7 +35,8 @@ bool texelsBehindReceivers(const ReceiverMask& mask, uint32_t mx, uint32_t my, c
         for (uint32_t x = x0; x < x1; ++x) {
             const double depth =
                 std::min(plane.x * (double(x) + 0.5) + plane.y * (double(y) + 0.5) + plane.z, nearest) + kPlaneMargin;
-            // Non-negative floats order as their bits (culling_mask.frag).
+            // Non-negative floats order as their bits (receiver depths are stored clamped to
+            // 0; below 0 lies beyond the far plane). Equal is kept.
             if (std::bit_cast<uint32_t>(float(std::max(depth, 0.0))) >= mask.receiverDepthBits(x, y)) return false;
         }
     }
@@ -43,14 +44,15 @@ bool texelsBehindReceivers(const ReceiverMask& mask, uint32_t mx, uint32_t my, c
 }
 
 // Whether one triangle (clip-space corners) lies behind the receivers at every view texel
-// it can cover, once the technique's bias has moved it away from the light: the test of
-// culling_mask.frag, done on the CPU. Depth is an affine function of the texel position for
-// perspective and orthographic views alike (z / w interpolates linearly on screen). Over a
-// mask texel it is at most its largest value at the texel's four corners (and never more
-// than the triangle's nearest corner): where that lies behind the floor, the whole block
-// is; elsewhere each texel centre's depth is compared with that texel's receiver depth.
-// The bias is taken at its least, as culling_mask.frag takes it: the slope term alone
-// (Vulkan's slope is at least the larger texel derivative), at most the clamp.
+// it can cover, once the technique's bias has moved it away from the light, so that it
+// can shadow no receiver there whatever else is drawn. Depth is an affine function of the
+// texel position for perspective and orthographic views alike (z / w interpolates
+// linearly on screen). Over a mask texel it is at most its largest value at the texel's
+// four corners (and never more than the triangle's nearest corner): where that lies
+// behind the floor, the whole block is; elsewhere each texel centre's depth is compared
+// with that texel's receiver depth.
+// The bias is taken at its least: the slope term alone, 0.99 of it (Vulkan's slope m is at
+// least the larger texel derivative; the constant term only keeps more), at most the clamp.
 bool triangleBehindFloor(const std::array<glm::dvec4, 3>& clip, const ReceiverMask& mask,
                          const render::ShadowDepthBias& bias)
 {

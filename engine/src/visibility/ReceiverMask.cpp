@@ -47,8 +47,8 @@ struct CameraData {  // receiver_scatter.comp Camera
 
 // The receiver floor's pyramid: a test reads at most this many cells per side.
 constexpr uint32_t kFloorCellsPerSide = 8;
-// Depth rounding between the CPU's box corners and the GPU's interpolated proxy
-// (culling_mask.frag kDepthRounding is 4 ulps of 1; four times that).
+// Depth rounding between the CPU's box corners and the rasterizer's interpolated depth of
+// the geometry inside (a few fp32 ulps of depths <= 1): 16 ulps of 1.
 constexpr float kFloorMargin = 16.0f / 16777216.0f;
 
 struct MaskTexelRange {
@@ -94,8 +94,8 @@ bool ReceiverMask::behindReceivers(const TexelRect& rect, float nearestDepth) co
     }
     const uint32_t side = std::max((size + (1u << level) - 1) >> level, 1u);
     const std::vector<float>& cells = floorLevels[level];
-    // The GPU test keeps a sample whose depth, plus a few ulps of rounding, reaches the
-    // floor (culling_mask.frag kDepthRounding); this keeps a margin of four times that.
+    // Geometry inside the box lies at most at its nearest corner's depth (less its bias),
+    // up to rounding: kFloorMargin.
     const float reach = nearestDepth + kFloorMargin;
     for (uint32_t y = y0; y <= y1; ++y)
         for (uint32_t x = x0; x <= x1; ++x)
