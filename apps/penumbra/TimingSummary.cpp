@@ -99,6 +99,7 @@ std::span<const CullingFigure> cullingFigures()
         {"queries", "occlusion queries issued", &S::queriesIssued},
         {"query_rounds", "query rounds (submissions waited for)", &S::queryRounds},
         {"mask_rejected", "nodes culled by the mask, no query", &S::maskRejected},
+        {"floor_rejected", "nodes behind the receivers, no query", &S::floorRejected},
         {"camera_ms", "camera culling ms", nullptr, &S::cameraMs},
         {"mask_ms", "receiver masks ms", nullptr, &S::maskMs},
         {"caster_cull_ms", "caster culling ms", nullptr, &S::casterCullMs},

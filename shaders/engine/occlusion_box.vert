@@ -10,10 +10,6 @@ struct Box {
 };
 layout(std430, binding = 0) readonly buffer Boxes { Box boxes[]; };
 
-#ifdef CULLING_WORLD
-layout(location = 0) out vec3 outWorld;  // for engine/culling_mask.frag
-#endif
-
 layout(push_constant) uniform Push {
     mat4 viewProj;
 } pc;
@@ -32,8 +28,5 @@ void main()
     uint c = kCorners[gl_VertexIndex % 36];
     vec3 p = vec3((c & 1u) != 0u ? box.hi.x : box.lo.x, (c & 2u) != 0u ? box.hi.y : box.lo.y,
                   (c & 4u) != 0u ? box.hi.z : box.lo.z);
-#ifdef CULLING_WORLD
-    outWorld = p;
-#endif
     gl_Position = pc.viewProj * vec4(p, 1.0);
 }

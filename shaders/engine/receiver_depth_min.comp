@@ -14,8 +14,8 @@
 // k + radius, which the backward sweep has already read.
 layout(local_size_x = 64) in;
 
-layout(binding = 0, r32ui) uniform uimage2D depth;   // in and out
-layout(binding = 1, r32ui) uniform uimage2D prefix;  // scratch, the same size
+layout(std430, binding = 0) buffer Depth { uint depth[]; };    // in and out, row by row
+layout(std430, binding = 1) buffer Prefix { uint prefix[]; };  // scratch, the same size
 
 layout(push_constant) uniform Push {
     int size;      // texels per side
@@ -25,7 +25,7 @@ layout(push_constant) uniform Push {
 
 const uint kNone = 0xffffffffu;  // no receiver
 
-ivec2 texel(int line, int i) { return pc.vertical != 0 ? ivec2(line, i) : ivec2(i, line); }
+int texel(int line, int i) { return pc.vertical != 0 ? i * pc.size + line : line * pc.size + i; }
 
 void main()
 {
@@ -35,24 +35,24 @@ void main()
     uint run = kNone;
     for (int i = 0; i < pc.size; ++i) {
         if (i % width == 0) run = kNone;
-        run = min(run, imageLoad(depth, texel(line, i)).r);
-        imageStore(prefix, texel(line, i), uvec4(run));
+        run = min(run, depth[texel(line, i)]);
+        prefix[texel(line, i)] = run;
     }
     // The prefix of the last block, for windows that end past the line.
     int lastBlock = (pc.size - 1) / width;
-    uint lastPrefix = imageLoad(prefix, texel(line, pc.size - 1)).r;
+    uint lastPrefix = prefix[texel(line, pc.size - 1)];
     uint suffix = kNone;
     for (int k = pc.size - 1; k >= -pc.radius; --k) {
         if (k >= 0) {
             if (k % width == width - 1 || k == pc.size - 1) suffix = kNone;
-            suffix = min(suffix, imageLoad(depth, texel(line, k)).r);
+            suffix = min(suffix, depth[texel(line, k)]);
         } else {
             suffix = kNone;  // before the line: the block holds no texel
         }
         int i = k + pc.radius;
         if (i >= pc.size) continue;
         int end = k + 2 * pc.radius;
-        uint tail = end < pc.size ? imageLoad(prefix, texel(line, end)).r : (end / width == lastBlock ? lastPrefix : kNone);
-        imageStore(depth, texel(line, i), uvec4(min(suffix, tail)));
+        uint tail = end < pc.size ? prefix[texel(line, end)] : (end / width == lastBlock ? lastPrefix : kNone);
+        depth[texel(line, i)] = min(suffix, tail);
     }
 }

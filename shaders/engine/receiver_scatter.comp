@@ -23,7 +23,7 @@ layout(std430, binding = 2) readonly buffer Camera {
     vec4 eye;   // xyz: the camera's position (a far point along the view for orthographic cameras)
 } camera;
 #ifdef RECEIVER_DEPTH
-layout(binding = 3, r32ui) uniform coherent uimage2D receiverDepth;  // cleared to all ones
+layout(std430, binding = 3) coherent buffer ReceiverDepth { uint receiverDepth[]; };  // row by row, all ones
 #endif
 
 layout(push_constant) uniform Push {
@@ -83,6 +83,11 @@ void main()
     ivec2 lo = clamp(ivec2(floor(texelCoord - spread)), ivec2(0), ivec2(pc.resolution - 1));
     ivec2 hi = clamp(ivec2(floor(texelCoord + spread)), ivec2(0), ivec2(pc.resolution - 1));
     for (int y = lo.y; y <= hi.y; ++y)
-        for (int x = lo.x; x <= hi.x; ++x) imageAtomicMin(receiverDepth, ivec2(x, y), bits);
+        for (int x = lo.x; x <= hi.x; ++x) {
+            // Many pixels fall in one texel: the atomic only where it can still lower the
+            // depth (values only decrease, so a stale read at most costs an atomic).
+            uint i = uint(y * pc.resolution + x);
+            if (receiverDepth[i] > bits) atomicMin(receiverDepth[i], bits);
+        }
 #endif
 }

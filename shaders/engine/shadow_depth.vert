@@ -2,8 +2,6 @@
 // The depth pass of render::ShadowMap (render/ShadowMap.h): casters from the light,
 // reversed-Z (near = 1, far = 0).
 // With ALPHA_MASK defined it also hands the fragment shader what it needs to cut holes;
-// with CULLING_WORLD (visibility::OcclusionTraversal's receiver-mask queries) the world position, from
-// which engine/culling_mask.frag computes the depth free of the culling pass's own bias.
 #include "common/scene.glsl"
 
 layout(location = 0) in vec3 inPosition;
@@ -11,12 +9,6 @@ layout(location = 0) in vec3 inPosition;
 layout(location = 2) in vec2 inUv;
 layout(location = 0) out vec2 outUv;
 layout(location = 1) flat out uint outMaterial;
-#endif
-#ifdef CULLING_WORLD
-#ifdef ALPHA_MASK
-#error engine/shadow_depth.vert: CULLING_WORLD and ALPHA_MASK both write location 0
-#endif
-layout(location = 0) out vec3 outWorld;
 #endif
 
 layout(std430, binding = 0) readonly buffer Instances { InstanceData instances[]; };
@@ -33,8 +25,5 @@ void main()
     outMaterial = inst.info.x;
 #endif
     vec4 world = inst.model * vec4(inPosition, 1.0);
-#ifdef CULLING_WORLD
-    outWorld = world.xyz;
-#endif
     gl_Position = pc.lightViewProj * world;
 }

@@ -6,6 +6,7 @@
 //   shadow_ms     the shadow depth pass on the GPU plus the culling work done for it
 //                 (receiver masks and caster queries, wall clock)
 //   depth_ms      the shadow depth pass alone (GPU)
+//   mask_ms, cull_ms  the receiver masks, and the caster culling (wall clock)
 //   camera_ms     the camera culling (step 1) before the G-buffer
 //   triangles     triangles drawn into the shadow map
 //   oracle        triangles of the casters that really shadow a visible pixel: every
@@ -104,7 +105,7 @@ void BM_Culling(benchmark::State& state, View view, config::CullingMode mode)
     frame::FrameRenderer renderer(context(), scene, cfg, registry());
     renderer.renderFrame();  // lavapipe compiles pipelines at first use
     const std::string depthPass = "light0.hard.shadow_map";
-    double depthMs = 0.0, shadowMs = 0.0, cameraMs = 0.0;
+    double depthMs = 0.0, shadowMs = 0.0, cameraMs = 0.0, maskMs = 0.0, cullMs = 0.0;
     visibility::CullingStats last;
     for (auto _ : state) {
         const frame::FrameTimings t = renderer.renderFrame();
@@ -114,6 +115,8 @@ void BM_Culling(benchmark::State& state, View view, config::CullingMode mode)
         depthMs += depth;
         shadowMs += depth + t.culling.maskMs + t.culling.casterCullMs;
         cameraMs += t.culling.cameraMs;
+        maskMs += t.culling.maskMs;
+        cullMs += t.culling.casterCullMs;
         last = t.culling;
         state.SetIterationTime(t.frameCpuMs / 1000.0);
     }
@@ -121,6 +124,8 @@ void BM_Culling(benchmark::State& state, View view, config::CullingMode mode)
     state.counters["shadow_ms"] = shadowMs / n;
     state.counters["depth_ms"] = depthMs / n;
     state.counters["camera_ms"] = cameraMs / n;
+    state.counters["mask_ms"] = maskMs / n;
+    state.counters["cull_ms"] = cullMs / n;
     state.counters["triangles"] = double(last.trianglesDrawn);
     state.counters["oracle"] = double(oracle);
     state.counters["casters"] = double(last.castersDrawn);

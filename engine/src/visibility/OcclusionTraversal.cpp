@@ -46,43 +46,9 @@ struct GpuBox {
 struct CulledQueryPush {  // culling_mask.frag / occlusion_box.vert Push
     glm::mat4 viewProj;
     int32_t maskBlock;
-    int32_t ownDepth;
-    float biasSlope;
-    float biasClamp;
 };
 
-bool outside(const scene::Frustum& f, const scene::Aabb& box)
-{
-    for (uint32_t i = 0; i < f.planeCount; ++i) {
-        const glm::vec4& p = f.planes[i];
-        const glm::vec3 far(p.x >= 0 ? box.max.x : box.min.x, p.y >= 0 ? box.max.y : box.min.y,
-                            p.z >= 0 ? box.max.z : box.min.z);
-        if (glm::dot(glm::vec3(p), far) + p.w < 0.0f) return true;
-    }
-    return false;
-}
 
-// The view texels a box's projection can cover (with a texel of margin for the proxy's
-// inflation and rounding), or nothing when any part of the box lies in front of the
-// near plane (or behind the eye): its proxy would be clipped there, and a query could
-// miss geometry inside it that the view does see, so such a node is treated as visible
-// without a query.
-std::optional<TexelRect> projectedRect(const glm::mat4& viewProj, const scene::Aabb& box, uint32_t width,
-                                       uint32_t height)
-{
-    glm::vec2 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
-    for (int c = 0; c < 8; ++c) {
-        const glm::vec4 clip = viewProj * glm::vec4(box.corner(c), 1.0f);
-        if (!(clip.w > 0.0f) || clip.z > clip.w) return std::nullopt;
-        const glm::vec2 p = (glm::vec2(clip) / clip.w * 0.5f + 0.5f) * glm::vec2(float(width), float(height));
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
-    }
-    // Clamped to the view: only covered texels cost, and a box larger than the view
-    // still covers it whole.
-    const glm::vec2 size{float(width), float(height)};
-    return TexelRect{glm::clamp(lo - 1.0f, glm::vec2(-1.0f), size), glm::clamp(hi + 1.0f, glm::vec2(-1.0f), size)};
-}
 
 // A box a little larger than `box`, so that no rasterization tie rule lets geometry on
 // its faces produce a sample that the box does not.
@@ -101,6 +67,37 @@ float distanceSq(const glm::vec3& p, const scene::Aabb& box)
 }
 
 } // namespace
+
+bool outside(const scene::Frustum& f, const scene::Aabb& box)
+{
+    for (uint32_t i = 0; i < f.planeCount; ++i) {
+        const glm::vec4& p = f.planes[i];
+        const glm::vec3 far(p.x >= 0 ? box.max.x : box.min.x, p.y >= 0 ? box.max.y : box.min.y,
+                            p.z >= 0 ? box.max.z : box.min.z);
+        if (glm::dot(glm::vec3(p), far) + p.w < 0.0f) return true;
+    }
+    return false;
+}
+
+std::optional<ProjectedBox> projectBox(const glm::mat4& viewProj, const scene::Aabb& box, uint32_t width,
+                                       uint32_t height)
+{
+    glm::vec2 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+    float nearest = -std::numeric_limits<float>::max();
+    for (int c = 0; c < 8; ++c) {
+        const glm::vec4 clip = viewProj * glm::vec4(box.corner(c), 1.0f);
+        if (!(clip.w > 0.0f) || clip.z > clip.w) return std::nullopt;
+        const glm::vec2 p = (glm::vec2(clip) / clip.w * 0.5f + 0.5f) * glm::vec2(float(width), float(height));
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+        nearest = std::max(nearest, clip.z / clip.w);
+    }
+    // Clamped to the view: only covered texels cost, and a box larger than the view
+    // still covers it whole.
+    const glm::vec2 size{float(width), float(height)};
+    return ProjectedBox{
+        {glm::clamp(lo - 1.0f, glm::vec2(-1.0f), size), glm::clamp(hi + 1.0f, glm::vec2(-1.0f), size)}, nearest};
+}
 
 glm::vec3 viewOrigin(const glm::mat4& viewProj, float sceneRadius)
 {
@@ -233,16 +230,12 @@ private:
         if (bound_ == &p) return;
         p.bind(cmd_);
         const ReceiverMask* mask = t_.view.mask;
-        const bool ownDepth = mask && mask->hasReceiverDepth;
         gpu::DescriptorPush push;
         if (boxPipeline)
             push.storageBuffer("Boxes", owner_.boxes_);
         else
             push.storageBuffer("Instances", owner_.sceneGpu_.instanceBuffer());
-        if (mask) {
-            push.sampledImage("receiverMask", mask->dilated, owner_.nearest_, VK_IMAGE_LAYOUT_GENERAL)
-                .storageImage("receiverDepth", ownDepth ? mask->receiverDepth : owner_.noReceiverDepth_);
-        }
+        if (mask) push.sampledImage("receiverMask", mask->dilated, owner_.nearest_, VK_IMAGE_LAYOUT_GENERAL);
         push.push(owner_.context_, cmd_, p);
         // Leaf draws take the technique's bias in a light view, so that what they draw and
         // what their queries count is the technique's own map (reversed-Z: negated, as in
@@ -251,8 +244,7 @@ private:
         const render::ShadowDepthBias bias =
             t_.view.lightView && !boxPipeline ? t_.view.bias : render::ShadowDepthBias{};
         vkCmdSetDepthBias(cmd_, -bias.constant, -bias.clamp, -bias.slope);
-        const CulledQueryPush constants{t_.view.viewProj, int32_t(mask ? mask->block : 1), ownDepth ? 1 : 0,
-                                        bias.slope, bias.clamp};
+        const CulledQueryPush constants{t_.view.viewProj, int32_t(mask ? mask->block : 1)};
         p.pushConstants(cmd_, &constants, mask ? sizeof(constants) : sizeof(glm::mat4));
         bound_ = &p;
     }
@@ -354,21 +346,13 @@ OcclusionTraversal::OcclusionTraversal(gpu::Context& context, const gpu::ShaderC
     box_ = gpu::Pipeline(context_, shaders, boxDesc);
     if (withMask) {
         d.fragmentShader = "engine/culling_mask.frag";
-        d.defines = {{"CULLING_WORLD", "1"}};
         d.pushConstantBytes = sizeof(CulledQueryPush);
         maskLeafDepth_ = make("mask_leaf", true);
         maskLeafCount_ = make("mask_leaf_count", false);
         boxDesc.fragmentShader = d.fragmentShader;
-        boxDesc.defines = d.defines;
         boxDesc.pushConstantBytes = d.pushConstantBytes;
         boxDesc.name = "visibility.mask_box";
         maskBox_ = gpu::Pipeline(context_, shaders, boxDesc);
-        noReceiverDepth_ = gpu::Image(context_, {1, 1, kReceiverDepthFormat, VK_IMAGE_USAGE_STORAGE_BIT,
-                                                 "visibility.no_receiver_depth"});
-        context_.submitAndWait([&](VkCommandBuffer cmd) {
-            gpu::transition(cmd, noReceiverDepth_, gpu::access::kUndefined,
-                            {VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0});
-        });
         nearest_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
     }
 
@@ -468,7 +452,8 @@ void OcclusionTraversal::walkFrontToBack(Traversal& t, RoundRecorder& round)
         ++t.stats.nodesVisited;
         const scene::Aabb& box = bvh_.nodeBounds(e.node);
         if (outside(t.frustum, box)) continue;
-        const std::optional<TexelRect> rect = projectedRect(t.view.viewProj, box, width, height);
+        const std::optional<ProjectedBox> projected = projectBox(t.view.viewProj, box, width, height);
+        const std::optional<TexelRect> rect = projected ? std::optional(projected->rect) : std::nullopt;
         if (t.view.mask && rect && t.view.mask->rejects(*rect)) {
             ++t.stats.maskRejected;
             continue;

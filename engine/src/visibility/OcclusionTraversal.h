@@ -19,10 +19,12 @@
 #include "penumbra/scene/Bvh.h"
 #include "penumbra/scene/Scene.h"
 #include "penumbra/visibility/CullingStats.h"
+#include "visibility/ReceiverMask.h"
 
 #include <glm/glm.hpp>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -32,8 +34,6 @@ class ShaderCompiler;
 } // namespace penumbra::gpu
 
 namespace penumbra::visibility {
-
-struct ReceiverMask;
 
 // Per BVH node, what the last frames' traversals of one view found.
 struct NodeHistory {
@@ -62,11 +62,29 @@ struct TraversalView {
     // kept only when its draw finds samples. The camera keeps every leaf it draws.
     bool lightView = false;
     render::ShadowDepthBias bias;
-    // Receiver-mask mode: queries count only samples on the mask (and in front of its
-    // receiver depths, when it has them), and nodes whose projection meets no marked
-    // texel are culled without a query.
+    // Receiver-mask mode (views without receiver depths): queries count only samples on
+    // the mask, and nodes whose projection meets no marked texel are culled without a
+    // query.
     const ReceiverMask* mask = nullptr;
 };
+
+// Whether `box` lies wholly outside a plane of `frustum`.
+bool outside(const scene::Frustum& frustum, const scene::Aabb& box);
+
+// A box's projection into a view: the texels it can cover (with a texel of margin for the
+// proxy's inflation and rounding) and its nearest depth (reversed-Z: the largest; at a
+// corner, since depth is monotonic along the view for both projections).
+struct ProjectedBox {
+    TexelRect rect;
+    float nearestDepth;
+};
+
+// A box's projection into a `width` x `height` view, or nothing when any part of the box
+// lies in front of the near plane (or behind the eye): its proxy would be clipped there,
+// and a query could miss geometry inside it that the view does see, so such a node is
+// treated as visible without a query.
+std::optional<ProjectedBox> projectBox(const glm::mat4& viewProj, const scene::Aabb& box, uint32_t width,
+                                       uint32_t height);
 
 // Where a front-to-back traversal of a view starts: the eye of a perspective view; for an
 // orthographic one a point far behind the near plane's centre, so that distance from it
@@ -105,11 +123,9 @@ private:
     const scene::InstanceBvh& bvh_;
 
     // Pipelines: depth-only leaf draws (writing depth, or only counting samples for
-    // alpha-masked instances), box queries; the same behind the receiver mask (or the
-    // receiver depths).
+    // alpha-masked instances), box queries; the same behind the receiver mask.
     gpu::Pipeline leafDepth_, leafCount_, box_;
     gpu::Pipeline maskLeafDepth_, maskLeafCount_, maskBox_;
-    gpu::Image noReceiverDepth_;  // bound in place of a mask's receiver depths when it has none
     gpu::Sampler nearest_;
     gpu::Buffer boxes_;
     VkQueryPool queries_ = VK_NULL_HANDLE;

@@ -7,8 +7,11 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
+#include <limits>
+#include <optional>
 #include <string>
 
 namespace penumbra::visibility {
@@ -42,20 +45,62 @@ struct CameraData {  // receiver_scatter.comp Camera
     glm::vec4 eye;
 };
 
+// The receiver floor's pyramid: a test reads at most this many cells per side.
+constexpr uint32_t kFloorCellsPerSide = 8;
+// Depth rounding between the CPU's box corners and the rasterizer's interpolated depth of
+// the geometry inside (a few fp32 ulps of depths <= 1): 16 ulps of 1.
+constexpr float kFloorMargin = 16.0f / 16777216.0f;
+
+struct MaskTexelRange {
+    uint32_t x0, y0, x1, y1;
+};
+
+// The mask texels a rectangle of view texels (inclusive) meets, inclusive, or nothing when
+// it lies off the view.
+std::optional<MaskTexelRange> maskTexels(const ReceiverMask& mask, const TexelRect& rect)
+{
+    const float blockTexels = float(mask.block), last = float(mask.size - 1);
+    const float x0 = std::floor(rect.lo.x / blockTexels), y0 = std::floor(rect.lo.y / blockTexels);
+    const float x1 = std::floor(rect.hi.x / blockTexels), y1 = std::floor(rect.hi.y / blockTexels);
+    if (!(x1 >= 0.0f && y1 >= 0.0f && x0 <= last && y0 <= last)) return std::nullopt;
+    return MaskTexelRange{uint32_t(std::max(x0, 0.0f)), uint32_t(std::max(y0, 0.0f)), uint32_t(std::min(x1, last)),
+                          uint32_t(std::min(y1, last))};
+}
+
 } // namespace
 
 bool ReceiverMask::rejects(const TexelRect& rect) const
 {
-    const float blockTexels = float(block), last = float(size - 1);
-    const float x0 = std::floor(rect.lo.x / blockTexels), y0 = std::floor(rect.lo.y / blockTexels);
-    const float x1 = std::floor(rect.hi.x / blockTexels), y1 = std::floor(rect.hi.y / blockTexels);
-    if (!(x1 >= 0.0f && y1 >= 0.0f && x0 <= last && y0 <= last)) return true;  // off the view
-    const auto ix0 = size_t(std::max(x0, 0.0f)), iy0 = size_t(std::max(y0, 0.0f));
-    const auto ix1 = size_t(std::min(x1, last)) + 1, iy1 = size_t(std::min(y1, last)) + 1;
+    const std::optional<MaskTexelRange> r = maskTexels(*this, rect);
+    if (!r) return true;  // off the view
     const size_t w = size + 1;
+    const size_t ix0 = r->x0, iy0 = r->y0, ix1 = size_t(r->x1) + 1, iy1 = size_t(r->y1) + 1;
     const uint64_t marked = uint64_t(summedArea[iy1 * w + ix1]) + summedArea[iy0 * w + ix0] -
                             summedArea[iy0 * w + ix1] - summedArea[iy1 * w + ix0];
     return marked == 0;
+}
+
+bool ReceiverMask::behindReceivers(const TexelRect& rect, float nearestDepth) const
+{
+    if (!hasReceiverDepth || floorLevels.empty()) return false;
+    const std::optional<MaskTexelRange> r = maskTexels(*this, rect);
+    if (!r) return true;  // off the view: no receiver reads it
+    // The finest level at which the range spans at most kFloorCellsPerSide cells per side:
+    // the least floor over those cells, a superset of the range, bounds it from below.
+    uint32_t level = 0, x0 = r->x0, y0 = r->y0, x1 = r->x1, y1 = r->y1;
+    while (level + 1 < floorLevels.size() && (x1 - x0 >= kFloorCellsPerSide || y1 - y0 >= kFloorCellsPerSide)) {
+        ++level;
+        x0 >>= 1, y0 >>= 1, x1 >>= 1, y1 >>= 1;
+    }
+    const uint32_t side = std::max((size + (1u << level) - 1) >> level, 1u);
+    const std::vector<float>& cells = floorLevels[level];
+    // Geometry inside the box lies at most at its nearest corner's depth (less its bias),
+    // up to rounding: kFloorMargin.
+    const float reach = nearestDepth + kFloorMargin;
+    for (uint32_t y = y0; y <= y1; ++y)
+        for (uint32_t x = x0; x <= x1; ++x)
+            if (!(reach < cells[size_t(y) * side + x])) return false;
+    return true;
 }
 
 ReceiverMaskBuilder::ReceiverMaskBuilder(gpu::Context& context, const gpu::ShaderCompiler& shaders) : context_(context)
@@ -79,6 +124,7 @@ ReceiverMaskBuilder::ReceiverMaskBuilder(gpu::Context& context, const gpu::Shade
     };
     depthMin_ = imageFilter("visibility.receiver_depth_min", "engine/receiver_depth_min.comp");
     dilate_ = imageFilter("visibility.dilate", "engine/mask_dilate.comp");
+    floor_ = imageFilter("visibility.receiver_floor", "engine/receiver_floor.comp");
     nearest_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
     cameraData_ =
         gpu::Buffer(context_, sizeof(CameraData), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "visibility.camera");
@@ -121,24 +167,24 @@ ReceiverMask& ReceiverMaskBuilder::maskFor(uint32_t resolution)
 
 void ReceiverMaskBuilder::makeReceiverDepth(ReceiverMask& mask, bool withPrefix)
 {
-    const VkImageUsageFlags usage = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
     const std::string name = fmt::format("visibility.light{}", mask.resolution);
-    const uint32_t r = mask.resolution;
-    std::vector<gpu::Image*> made;
-    if (!mask.receiverDepth.handle()) {
-        mask.receiverDepth = gpu::Image(context_, {r, r, kReceiverDepthFormat, usage, name + ".receiver_depth"});
-        made.push_back(&mask.receiverDepth);
-    }
-    if (withPrefix && !mask.receiverDepthPrefix.handle()) {
-        mask.receiverDepthPrefix =
-            gpu::Image(context_, {r, r, kReceiverDepthFormat, usage, name + ".receiver_depth_prefix"});
-        made.push_back(&mask.receiverDepthPrefix);
-    }
-    if (made.empty()) return;
+    const VkDeviceSize depthBytes = VkDeviceSize(mask.resolution) * mask.resolution * sizeof(uint32_t);
+    const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+    // Host-visible: the CPU culling reads the receiver depths where they are written.
+    if (!mask.receiverDepth.handle())
+        mask.receiverDepth = gpu::Buffer(context_, depthBytes, storage, true, name + ".receiver_depth");
+    if (withPrefix && !mask.receiverDepthPrefix.handle())
+        mask.receiverDepthPrefix = gpu::Buffer(context_, depthBytes, storage, false, name + ".receiver_depth_prefix");
+    if (mask.receiverFloor.handle()) return;
+    const uint32_t m = mask.size;
+    mask.receiverFloor =
+        gpu::Image(context_, {m, m, kReceiverDepthFormat,
+                              VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, name + ".receiver_floor"});
+    mask.floorReadback = gpu::Buffer(context_, VkDeviceSize(m) * m * sizeof(uint32_t), VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                     true, name + ".receiver_floor_readback");
     context_.submitAndWait([&](VkCommandBuffer cmd) {
-        for (gpu::Image* image : made)
-            gpu::transition(cmd, *image, gpu::access::kUndefined,
-                            {VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0});
+        gpu::transition(cmd, mask.receiverFloor, gpu::access::kUndefined,
+                        {VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0});
     });
 }
 
@@ -150,6 +196,7 @@ const ReceiverMask& ReceiverMaskBuilder::build(const render::CasterView& view)
     if (mask.hasReceiverDepth) makeReceiverDepth(mask, tapRadius > 0);
     context_.submitAndWait([&](VkCommandBuffer cmd) { recordMask(cmd, view, mask, tapRadius); });
     sumMarkedTexels(mask);
+    buildFloorPyramid(mask);
     return mask;
 }
 
@@ -171,8 +218,7 @@ void ReceiverMaskBuilder::recordMask(VkCommandBuffer cmd, const render::CasterVi
     const VkImageSubresourceRange colorRange{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
     vkCmdClearColorImage(cmd, mask.marked.handle(), VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &colorRange);
     if (ownDepth) {
-        const VkClearColorValue none{.uint32 = {~0u, 0u, 0u, 0u}};
-        vkCmdClearColorImage(cmd, mask.receiverDepth.handle(), VK_IMAGE_LAYOUT_GENERAL, &none, 1, &colorRange);
+        vkCmdFillBuffer(cmd, mask.receiverDepth.handle(), 0, VK_WHOLE_SIZE, ~0u);  // no receiver
     }
     gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT},
                        {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT});
@@ -183,7 +229,7 @@ void ReceiverMaskBuilder::recordMask(VkCommandBuffer cmd, const render::CasterVi
     scatterBindings.sampledImage("cameraDepth", *cameraDepth_, nearest_, VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL)
         .storageImage("receiverMask", mask.marked)
         .storageBuffer("camera", cameraData_);
-    if (ownDepth) scatterBindings.storageImage("receiverDepth", mask.receiverDepth);
+    if (ownDepth) scatterBindings.storageBuffer("ReceiverDepth", mask.receiverDepth);
     scatterBindings.push(context_, cmd, scatter);
     const ScatterPush scatterPush{view.viewProj, int32_t(mask.block), int32_t(size)};
     scatter.pushConstants(cmd, &scatterPush, sizeof(scatterPush));
@@ -199,8 +245,8 @@ void ReceiverMaskBuilder::recordMask(VkCommandBuffer cmd, const render::CasterVi
         // Each receiver's depth over the texels its taps read (receiver_depth_min.comp).
         depthMin_.bind(cmd);
         gpu::DescriptorPush()
-            .storageImage("depth", mask.receiverDepth)
-            .storageImage("prefix", mask.receiverDepthPrefix)
+            .storageBuffer("Depth", mask.receiverDepth)
+            .storageBuffer("Prefix", mask.receiverDepthPrefix)
             .push(context_, cmd, depthMin_);
         for (int32_t vertical = 0; vertical < 2; ++vertical) {
             const int32_t push[3] = {int32_t(size), tapRadius, vertical};
@@ -221,20 +267,41 @@ void ReceiverMaskBuilder::recordMask(VkCommandBuffer cmd, const render::CasterVi
         dilate_.dispatchOver(cmd, mask.size);
         gpu::memoryBarrier(cmd, stores, loads);
     }
+    if (ownDepth) {
+        // The least receiver depth per mask texel, where the dilated mask is marked
+        // (receiver_floor.comp).
+        floor_.bind(cmd);
+        gpu::DescriptorPush()
+            .storageImage("mask", mask.dilated)
+            .storageBuffer("ReceiverDepth", mask.receiverDepth)
+            .storageImage("receiverFloor", mask.receiverFloor)
+            .push(context_, cmd, floor_);
+        const int32_t push[3] = {int32_t(mask.size), int32_t(mask.block), int32_t(size)};
+        floor_.pushConstants(cmd, push, sizeof(push));
+        floor_.dispatchOver(cmd, mask.size, mask.size);
+        gpu::memoryBarrier(cmd, stores, loads);
+    }
     const gpu::ImageAccess general{VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                                    VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
     const gpu::ImageAccess copySource{VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
                                       VK_ACCESS_2_TRANSFER_READ_BIT};
-    gpu::transition(cmd, mask.dilated, general, copySource);
-    VkBufferImageCopy copy{};
-    copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-    copy.imageExtent = {mask.size, mask.size, 1};
-    vkCmdCopyImageToBuffer(cmd, mask.dilated.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, mask.readback.handle(), 1,
-                           &copy);
-    // Back to GENERAL for the queries' sampled reads.
-    gpu::transition(cmd, mask.dilated, copySource,
-                    {VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT});
-    gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT},
+    // Read back, then back to GENERAL for the queries' reads.
+    const auto readBack = [&](const gpu::Image& image, const gpu::Buffer& buffer, const gpu::ImageAccess& after) {
+        VkBufferImageCopy copy{};
+        copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+        copy.imageExtent = {image.desc().width, image.desc().height, 1};
+        gpu::transition(cmd, image, general, copySource);
+        vkCmdCopyImageToBuffer(cmd, image.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, buffer.handle(), 1, &copy);
+        gpu::transition(cmd, image, copySource, after);
+    };
+    readBack(mask.dilated, mask.readback,
+             {VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT});
+    if (ownDepth) {
+        readBack(mask.receiverFloor, mask.floorReadback, general);
+    }
+    gpu::memoryBarrier(cmd,
+                       {VK_PIPELINE_STAGE_2_COPY_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                        VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT},
                        {VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT});
 }
 
@@ -268,6 +335,37 @@ void ReceiverMaskBuilder::sumMarkedTexels(ReceiverMask& mask)
     const uint32_t b = mask.block, size = mask.resolution;
     mask.bounds = {{int32_t(x0 * b), int32_t(y0 * b)},
                    {std::min((x1 + 1) * b, size) - x0 * b, std::min((y1 + 1) * b, size) - y0 * b}};
+}
+
+std::vector<std::vector<float>> floorPyramid(std::span<const uint32_t> floorBits, uint32_t size)
+{
+    std::vector<std::vector<float>> levels;
+    std::vector<float> level(size_t(size) * size);
+    for (size_t i = 0; i < level.size(); ++i)
+        level[i] = floorBits[i] == ~0u ? std::numeric_limits<float>::infinity() : std::bit_cast<float>(floorBits[i]);
+    levels.push_back(std::move(level));
+    for (uint32_t side = size; side > 1;) {
+        const uint32_t next = (side + 1) / 2;
+        const std::vector<float>& fine = levels.back();
+        std::vector<float> coarse(size_t(next) * next, std::numeric_limits<float>::infinity());
+        for (uint32_t y = 0; y < side; ++y)
+            for (uint32_t x = 0; x < side; ++x) {
+                float& cell = coarse[size_t(y / 2) * next + x / 2];
+                cell = std::min(cell, fine[size_t(y) * side + x]);
+            }
+        levels.push_back(std::move(coarse));
+        side = next;
+    }
+    return levels;
+}
+
+void ReceiverMaskBuilder::buildFloorPyramid(ReceiverMask& mask)
+{
+    mask.floorLevels.clear();
+    if (!mask.hasReceiverDepth) return;
+    const size_t texels = size_t(mask.size) * mask.size;
+    mask.floorLevels =
+        floorPyramid({static_cast<const uint32_t*>(mask.floorReadback.mapped()), texels}, mask.size);
 }
 
 } // namespace penumbra::visibility

@@ -6,7 +6,10 @@
 // and read back into a summed-area table, so that the traversal can skip, without a
 // query, every node whose projection meets no marked texel. A view whose technique
 // compares with the receivers' own depth also gets the farthest receiver depth per texel,
-// spread over the technique's taps (engine/receiver_depth_min.comp).
+// spread over the technique's taps (engine/receiver_depth_min.comp), and its least value
+// per mask texel, the receiver floor (engine/receiver_floor.comp), read back into a min
+// pyramid: the traversal skips, without a query, every node whose box lies behind the
+// floor wherever it is projected.
 //
 // The paper also rasterises the receivers' depth here, as the start of the shadow map.
 // Here the technique draws its own map, so that pass would draw the receivers twice (in a
@@ -23,6 +26,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <map>
+#include <span>
 #include <vector>
 
 namespace penumbra::gpu {
@@ -32,8 +36,8 @@ class ShaderCompiler;
 
 namespace penumbra::visibility {
 
-// Receiver depths (engine/receiver_scatter.comp RECEIVER_DEPTH): the bits of a
-// non-negative float, all ones where no receiver reads the texel.
+// Receiver depths (engine/receiver_scatter.comp RECEIVER_DEPTH) and the receiver floor: the
+// bits of a non-negative float, all ones where no receiver reads the texel.
 inline constexpr VkFormat kReceiverDepthFormat = VK_FORMAT_R32_UINT;
 
 // The view texels a box's projection can cover (OcclusionTraversal.cpp projectedRect).
@@ -53,15 +57,40 @@ struct ReceiverMask {
     // Views whose technique compares with the receivers' own depth: the farthest receiver
     // depth per view texel, and the scratch of its spreading over the taps; made on
     // first use.
-    gpu::Image receiverDepth, receiverDepthPrefix;
+    // Row by row, host-visible (the CPU culling reads it).
+    gpu::Buffer receiverDepth, receiverDepthPrefix;
     bool hasReceiverDepth = false;  // this view's receiver depths are in receiverDepth
+    // With receiver depths: per mask texel the least receiver depth of its block (the bits
+    // of a non-negative float, all ones for none), read back; floorLevels[0] holds it as
+    // floats (+infinity for none) and each next level the least of 2 x 2 of the last.
+    gpu::Image receiverFloor;
+    gpu::Buffer floorReadback;
+    std::vector<std::vector<float>> floorLevels;
     // The view texels that the marked mask texels cover: the queries render only there.
     VkRect2D bounds{};
 
     // Whether no mask texel in `rect` (view texels, inclusive) is marked, so that no
     // fragment of a query inside it could pass the mask test.
     bool rejects(const TexelRect& rect) const;
+
+    // With receiver depths: whether a box whose nearest light depth (reversed-Z: the
+    // largest) is `nearestDepth` lies behind every receiver depth in `rect` (view texels),
+    // so that no sample of it inside could pass the receiver-depth test there. False
+    // without receiver depths.
+    bool behindReceivers(const TexelRect& rect, float nearestDepth) const;
+
+    // With receiver depths: the bits of the least receiver depth that reads view texel
+    // (x, y), all ones for none.
+    uint32_t receiverDepthBits(uint32_t x, uint32_t y) const
+    {
+        return static_cast<const uint32_t*>(receiverDepth.mapped())[size_t(y) * resolution + x];
+    }
 };
+
+// The receiver floor's min pyramid (ReceiverMask::floorLevels) from its `size`² texels as
+// read back (all ones: none): level 0 holds them as floats, each next level the least of
+// 2 x 2 cells of the last (an odd side's last cell takes what it has), down to 1 x 1.
+std::vector<std::vector<float>> floorPyramid(std::span<const uint32_t> floorBits, uint32_t size);
 
 // Builds the receiver masks: their pipelines, the camera they are scattered from, and one
 // mask per light-view resolution (views of one resolution share it, one after another).
@@ -84,15 +113,17 @@ private:
     void makeReceiverDepth(ReceiverMask& mask, bool withPrefix);
     void recordMask(VkCommandBuffer cmd, const render::CasterView& view, ReceiverMask& mask, int32_t tapRadius);
     void sumMarkedTexels(ReceiverMask& mask);
+    void buildFloorPyramid(ReceiverMask& mask);
 
     gpu::Context& context_;
     const gpu::Image* cameraDepth_ = nullptr;
     std::map<uint32_t, ReceiverMask> masks_;  // by resolution
     // The scatter (with receiver depths), the receivers' depths spread over the taps, and
-    // the dilation.
+    // the dilation, the receiver floor.
     gpu::Pipeline scatter_, scatterDepth_;
     gpu::Pipeline depthMin_;
     gpu::Pipeline dilate_;
+    gpu::Pipeline floor_;
     gpu::Sampler nearest_;
     gpu::Buffer cameraData_;  // the reverse shadow test's camera
 };

@@ -3,6 +3,7 @@
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
 #include "penumbra/gpu/Context.h"
+#include "visibility/ReceiverFloorCulling.h"
 
 #include <fmt/format.h>
 
@@ -208,23 +209,29 @@ void Visibility::cullLightView(const render::CasterView& view, CulledLightView& 
     culled.framesSinceFull = 0;
 }
 
-// Steps 2 and 3: the view's receiver mask (receiver-mask mode), then its casters by
-// occlusion culling from the light, behind the mask.
+// Steps 2 and 3: the view's receiver mask (receiver-mask mode), then its casters: on the
+// CPU against the receiver floor when the view has receiver depths
+// (ReceiverFloorCulling.h), otherwise by occlusion culling from the light, behind the
+// mask.
 void Visibility::cullLightViewFully(const render::CasterView& view, CulledLightView& culled)
 {
     auto start = std::chrono::steady_clock::now();
-    OccluderDepth& depth = lightDepth(view.resolution);
     TraversalView traversal;
     traversal.viewProj = view.viewProj;
     traversal.lightView = true;
     traversal.bias = view.depthBias;
-    traversal.area = {{0, 0}, {depth.width, depth.height}};
     if (masks_) {
         traversal.mask = &masks_->build(view);
-        traversal.area = traversal.mask->bounds;
         stats_.maskMs += msSince(start);
         start = std::chrono::steady_clock::now();
+        if (traversal.mask->hasReceiverDepth) {
+            cullBehindReceivers(bvh_, scene_, view.viewProj, view.depthBias, *traversal.mask, culled.casters, stats_);
+            stats_.casterCullMs += msSince(start);
+            return;
+        }
     }
+    OccluderDepth& depth = lightDepth(view.resolution);
+    traversal.area = traversal.mask ? traversal.mask->bounds : VkRect2D{{0, 0}, {depth.width, depth.height}};
     traversal_->cull(depth, traversal, culled.history, culled.casters, stats_);
     stats_.casterCullMs += msSince(start);
 }

@@ -19,11 +19,13 @@
 //                    query that discards fragments outside the mask finds samples in
 //                    front of what the traversal drew (the paper's method, steps 1-3;
 //                    docs/culling.md says where and why this differs from the paper).
-//                    A view whose technique compares with the receivers' own depth
-//                    (CasterView::compareTapRadius) also gets the receivers' depths per
-//                    texel, and only caster samples in front of one count: lit receivers
-//                    that shadow nothing are not drawn. Light views draw with the
-//                    technique's own bias, and keep a leaf only when its draw finds samples.
+//                    Light views draw with the technique's own bias, and keep a leaf only
+//                    when its draw finds samples. A view whose technique compares with the
+//                    receivers' own depth (CasterView::compareTapRadius) also gets the
+//                    receivers' depths per texel, and is culled on the CPU instead, without
+//                    a query: an instance is kept only where it lies in front of a receiver
+//                    depth after the technique's bias (ReceiverFloorCulling.h): lit
+//                    receivers that shadow nothing are not drawn.
 //
 // This file is the policy: the modes, the camera's and each light view's culling per
 // frame (a light view is culled on its first draw of the frame and keeps its list for the

@@ -175,12 +175,17 @@ TEST_F(VisibilityCulling, ACasterOutsideTheViewShadowsAVisibleReceiver)
         SCOPED_TRACE(config::cullingModeName(mode));
         const Frame culled = render(scene, cfg, mode);
         EXPECT_TRUE(sameVisibility(all.visibility, culled.visibility, cfg.width));
-        // The frustum leaves the tower out of the G-buffer; the occlusion modes cull per
-        // BVH leaf, and one leaf holds both instances.
+        // The frustum leaves the tower out of the G-buffer; light-occlusion culls per BVH
+        // leaf, and one leaf holds both instances. Receiver-mask with hard's slope bias
+        // tests each instance on the CPU: the ground lies behind its own receiver depths
+        // once biased, and only the tower is drawn.
         if (mode == CullingMode::Frustum) {
             EXPECT_EQ(culled.stats.receivers, 1u) << "the camera sees only the ground";
         }
-        EXPECT_EQ(culled.stats.castersDrawn, 2u) << "ground and tower";
+        if (mode == CullingMode::ReceiverMask)
+            EXPECT_EQ(culled.stats.castersDrawn, 1u) << "the tower";
+        else
+            EXPECT_EQ(culled.stats.castersDrawn, 2u) << "ground and tower";
     }
 }
 
@@ -322,9 +327,13 @@ TEST_F(VisibilityCulling, ThinCastersSeenEdgeOnKeepTheirShadows)
 }
 
 // An animated path: the camera walks and turns, the light swings, a box moves. Two
-// renderers follow it in lockstep; the culled one (temporal coherence: last frame's
-// visible nodes drawn without waiting) matches the other on every frame.
-TEST_F(VisibilityCulling, AnAnimatedPathKeepsEveryFrameExact)
+// renderers follow it in lockstep; the culled one matches the other on every frame: with
+// PCSS's receiver planes (the mask alone: occlusion queries, with temporal coherence, last
+// frame's visible nodes drawn without waiting) and with hard's slope bias (receiver depths:
+// culled on the CPU against this frame's receivers, ReceiverFloorCulling.h).
+class AnimatedCulling : public VisibilityCulling, public ::testing::WithParamInterface<const char*> {};
+
+TEST_P(AnimatedCulling, AnAnimatedPathKeepsEveryFrameExact)
 {
     // A street of a small city, where the receiver mask culls on every frame (no view
     // takes its frustum): the camera walks down the street and turns, the sun swings, and
@@ -334,7 +343,7 @@ TEST_F(VisibilityCulling, AnAnimatedPathKeepsEveryFrameExact)
     p.seed = 5;
     scene::Scene sceneAll = scene::generateCity(p);
     scene::Scene sceneCulled = scene::generateCity(p);
-    config::RenderConfig cfg = smallDefault(scene::LightType::Directional, "pcss", {{"resolution", 1024}});
+    config::RenderConfig cfg = smallDefault(scene::LightType::Directional, GetParam(), {{"resolution", 1024}});
     cfg.camera.position = {38.0f, 1.7f, -100.0f};
     cfg.camera.target = {36.0f, 8.0f, 40.0f};
     cfg.camera.nearWorld = 0.1f;
@@ -367,6 +376,8 @@ TEST_F(VisibilityCulling, AnAnimatedPathKeepsEveryFrameExact)
         EXPECT_LT(ct.culling.trianglesDrawn, at.culling.trianglesDrawn / 3);
     }
 }
+
+INSTANTIATE_TEST_SUITE_P(VisibilityCulling, AnimatedCulling, ::testing::Values("pcss", "hard"));
 
 // Where culling keeps most instances (the default scene: the camera sees most of them and
 // nearly every caster shadows something it sees), the camera and the light view take
@@ -418,6 +429,7 @@ TEST_F(VisibilityCulling, AStreetViewOfACityCullsMostCasters)
     EXPECT_LT(mask.stats.trianglesDrawn, all.stats.trianglesDrawn / 4);
     EXPECT_GT(mask.stats.queriesIssued, 0u);
     EXPECT_GT(mask.stats.nodesVisited, 0u);
+    EXPECT_GT(mask.stats.floorRejected, 0u) << "hard's slope bias: culled behind the receivers on the CPU";
 }
 
 // A technique that compares with the receivers' own depth (hard, slope bias) needs no
@@ -454,10 +466,13 @@ TEST_F(VisibilityCulling, ALitReceiverThatShadowsNothingIsNotDrawn)
     }
 }
 
-// The figure of merit: triangles drawn against the oracle, the instances that
-// really shadow a pixel the camera sees (test::casterOracle). On a street view of a
-// small city under a low sun, hard with slope bias (receiver depths) stays within 1.5
-// times the oracle, the bound; with normal offset (the receiver mask alone) the
+// Triangles drawn against the oracle, the instances that really shadow a pixel the camera
+// sees (test::casterOracle). On a street view of a small city under a low sun, hard with
+// slope bias (receiver depths, culled on the CPU: ReceiverFloorCulling.h) stays within 3
+// times the oracle: it keeps every instance in front of a receiver, also those hidden
+// behind other casters, and in front of receivers that face away from the sun, which the
+// oracle skips; drawing those costs less than the occlusion queries that dropped them
+// (docs/culling.md). With normal offset (the receiver mask alone, occlusion queries) the
 // lit facades and ground the camera sees are drawn too.
 TEST_F(VisibilityCulling, ReceiverDepthsKeepAStreetViewNearTheOracle)
 {
@@ -486,16 +501,18 @@ TEST_F(VisibilityCulling, ReceiverDepthsKeepAStreetViewNearTheOracle)
         const Frame mask = render(scene, cfg, CullingMode::ReceiverMask);
         EXPECT_TRUE(sameVisibility(all.visibility, mask.visibility, cfg.width));
         ASSERT_GT(oracle.triangles, 0u);
-        // Measured: slope 3,900 triangles against an oracle of 4,312 (0.90: the oracle
-        // counts every instance along a ray, also those behind the first), normal offset
+        // Measured: slope 11,222 triangles against an oracle of 4,312 (2.6), normal offset
         // 13,842 (3.2).
         const double ratio = double(mask.stats.trianglesDrawn) / double(oracle.triangles);
         const std::string figures = fmt::format("{} triangles drawn, oracle {}", mask.stats.trianglesDrawn,
                                                 oracle.triangles);
-        if (std::string(bias) == "slope")
-            EXPECT_LE(ratio, 1.5) << figures;
-        else
+        if (std::string(bias) == "slope") {
+            EXPECT_LE(ratio, 3.0) << figures;
+            EXPECT_GT(mask.stats.floorRejected, 0u);
+        } else {
             EXPECT_GT(ratio, 1.5) << figures;
+            EXPECT_EQ(mask.stats.floorRejected, 0u) << "no receiver depths";
+        }
     }
 }
 
@@ -517,7 +534,8 @@ TEST_F(VisibilityCulling, ACameraThatSeesNothingDrawsNoCaster)
 
 // engine/receiver_depth_min.comp spreads each receiver's depth over the taps of radius r
 // (the least value in a (2 r + 1)^2 square, running minima over blocks of 2 r + 1): the
-// same as the brute-force minimum on random images, with most texels empty (all ones),
+// same as the brute-force minimum on random images (buffers, row by row), with most texels
+// empty (all ones),
 // for sizes that are and are not multiples of the block, and radii past the image.
 TEST_F(VisibilityCulling, ReceiverDepthsSpreadOverTheTapsExactly)
 {
@@ -537,41 +555,26 @@ TEST_F(VisibilityCulling, ReceiverDepthsSpreadOverTheTapsExactly)
         std::vector<uint32_t> texels(n * n, ~0u);
         for (uint32_t& t : texels)
             if (random() % 10 < 2) t = random() % 0x3f800000u;
-        const VkImageUsageFlags usage =
-            VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-        const gpu::Image depth(*context, {uint32_t(n), uint32_t(n), VK_FORMAT_R32_UINT, usage, "test.depth"});
-        const gpu::Image prefix(*context, {uint32_t(n), uint32_t(n), VK_FORMAT_R32_UINT, usage, "test.prefix"});
-        gpu::Buffer staging(*context, texels.size() * sizeof(uint32_t), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true,
-                            "test.staging");
-        std::memcpy(staging.mapped(), texels.data(), texels.size() * sizeof(uint32_t));
+        const VkDeviceSize bytes = texels.size() * sizeof(uint32_t);
+        gpu::Buffer depth(*context, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "test.depth");
+        const gpu::Buffer prefix(*context, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "test.prefix");
+        std::memcpy(depth.mapped(), texels.data(), bytes);
         const gpu::MemoryAccess write{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
         const gpu::MemoryAccess readWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                                           VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
         context->submitAndWait([&](VkCommandBuffer cmd) {
-            const gpu::ImageAccess copyTarget{VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
-                                              VK_ACCESS_2_TRANSFER_WRITE_BIT};
-            gpu::transition(cmd, depth, gpu::access::kUndefined, copyTarget);
-            VkBufferImageCopy copy{};
-            copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-            copy.imageExtent = {uint32_t(n), uint32_t(n), 1};
-            vkCmdCopyBufferToImage(cmd, staging.handle(), depth.handle(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &copy);
-            gpu::transition(cmd, depth, copyTarget,
-                            {VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                             VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT});
-            gpu::transition(cmd, prefix, gpu::access::kUndefined, gpu::access::kComputeWrite);
             spread.bind(cmd);
-            gpu::DescriptorPush().storageImage("depth", depth).storageImage("prefix", prefix).push(*context, cmd, spread);
+            gpu::DescriptorPush().storageBuffer("Depth", depth).storageBuffer("Prefix", prefix).push(*context, cmd, spread);
             for (int32_t vertical = 0; vertical < 2; ++vertical) {
                 const int32_t push[3] = {c.size, c.radius, vertical};
                 spread.pushConstants(cmd, push, sizeof(push));
                 spread.dispatchOver(cmd, uint32_t(n));
                 gpu::memoryBarrier(cmd, write, readWrite);
             }
+            gpu::memoryBarrier(cmd, write, {VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT});
         });
-        const std::vector<std::byte> bytes = gpu::readImage(*context, depth, VK_IMAGE_LAYOUT_GENERAL);
-        ASSERT_EQ(bytes.size(), n * n * sizeof(uint32_t));
         std::vector<uint32_t> spreadTexels(n * n);
-        std::memcpy(spreadTexels.data(), bytes.data(), bytes.size());
+        std::memcpy(spreadTexels.data(), depth.mapped(), bytes);
         size_t wrong = 0;
         for (int32_t y = 0; y < c.size; ++y) {
             for (int32_t x = 0; x < c.size; ++x) {

@@ -13,6 +13,7 @@ struct CullingStats {
     uint64_t nodesVisited = 0;      // BVH nodes the traversals looked at
     uint64_t queriesIssued = 0;     // occlusion queries (boxes, multi-queries, leaf draws)
     uint64_t maskRejected = 0;      // nodes culled without a query: their projection meets no mask texel
+    uint64_t floorRejected = 0;     // nodes culled without a query: behind every receiver depth they meet
     uint64_t queryRounds = 0;       // submissions waited for
     uint64_t receivers = 0;         // instances the camera sees (the G-buffer draws them)
     uint64_t cameraFellBack = 0;    // 1: the camera took its frustum (culling kept most last time)
