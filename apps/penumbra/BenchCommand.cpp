@@ -405,7 +405,8 @@ BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& v
         light.name = config.lights[l].name;
         const std::string& technique = images.techniques[l];
         light.technique = technique.empty() ? "unshadowed" : technique;
-        light.params = technique.empty() ? json(nullptr)
+        light.params = technique.empty() || config.lights[l].shadow.unshadowed()
+                           ? json(nullptr)
                                          : plugin::resolveParams(session.plugins.load(technique), config.lights[l].shadow).toJson();
         light.techniqueLabel = choicesText(variant, l, true);
         light.contextLabel = choicesText(variant, l, false);

@@ -205,7 +205,8 @@ int runCompare(const CompareFlags& flags)
         json light = {{"index", i},
                       {"name", config.lights[i].name},
                       {"technique", technique.empty() ? "unshadowed" : technique},
-                      {"params", technique.empty() ? json(nullptr)
+                      {"params", technique.empty() || config.lights[i].shadow.unshadowed()
+                                     ? json(nullptr)
                                                    : plugin::resolveParams(plugins.load(technique), config.lights[i].shadow).toJson()},
                       {"visibility", metrics::toJson(c)}};
         if (!flags.output.empty()) {

@@ -49,6 +49,10 @@ void ConfigCheck::checkPlugins(const config::RenderConfig& config, std::optional
     for (size_t i = 0; i < config.lights.size(); ++i) {
         const config::LightConfig& light = config.lights[i];
         const std::string who = fmt::format("light {} ('{}')", i, light.name);
+        if (light.shadow.unshadowed()) {  // no plugin: nothing to load or check
+            if (print) fmt::print("{}: unshadowed (technique \"{}\")\n", who, light.shadow.technique);
+            continue;
+        }
         const plugin::LoadedPlugin* loaded = nullptr;
         try {
             loaded = &registry_.load(light.shadow.technique);

@@ -3,20 +3,19 @@
 // The map and its conventions (one face or a cube atlas, reversed-Z) are the engine's
 // render::ShadowMap, read through common/shadow_map.glsl; the receiver (the face its
 // G-buffer position falls in, its uv and depth there) is common/shadow_receiver.glsl's.
+#define GBUFFER_BINDING 0  // gDepth, gNormal, GBufferCamera: plugin::bindGBuffer
 #include "common/gbuffer.glsl"
 #include "common/visibility.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
 // The C++ binds these by name (gpu::DescriptorPush); the numbers live here alone.
-layout(binding = 0, GBUFFER_POSITION_FORMAT) uniform readonly image2D gPosition;
-layout(binding = 1, GBUFFER_NORMAL_FORMAT) uniform readonly image2D gNormal;
-layout(binding = 2) uniform sampler2DShadow shadowMap;  // nearest, compareOp GREATER_OR_EQUAL
-layout(binding = 3, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
+layout(binding = 3) uniform sampler2DShadow shadowMap;  // nearest, compareOp GREATER_OR_EQUAL
+layout(binding = 4, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
 
 // render::ShadowMap::buffer() ("shadowMapBuffer"). Constant and slope-scaled bias are
 // the depth pass's rasterizer bias: no receiver-side bias here.
-#define SHADOW_MAP_BINDING 4
+#define SHADOW_MAP_BINDING 5
 #define SHADOW_RECEIVER_BIAS 0
 #include "common/shadow_receiver.glsl"
 
@@ -25,7 +24,7 @@ void main()
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(pixel, imageSize(visibilityOut)))) return;  // the last groups overhang
 
-    vec4 position = imageLoad(gPosition, pixel);
+    vec4 position = gbufferPosition(pixel);
     float v = VISIBILITY_NO_GEOMETRY;
     ShadowReceiver r;
     if (position.w != 0.0) {
@@ -37,7 +36,7 @@ void main()
         if (makeShadowReceiver(pixel, position.xyz, 0.0, r)) v = shadowCompareTap(shadowMap, r, vec2(0.0));
         // The contract (common/visibility.glsl): light from below the surface's tangent
         // plane is blocked by the surface itself.
-        v *= shadowLightAboveHorizon(position.xyz, shadowReceiverNormal(pixel));
+        v *= shadowLightAboveHorizon(position.xyz, gbufferNormal(pixel));
     }
     imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
 }

@@ -15,6 +15,7 @@
 // search and the filter compares against the receiver's plane at that tap, so a tilted
 // receiver neither finds itself as a blocker nor shadows itself under a wide filter;
 // with 0 the rasterizer's slope bias is all there is.
+#define GBUFFER_BINDING 6  // gDepth, gNormal, GBufferCamera: plugin::bindGBuffer
 #include "common/gbuffer.glsl"
 #include "common/sampling.glsl"
 #include "common/visibility.glsl"
@@ -26,10 +27,8 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(binding = 0, GBUFFER_POSITION_FORMAT) uniform readonly image2D gPosition;
 layout(binding = 1) uniform sampler2DShadow shadowCompare;
 layout(binding = 2, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
-layout(binding = 4, GBUFFER_NORMAL_FORMAT) uniform readonly image2D gNormal;
 layout(binding = 5) uniform sampler2D shadowDepth;  // the same map, raw depths
 
 #define SHADOW_MAP_BINDING 3
@@ -92,12 +91,12 @@ void main()
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(pixel, imageSize(visibilityOut)))) return;
 
-    vec4 position = imageLoad(gPosition, pixel);
+    vec4 position = gbufferPosition(pixel);
     float v = VISIBILITY_NO_GEOMETRY;
     ShadowReceiver r;
     if (position.w != 0.0) {
         if (makeShadowReceiver(pixel, position.xyz, 0.0, r)) v = pcssVisibility(r, pixel);
-        v *= shadowLightAboveHorizon(position.xyz, shadowReceiverNormal(pixel));
+        v *= shadowLightAboveHorizon(position.xyz, gbufferNormal(pixel));
     }
     imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
 }

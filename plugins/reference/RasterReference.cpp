@@ -185,9 +185,8 @@ void RasterReference::registerPasses(graph::RenderGraph& graph, const plugin::Li
                 shape_.recordDepthMaps(pass, maps, kDepthBias, placements);
             });
         graph::PassBuilder accumulate = graph.addPass(io.local(fmt::format("accumulate{}", b)), graph::QueueKind::Compute);
-        accumulate.read(io.gPosition, graph::Usage::Storage)
-            .read(io.gNormal, graph::Usage::Storage)
-            .read(maps, graph::Usage::Sampled)
+        plugin::readGBuffer(accumulate, io.gbuffer);
+        accumulate.read(maps, graph::Usage::Sampled)
             .write(sums, graph::Usage::Storage);
         if (!previous.empty()) accumulate.read(previous, graph::Usage::Storage);
         accumulate.execute([this, io, maps, previous, sums, batch](graph::PassContext& pass) {
@@ -210,9 +209,8 @@ void RasterReference::recordAccumulate(const graph::PassContext& pass, const plu
     const gpu::Pipeline& pipeline = previous.empty() ? accumulateFirst_ : accumulate_;
     pipeline.bind(cmd);
     gpu::DescriptorPush descriptors;
-    descriptors.storageImage("gPosition", pass.image(io.gPosition))
-        .storageImage("gNormal", pass.image(io.gNormal))
-        .sampledImage("sampleMaps", pass.image(maps), compareSampler_, pass.layout(maps))
+    plugin::bindGBuffer(pass, io.gbuffer, descriptors);
+    descriptors.sampledImage("sampleMaps", pass.image(maps), compareSampler_, pass.layout(maps))
         .storageImage("sums", out)
         .storageBuffer("shadowMapArray", sampleMaps_);
     if (!previous.empty()) descriptors.storageImage("previousSums", pass.image(previous));

@@ -18,13 +18,12 @@
 // The horizon: a sample below the receiver's tangent plane, dot(n, towards sample) <= 0
 // with n the G-buffer normal (it faces the camera), counts as blocked, as in the ray
 // tracer; a pixel without a normal has no horizon test.
+#define GBUFFER_BINDING 6  // gDepth, gNormal, GBufferCamera: plugin::bindGBuffer
 #include "common/gbuffer.glsl"
 #include "common/visibility.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(binding = 0, GBUFFER_POSITION_FORMAT) uniform readonly image2D gPosition;
-layout(binding = 1, GBUFFER_NORMAL_FORMAT) uniform readonly image2D gNormal;
 layout(binding = 2) uniform sampler2DShadow sampleMaps;
 #ifndef FIRST_BATCH
 layout(binding = 3, rg32f) uniform readonly image2D previousSums;  // the first batch starts from zero
@@ -75,18 +74,17 @@ void main()
 #else
     vec2 sum = imageLoad(previousSums, pixel).xy;
 #endif
-    vec4 position = imageLoad(gPosition, pixel);
+    vec4 position = gbufferPosition(pixel);
     if (position.w != 0.0) {
         vec3 p = position.xyz;
-        vec3 n = shadowReceiverNormal(pixel);
-        bool hasNormal = dot(n, n) > 0.0;
+        vec3 n = gbufferNormal(pixel);
         for (uint k = 0u; k < pc.sampleCount; ++k) {
             shadowMapIndex = pc.firstSample + k;
             float weight = sampleWeight(p);
             if (!(weight > 0.0)) continue;
             vec3 l = shadowTowardsLight(p);
             float lit = 1.0;  // at the sample itself, or outside its map (a spot's cone): lit by contract
-            if (hasNormal && dot(l, l) > 0.0 && dot(n, l) <= 0.0) {
+            if (dot(l, l) > 0.0 && dot(n, l) <= 0.0) {
                 lit = 0.0;  // below the horizon
             } else {
                 ShadowReceiver r;

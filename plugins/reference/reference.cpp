@@ -1,8 +1,8 @@
 // The reference technique (README.md next to this file): exact area-light visibility by
 // ray tracing with Embree on the CPU. Per frame, inside the frame's render graph: a
-// transfer pass copies the G-buffer's positions and normals into host-visible buffers, a
+// compute pass copies the G-buffer's positions and normals into host-visible buffers, a
 // host pass traces stratified shadow rays from every pixel's surface point to the light
-// (or takes V from the disk cache), and a transfer pass uploads V into V_l.
+// (or takes V from the disk cache), and a compute pass writes V into V_l (upload.comp).
 #include "Digest.h"
 #include "LightSampling.h"
 #include "RasterReference.h"
@@ -11,14 +11,15 @@
 #include "VisibilityCache.h"
 
 #include "penumbra/core/Error.h"
+#include "penumbra/gpu/Pipeline.h"
 #include "penumbra/gpu/Resources.h"
 #include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
+#include "penumbra/plugin/GBuffer.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/Technique.h"
 
 #include <fmt/format.h>
-#include <glm/gtc/packing.hpp>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -99,11 +100,6 @@ Settings readSettings(const plugin::ParamValues& params)
 
 std::atomic<uint64_t> gFramesTraced{0}, gRaysTraced{0}, gCacheHits{0}, gCacheRejected{0}, gCacheWrites{0};
 
-// G-buffer read-back formats (shaders/common/gbuffer.glsl): position RGBA32F, normal
-// RGBA16F.
-constexpr VkDeviceSize kPositionTexelBytes = 4 * sizeof(float);
-constexpr VkDeviceSize kNormalTexelBytes = 4 * sizeof(uint16_t);
-
 // Shows how far tracing is, on stderr, when stderr is a terminal (never in logs or
 // pipes). Redraws one line from the thread that waits for the tracers.
 class ProgressLine {
@@ -138,6 +134,14 @@ private:
     std::chrono::steady_clock::time_point start_;
 };
 
+gpu::ComputePipelineDesc uploadPipeline()
+{
+    gpu::ComputePipelineDesc desc;
+    desc.name = "reference.upload";
+    desc.shader = "upload.comp";
+    return desc;
+}
+
 class ReferenceShadow final : public plugin::Technique {
 public:
     explicit ReferenceShadow(const plugin::TechniqueSetup& setup)
@@ -148,7 +152,9 @@ public:
           light_(setup.light),
           sampler_(setup.light),
           tracer_(setup.scene),
-          cache_(defaultCacheFolder())
+          cache_(defaultCacheFolder()),
+          gbufferExport_(setup.context, setup.shaders),
+          upload_(setup.context, setup.shaders, uploadPipeline())
     {
         if (settings_.cache && cache_.folder().empty())
             spdlog::warn("reference (light {}): no cache folder: set PENUMBRA_CACHE_DIR (or XDG_CACHE_HOME or HOME); "
@@ -169,18 +175,10 @@ public:
         const VkDeviceSize pixels = VkDeviceSize(width_) * height_;
         const std::string positions = io.local("positions"), normals = io.local("normals"),
                           visibility = io.local("visibility_host");
-        graph.declareBuffer({positions, pixels * kPositionTexelBytes});
-        graph.declareBuffer({normals, pixels * kNormalTexelBytes});
+        graph.declareBuffer({positions, pixels * plugin::GBufferExport::kTexelBytes});
+        graph.declareBuffer({normals, pixels * plugin::GBufferExport::kTexelBytes});
         graph.declareBuffer({visibility, pixels * sizeof(float)});
-        graph.addPass(io.local("read_gbuffer"), graph::QueueKind::Transfer)
-            .read(io.gPosition, graph::Usage::TransferSrc)
-            .read(io.gNormal, graph::Usage::TransferSrc)
-            .write(positions, graph::Usage::TransferDst)
-            .write(normals, graph::Usage::TransferDst)
-            .execute([=](graph::PassContext& pass) {
-                copyToBuffer(pass, io.gPosition, positions);
-                copyToBuffer(pass, io.gNormal, normals);
-            });
+        gbufferExport_.addPass(graph, io.local("read_gbuffer"), io.gbuffer, positions, normals);
         std::string label = io.prefix;
         if (!label.empty() && label.back() == '.') label.pop_back();
         graph.addPass(io.local("trace"), graph::QueueKind::Host)
@@ -191,30 +189,21 @@ public:
                 computeVisibility(pass.hostMemory(positions), pass.hostMemory(normals), pass.hostMemory(visibility),
                                   label);
             });
-        graph.addPass(io.local("upload"), graph::QueueKind::Transfer)
-            .read(visibility, graph::Usage::TransferSrc)
-            .write(io.visibility, graph::Usage::TransferDst)
-            .execute([=](graph::PassContext& pass) {
+        graph.addPass(io.local("upload"), graph::QueueKind::Compute)
+            .read(visibility, graph::Usage::Storage)
+            .write(io.visibility, graph::Usage::Storage)
+            .execute([=, this](graph::PassContext& pass) {
                 const gpu::Image& image = pass.image(io.visibility);
-                VkBufferImageCopy region{};
-                region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-                region.imageExtent = {image.desc().width, image.desc().height, 1};
-                vkCmdCopyBufferToImage(pass.cmd(), pass.buffer(visibility).handle(), image.handle(),
-                                       pass.layout(io.visibility), 1, &region);
+                upload_.bind(pass.cmd());
+                gpu::DescriptorPush()
+                    .storageBuffer("Traced", pass.buffer(visibility))
+                    .storageImage("visibilityOut", image)
+                    .push(pass.context(), pass.cmd(), upload_);
+                upload_.dispatchOver(pass.cmd(), image);
             });
     }
 
 private:
-    static void copyToBuffer(const graph::PassContext& pass, const std::string& image, const std::string& buffer)
-    {
-        const gpu::Image& source = pass.image(image);
-        VkBufferImageCopy region{};
-        region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-        region.imageExtent = {source.desc().width, source.desc().height, 1};
-        vkCmdCopyImageToBuffer(pass.cmd(), source.handle(), pass.layout(image), pass.buffer(buffer).handle(), 1,
-                               &region);
-    }
-
     // Everything V depends on: the algorithm, the scene's shadow-casting geometry, the
     // light's shape and placement (not its colour or intensity), the parameters that
     // change values (not `cache` or `threads`), and the G-buffer, which holds the camera.
@@ -295,7 +284,7 @@ private:
                              const std::string& label) const
     {
         const auto* positions = reinterpret_cast<const float*>(positionBytes.data());
-        const auto* normals = reinterpret_cast<const uint16_t*>(normalBytes.data());
+        const auto* normals = reinterpret_cast<const float*>(normalBytes.data());
         std::vector<float> values(size_t(width_) * height_);
         const uint32_t threads =
             std::max(1u, settings_.threads > 0 ? settings_.threads : std::thread::hardware_concurrency());
@@ -342,14 +331,13 @@ private:
     }
 
     // V of one pixel: the mean transmittance of its stratified samples, in [0, 1].
-    float tracePixel(size_t pixel, const float* position, const uint16_t* normalHalf, uint32_t count,
+    float tracePixel(size_t pixel, const float* position, const float* normalWorld, uint32_t count,
                      RayScratch& scratch, uint64_t& traced) const
     {
         if (position[3] == 0.0f) return 1.0f;  // no geometry: VISIBILITY_NO_GEOMETRY
         const glm::vec3 p(position[0], position[1], position[2]);
         if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) return 1.0f;
-        const glm::vec3 n(glm::unpackHalf1x16(normalHalf[0]), glm::unpackHalf1x16(normalHalf[1]),
-                          glm::unpackHalf1x16(normalHalf[2]));
+        const glm::vec3 n(normalWorld[0], normalWorld[1], normalWorld[2]);
         const float nLength = glm::length(n);
         const glm::vec3 pAbs = glm::abs(p);
         const float offset = kRayOffset * (tracer_.sceneRadius() + std::max({pAbs.x, pAbs.y, pAbs.z}));
@@ -397,6 +385,8 @@ private:
     LightSampler sampler_;
     SceneTracer tracer_;
     VisibilityCache cache_;
+    plugin::GBufferExport gbufferExport_;  // the G-buffer as floats for the tracer
+    gpu::Pipeline upload_;                 // upload.comp: the traced V into V_l
     std::optional<CacheKey> lastKey_;
     std::vector<float> last_;
     bool storeWarned_ = false;

@@ -11,6 +11,7 @@
 //              footprint's long axis, at the level of its short one
 //   LEVELS   mip levels bound (1 for FILTER 0), at most 15
 //   VSM_VARIANT, MOMENT_CHANNELS (moments.glsl)
+#define GBUFFER_BINDING 5  // gDepth, gNormal, GBufferCamera: plugin::bindGBuffer
 #include "common/gbuffer.glsl"
 #include "common/visibility.glsl"
 #include "moments.glsl"
@@ -30,10 +31,8 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(binding = 0, GBUFFER_POSITION_FORMAT) uniform readonly image2D gPosition;
 layout(binding = 1, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
 // The horizon (every filter) and the footprint (mips) read the normal.
-layout(binding = 3, GBUFFER_NORMAL_FORMAT) uniform readonly image2D gNormal;
 // Level k has faceTexels / 2^k texels per face; each its own image (a graph resource).
 layout(binding = 4) uniform sampler2D momentLevels[LEVELS];
 
@@ -137,7 +136,7 @@ void footprint(ivec2 pixel, vec3 p, ShadowReceiver r, out vec2 dx, out vec2 dy)
 {
     dx = vec2(0.0);
     dy = vec2(0.0);
-    vec3 n = shadowReceiverNormal(pixel);
+    vec3 n = gbufferNormal(pixel);
     if (dot(n, n) == 0.0) return;
     vec3 q, a;
     float w;
@@ -190,7 +189,7 @@ void main()
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(pixel, imageSize(visibilityOut)))) return;
 
-    vec4 position = imageLoad(gPosition, pixel);
+    vec4 position = gbufferPosition(pixel);
     float v = VISIBILITY_NO_GEOMETRY;
     ShadowReceiver r;
     if (position.w != 0.0) {
@@ -199,7 +198,7 @@ void main()
             v = momentVisibility(filteredMoments(r, pixel, position.xyz), t, pc.exponents, pc.minVariance,
                                  pc.bleedingReduction);
         }
-        v *= shadowLightAboveHorizon(position.xyz, shadowReceiverNormal(pixel));
+        v *= shadowLightAboveHorizon(position.xyz, gbufferNormal(pixel));
     }
     imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
 }

@@ -36,6 +36,7 @@
 // sub-kernels compared with different references.
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 
+#define GBUFFER_BINDING 8  // gDepth, gNormal, GBufferCamera: plugin::bindGBuffer
 #include "common/gbuffer.glsl"
 #include "common/sampling.glsl"
 #include "common/visibility.glsl"
@@ -55,10 +56,8 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(binding = 0, GBUFFER_POSITION_FORMAT) uniform readonly image2D gPosition;
 layout(binding = 1) uniform sampler2DShadow shadowCompare;  // nearest, GREATER_OR_EQUAL
 layout(binding = 2, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
-layout(binding = 4, GBUFFER_NORMAL_FORMAT) uniform readonly image2D gNormal;
 layout(binding = 5) uniform sampler2D shadowDepth;  // the same map, raw depths
 
 #define SAT_BINDING 6
@@ -409,7 +408,7 @@ void main()
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(pixel, imageSize(visibilityOut)))) return;
 
-    vec4 position = imageLoad(gPosition, pixel);
+    vec4 position = gbufferPosition(pixel);
     float v = VISIBILITY_NO_GEOMETRY;
     Result res = Result(VISIBILITY_NO_GEOMETRY, 0.0, kClassLit);
     gVisited = 0u;
@@ -422,7 +421,7 @@ void main()
                               : vec2(0.0);
             res = vssmVisibility(pixel);
         }
-        v = res.v * shadowLightAboveHorizon(position.xyz, shadowReceiverNormal(pixel));
+        v = res.v * shadowLightAboveHorizon(position.xyz, gbufferNormal(pixel));
     }
     // The debug views replace V where there is geometry (the contract keeps 1 elsewhere).
     if (position.w != 0.0) {

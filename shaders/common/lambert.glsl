@@ -2,8 +2,8 @@
 // BRDF albedo / pi; directional lights give irradiance = intensity * cos, the others
 // intensity / d^2 * cos, times the spot cone for spots and the emitter's own cosine for
 // rect and disk lights (taken as their centre point here). `v` is the light's visibility.
-// The floor's forward pass (engine/floor_forward.frag) shades with it; shading.comp
-// holds the same formula as lightContribution.
+// The frame's shading pass (engine/shading.comp) and the floor's forward pass
+// (engine/floor_forward.frag) both shade with it.
 #ifndef PENUMBRA_LAMBERT_GLSL
 #define PENUMBRA_LAMBERT_GLSL
 

@@ -7,10 +7,8 @@
 //                         1 normal offset (Holbert 2011)
 //                         2 receiver plane depth bias (Isidoro 2006)
 //                         (render::ReceiverBias in render/ShadowMap.h)
-// and declares `gNormal` (GBUFFER_NORMAL_FORMAT, readonly image2D: every technique
-// weighs V by the part of the light above the receiver's horizon, shadowReceiverNormal),
-// `gPosition` (GBUFFER_POSITION_FORMAT, readonly image2D) for bias 2 (and for
-// SHADOW_SURFACE_NEIGHBOURS, below).
+// and includes common/gbuffer.glsl with GBUFFER_BINDING defined (receivers and their
+// neighbours are read through gbufferPosition / gbufferNormal).
 #ifndef PENUMBRA_SHADOW_RECEIVER_GLSL
 #define PENUMBRA_SHADOW_RECEIVER_GLSL
 
@@ -120,7 +118,7 @@ vec3 shadowOffsetAlongNormal(uint face, vec3 p, vec3 n, float texelWorld, float 
 
 #if SHADOW_RECEIVER_BIAS == SHADOW_RECEIVER_BIAS_PLANE || defined(SHADOW_SURFACE_NEIGHBOURS)
 // Neighbouring pixels on the receiver's own surface: they give the receiver plane, and
-// (define SHADOW_SURFACE_NEIGHBOURS and declare gPosition for this part alone) a pixel's
+// (define SHADOW_SURFACE_NEIGHBOURS for this part alone) a pixel's
 // footprint in the map, for filters that choose a level of detail.
 //
 // Neighbours give the plane of the triangle the map holds, where the receiver is flat
@@ -142,11 +140,11 @@ bool shadowSurfaceNeighbour(ivec2 pixel, ivec2 axis, vec3 p, vec3 n, out vec3 q)
     q = p;
     float best = kShadowCoplanarSine;
     bool found = false;
-    ivec2 size = imageSize(gPosition);
+    ivec2 size = gbufferSize();
     for (int side = -1; side <= 1; side += 2) {
         ivec2 at = pixel + side * axis;
         if (any(lessThan(at, ivec2(0))) || any(greaterThanEqual(at, size))) continue;
-        vec4 other = imageLoad(gPosition, at);
+        vec4 other = gbufferPosition(at);
         vec3 d = other.xyz - p;
         float len = length(d);
         if (other.w == 0.0 || !(len > 0.0)) continue;
@@ -242,14 +240,6 @@ void shadowReceiverPlane(ivec2 pixel, vec3 p, vec3 n, float texelWorld, inout Sh
 }
 #endif
 
-// The G-buffer's unit normal at `pixel` (facing the camera), or 0 where it has none.
-vec3 shadowReceiverNormal(ivec2 pixel)
-{
-    vec3 n = imageLoad(gNormal, pixel).xyz;
-    float nLength = length(n);
-    return nLength > 1e-6 ? n / nLength : vec3(0.0);
-}
-
 // The receiver seen in `pixel` at world position `p`. False where the map has nothing to
 // say (behind the light, outside the map): V = 1 there by contract, the light's own cone
 // gives zero light in shading. `normalOffsetTexels` is read with bias 1 only.
@@ -260,8 +250,14 @@ bool makeShadowReceiver(ivec2 pixel, vec3 p, float normalOffsetTexels, out Shado
     r.depth = 0.0;
     r.w = 0.0;
 #if SHADOW_RECEIVER_BIAS != SHADOW_RECEIVER_BIAS_NONE
-    vec3 n = shadowReceiverNormal(pixel);  // no normal: no receiver-side bias
+    vec3 n = gbufferNormal(pixel);
 #endif
+    // The G-buffer's position is rebuilt from the camera depth: the true surface point
+    // lies within gbufferPositionError of it, on any side. Taken at its nearest to the
+    // light, so that the surface never shadows itself for that reason (an error of a few
+    // 1e-7 of the camera distance: far below any shadow detail, but the size of the
+    // ulp-scaled rasterizer biases).
+    p += shadowTowardsLight(p) * gbufferPositionError(p);
     vec3 uvDepth;
     float w;
 #if SHADOW_RECEIVER_BIAS == SHADOW_RECEIVER_BIAS_NORMAL_OFFSET

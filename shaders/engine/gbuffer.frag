@@ -2,7 +2,6 @@
 #include "common/gbuffer.glsl"
 #include "common/scene.glsl"
 
-layout(location = 0) in vec3 inPositionWorld;
 layout(location = 1) in vec3 inNormalWorld;
 layout(location = 2) in vec2 inUv;
 layout(location = 3) flat in uint inMaterial;
@@ -10,9 +9,9 @@ layout(location = 3) flat in uint inMaterial;
 layout(std430, binding = 1) readonly buffer Materials { MaterialData materials[]; };
 layout(binding = 2) uniform sampler2D baseColorTexture;  // pushed per group of draws
 
-layout(location = 0) out vec4 outPosition;
-layout(location = 1) out vec4 outNormal;
-layout(location = 2) out vec4 outAlbedo;
+// The position is the depth's (common/gbuffer.glsl rebuilds it).
+layout(location = 0) out vec2 outNormal;  // octahedral
+layout(location = 1) out vec4 outAlbedo;
 
 void main()
 {
@@ -24,7 +23,6 @@ void main()
     vec3 n = normalize(inNormalWorld);
     // Two-sided lighting: a back face seen by the camera is lit from its visible side.
     if (!gl_FrontFacing) n = -n;
-    outPosition = vec4(inPositionWorld, 1.0);
-    outNormal = vec4(n, 0.0);
+    outNormal = gbufferEncodeNormal(n);
     outAlbedo = baseColor;
 }

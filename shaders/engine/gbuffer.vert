@@ -11,7 +11,6 @@ layout(push_constant) uniform Push {
     mat4 viewProj;
 } pc;
 
-layout(location = 0) out vec3 outPositionWorld;
 layout(location = 1) out vec3 outNormalWorld;
 layout(location = 2) out vec2 outUv;
 layout(location = 3) flat out uint outMaterial;
@@ -20,7 +19,6 @@ void main()
 {
     InstanceData inst = instances[gl_InstanceIndex];
     vec4 world = inst.model * vec4(inPosition, 1.0);
-    outPositionWorld = world.xyz;
     outNormalWorld = mat3(inst.normalMatrix) * inNormal;
     outUv = inUv;
     outMaterial = inst.info.x;

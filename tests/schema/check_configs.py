@@ -57,6 +57,7 @@ good = {
         {"target": "/lights/1/intensity", "keys": [{"t": 0, "value": 1}]}]}},
     "a track of an included light": {"include": "two-spots.json", "animation": {"tracks": [
         {"target": "/lights/1/color", "keys": [{"t": 0, "value": [1, 1, 1]}]}]}},
+    "an unshadowed light": {"lights": [dict(point, shadow={"technique": "none"})]},
     "sweep pointers": {"sweep": [{"paths": ["/lights/0/shadow", "/culling"], "values": [[{}, "none"]]},
                                  {"path": "/lights", "values": [[point]]}]},
 }
@@ -117,6 +118,8 @@ bad = {
     "pcss radius out of range": ({"lights": [dict(point, shadow={"technique": "pcss", "max_filter_radius": 1000})]},
                                  "/lights/0/shadow/max_filter_radius"),
     "vsm unknown variant": ({"lights": [dict(point, shadow={"technique": "vsm", "variant": "msm"})]}, "/lights/0/shadow/variant"),
+    "parameter on an unshadowed light": ({"lights": [dict(point, shadow={"technique": "none", "resolution": 512})]},
+                                         "/lights/0/shadow/resolution"),
     "hard parameter on vsm": ({"lights": [dict(point, shadow={"technique": "vsm", "pcf_kernel": 3})]},
                               "/lights/0/shadow/pcf_kernel"),
 }

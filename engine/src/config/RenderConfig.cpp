@@ -90,6 +90,7 @@ ShadowSettings readShadow(ObjectReader& light)
     // name, type and range when the technique is created.
     for (auto it = v->begin(); it != v->end(); ++it) {
         if (it.key() == "technique" || it.key() == "required") continue;
+        if (s.unshadowed()) r.fail(r.path(it.key()), "technique \"none\" (an unshadowed light) takes no parameters");
         s.params.push_back({it.key(), it.value(), light.locator().where(r.path(it.key()))});
     }
     return s;

@@ -3,23 +3,31 @@
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
 #include "frame/LightTable.h"
+#include "penumbra/plugin/GBuffer.h"
 #include "penumbra/plugin/Params.h"
 #include "visibility/Visibility.h"
 
 #include <fmt/format.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstring>
 
 namespace penumbra::frame {
 namespace {
 
-constexpr VkFormat kPositionFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
-constexpr VkFormat kNormalFormat = VK_FORMAT_R16G16B16A16_SFLOAT;
+// The G-buffer's formats: shaders/common/gbuffer.glsl.
+constexpr VkFormat kNormalFormat = VK_FORMAT_R16G16_SNORM;
 constexpr VkFormat kAlbedoFormat = VK_FORMAT_R8G8B8A8_UNORM;
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
 constexpr VkFormat kColorFormat = VK_FORMAT_R8G8B8A8_UNORM;
-constexpr VkFormat kVisibilityFormat = VK_FORMAT_R32_SFLOAT;  // shaders/common/visibility.glsl
+constexpr VkFormat kVisibilityFormat = VK_FORMAT_R16_UNORM;  // shaders/common/visibility.glsl
+
+struct GBufferCameraData {  // matches GBufferCamera in shaders/common/gbuffer.glsl (std140)
+    glm::vec4 eye;
+    glm::vec4 rayX, rayY, rayZ;  // world point at NDC (x, y, depth): eye + (x rayX + y rayY + rayZ) / depth
+    glm::vec4 size;
+};
 
 struct ShadingPush {
     glm::vec4 ambient;
@@ -32,7 +40,6 @@ double msSince(std::chrono::steady_clock::time_point start)
 }
 
 // Graph names of the engine's images (plugin::LightPassIo refers to the G-buffer ones).
-constexpr const char* kGPosition = "gbuffer.position";
 constexpr const char* kGNormal = "gbuffer.normal";
 constexpr const char* kGAlbedo = "gbuffer.albedo";
 constexpr const char* kGDepth = "gbuffer.depth";
@@ -51,12 +58,13 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
       sceneGpu_(context, scene, config.batchDraws ? render::DrawBatching::Batched : render::DrawBatching::PerInstance),
       casters_(sceneGpu_),
       lightBuffer_(context, sizeof(LightData) * config::kMaxLights, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "lights"),
+      gbufferCamera_(context, sizeof(GBufferCameraData), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, "gbuffer.camera"),
       executor_(context)
 {
     if (config.lights.empty() || config.lights.size() > config::kMaxLights) {
         throw Error(fmt::format("{} lights: expected 1 to {}", config.lights.size(), config::kMaxLights));
     }
-    cameraViewProj_ = render::cameraViewProj(config.camera, float(width_) / float(height_));
+    setCamera(config.camera);
     ambient_ = kSkyAmbient;
     background_ = kBackground;
 
@@ -69,7 +77,7 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
                       {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(scene::Vertex, position)},
                        {1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(scene::Vertex, normal)},
                        {2, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(scene::Vertex, uv)}}};
-    g.colorFormats = {kPositionFormat, kNormalFormat, kAlbedoFormat};
+    g.colorFormats = {kNormalFormat, kAlbedoFormat};
     g.depthFormat = kDepthFormat;
     g.depthCompare = VK_COMPARE_OP_GREATER_OR_EQUAL;
     // Open or single-sided geometry (the ground plane seen from below) must still
@@ -77,20 +85,55 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
     g.cullMode = VK_CULL_MODE_NONE;
     gbufferPipeline_ = gpu::Pipeline(context, compiler_, g);
 
-    gpu::ComputePipelineDesc s;
-    s.name = "shading";
-    s.shader = "engine/shading.comp";
-    s.defines = {{"LIGHT_COUNT", std::to_string(config.lights.size())}};
-    s.pushConstantBytes = sizeof(ShadingPush);
-    shadingPipeline_ = gpu::Pipeline(context, compiler_, s);
     nearestSampler_ = gpu::createSampler(context, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
     visibility_ = std::make_unique<visibility::Visibility>(context, compiler_, scene, sceneGpu_, config.culling, width_,
                                                            height_, config.shadowFocus);
     casters_.setCulling(visibility_.get());
 
     createTechniques(config, scene);
+    createShadingPipeline();
     updateLights(config, scene.bounds());
     buildGraph();
+}
+
+// The shading pass is compiled for the frame's lights: LIGHT_COUNT, and for each light i
+// VISIBILITY_SLOT_<i>, its element of the visibility[] array, or -1 for a light without
+// a visibility image (technique "none": V = 1 in the shader, no image read).
+void FrameRenderer::createShadingPipeline()
+{
+    gpu::ComputePipelineDesc s;
+    s.name = "shading";
+    s.shader = "engine/shading.comp";
+    s.defines = {{"LIGHT_COUNT", std::to_string(lights_.size())}};
+    int slots = 0;
+    for (size_t i = 0; i < lights_.size(); ++i)
+        s.defines.push_back({fmt::format("VISIBILITY_SLOT_{}", i), lights_[i].unshadowed ? "-1" : std::to_string(slots++)});
+    s.defines.push_back({"VISIBILITY_COUNT", std::to_string(slots)});
+    s.pushConstantBytes = sizeof(ShadingPush);
+    shadingPipeline_ = gpu::Pipeline(context_, compiler_, s);
+}
+
+void FrameRenderer::setCamera(const scene::Camera& camera)
+{
+    const float aspect = float(width_) / float(height_);
+    cameraViewProj_ = render::cameraViewProj(camera, aspect);
+    // The unprojection, in double: world_h = M^-1 (x, y, depth, 1). For the infinite
+    // reversed-Z perspective only the depth column has a w (1 / near), and it holds
+    // eye / near, so world = eye + (x c0 + y c1 + c3) / (depth c2.w).
+    const glm::dmat4 inverse =
+        glm::inverse(glm::dmat4(render::perspectiveReversedZ(glm::radians(camera.fovYDeg), aspect, camera.nearWorld)) *
+                     glm::dmat4(render::cameraView(camera)));
+    const double wPerDepth = inverse[2][3];
+    const double otherW = std::abs(inverse[0][3]) + std::abs(inverse[1][3]) + std::abs(inverse[3][3]);
+    if (!(std::abs(wPerDepth) > 0.0) || !(otherW <= 1e-9 * std::abs(wPerDepth))) {
+        throw Error(fmt::format("camera: near {} gives no reversed-Z perspective to unproject", camera.nearWorld));
+    }
+    auto* data = static_cast<GBufferCameraData*>(gbufferCamera_.mapped());
+    data->eye = glm::vec4(camera.position, 1.0f);
+    data->rayX = glm::vec4(glm::dvec3(inverse[0]) / wPerDepth, 0.0f);
+    data->rayY = glm::vec4(glm::dvec3(inverse[1]) / wPerDepth, 0.0f);
+    data->rayZ = glm::vec4(glm::dvec3(inverse[3]) / wPerDepth, 0.0f);
+    data->size = glm::vec4(float(width_), float(height_), 0.0f, 0.0f);
 }
 
 FrameRenderer::~FrameRenderer()
@@ -111,6 +154,11 @@ void FrameRenderer::createTechniques(const config::RenderConfig& config, const s
         slot.visibility = fmt::format("light{}.visibility", i);
         slot.required = lc.shadow.required;
         slot.light = lc.light;
+        slot.unshadowed = lc.shadow.unshadowed();
+        if (slot.unshadowed) {
+            slot.technique = lc.shadow.technique;
+            continue;
+        }
         const std::string who = fmt::format("light {} ('{}')", i, lc.name);
         try {
             slot.plugin = &plugins_.load(lc.shadow.technique);
@@ -155,13 +203,11 @@ void FrameRenderer::buildGraph()
     for (;;) {
         graph_ = std::make_unique<graph::RenderGraph>();
         graph::RenderGraph& g = *graph_;
-        g.declareImage({kGPosition, width_, height_, kPositionFormat});
         g.declareImage({kGNormal, width_, height_, kNormalFormat});
         g.declareImage({kGAlbedo, width_, height_, kAlbedoFormat});
         g.declareImage({kGDepth, width_, height_, kDepthFormat});
         g.declareImage({kColor, width_, height_, kColorFormat});
         g.addPass("gbuffer", graph::QueueKind::Graphics)
-            .write(kGPosition, graph::Usage::ColorAttachment)
             .write(kGNormal, graph::Usage::ColorAttachment)
             .write(kGAlbedo, graph::Usage::ColorAttachment)
             .write(kGDepth, graph::Usage::DepthAttachment)
@@ -169,24 +215,27 @@ void FrameRenderer::buildGraph()
 
         bool restart = false;
         for (size_t i = 0; i < lights_.size() && !restart; ++i) {
+            if (lights_[i].unshadowed) continue;
             g.declareImage({lights_[i].visibility, width_, height_, kVisibilityFormat});
             restart = !registerTechnique(i);
         }
         if (restart) continue;
 
         graph::PassBuilder shading = g.addPass("shading", graph::QueueKind::Compute);
-        shading.read(kGPosition, graph::Usage::Storage)
-            .read(kGNormal, graph::Usage::Storage)
-            .read(kGAlbedo, graph::Usage::Storage)
+        shading.read(kGDepth, graph::Usage::Sampled)
+            .read(kGNormal, graph::Usage::Sampled)
+            .read(kGAlbedo, graph::Usage::Sampled)
             .write(kColor, graph::Usage::Storage)
             .execute([this](graph::PassContext& pass) { recordShading(pass); });
-        for (const LightSlot& slot : lights_) shading.read(slot.visibility, graph::Usage::Sampled);
-        // The colour image is the frame's result; V_l and the G-buffer surfaces are read
-        // back by metrics and tests.
+        for (const LightSlot& slot : lights_)
+            if (!slot.unshadowed) shading.read(slot.visibility, graph::Usage::Sampled);
+        // The colour image is the frame's result; V_l and the G-buffer surfaces (depth and
+        // normal: readPositions, readNormals) are read back by metrics and tests.
         g.markOutput(kColor);
-        g.markOutput(kGPosition);
+        g.markOutput(kGDepth);
         g.markOutput(kGNormal);
-        for (const LightSlot& slot : lights_) g.markOutput(slot.visibility);
+        for (const LightSlot& slot : lights_)
+            if (!slot.unshadowed) g.markOutput(slot.visibility);
         g.compile();
         return;
     }
@@ -201,9 +250,7 @@ bool FrameRenderer::registerTechnique(size_t light)
     if (slot.instance) {
         plugin::LightPassIo io;
         io.prefix = shadowPassPrefix(light);
-        io.gPosition = kGPosition;
-        io.gNormal = kGNormal;
-        io.gDepth = kGDepth;
+        io.gbuffer = gbufferIo();
         io.visibility = slot.visibility;
         std::string failure;
         try {
@@ -253,7 +300,7 @@ void FrameRenderer::update(const config::RenderConfig& config, const scene::Scen
         throw Error("FrameRenderer::update: called with another scene than the renderer was built with; animate "
                     "that scene in place (config::applyAnimation, Scene::updateTransforms)");
     }
-    cameraViewProj_ = render::cameraViewProj(config.camera, float(width_) / float(height_));
+    setCamera(config.camera);
     if (!movedInstances.empty()) {
         sceneGpu_.updateInstances(context_, scene);
         visibility_->instancesMoved(movedInstances);
@@ -297,15 +344,15 @@ FrameTimings FrameRenderer::renderFrame()
 void FrameRenderer::recordGBuffer(graph::PassContext& pass)
 {
     const VkCommandBuffer cmd = pass.cmd();
-    VkRenderingAttachmentInfo colors[3];
-    const char* targets[3] = {kGPosition, kGNormal, kGAlbedo};
-    for (int i = 0; i < 3; ++i) {
+    VkRenderingAttachmentInfo colors[2];
+    const char* targets[2] = {kGNormal, kGAlbedo};
+    for (int i = 0; i < 2; ++i) {
         colors[i] = {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
         colors[i].imageView = pass.image(targets[i]).view();
         colors[i].imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
         colors[i].loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
         colors[i].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-        colors[i].clearValue.color = {{0.0f, 0.0f, 0.0f, 0.0f}};  // w = 0: no geometry
+        colors[i].clearValue.color = {{0.0f, 0.0f, 0.0f, 0.0f}};  // where no geometry: depth 0 says so
     }
     VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
     depth.imageView = pass.image(kGDepth).view();
@@ -317,7 +364,7 @@ void FrameRenderer::recordGBuffer(graph::PassContext& pass)
     VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
     info.renderArea = {{0, 0}, {width_, height_}};
     info.layerCount = 1;
-    info.colorAttachmentCount = 3;
+    info.colorAttachmentCount = 2;
     info.pColorAttachments = colors;
     info.pDepthAttachment = &depth;
     vkCmdBeginRendering(cmd, &info);
@@ -344,16 +391,16 @@ void FrameRenderer::recordShading(graph::PassContext& pass)
 {
     const VkCommandBuffer cmd = pass.cmd();
     std::vector<const gpu::Image*> visibility;
-    for (const LightSlot& slot : lights_) visibility.push_back(&pass.image(slot.visibility));
+    for (const LightSlot& slot : lights_)
+        if (!slot.unshadowed) visibility.push_back(&pass.image(slot.visibility));
     shadingPipeline_.bind(cmd);
-    gpu::DescriptorPush()
-        .storageImage("gPosition", pass.image(kGPosition))
-        .storageImage("gNormal", pass.image(kGNormal))
-        .storageImage("gAlbedo", pass.image(kGAlbedo))
-        .sampledImages("visibility", visibility, nearestSampler_)
+    gpu::DescriptorPush descriptors;
+    plugin::bindGBuffer(pass, gbufferIo(), descriptors);
+    descriptors.sampledImage("gAlbedo", pass.image(kGAlbedo), nearestSampler_, pass.layout(kGAlbedo))
         .storageBuffer("Lights", lightBuffer_)
-        .storageImage("outColor", pass.image(kColor))
-        .push(context_, cmd, shadingPipeline_);
+        .storageImage("outColor", pass.image(kColor));
+    if (!visibility.empty()) descriptors.sampledImages("visibility", visibility, nearestSampler_);
+    descriptors.push(context_, cmd, shadingPipeline_);
     const ShadingPush push{ambient_, background_};
     shadingPipeline_.pushConstants(cmd, &push, sizeof(push));
     shadingPipeline_.dispatchOver(cmd, width_, height_);
@@ -372,10 +419,58 @@ std::vector<float> FrameRenderer::readFloats(const std::string& name) const
     return gpu::readImageFloats(context_, executor_.image(name), executor_.finalLayout(name));
 }
 
-std::vector<float> FrameRenderer::readVisibility(size_t light) const { return readFloats(lights_.at(light).visibility); }
+std::vector<float> FrameRenderer::readVisibility(size_t light) const
+{
+    const LightSlot& slot = lights_.at(light);
+    if (slot.unshadowed) return std::vector<float>(size_t(width_) * height_, 1.0f);
+    return readFloats(slot.visibility);
+}
 
-std::vector<float> FrameRenderer::readPositions() const { return readFloats(kGPosition); }
+plugin::GBufferIo FrameRenderer::gbufferIo() const
+{
+    plugin::GBufferIo io;
+    io.depth = kGDepth;
+    io.normal = kGNormal;
+    io.camera = &gbufferCamera_;
+    io.sampler = nearestSampler_;
+    return io;
+}
 
-std::vector<float> FrameRenderer::readNormals() const { return readFloats(kGNormal); }
+// The G-buffer's positions and normals as the techniques' shaders read them: exported on
+// the GPU by plugin::GBufferExport (common/gbuffer.glsl's readers), not decoded again here.
+FrameRenderer::SurfaceFloats FrameRenderer::readSurfaces() const
+{
+    if (!gbufferExport_) gbufferExport_ = std::make_unique<plugin::GBufferExport>(context_, compiler_);
+    const VkDeviceSize bytes = VkDeviceSize(width_) * height_ * plugin::GBufferExport::kTexelBytes;
+    const gpu::Buffer positions(context_, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "gbuffer.positions_readback");
+    const gpu::Buffer normals(context_, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "gbuffer.normals_readback");
+    const gpu::Image& depth = executor_.image(kGDepth);
+    const gpu::Image& normal = executor_.image(kGNormal);
+    const VkImageLayout depthLayout = executor_.finalLayout(kGDepth), normalLayout = executor_.finalLayout(kGNormal);
+    const gpu::ImageAccess depthRead = gpu::access::kComputeSampledDepth, normalRead = gpu::access::kComputeSampled;
+    context_.submitAndWait([&](VkCommandBuffer cmd) {
+        const gpu::ImageAccess last{VK_IMAGE_LAYOUT_UNDEFINED, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                                    VK_ACCESS_2_MEMORY_WRITE_BIT};
+        gpu::transition(cmd, depth, {depthLayout, last.stage, last.access}, depthRead);
+        gpu::transition(cmd, normal, {normalLayout, last.stage, last.access}, normalRead);
+        gbufferExport_->record(cmd, depth, depthRead.layout, normal, normalRead.layout, gbufferCamera_, nearestSampler_,
+                               positions, normals);
+        gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT},
+                           {VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT});
+        gpu::transition(cmd, depth, depthRead, {depthLayout, last.stage, VK_ACCESS_2_MEMORY_READ_BIT});
+        gpu::transition(cmd, normal, normalRead, {normalLayout, last.stage, VK_ACCESS_2_MEMORY_READ_BIT});
+    });
+    const size_t floats = size_t(bytes / sizeof(float));
+    SurfaceFloats out;
+    out.positions.resize(floats);
+    out.normals.resize(floats);
+    std::memcpy(out.positions.data(), positions.mapped(), bytes);
+    std::memcpy(out.normals.data(), normals.mapped(), bytes);
+    return out;
+}
+
+std::vector<float> FrameRenderer::readPositions() const { return readSurfaces().positions; }
+
+std::vector<float> FrameRenderer::readNormals() const { return readSurfaces().normals; }
 
 } // namespace penumbra::frame

@@ -117,7 +117,8 @@ uint32_t texelSize(VkFormat format)
     case VK_FORMAT_R32_SFLOAT:
     case VK_FORMAT_D32_SFLOAT:
     case VK_FORMAT_R32_UINT: return 4;
-    case VK_FORMAT_R16_SFLOAT: return 2;
+    case VK_FORMAT_R16_SFLOAT:
+    case VK_FORMAT_R16_UNORM: return 2;
     case VK_FORMAT_R16G16B16A16_SFLOAT:
     case VK_FORMAT_R32G32_SFLOAT: return 8;
     case VK_FORMAT_R32G32B32A32_SFLOAT: return 16;
@@ -338,9 +339,16 @@ std::vector<float> readImageFloats(Context& context, const Image& image, VkImage
         for (size_t i = 0; i < halves.size(); ++i) out[i] = glm::unpackHalf1x16(halves[i]);
         return out;
     }
+    if (format == VK_FORMAT_R16_UNORM) {
+        std::vector<uint16_t> values(bytes.size() / sizeof(uint16_t));
+        std::memcpy(values.data(), bytes.data(), values.size() * sizeof(uint16_t));
+        std::vector<float> out(values.size());
+        for (size_t i = 0; i < values.size(); ++i) out[i] = float(values[i]) / 65535.0f;
+        return out;
+    }
     if (format != VK_FORMAT_R32_SFLOAT && format != VK_FORMAT_R32G32B32A32_SFLOAT &&
         format != VK_FORMAT_D32_SFLOAT && format != VK_FORMAT_R32G32_SFLOAT) {
-        throw GpuError(fmt::format("readImageFloats: image '{}' is not a 16- or 32-bit float format",
+        throw GpuError(fmt::format("readImageFloats: image '{}' is not a 16- or 32-bit float or 16-bit unorm format",
                                    image.desc().name));
     }
     std::vector<float> out(bytes.size() / sizeof(float));

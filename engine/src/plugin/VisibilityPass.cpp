@@ -8,17 +8,15 @@ graph::PassBuilder addVisibilityPass(graph::RenderGraph& graph, const LightPassI
                                      BindVisibilityFn bind)
 {
     graph::PassBuilder builder = graph.addPass(io.local("visibility"), graph::QueueKind::Compute);
-    builder.read(io.gPosition, graph::Usage::Storage)
-        .read(io.gNormal, graph::Usage::Storage)
-        .write(io.visibility, graph::Usage::Storage)
+    readGBuffer(builder, io.gbuffer);
+    builder.write(io.visibility, graph::Usage::Storage)
         .execute([io, &pipeline, bind = std::move(bind)](graph::PassContext& pass) {
             const VkCommandBuffer cmd = pass.cmd();
             const gpu::Image& out = pass.image(io.visibility);
             pipeline.bind(cmd);
             gpu::DescriptorPush descriptors;
-            descriptors.storageImage("gPosition", pass.image(io.gPosition))
-                .storageImage("gNormal", pass.image(io.gNormal))
-                .storageImage("visibilityOut", out);
+            bindGBuffer(pass, io.gbuffer, descriptors);
+            descriptors.storageImage("visibilityOut", out);
             bind(pass, descriptors);
             descriptors.push(pass.context(), cmd, pipeline);
             pipeline.dispatchOver(cmd, out);

@@ -539,6 +539,12 @@ TEST(Config, WrongTypes)
               std::string::npos);
     doc["lights"][0]["shadow"] = {{"technique", "hard"}, {"required", "yes"}};
     EXPECT_NE(errorOf(doc).find("/lights/0/shadow/required: must be true or false"), std::string::npos);
+    // "none" is an unshadowed light: no plugin, so no parameters either.
+    doc["lights"][0]["shadow"] = {{"technique", "none"}, {"resolution", 512}};
+    EXPECT_NE(errorOf(doc).find("/lights/0/shadow/resolution: technique \"none\" (an unshadowed light) takes no parameters"),
+              std::string::npos);
+    doc["lights"][0]["shadow"] = {{"technique", "none"}};
+    EXPECT_TRUE(config::parseConfig(doc, "none.json").lights[0].shadow.unshadowed());
 }
 
 TEST(Config, DegenerateGeometryIsRejected)

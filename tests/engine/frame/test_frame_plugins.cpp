@@ -28,9 +28,12 @@ std::vector<std::filesystem::path> searchPath()
     return path;
 }
 
+// Equal up to V_l's storage (R16_UNORM, shaders/common/visibility.glsl): within half a
+// step of 1/65535 (0 and 1 are exact).
 ::testing::AssertionResult allEqual(const std::vector<float>& values, float expected)
 {
-    const auto bad = std::find_if(values.begin(), values.end(), [&](float v) { return v != expected; });
+    const auto bad = std::find_if(values.begin(), values.end(),
+                                  [&](float v) { return !(std::abs(v - expected) <= 0.5f / 65535.0f); });
     if (values.empty()) return ::testing::AssertionFailure() << "no values";
     if (bad == values.end()) return ::testing::AssertionSuccess();
     return ::testing::AssertionFailure() << "pixel " << (bad - values.begin()) << " is " << *bad << ", expected "
@@ -124,6 +127,30 @@ TEST_F(FramePlugins, TheExamplePluginShadowsEveryLightTypeAsHardDoes)
         EXPECT_LE(worst, 1e-6f);
         EXPECT_GT(shadowed, 200u) << "too few shadowed pixels for the comparison to mean anything";
     }
+}
+
+// Technique "none": an unshadowed light by choice. No plugin, no pass, no V_l, no
+// warning; shading takes V = 1, so the frame is the one a technique writing 1 gives.
+TEST_F(FramePlugins, TechniqueNoneLeavesTheLightUnshadowedWithoutPassesOrImage)
+{
+    config::RenderConfig none = twoLights("testgood", {});
+    none.lights[0].shadow = {};
+    none.lights[0].shadow.technique = "none";
+    const scene::Scene scene = config::buildScene(none.scene);
+    frame::FrameRenderer renderer(*context, scene, none, registry);
+    renderer.renderFrame();
+    EXPECT_TRUE(renderer.warnings().empty());
+    EXPECT_EQ(renderer.techniqueName(0), "none");
+    EXPECT_TRUE(allEqual(renderer.readVisibility(0), 1.0f));
+    EXPECT_TRUE(allEqual(renderer.readVisibility(1), 0.25f));
+    const graph::CompiledGraph& compiled = renderer.compiledGraph();
+    for (const auto& p : compiled.passes) EXPECT_NE(p.name.rfind("light0", 0), 0u) << p.name;
+    for (const auto& r : compiled.resources) EXPECT_NE(r.name, "light0.visibility");
+
+    const config::RenderConfig lit = twoLights("testgood", {{"mode", "unshadowed"}});
+    frame::FrameRenderer litRenderer(*context, scene, lit, registry);
+    litRenderer.renderFrame();
+    EXPECT_EQ(renderer.readColor(), litRenderer.readColor()) << "V = 1 in shading, as a technique writing 1 gives";
 }
 
 // Each way a light's technique can fail: the light is unshadowed (V = 1, the contract's

@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace penumbra::config {
@@ -29,12 +30,18 @@ struct ShadowParam {
 
 // "shadow": {"technique": "hard", "required": true, "pcf_kernel": 5, ...}: the technique
 // plugin, whether a failure to load it ends the run, and every other key as a parameter.
+// The technique name of an unshadowed light: no plugin, no passes, no visibility image;
+// shading takes V = 1 (the baseline a trade-off table compares techniques with).
+inline constexpr std::string_view kNoShadowTechnique = "none";
+
 struct ShadowSettings {
-    std::string technique = "hard";
+    std::string technique = "hard";  // a plugin's name, or kNoShadowTechnique
     // A required technique that fails to load or register stops the run (exit != 0);
     // otherwise the light is rendered unshadowed (V = 1) with a warning.
     bool required = false;
     std::vector<ShadowParam> params;
+
+    bool unshadowed() const { return technique == kNoShadowTechnique; }
 
     // The parameter's value as given, or null when the config leaves it at the default.
     const nlohmann::json* param(std::string_view name) const;

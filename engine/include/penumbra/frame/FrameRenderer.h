@@ -3,7 +3,9 @@
 // per light, the passes its technique plugin registers, which write the light's
 // visibility image V_l -> the engine's shading pass (reads every V_l) -> colour image.
 // The engine itself contains no shadow technique: a light whose plugin could not be
-// loaded or registered (and is not required) gets V_l = 1 from a clear, with a warning.
+// loaded or registered (and is not required) gets V_l = 1 from a clear, with a warning;
+// a light whose technique is "none" (config::kNoShadowTechnique) has no V_l at all and
+// shading takes V = 1 for it.
 #include "penumbra/config/Config.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/gpu/Pipeline.h"
@@ -11,6 +13,7 @@
 #include "penumbra/gpu/ShaderCompiler.h"
 #include "penumbra/graph/GraphExecutor.h"
 #include "penumbra/graph/RenderGraph.h"
+#include "penumbra/plugin/GBuffer.h"
 #include "penumbra/plugin/PluginRegistry.h"
 #include "penumbra/render/Casters.h"
 #include "penumbra/render/Projection.h"
@@ -68,7 +71,8 @@ public:
     // Lights rendered without their technique (plugin failed, not required): one line
     // each, naming light, plugin and the error.
     const std::vector<std::string>& warnings() const { return warnings_; }
-    // The technique a light uses ("hard"), empty when it fell back to unshadowed.
+    // The technique a light uses ("hard", or "none" for an unshadowed light), empty when it
+    // fell back to unshadowed.
     const std::string& techniqueName(size_t light) const { return lights_.at(light).technique; }
     // What the names of a light's shadow passes and resources begin with: its technique's
     // LightPassIo::prefix ("light0.hard."), or the unshadowed fallback's one pass
@@ -82,11 +86,13 @@ public:
 
     // Read-back after renderFrame(): sRGB RGBA8 rows, top row first.
     std::vector<uint8_t> readColor() const;
-    // V_l, one float per pixel.
+    // V_l, one float per pixel (all 1 for a light whose technique is "none").
     std::vector<float> readVisibility(size_t light) const;
-    // G-buffer world positions, four floats per pixel (w = 0 where no geometry).
+    // G-buffer world positions as the techniques read them (rebuilt from the depth,
+    // plugin::GBufferExport), four floats per pixel (all 0 where no geometry, w = 1
+    // elsewhere).
     std::vector<float> readPositions() const;
-    // G-buffer world normals, four floats per pixel.
+    // G-buffer unit world normals, four floats per pixel (0 where no geometry).
     std::vector<float> readNormals() const;
 
 private:
@@ -96,11 +102,20 @@ private:
         std::unique_ptr<plugin::ParamValues> params;
         std::unique_ptr<plugin::Technique> instance;
         bool required = false;
+        bool unshadowed = false;  // technique "none": no passes, no visibility image
         std::string visibility;  // "light<i>.visibility"
         scene::Light light;      // the state the technique was created with (its setup refers to it)
     };
 
+    struct SurfaceFloats {
+        std::vector<float> positions, normals;
+    };
+
     void createTechniques(const config::RenderConfig& config, const scene::Scene& scene);
+    void createShadingPipeline();
+    void setCamera(const scene::Camera& camera);
+    plugin::GBufferIo gbufferIo() const;
+    SurfaceFloats readSurfaces() const;
     void buildGraph();
     bool registerTechnique(size_t light);
     void dropTechnique(size_t light, const std::string& why);
@@ -123,6 +138,7 @@ private:
     render::Casters casters_;
     std::unique_ptr<visibility::Visibility> visibility_;
     gpu::Buffer lightBuffer_;
+    gpu::Buffer gbufferCamera_;  // GBufferCamera (common/gbuffer.glsl), rewritten by setCamera
     gpu::Pipeline gbufferPipeline_;
     gpu::Pipeline shadingPipeline_;
     gpu::Sampler nearestSampler_;
@@ -133,6 +149,7 @@ private:
     std::vector<std::string> warnings_;
     std::unique_ptr<graph::RenderGraph> graph_;
     graph::GraphExecutor executor_;
+    mutable std::unique_ptr<plugin::GBufferExport> gbufferExport_;  // made at the first read-back
 };
 
 } // namespace penumbra::frame

@@ -114,7 +114,7 @@ Image uploadImage(Context& context, uint32_t width, uint32_t height, VkFormat fo
 std::vector<std::byte> readImage(Context& context, const Image& image, VkImageLayout layout);
 
 // Same, as floats: one per channel (R32F gives one per texel, RGBA16F/RGBA32F four);
-// half floats are widened.
+// half floats are widened, 16-bit unorm values divided by 65535.
 std::vector<float> readImageFloats(Context& context, const Image& image, VkImageLayout layout);
 
 } // namespace penumbra::gpu

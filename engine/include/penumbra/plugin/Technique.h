@@ -4,6 +4,7 @@
 // one contract between the engine and a technique), drawing casters only through the
 // engine's caster interface (render/Casters.h).
 #include "penumbra/gpu/ShaderCompiler.h"
+#include "penumbra/plugin/GBuffer.h"
 #include "penumbra/graph/RenderGraph.h"
 #include "penumbra/plugin/Params.h"
 #include "penumbra/render/Casters.h"
@@ -49,13 +50,11 @@ struct LightPassIo {
     // Prefix for the technique's own pass and resource names, so that two lights using
     // one technique never collide: "light0.hard.".
     std::string prefix;
-    // G-buffer (screen size): world position (RGBA32F, w = 0 where no geometry), world
-    // normal (RGBA16F), reversed-Z depth (D32). Read as Usage::Storage (position, normal)
-    // or Usage::Sampled.
-    std::string gPosition = "gbuffer.position";
-    std::string gNormal = "gbuffer.normal";
-    std::string gDepth = "gbuffer.depth";
-    // V_l: R32F, screen size, values in [0, 1] (shaders/common/visibility.glsl). The
+    // The G-buffer (screen size): read it with readGBuffer / bindGBuffer and, in GLSL,
+    // common/gbuffer.glsl's gbufferPosition / gbufferNormal (plugin/GBuffer.h).
+    GBufferIo gbuffer;
+    // V_l: screen size, values in [0, 1], written as VISIBILITY_FORMAT by a shader
+    // (shaders/common/visibility.glsl) or as a float by a clear. The
     // technique must write every pixel of it in one of its passes (Usage::Storage or
     // Usage::ColorAttachment / TransferDst).
     std::string visibility;

@@ -1,6 +1,7 @@
 #pragma once
 // The pass a technique ends with: a compute shader run once per pixel of V_l that reads
-// the G-buffer's world position and normal and writes the light's visibility image
+// the G-buffer (common/gbuffer.glsl: gbufferPosition, gbufferNormal) and writes the
+// light's visibility image
 // (docs/plugins.md, "The contract"). Declared and recorded here once, so that a technique
 // says only what it adds: its own inputs, descriptors and push constants.
 #include "penumbra/gpu/Pipeline.h"
@@ -17,10 +18,10 @@ namespace penumbra::plugin {
 // and push its constants into pass.cmd().
 using BindVisibilityFn = std::function<void(const graph::PassContext& pass, gpu::DescriptorPush& descriptors)>;
 
-// Declares the compute pass io.local("visibility"), which reads io.gPosition and
-// io.gNormal and writes io.visibility, all as storage images that `pipeline`'s shader
-// names gPosition, gNormal and visibilityOut. Each frame it binds `pipeline`, pushes
-// those three and what `bind` adds, and dispatches one invocation per pixel of V_l
+// Declares the compute pass io.local("visibility"), which reads the G-buffer (readGBuffer)
+// and writes io.visibility as the storage image that `pipeline`'s shader names
+// visibilityOut. Each frame it binds `pipeline`, pushes the G-buffer's bindings
+// (bindGBuffer), visibilityOut and what `bind` adds, and dispatches one invocation per pixel of V_l
 // (Pipeline::dispatchOver). Returns the pass, for the technique's own reads (its shadow
 // map, ...). `pipeline` must live as long as the technique (a member of it).
 graph::PassBuilder addVisibilityPass(graph::RenderGraph& graph, const LightPassIo& io, const gpu::Pipeline& pipeline,
