@@ -7,6 +7,10 @@
 #include "common/lambert.glsl"
 #include "common/color.glsl"
 
+// Compute, not a full-screen triangle into a colour attachment: on llvmpipe the fragment
+// path writes a constant colour in half the time (4.4 against 9.3 ms), but this shading
+// costs the same or more there (67.0 against 65.1 ms, medians of 5 rounds under load;
+// docs/performance.md, "Full-screen passes"): the time is the per-pixel work, not the store.
 layout(local_size_x = 64, local_size_y = 1) in;  // rows: measured 3-12% faster than 8 x 8 on llvmpipe
 
 layout(binding = 3) uniform sampler2D gAlbedo;

@@ -7,6 +7,9 @@ namespace penumbra::plugin {
 graph::PassBuilder addVisibilityPass(graph::RenderGraph& graph, const LightPassIo& io, const gpu::Pipeline& pipeline,
                                      BindVisibilityFn bind)
 {
+    // A compute pass: a full-screen fragment pass was measured no faster on llvmpipe for
+    // the shading pass, whose per-pixel work is the lighter (docs/performance.md,
+    // "Full-screen passes").
     graph::PassBuilder builder = graph.addPass(io.local("visibility"), graph::QueueKind::Compute);
     readGBuffer(builder, io.gbuffer);
     builder.write(io.visibility, graph::Usage::Storage)
