@@ -16,4 +16,12 @@ vec3 linearToSrgb(vec3 c)
     return mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(vec3(0.0031308), c));
 }
 
+// Reflected radiance to the displayed sRGB colour. The tone curve saturates long before
+// 1e4; the clamp keeps x*x inside fp32 so that a huge irradiance maps to white instead of
+// inf/inf = NaN.
+vec3 displayColor(vec3 radiance, float exposure)
+{
+    return linearToSrgb(tonemapAces(min(radiance * exposure, vec3(1e4))));
+}
+
 #endif

@@ -29,4 +29,11 @@ vec3 lambertRadiance(LightData light, vec3 position, vec3 n, vec3 albedo, float 
     return albedo / kLambertPi * light.radiance.rgb * falloff;
 }
 
+// The sky's ambient light reflected by a surface of normal n: hemispherical, brighter for
+// up-facing surfaces, never zero. `skyAmbient` is the sky irradiance / pi.
+vec3 lambertSkyAmbient(vec3 albedo, vec3 n, vec3 skyAmbient)
+{
+    return albedo * skyAmbient * (0.6 + 0.4 * n.y);
+}
+
 #endif

@@ -66,7 +66,7 @@ void main()
     vec3 n = normalize(inNormalWorld);
     if (!gl_FrontFacing) n = -n;  // two-sided, as the G-buffer
     vec3 albedo = baseColor.rgb;
-    vec3 radiance = albedo * pc.ambient.rgb * (0.6 + 0.4 * n.y);
+    vec3 radiance = lambertSkyAmbient(albedo, n, pc.ambient.rgb);
     ADD_LIGHT(0);
 #if LIGHT_COUNT > 1
     ADD_LIGHT(1);
@@ -92,5 +92,5 @@ void main()
 #if LIGHT_COUNT > 8
 #error "floor_forward.frag adds at most 8 lights (config::kMaxLights)"
 #endif
-    outColor = vec4(linearToSrgb(tonemapAces(min(radiance * pc.ambient.w, vec3(1e4)))), 1.0);
+    outColor = vec4(displayColor(radiance, pc.ambient.w), 1.0);
 }

@@ -53,8 +53,7 @@ void main()
     vec3 n = gbufferNormal(pixel);
     vec3 albedo = texelFetch(gAlbedo, pixel, 0).rgb;
 
-    // Hemispherical ambient: brighter for up-facing surfaces, never zero.
-    vec3 radiance = albedo * pc.ambient.rgb * (0.6 + 0.4 * n.y);
+    vec3 radiance = lambertSkyAmbient(albedo, n, pc.ambient.rgb);
     ADD_LIGHT(0);
 #if LIGHT_COUNT > 1
     ADD_LIGHT(1);
@@ -80,8 +79,5 @@ void main()
 #if LIGHT_COUNT > 8
 #error "shading.comp adds at most 8 lights (config::kMaxLights)"
 #endif
-    // The tone curve saturates long before 1e4; the clamp keeps x*x inside fp32 so that
-    // a huge irradiance maps to white instead of inf/inf = NaN.
-    vec3 color = linearToSrgb(tonemapAces(min(radiance * pc.ambient.w, vec3(1e4))));
-    imageStore(outColor, pixel, vec4(color, 1.0));
+    imageStore(outColor, pixel, vec4(displayColor(radiance, pc.ambient.w), 1.0));
 }
