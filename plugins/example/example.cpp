@@ -46,6 +46,7 @@ public:
         gpu::ComputePipelineDesc visibility;
         visibility.name = fmt::format("light{}.example.visibility", setup.lightIndex);
         visibility.shader = "visibility.comp";
+        visibility.defines = shadowMap_.shaderDefines();  // the map's layout, compiled in
         visibility_ = gpu::Pipeline(setup.context, setup.shaders, visibility);
 
         // Nearest, with the comparison the shader's sampler2DShadow makes (reversed-Z).

@@ -22,21 +22,26 @@ layout(binding = 4, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
 void main()
 {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    if (any(greaterThanEqual(pixel, imageSize(visibilityOut)))) return;  // the last groups overhang
+    // The last groups overhang the image: they compute a clamped pixel and store nothing.
+    // No early return: on llvmpipe everything after one would load the buffers' uniform
+    // values once per lane (common/shadow_map.glsl: uniform loads).
+    ivec2 size = imageSize(visibilityOut);
+    bool inImage = all(lessThan(pixel, size));
+    pixel = min(pixel, size - 1);
 
     vec4 position = gbufferPosition(pixel);
-    float v = VISIBILITY_NO_GEOMETRY;
     ShadowReceiver r;
-    if (position.w != 0.0) {
-        // Outside every face or behind the light the map has nothing to say: lit (the
-        // spot cone in shading gives no light there anyway).
-        v = 1.0;
-        // Reversed-Z: lit where the receiver is not farther from the light than the
-        // nearest caster in its texel.
-        if (makeShadowReceiver(pixel, position.xyz, 0.0, r)) v = shadowCompareTap(shadowMap, r, vec2(0.0));
-        // The contract (common/visibility.glsl): light from below the surface's tangent
-        // plane is blocked by the surface itself.
-        v *= shadowLightAboveHorizon(position.xyz, gbufferNormal(pixel));
-    }
-    imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
+    bool inMap = makeShadowReceiver(pixel, position.xyz, 0.0, r);
+    // Reversed-Z: lit where the receiver is not farther from the light than the nearest
+    // caster in its texel.
+    float compare = shadowCompareTap(shadowMap, r, vec2(0.0));
+    // Outside every face or behind the light the map has nothing to say: lit (the spot
+    // cone in shading gives no light there anyway).
+    float v = inMap ? compare : 1.0;
+    // The contract (common/visibility.glsl): light from below the surface's tangent plane
+    // is blocked by the surface itself.
+    v *= shadowLightAboveHorizon(position.xyz, gbufferNormal(pixel));
+    // Pixels that see no geometry hold 1.
+    v = position.w != 0.0 ? v : VISIBILITY_NO_GEOMETRY;
+    if (inImage) imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
 }

@@ -21,6 +21,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iterator>
 #include <string>
@@ -143,6 +144,7 @@ HardShadow::HardShadow(const plugin::TechniqueSetup& setup)
     c.name = fmt::format("light{}.hard.visibility", setup.lightIndex);
     c.shader = "visibility.comp";
     c.defines = visibilityDefines(settings_.variant);
+    std::ranges::copy(shadowMap_.shaderDefines(), std::back_inserter(c.defines));
     c.pushConstantBytes = sizeof(VisibilityPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
 

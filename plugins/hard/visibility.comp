@@ -84,7 +84,7 @@ float filteredVisibility(ShadowReceiver r, ivec2 pixel)
 #else
     // Bilinear with receiver plane bias: the same four texels and weights as the
     // hardware filter, but each compared against the plane's depth at its own centre.
-    vec2 st = r.uv * shadowMapData.faceTexels - 0.5;
+    vec2 st = r.uv * shadowFaceTexels() - 0.5;
     vec2 f = st - floor(st);
     float t00 = shadowCompareTap(shadowMap, r, -f), t10 = shadowCompareTap(shadowMap, r, vec2(1.0, 0.0) - f);
     float t01 = shadowCompareTap(shadowMap, r, vec2(0.0, 1.0) - f), t11 = shadowCompareTap(shadowMap, r, vec2(1.0) - f);
@@ -92,17 +92,21 @@ float filteredVisibility(ShadowReceiver r, ivec2 pixel)
 #endif
 }
 
+// Straight-line: every pixel, seen or not, in the map or not, runs the same code and the
+// results are selected at the end (common/shadow_map.glsl: uniform loads).
 void main()
 {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    if (any(greaterThanEqual(pixel, imageSize(visibilityOut)))) return;
+    ivec2 size = imageSize(visibilityOut);
+    bool inImage = all(lessThan(pixel, size));
+    pixel = min(pixel, size - 1);
 
     vec4 position = gbufferPosition(pixel);
-    float v = VISIBILITY_NO_GEOMETRY;
     ShadowReceiver r;
-    if (position.w != 0.0) {
-        if (makeShadowReceiver(pixel, position.xyz, pc.normalOffsetTexels, r)) v = filteredVisibility(r, pixel);
-        v *= shadowLightAboveHorizon(position.xyz, gbufferNormal(pixel));
-    }
-    imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
+    bool inMap = makeShadowReceiver(pixel, position.xyz, pc.normalOffsetTexels, r);
+    float filtered = filteredVisibility(r, pixel);
+    float v = inMap ? filtered : 1.0;
+    v *= shadowLightAboveHorizon(position.xyz, gbufferNormal(pixel));
+    v = position.w != 0.0 ? v : VISIBILITY_NO_GEOMETRY;
+    if (inImage) imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
 }

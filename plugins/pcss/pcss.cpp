@@ -118,6 +118,7 @@ PcssShadow::PcssShadow(const plugin::TechniqueSetup& setup)
     c.shader = "visibility.comp";
     c.defines = {{"RECEIVER_BIAS", std::to_string(uint32_t(usesReceiverPlane() ? render::ReceiverBias::Plane
                                                                                 : render::ReceiverBias::None))}};
+    std::ranges::copy(shadowMap_.shaderDefines(), std::back_inserter(c.defines));
     c.pushConstantBytes = sizeof(PcssPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
 

@@ -46,57 +46,68 @@ layout(push_constant) uniform Push {
     uint filterSamples;
 } pc;
 
-// Step 1: the mean distance of the blockers among the search taps; false when there is
-// none (the receiver sees the whole light).
-bool averageBlockerDistance(ShadowReceiver r, mat2 rotation, float radiusTexels, out float dBlocker)
+// Step 1: the mean distance of the blockers among `samples` search taps; false when
+// there is none (the receiver sees the whole light). `range`: the face's depthRange.
+bool averageBlockerDistance(ShadowReceiver r, vec4 range, mat2 rotation, float radiusTexels, uint samples,
+                            out float dBlocker)
 {
     float sum = 0.0;
     uint count = 0u;
-    uint samples = clamp(pc.blockerSamples, 1u, uint(kPoissonDisk.length()));
     for (uint i = 0u; i < samples; ++i) {
         vec2 uv = shadowTapUv(r, rotation * kPoissonDisk[i] * radiusTexels);
         float depth = textureLod(shadowDepth, shadowAtlasUv(r.face, uv), 0.0).r;
         // The exact negation of the compare sampler's "lit": reference >= depth.
-        if (depth > shadowReferenceDepth(r, uv)) {
-            sum += shadowDistance(r.face, depth);
-            ++count;
-        }
+        bool blocker = depth > shadowReferenceDepth(r, uv);
+        float distance = shadowDistanceInRange(range, depth);
+        sum += blocker ? distance : 0.0;
+        count += blocker ? 1u : 0u;
     }
     dBlocker = count > 0u ? sum / float(count) : 0.0;
     return count > 0u;
 }
 
+// Branch-free outside its loops, and the push constants and the face are loaded before
+// them (common/shadow_map.glsl: uniform loads): every case is computed and selected.
 float pcssVisibility(ShadowReceiver r, ivec2 pixel)
 {
     ShadowFace face = shadowMapData.faces[r.face];
-    // A light of size 0 (or a degenerate map) casts a hard shadow: exactly hard's one
-    // nearest compare.
-    if (!(pc.lightSize > 0.0) || !(face.texel.x > 0.0)) return shadowCompareTap(shadowCompare, r, vec2(0.0));
+    float lightSize = pc.lightSize;
+    float maxSearchTexels = pc.maxSearchTexels;
+    float maxFilterTexels = pc.maxFilterTexels;
+    uint blockerSamples = clamp(pc.blockerSamples, 1u, uint(kPoissonDisk.length()));
+    uint filterSamples = clamp(pc.filterSamples, 1u, uint(kPoissonDisk.length()));
 
-    float dReceiver = shadowDistance(r.face, r.depth);
+    float dReceiver = shadowDistanceInRange(face.depthRange, r.depth);
     mat2 rotation = poissonRotation(pixel);
     float dBlocker;
-    float search = shadowSearchRadiusTexels(face, pc.lightSize, dReceiver, pc.maxSearchTexels);
-    if (!averageBlockerDistance(r, rotation, search, dBlocker)) return 1.0;
+    float search = shadowSearchRadiusTexels(face, lightSize, dReceiver, maxSearchTexels);
+    bool blocked = averageBlockerDistance(r, face.depthRange, rotation, search, blockerSamples, dBlocker);
 
-    float radius = shadowFilterRadiusTexels(face, pc.lightSize, dReceiver, dBlocker, pc.maxFilterTexels);
-    uint samples = clamp(pc.filterSamples, 1u, uint(kPoissonDisk.length()));
+    float radius = shadowFilterRadiusTexels(face, lightSize, dReceiver, dBlocker, maxFilterTexels);
     float lit = 0.0;
-    for (uint i = 0u; i < samples; ++i) lit += shadowCompareTap(shadowCompare, r, rotation * kPoissonDisk[i] * radius);
-    return lit / float(samples);
+    for (uint i = 0u; i < filterSamples; ++i) lit += shadowCompareTap(shadowCompare, r, rotation * kPoissonDisk[i] * radius);
+    float soft = blocked ? lit / float(filterSamples) : 1.0;  // no blocker: the whole light
+    // A light of size 0 (or a degenerate map) casts a hard shadow: exactly hard's one
+    // nearest compare.
+    float hard = shadowCompareTap(shadowCompare, r, vec2(0.0));
+    return lightSize > 0.0 && face.texel.x > 0.0 ? soft : hard;
 }
 
+// Straight-line up to the technique's own search and filter: every pixel runs the same
+// code and the results are selected at the end (common/shadow_map.glsl: uniform loads).
 void main()
 {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    if (any(greaterThanEqual(pixel, imageSize(visibilityOut)))) return;
+    ivec2 size = imageSize(visibilityOut);
+    bool inImage = all(lessThan(pixel, size));
+    pixel = min(pixel, size - 1);
 
     vec4 position = gbufferPosition(pixel);
-    float v = VISIBILITY_NO_GEOMETRY;
     ShadowReceiver r;
-    if (position.w != 0.0) {
-        if (makeShadowReceiver(pixel, position.xyz, 0.0, r)) v = pcssVisibility(r, pixel);
-        v *= shadowLightAboveHorizon(position.xyz, gbufferNormal(pixel));
-    }
-    imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
+    bool inMap = makeShadowReceiver(pixel, position.xyz, 0.0, r);
+    float horizon = shadowLightAboveHorizon(position.xyz, gbufferNormal(pixel));
+    float pcss = pcssVisibility(r, pixel);
+    float v = (inMap ? pcss : 1.0) * horizon;
+    v = position.w != 0.0 ? v : VISIBILITY_NO_GEOMETRY;
+    if (inImage) imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
 }

@@ -29,10 +29,9 @@ layout(push_constant) uniform Push {
     float exponent;  // ESM's c (FilterSum)
 } pc;
 
-float weight(int offset)
+float weight(int offset, float sigma)
 {
 #if BLUR_KERNEL == 0
-    float sigma = 0.5 * float(max(pc.radius, 1));  // >= 0.5: no division by zero
     return exp(-float(offset * offset) / (2.0 * sigma * sigma));
 #else
     return 1.0;
@@ -41,13 +40,23 @@ float weight(int offset)
 
 void main()
 {
-    ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
+    // The push constants are loaded before the first branch, and the texels past the
+    // image's edge compute a clamped texel and store nothing: on llvmpipe a uniform value
+    // is loaded once per SIMD group only outside divergent control flow
+    // (docs/performance.md, "Uniform loads").
+    ivec2 axis = pc.axis;
+    int radius = pc.radius, faceTexels = pc.faceTexels;
+    float exponent = pc.exponent;
+    float sigma = 0.5 * float(max(radius, 1));  // >= 0.5: no division by zero
     ivec2 size = imageSize(momentsOut);
-    if (any(greaterThanEqual(texel, size))) return;
-    ivec2 cellStart = (texel / pc.faceTexels) * pc.faceTexels;
-    ivec2 cellEnd = min(cellStart + pc.faceTexels, size) - 1;
+    ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
+    bool inImage = all(lessThan(texel, size));
+    texel = min(texel, size - 1);
+    ivec2 cellStart = (texel / faceTexels) * faceTexels;
+    ivec2 cellEnd = min(cellStart + faceTexels, size) - 1;
     FilterSum f = emptyFilterSum();
-    for (int i = -pc.radius; i <= pc.radius; ++i)
-        addToFilter(f, imageLoad(momentsIn, clamp(texel + i * pc.axis, cellStart, cellEnd)), weight(i), pc.exponent);
-    imageStore(momentsOut, texel, filterResult(f, pc.exponent));
+    for (int i = -radius; i <= radius; ++i)
+        addToFilter(f, imageLoad(momentsIn, clamp(texel + i * axis, cellStart, cellEnd)), weight(i, sigma), exponent);
+    vec4 result = filterResult(f, exponent);
+    if (inImage) imageStore(momentsOut, texel, result);
 }

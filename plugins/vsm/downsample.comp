@@ -19,10 +19,12 @@ layout(push_constant) uniform Push {
 
 void main()
 {
+    // Loaded before the first branch (blur.comp says why).
+    float exponent = pc.exponent;
     ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(texel, imageSize(coarser)))) return;
     FilterSum f = emptyFilterSum();
     for (int y = 0; y < 2; ++y)
-        for (int x = 0; x < 2; ++x) addToFilter(f, imageLoad(finer, 2 * texel + ivec2(x, y)), 0.25, pc.exponent);
-    imageStore(coarser, texel, filterResult(f, pc.exponent));
+        for (int x = 0; x < 2; ++x) addToFilter(f, imageLoad(finer, 2 * texel + ivec2(x, y)), 0.25, exponent);
+    imageStore(coarser, texel, filterResult(f, exponent));
 }

@@ -23,8 +23,13 @@ layout(push_constant) uniform Push {
 
 void main()
 {
+    // No early return: the texels past the image's edge compute a clamped texel and store
+    // nothing (blur.comp says why).
+    ivec2 size = imageSize(momentsOut);
     ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
-    if (any(greaterThanEqual(texel, imageSize(momentsOut)))) return;
+    bool inImage = all(lessThan(texel, size));
+    texel = min(texel, size - 1);
     float t = shadowLinearDepth(shadowFaceOfTexel(texel), texelFetch(shadowDepth, texel, 0).r);
-    imageStore(momentsOut, texel, warpDepth(t, pc.exponents));
+    vec4 warped = warpDepth(t, pc.exponents);
+    if (inImage) imageStore(momentsOut, texel, warped);
 }

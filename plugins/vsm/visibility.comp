@@ -77,7 +77,7 @@ layout(push_constant) uniform Push {
 #endif
 void addLevel(inout FilterSum f, uint face, vec2 faceUv, int level, float weight)
 {
-    float texels = max(shadowMapData.faceTexels / float(1 << level), 1.0);
+    float texels = max(shadowFaceTexels() / float(1 << level), 1.0);
     vec2 uv = shadowAtlasUv(face, shadowClampToFace(faceUv, 0.5, texels));
     switch (level) {
     case 0: ADD_LEVEL(0)
@@ -141,9 +141,9 @@ void footprint(ivec2 pixel, vec3 p, ShadowReceiver r, out vec2 dx, out vec2 dy)
     vec3 q, a;
     float w;
     if (shadowSurfaceNeighbour(pixel, ivec2(1, 0), p, n, q) && shadowProject(r.face, q, a, w))
-        dx = (a.xy - r.uv) * shadowMapData.faceTexels;
+        dx = (a.xy - r.uv) * shadowFaceTexels();
     if (shadowSurfaceNeighbour(pixel, ivec2(0, 1), p, n, q) && shadowProject(r.face, q, a, w))
-        dy = (a.xy - r.uv) * shadowMapData.faceTexels;
+        dy = (a.xy - r.uv) * shadowFaceTexels();
     if (dot(dx, dx) == 0.0) dx = vec2(-dy.y, dy.x);
     if (dot(dy, dy) == 0.0) dy = vec2(-dx.y, dx.x);
 }
@@ -176,7 +176,7 @@ vec4 filteredMoments(ShadowReceiver r, ivec2 pixel, vec3 p)
     int coarser = min(finer + 1, LEVELS - 1);
     float blend = lod - float(finer);
     for (float i = 0.0; i < count; i += 1.0) {
-        vec2 uv = r.uv + major / shadowMapData.faceTexels * ((i + 0.5) / count - 0.5);
+        vec2 uv = r.uv + major / shadowFaceTexels() * ((i + 0.5) / count - 0.5);
         addLevel(f, r.face, uv, finer, 1.0 - blend);
         addLevel(f, r.face, uv, coarser, blend);
     }
@@ -184,21 +184,22 @@ vec4 filteredMoments(ShadowReceiver r, ivec2 pixel, vec3 p)
     return filterResult(f, pc.exponents.x);
 }
 
+// Straight-line: every pixel runs the same code and the results are selected at the end
+// (common/shadow_map.glsl: uniform loads).
 void main()
 {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    if (any(greaterThanEqual(pixel, imageSize(visibilityOut)))) return;
+    ivec2 size = imageSize(visibilityOut);
+    bool inImage = all(lessThan(pixel, size));
+    pixel = min(pixel, size - 1);
 
     vec4 position = gbufferPosition(pixel);
-    float v = VISIBILITY_NO_GEOMETRY;
     ShadowReceiver r;
-    if (position.w != 0.0) {
-        if (makeShadowReceiver(pixel, position.xyz, 0.0, r)) {
-            float t = shadowLinearDepth(r.face, r.depth);
-            v = momentVisibility(filteredMoments(r, pixel, position.xyz), t, pc.exponents, pc.minVariance,
-                                 pc.bleedingReduction);
-        }
-        v *= shadowLightAboveHorizon(position.xyz, gbufferNormal(pixel));
-    }
-    imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
+    bool inMap = makeShadowReceiver(pixel, position.xyz, 0.0, r);
+    float t = shadowLinearDepth(r.face, r.depth);
+    float moments = momentVisibility(filteredMoments(r, pixel, position.xyz), t, pc.exponents, pc.minVariance,
+                                     pc.bleedingReduction);
+    float v = (inMap ? moments : 1.0) * shadowLightAboveHorizon(position.xyz, gbufferNormal(pixel));
+    v = position.w != 0.0 ? v : VISIBILITY_NO_GEOMETRY;
+    if (inImage) imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
 }

@@ -237,7 +237,8 @@ VsmShadow::VsmShadow(const plugin::TechniqueSetup& setup)
     checkFormat("a storage image read with bilinear filtering",
                 VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT);
     const std::string name = fmt::format("light{}.vsm.", setup.lightIndex);
-    const std::vector<gpu::ShaderDefine> defines = momentDefines(settings_);
+    std::vector<gpu::ShaderDefine> defines = momentDefines(settings_);
+    std::ranges::copy(shadowMap_.shaderDefines(), std::back_inserter(defines));
 
     gpu::ComputePipelineDesc c;
     c.name = name + "moments";

@@ -22,12 +22,19 @@ layout(push_constant) uniform Push {
 
 void main()
 {
-    ivec2 levelSize = hsmLevelSize(pc.size, pc.level);
+    // The push constants are loaded before the first branch, and the texels past the
+    // level's edge compute a clamped texel and store nothing: on llvmpipe a uniform value
+    // is loaded once per SIMD group only outside divergent control flow
+    // (docs/performance.md, "Uniform loads").
+    ivec2 size = pc.size;
+    int level = pc.level;
+    ivec2 levelSize = hsmLevelSize(size, level);
     ivec2 texel = ivec2(gl_GlobalInvocationID.xy);
-    if (any(greaterThanEqual(texel, levelSize))) return;
+    bool inLevel = all(lessThan(texel, levelSize));
+    texel = min(texel, levelSize - 1);
     ivec2 a = texel * 2;
-    vec2 v00 = hsmTexel(pc.size, pc.level - 1, a), v10 = hsmTexel(pc.size, pc.level - 1, a + ivec2(1, 0));
-    vec2 v01 = hsmTexel(pc.size, pc.level - 1, a + ivec2(0, 1)), v11 = hsmTexel(pc.size, pc.level - 1, a + ivec2(1, 1));
+    vec2 v00 = hsmTexel(size, level - 1, a), v10 = hsmTexel(size, level - 1, a + ivec2(1, 0));
+    vec2 v01 = hsmTexel(size, level - 1, a + ivec2(0, 1)), v11 = hsmTexel(size, level - 1, a + ivec2(1, 1));
     vec2 range = vec2(min(min(v00.x, v10.x), min(v01.x, v11.x)), max(max(v00.y, v10.y), max(v01.y, v11.y)));
-    hsmTexels[hsmLevelOffset(pc.size, pc.level) + texel.y * levelSize.x + texel.x] = range;
+    if (inLevel) hsmTexels[hsmLevelOffset(size, level) + texel.y * levelSize.x + texel.x] = range;
 }

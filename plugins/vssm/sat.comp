@@ -23,18 +23,27 @@ layout(push_constant) uniform Push {
 
 void main()
 {
+    // The push constants and a one-face map's depth range are loaded before the first
+    // branch: on llvmpipe a uniform value is loaded once per SIMD group only outside
+    // divergent control flow (docs/performance.md, "Uniform loads").
+    ivec2 size = pc.size;
+    bool vertical = pc.vertical != 0;
+    vec4 range0 = shadowMapData.faces[0].depthRange;
     int line = int(gl_GlobalInvocationID.x);
     u64vec2 run = u64vec2(uint64_t(0));
-    if (pc.vertical == 0) {
-        if (line >= pc.size.y) return;
-        for (int x = 0; x < pc.size.x; ++x) {
+    if (!vertical) {
+        if (line >= size.y) return;
+        for (int x = 0; x < size.x; ++x) {
             ivec2 texel = ivec2(x, line);
-            run += satFixedMoments(shadowLinearDepth(shadowFaceOfTexel(texel), texelFetch(shadowDepth, texel, 0).r));
+            float depth = texelFetch(shadowDepth, texel, 0).r;
+            float t = shadowFaceCount() == 1u ? shadowLinearDepthInRange(range0, depth)
+                                              : shadowLinearDepth(shadowFaceOfTexel(texel), depth);
+            run += satFixedMoments(t);
             satStore(texel, run);
         }
     } else {
-        if (line >= pc.size.x) return;
-        for (int y = 0; y < pc.size.y; ++y) {
+        if (line >= size.x) return;
+        for (int y = 0; y < size.y; ++y) {
             ivec2 texel = ivec2(line, y);
             run += satLoad(texel);
             satStore(texel, run);

@@ -403,31 +403,35 @@ Result vssmVisibility(ivec2 pixel)
     return res;
 }
 
+// Straight-line up to the technique's own traversal: every pixel runs the same code and
+// the results are selected at the end (common/shadow_map.glsl: uniform loads).
 void main()
 {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    if (any(greaterThanEqual(pixel, imageSize(visibilityOut)))) return;
+    ivec2 size = imageSize(visibilityOut);
+    bool inImage = all(lessThan(pixel, size));
+    pixel = min(pixel, size - 1);
+    uint debugView = pc.debugView;
+    float maxFilterTexels = pc.maxFilterTexels;
+    float debugScale = pc.debugScale;
 
     vec4 position = gbufferPosition(pixel);
-    float v = VISIBILITY_NO_GEOMETRY;
-    Result res = Result(VISIBILITY_NO_GEOMETRY, 0.0, kClassLit);
     gVisited = 0u;
     gUsedPcf = false;
-    if (position.w != 0.0) {
-        if (makeShadowReceiver(pixel, position.xyz, 0.0, gReceiver)) {
-            gFaceTexels = shadowMapData.faceTexels;
-            gFaceOrigin = shadowMapData.faceCount == 6u
-                              ? vec2(float(gReceiver.face % 3u), float(gReceiver.face / 3u)) * gFaceTexels
-                              : vec2(0.0);
-            res = vssmVisibility(pixel);
-        }
-        v = res.v * shadowLightAboveHorizon(position.xyz, gbufferNormal(pixel));
-    }
+    bool inMap = makeShadowReceiver(pixel, position.xyz, 0.0, gReceiver);
+    gFaceTexels = shadowFaceTexels();
+    gFaceOrigin = shadowFaceCount() == 6u ? vec2(float(gReceiver.face % 3u), float(gReceiver.face / 3u)) * gFaceTexels
+                                          : vec2(0.0);
+    float horizon = shadowLightAboveHorizon(position.xyz, gbufferNormal(pixel));
+    Result res = vssmVisibility(pixel);
+    res = inMap ? res : Result(VISIBILITY_NO_GEOMETRY, 0.0, kClassLit);
+    float v = res.v * horizon;
     // The debug views replace V where there is geometry (the contract keeps 1 elsewhere).
-    if (position.w != 0.0) {
-        if (pc.debugView == DEBUG_KERNEL) v = res.kernelTexels / max(pc.maxFilterTexels, 0.5);
-        else if (pc.debugView == DEBUG_CLASSIFICATION) v = res.classification;
-        else if (pc.debugView == DEBUG_SUBKERNELS) v = float(gVisited) * pc.debugScale;
-    }
-    imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
+    float kernel = res.kernelTexels / max(maxFilterTexels, 0.5);
+    float subkernels = inMap ? float(gVisited) * debugScale : 0.0;  // outside the map: none looked at
+    v = debugView == DEBUG_KERNEL ? kernel : v;
+    v = debugView == DEBUG_CLASSIFICATION ? res.classification : v;
+    v = debugView == DEBUG_SUBKERNELS ? subkernels : v;
+    v = position.w != 0.0 ? v : VISIBILITY_NO_GEOMETRY;
+    if (inImage) imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
 }

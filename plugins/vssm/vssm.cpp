@@ -235,6 +235,7 @@ VssmShadow::VssmShadow(const plugin::TechniqueSetup& setup)
     gpu::ComputePipelineDesc c;
     c.name = name + "sat";
     c.shader = "sat.comp";
+    c.defines = shadowMap_.shaderDefines();
     c.pushConstantBytes = sizeof(SatPush);
     sat_ = gpu::Pipeline(context_, setup.shaders, c);
 
@@ -250,6 +251,7 @@ VssmShadow::VssmShadow(const plugin::TechniqueSetup& setup)
                                                               : render::ReceiverBias::None))},
                  {"BLOCKER_SUBDIVISION", std::to_string(uint32_t(settings_.blockerScheme()))},
                  {"FILTER_SUBDIVISION", std::to_string(uint32_t(settings_.filterScheme()))}};
+    std::ranges::copy(shadowMap_.shaderDefines(), std::back_inserter(c.defines));
     c.pushConstantBytes = sizeof(VisibilityPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
 

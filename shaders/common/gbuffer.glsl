@@ -79,13 +79,17 @@ ivec2 gbufferSize()
 
 // The world position of the surface seen at the centre of `pixel`, w = 1; (0, 0, 0, 0)
 // where the pixel sees no geometry.
+// Branch-free, as every helper a full-screen pass calls (docs/performance.md, "Uniform
+// loads"): the camera's fields are loaded once per SIMD group only outside divergent
+// control flow on llvmpipe.
 vec4 gbufferPosition(ivec2 pixel)
 {
     float depth = texelFetch(gDepth, pixel, 0).r;
-    if (!(depth > 0.0)) return vec4(0.0);
+    bool seen = depth > 0.0;
     vec2 ndc = (vec2(pixel) + 0.5) / gCamera.size.xy * 2.0 - 1.0;
     vec3 ray = ndc.x * gCamera.rayX.xyz + ndc.y * gCamera.rayY.xyz + gCamera.rayZ.xyz;
-    return vec4(gCamera.eye.xyz + ray / depth, 1.0);
+    vec3 p = gCamera.eye.xyz + ray / (seen ? depth : 1.0);
+    return seen ? vec4(p, 1.0) : vec4(0.0);
 }
 
 // A bound on the distance from gbufferPosition(pixel) = p to the surface point it stands

@@ -7,6 +7,16 @@
 // The including shader defines SHADOW_MAP_BINDING, the binding of the storage buffer
 // ShadowMap::buffer() (ShadowMapData), before including this file; with SHADOW_MAP_ARRAY
 // also defined, the buffer is an array of ShadowMapData (below).
+//
+// A technique's map has one layout for the technique's lifetime; compiled in (the
+// defines of render::ShadowMap::shaderDefines(): SHADOW_FACE_COUNT, SHADOW_FACE_TEXELS),
+// the branches on it fold away and no lookup loads it. Without them (an array of maps, a shader tool) they are
+// read from the buffer.
+//
+// Every function here is branch-free or loads the buffer before it branches: a
+// full-screen pass loads a uniform value once per SIMD group on llvmpipe only outside
+// divergent control flow, and once per lane inside it (docs/performance.md, "Uniform
+// loads").
 #ifndef PENUMBRA_SHADOW_MAP_GLSL
 #define PENUMBRA_SHADOW_MAP_GLSL
 
@@ -49,6 +59,20 @@ layout(std430, binding = SHADOW_MAP_BINDING) readonly buffer ShadowMapBuffer {
 #define shadowMapData shadowMapBuffer.map
 #endif
 
+#if defined(SHADOW_MAP_ARRAY) && (defined(SHADOW_FACE_COUNT) || defined(SHADOW_FACE_TEXELS))
+#error common/shadow_map.glsl: SHADOW_FACE_COUNT and SHADOW_FACE_TEXELS describe one map, not an array
+#endif
+#ifdef SHADOW_FACE_TEXELS
+#define shadowFaceTexels() float(SHADOW_FACE_TEXELS)
+#else
+#define shadowFaceTexels() shadowMapData.faceTexels
+#endif
+#ifdef SHADOW_FACE_COUNT
+#define shadowFaceCount() uint(SHADOW_FACE_COUNT)
+#else
+#define shadowFaceCount() shadowMapData.faceCount
+#endif
+
 // The area fraction of a unit disk on the far side of a line at signed distance h from
 // its centre (h = 1: the whole disk, 0: half, -1: none).
 float shadowCircularSegment(float h)
@@ -80,42 +104,43 @@ float shadowSquareAboveLine(float a, float b, float c)
 // first order in that radius. n = 0 (no normal): 1.
 float shadowLightAboveHorizon(vec3 p, vec3 n)
 {
-    if (!(dot(n, n) > 0.0)) return 1.0;
+    vec4 light = shadowMapData.light;
     vec4 axis = shadowMapData.lightAxis;
+    vec4 tangent = shadowMapData.lightTangent;
     uint type = shadowMapData.lightType;
-    if (type == 0u) {  // directional: light.xyz is the unit direction towards it
-        float sinElevation = dot(n, shadowMapData.light.xyz);
-        return axis.w > 0.0 ? shadowCircularSegment(sinElevation / axis.w) : (sinElevation > 0.0 ? 1.0 : 0.0);
-    }
     // a: the light's centre above the plane; the light's points lie at a + (their offset
     // from the centre) . n.
-    float a = dot(n, shadowMapData.light.xyz - p);
-    if (type == 3u)
-        return shadowSquareAboveLine(a, axis.w * dot(n, shadowMapData.lightTangent.xyz),
-                                     shadowMapData.lightTangent.w * dot(n, cross(axis.xyz, shadowMapData.lightTangent.xyz)));
-    if (type == 4u) {
+    float a = dot(n, light.xyz - p);
+    float above = a > 0.0 ? 1.0 : 0.0;  // spot, point without radius
+    if (type == 0u) {  // directional: light.xyz is the unit direction towards it
+        float sinElevation = dot(n, light.xyz);
+        above = axis.w > 0.0 ? shadowCircularSegment(sinElevation / axis.w) : (sinElevation > 0.0 ? 1.0 : 0.0);
+    } else if (type == 3u) {
+        above = shadowSquareAboveLine(a, axis.w * dot(n, tangent.xyz), tangent.w * dot(n, cross(axis.xyz, tangent.xyz)));
+    } else if (type == 4u) {
         // The disk's points: the centre plus up to radius along the plane's normal
         // projected into the disk's plane, |m| of it.
         vec3 m = n - axis.xyz * dot(n, axis.xyz);
         float reach = axis.w * length(m);
-        return reach > 1e-6 * abs(a) ? shadowCircularSegment(a / reach) : (a > 0.0 ? 1.0 : 0.0);
+        above = reach > 1e-6 * abs(a) ? shadowCircularSegment(a / reach) : above;
+    } else if (type == 2u && axis.w > 0.0) {
+        above = shadowCircularSegment(a / axis.w);  // a sphere: sin(elev) / sin(radius)
     }
-    if (type == 2u && axis.w > 0.0) return shadowCircularSegment(a / axis.w);  // a sphere: sin(elev) / sin(radius)
-    return a > 0.0 ? 1.0 : 0.0;  // spot, point without radius
+    return dot(n, n) > 0.0 ? above : 1.0;
 }
 
 // Face order +X -X +Y -Y +Z -Z, as render/Projection.cpp builds them.
 uint shadowCubeFace(vec3 d)
 {
     vec3 a = abs(d);
-    if (a.x >= a.y && a.x >= a.z) return d.x > 0.0 ? 0u : 1u;
-    if (a.y >= a.z) return d.y > 0.0 ? 2u : 3u;
-    return d.z > 0.0 ? 4u : 5u;
+    uint face = d.z > 0.0 ? 4u : 5u;
+    face = a.y >= a.z ? (d.y > 0.0 ? 2u : 3u) : face;
+    return all(greaterThanEqual(a.xx, a.yz)) ? (d.x > 0.0 ? 0u : 1u) : face;
 }
 
 uint shadowFaceOf(vec3 world)
 {
-    return shadowMapData.faceCount == 6u ? shadowCubeFace(world - shadowMapData.light.xyz) : 0u;
+    return shadowFaceCount() == 6u ? shadowCubeFace(world - shadowMapData.light.xyz) : 0u;
 }
 
 // Face uv, NDC depth and clip w of a world point. False behind the light (w <= 0: the
@@ -124,33 +149,35 @@ bool shadowProject(uint face, vec3 world, out vec3 uvDepth, out float w)
 {
     vec4 clip = shadowMapData.faces[face].viewProj * vec4(world, 1.0);
     w = clip.w;
-    uvDepth = vec3(0.0);
-    if (!(clip.w > 0.0)) return false;
-    uvDepth = vec3(clip.xy / clip.w * 0.5 + 0.5, clip.z / clip.w);
-    return !any(isinf(uvDepth)) && !any(isnan(uvDepth));
+    bool inFront = clip.w > 0.0;
+    float divisor = inFront ? clip.w : 1.0;
+    vec3 q = vec3(clip.xy / divisor * 0.5 + 0.5, clip.z / divisor);
+    uvDepth = inFront ? q : vec3(0.0);
+    return inFront && !any(isinf(q)) && !any(isnan(q));
 }
 
 // Unit vector from `p` towards the light; zero when p is at the light.
 vec3 shadowTowardsLight(vec3 p)
 {
-    if (shadowMapData.light.w == 0.0) return shadowMapData.light.xyz;
-    vec3 d = shadowMapData.light.xyz - p;
+    vec4 light = shadowMapData.light;
+    vec3 d = light.xyz - p;
     float len = length(d);
-    return len > 0.0 ? d / len : vec3(0.0);
+    vec3 towards = len > 0.0 ? d / (len > 0.0 ? len : 1.0) : vec3(0.0);
+    return light.w == 0.0 ? light.xyz : towards;
 }
 
 // Face uv -> uv in the whole map (the atlas cell of `face`).
 vec2 shadowAtlasUv(uint face, vec2 faceUv)
 {
-    vec2 grid = shadowMapData.faceCount == 6u ? vec2(3.0, 2.0) : vec2(1.0);
+    vec2 grid = shadowFaceCount() == 6u ? vec2(3.0, 2.0) : vec2(1.0);
     return (vec2(face % 3u, face / 3u) + faceUv) / grid;
 }
 
 // The face whose atlas cell holds atlas texel `texel` (a one-face map has one cell).
 uint shadowFaceOfTexel(ivec2 texel)
 {
-    uvec2 cell = uvec2(max(texel, ivec2(0))) / uint(shadowMapData.faceTexels);
-    return min(cell.y * 3u + cell.x, shadowMapData.faceCount - 1u);
+    uvec2 cell = uvec2(max(texel, ivec2(0))) / uint(shadowFaceTexels());
+    return min(cell.y * 3u + cell.x, shadowFaceCount() - 1u);
 }
 
 // Keeps a lookup `marginTexels` inside its face: the next cell of the atlas is another
@@ -167,33 +194,42 @@ vec2 shadowClampToFace(vec2 uv, float marginTexels, float faceTexels)
 
 vec2 shadowClampToFace(vec2 uv, float marginTexels)
 {
-    return shadowClampToFace(uv, marginTexels, shadowMapData.faceTexels);
+    return shadowClampToFace(uv, marginTexels, shadowFaceTexels());
 }
 
 // The centre of the texel `uv` falls in: where the rasterizer evaluated the casters'
 // depth.
 vec2 shadowTexelCentre(vec2 uv)
 {
-    return (floor(uv * shadowMapData.faceTexels) + 0.5) / shadowMapData.faceTexels;
+    return (floor(uv * shadowFaceTexels()) + 0.5) / shadowFaceTexels();
 }
 
 // Distance from the light along the face's axis (world units) of a map depth, within
 // the face's [near, far]. Perspective: depth = near / d; 0 (nothing drawn) and anything
 // below near / far read as far, so no division by zero. Orthographic: depth falls
 // linearly from 1 at near to 0 at far.
+// shadowDistanceInRange takes the face's depthRange, loaded once outside a loop.
+float shadowDistanceInRange(vec4 range, float ndcDepth)
+{
+    float orthographic = mix(range.y, range.x, clamp(ndcDepth, 0.0, 1.0));
+    return range.z != 0.0 ? orthographic : range.x / max(ndcDepth, range.x / range.y);
+}
+
 float shadowDistance(uint face, float ndcDepth)
 {
-    vec4 range = shadowMapData.faces[face].depthRange;
-    if (range.z != 0.0) return mix(range.y, range.x, clamp(ndcDepth, 0.0, 1.0));
-    return range.x / max(ndcDepth, range.x / range.y);
+    return shadowDistanceInRange(shadowMapData.faces[face].depthRange, ndcDepth);
 }
 
 // The same distance normalised to [0, 1] over the face's [near, far]: the depth that
 // filtered maps store, independent of the scene's scale. ShadowMap keeps far > near.
+float shadowLinearDepthInRange(vec4 range, float ndcDepth)
+{
+    return clamp((shadowDistanceInRange(range, ndcDepth) - range.x) / (range.y - range.x), 0.0, 1.0);
+}
+
 float shadowLinearDepth(uint face, float ndcDepth)
 {
-    vec4 range = shadowMapData.faces[face].depthRange;
-    return clamp((shadowDistance(face, ndcDepth) - range.x) / (range.y - range.x), 0.0, 1.0);
+    return shadowLinearDepthInRange(shadowMapData.faces[face].depthRange, ndcDepth);
 }
 
 #endif

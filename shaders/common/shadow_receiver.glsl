@@ -50,7 +50,7 @@ float shadowReferenceDepth(ShadowReceiver r, vec2 uv)
 // so that a receiver plane is evaluated at the same point.
 vec2 shadowTapUv(ShadowReceiver r, vec2 offsetTexels)
 {
-    return shadowTexelCentre(shadowClampToFace(r.uv + offsetTexels / shadowMapData.faceTexels, 0.5));
+    return shadowTexelCentre(shadowClampToFace(r.uv + offsetTexels / shadowFaceTexels(), 0.5));
 }
 
 // One nearest-texel compare, `offsetTexels` from the receiver: 1 lit, 0 shadowed.
@@ -177,7 +177,7 @@ bool shadowSolveGradient(vec3 a, vec3 b, float maxTexels, out vec2 g)
     g = vec2(0.0);
     float la = length(a.xy), lb = length(b.xy);
     float det = a.x * b.y - a.y * b.x;
-    float texels = shadowMapData.faceTexels;
+    float texels = shadowFaceTexels();
     if (!(min(la, lb) * texels > 1.0 / 64.0) || !(max(la, lb) * texels <= maxTexels) ||
         !(abs(det) > 1e-3 * la * lb))
         return false;
@@ -228,7 +228,7 @@ void shadowReceiverPlane(ivec2 pixel, vec3 p, vec3 n, float texelWorld, inout Sh
     // |g| per texel is at most (tan(theta) + tan(alpha)) · zStep (theta: the plane's
     // normal to the ray, alpha: the ray to the map's iso-depth normal; see
     // shadowOffsetAlongNormal): clamped where that passes tan(88 degrees).
-    float perTexel = length(g) / shadowMapData.faceTexels;
+    float perTexel = length(g) / shadowFaceTexels();
     float maxPerTexel = kShadowMaxTan * zStep;
     if (perTexel > maxPerTexel) {
         g *= maxPerTexel / perTexel;  // perTexel > maxPerTexel >= 0: no division by zero
@@ -243,12 +243,10 @@ void shadowReceiverPlane(ivec2 pixel, vec3 p, vec3 n, float texelWorld, inout Sh
 // The receiver seen in `pixel` at world position `p`. False where the map has nothing to
 // say (behind the light, outside the map): V = 1 there by contract, the light's own cone
 // gives zero light in shading. `normalOffsetTexels` is read with bias 1 only.
+// Branch-free up to the receiver plane (common/shadow_map.glsl: uniform loads), so
+// callers call it for every pixel and select on the result.
 bool makeShadowReceiver(ivec2 pixel, vec3 p, float normalOffsetTexels, out ShadowReceiver r)
 {
-    r.face = 0u;
-    r.uv = vec2(0.0);
-    r.depth = 0.0;
-    r.w = 0.0;
 #if SHADOW_RECEIVER_BIAS != SHADOW_RECEIVER_BIAS_NONE
     vec3 n = gbufferNormal(pixel);
 #endif
@@ -262,21 +260,24 @@ bool makeShadowReceiver(ivec2 pixel, vec3 p, float normalOffsetTexels, out Shado
     float w;
 #if SHADOW_RECEIVER_BIAS == SHADOW_RECEIVER_BIAS_NORMAL_OFFSET
     uint ownFace = shadowFaceOf(p);
-    if (shadowProject(ownFace, p, uvDepth, w))
-        p = shadowOffsetAlongNormal(ownFace, p, n, w * shadowMapData.faces[ownFace].texel.x, normalOffsetTexels);
+    bool ownProjected = shadowProject(ownFace, p, uvDepth, w);
+    vec3 offset = shadowOffsetAlongNormal(ownFace, p, n, w * shadowMapData.faces[ownFace].texel.x, normalOffsetTexels);
+    p = ownProjected ? offset : p;
 #endif
     r.face = shadowFaceOf(p);
-    if (!shadowProject(r.face, p, uvDepth, w)) return false;
-    if (any(lessThan(uvDepth.xy, vec2(0.0))) || any(greaterThan(uvDepth.xy, vec2(1.0)))) return false;
-    r.uv = uvDepth.xy;
-    r.depth = uvDepth.z;
-    r.w = w;
+    bool projected = shadowProject(r.face, p, uvDepth, w);
+    bool inMap = all(bvec3(projected, all(greaterThanEqual(uvDepth.xy, vec2(0.0))), all(lessThanEqual(uvDepth.xy, vec2(1.0)))));
+    r.face = inMap ? r.face : 0u;
+    r.uv = inMap ? uvDepth.xy : vec2(0.0);
+    r.depth = inMap ? uvDepth.z : 0.0;
+    r.w = inMap ? w : 0.0;
 #if SHADOW_RECEIVER_BIAS == SHADOW_RECEIVER_BIAS_PLANE
     r.dDepthDUv = vec2(0.0);
     r.epsilon = 0.0;
-    shadowReceiverPlane(pixel, p, n, w * shadowMapData.faces[r.face].texel.x, r);
+    float texelWorld = w * shadowMapData.faces[r.face].texel.x;
+    if (inMap) shadowReceiverPlane(pixel, p, n, texelWorld, r);
 #endif
-    return true;
+    return inMap;
 }
 
 #endif

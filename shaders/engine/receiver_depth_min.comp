@@ -25,34 +25,39 @@ layout(push_constant) uniform Push {
 
 const uint kNone = 0xffffffffu;  // no receiver
 
-int texel(int line, int i) { return pc.vertical != 0 ? i * pc.size + line : line * pc.size + i; }
+int texel(bool vertical, int size, int line, int i) { return vertical ? i * size + line : line * size + i; }
 
 void main()
 {
+    // The push constants are loaded before the first branch: on llvmpipe a uniform value
+    // is loaded once per SIMD group only outside divergent control flow
+    // (docs/performance.md, "Uniform loads").
+    int size = pc.size, radius = pc.radius;
+    bool vertical = pc.vertical != 0;
     int line = int(gl_GlobalInvocationID.x);
-    if (line >= pc.size) return;
-    int width = 2 * pc.radius + 1;
+    if (line >= size) return;
+    int width = 2 * radius + 1;
     uint run = kNone;
-    for (int i = 0; i < pc.size; ++i) {
+    for (int i = 0; i < size; ++i) {
         if (i % width == 0) run = kNone;
-        run = min(run, depth[texel(line, i)]);
-        prefix[texel(line, i)] = run;
+        run = min(run, depth[texel(vertical, size, line, i)]);
+        prefix[texel(vertical, size, line, i)] = run;
     }
     // The prefix of the last block, for windows that end past the line.
-    int lastBlock = (pc.size - 1) / width;
-    uint lastPrefix = prefix[texel(line, pc.size - 1)];
+    int lastBlock = (size - 1) / width;
+    uint lastPrefix = prefix[texel(vertical, size, line, size - 1)];
     uint suffix = kNone;
-    for (int k = pc.size - 1; k >= -pc.radius; --k) {
+    for (int k = size - 1; k >= -radius; --k) {
         if (k >= 0) {
-            if (k % width == width - 1 || k == pc.size - 1) suffix = kNone;
-            suffix = min(suffix, depth[texel(line, k)]);
+            if (k % width == width - 1 || k == size - 1) suffix = kNone;
+            suffix = min(suffix, depth[texel(vertical, size, line, k)]);
         } else {
             suffix = kNone;  // before the line: the block holds no texel
         }
-        int i = k + pc.radius;
-        if (i >= pc.size) continue;
-        int end = k + 2 * pc.radius;
-        uint tail = end < pc.size ? prefix[texel(line, end)] : (end / width == lastBlock ? lastPrefix : kNone);
-        depth[texel(line, i)] = min(suffix, tail);
+        int i = k + radius;
+        if (i >= size) continue;
+        int end = k + 2 * radius;
+        uint tail = end < size ? prefix[texel(vertical, size, line, end)] : (end / width == lastBlock ? lastPrefix : kNone);
+        depth[texel(vertical, size, line, i)] = min(suffix, tail);
     }
 }

@@ -22,14 +22,18 @@ const uint kNone = 0xffffffffu;  // no receiver (as in receiverDepth)
 
 void main()
 {
+    // The push constants are loaded before the first branch: on llvmpipe a uniform value
+    // is loaded once per SIMD group only outside divergent control flow
+    // (docs/performance.md, "Uniform loads").
+    int maskSize = pc.maskSize, maskBlock = pc.maskBlock, resolution = pc.resolution;
     ivec2 cell = ivec2(gl_GlobalInvocationID.xy);
-    if (any(greaterThanEqual(cell, ivec2(pc.maskSize)))) return;
+    if (any(greaterThanEqual(cell, ivec2(maskSize)))) return;
     uint floorBits = kNone;
     if (imageLoad(mask, cell).r >= 0.5) {
-        ivec2 lo = cell * pc.maskBlock;
-        ivec2 hi = min(lo + pc.maskBlock, ivec2(pc.resolution));
+        ivec2 lo = cell * maskBlock;
+        ivec2 hi = min(lo + maskBlock, ivec2(resolution));
         for (int y = lo.y; y < hi.y; ++y)
-            for (int x = lo.x; x < hi.x; ++x) floorBits = min(floorBits, receiverDepth[y * pc.resolution + x]);
+            for (int x = lo.x; x < hi.x; ++x) floorBits = min(floorBits, receiverDepth[y * resolution + x]);
     }
     imageStore(receiverFloor, cell, uvec4(floorBits));
 }

@@ -46,33 +46,45 @@ float projectedGradient(vec3 row, vec3 rowW, float x, float w)
 }
 #endif
 
+// The camera's and the light's matrices are loaded first, and the pixel's tests are
+// selected, not returned on: on llvmpipe a uniform value is loaded once per SIMD group
+// only outside divergent control flow (docs/performance.md, "Uniform loads").
 void main()
 {
+    mat4 inverseViewProj = camera.inverseViewProj;
+    vec2 size = camera.size.xy;
+    mat4 lightViewProj = pc.lightViewProj;
+    int maskBlock = pc.maskBlock;
+    int resolution = pc.resolution;
+#ifdef RECEIVER_DEPTH
+    vec3 eye = camera.eye.xyz;
+#endif
+
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    if (any(greaterThanEqual(pixel, ivec2(camera.size.xy)))) return;
+    bool inImage = all(lessThan(pixel, ivec2(size)));
+    pixel = min(pixel, ivec2(size) - 1);
     float depth = texelFetch(cameraDepth, pixel, 0).r;
-    if (depth <= 0.0) return;
-    vec2 ndc = (vec2(pixel) + 0.5) / camera.size.xy * 2.0 - 1.0;
-    vec4 world = camera.inverseViewProj * vec4(ndc, depth, 1.0);
-    if (world.w == 0.0) return;
-    vec3 p = world.xyz / world.w;
-    vec4 clip = pc.lightViewProj * vec4(p, 1.0);
-    if (clip.w <= 0.0) return;
-    vec3 light = clip.xyz / clip.w;
-    if (any(greaterThan(abs(light.xy), vec2(1.0))) || light.z < 0.0 || light.z > 1.0) return;
-    vec2 texelCoord = (light.xy * 0.5 + 0.5) * float(pc.resolution);
-    ivec2 texel = clamp(ivec2(texelCoord), ivec2(0), ivec2(pc.resolution - 1));
-    imageStore(receiverMask, texel / pc.maskBlock, vec4(1.0));
+    vec2 ndc = (vec2(pixel) + 0.5) / size * 2.0 - 1.0;
+    vec4 world = inverseViewProj * vec4(ndc, depth, 1.0);
+    vec3 p = world.xyz / (world.w != 0.0 ? world.w : 1.0);
+    vec4 clip = lightViewProj * vec4(p, 1.0);
+    vec3 light = clip.xyz / (clip.w > 0.0 ? clip.w : 1.0);
+    bool inView = all(lessThanEqual(abs(light.xy), vec2(1.0))) && light.z >= 0.0 && light.z <= 1.0;
+    bool receiver = inImage && depth > 0.0 && world.w != 0.0 && clip.w > 0.0 && inView;
+    vec2 texelCoord = (light.xy * 0.5 + 0.5) * float(resolution);
+    ivec2 texel = clamp(ivec2(texelCoord), ivec2(0), ivec2(resolution - 1));
+    if (!receiver) return;
+    imageStore(receiverMask, texel / maskBlock, vec4(1.0));
 #ifdef RECEIVER_DEPTH
     // The technique's receiver lies within `slack` of p: its depth is at least light.z
     // less the depth gradient times slack, and its texel within `spread` texels of p's.
-    mat4 m = pc.lightViewProj;
+    mat4 m = lightViewProj;
     vec3 rowX = vec3(m[0][0], m[1][0], m[2][0]), rowY = vec3(m[0][1], m[1][1], m[2][1]);
     vec3 rowZ = vec3(m[0][2], m[1][2], m[2][2]), rowW = vec3(m[0][3], m[1][3], m[2][3]);
-    float slack = kReconstructionRelative * (length(p) + length(p - camera.eye.xyz));
+    float slack = kReconstructionRelative * (length(p) + length(p - eye));
     float farthest = light.z - projectedGradient(rowZ, rowW, clip.z, clip.w) * slack - 4.0 / 16777216.0;
     uint bits = floatBitsToUint(max(farthest, 0.0));
-    float texelsPerNdc = 0.5 * float(pc.resolution);
+    float texelsPerNdc = 0.5 * float(resolution);
     float spread = texelsPerNdc * slack *
                        max(projectedGradient(rowX, rowW, clip.x, clip.w), projectedGradient(rowY, rowW, clip.y, clip.w)) +
                    1.0 / 64.0;
@@ -80,13 +92,13 @@ void main()
     // (beyond 30,000 texels for a scene seen from its own size); the spread is capped at
     // one texel, which keeps the loop below at most 3 x 3.
     spread = min(spread, 1.0);
-    ivec2 lo = clamp(ivec2(floor(texelCoord - spread)), ivec2(0), ivec2(pc.resolution - 1));
-    ivec2 hi = clamp(ivec2(floor(texelCoord + spread)), ivec2(0), ivec2(pc.resolution - 1));
+    ivec2 lo = clamp(ivec2(floor(texelCoord - spread)), ivec2(0), ivec2(resolution - 1));
+    ivec2 hi = clamp(ivec2(floor(texelCoord + spread)), ivec2(0), ivec2(resolution - 1));
     for (int y = lo.y; y <= hi.y; ++y)
         for (int x = lo.x; x <= hi.x; ++x) {
             // Many pixels fall in one texel: the atomic only where it can still lower the
             // depth (values only decrease, so a stale read at most costs an atomic).
-            uint i = uint(y * pc.resolution + x);
+            uint i = uint(y * resolution + x);
             if (receiverDepth[i] > bits) atomicMin(receiverDepth[i], bits);
         }
 #endif

@@ -10,7 +10,10 @@
 // Compute, not a full-screen triangle into a colour attachment: on llvmpipe the fragment
 // path writes a constant colour in half the time (4.4 against 9.3 ms), but this shading
 // costs the same or more there (67.0 against 65.1 ms, medians of 5 rounds under load;
-// docs/performance.md, "Full-screen passes"): the time is the per-pixel work, not the store.
+// docs/performance.md, "Full-screen passes"). A fragment shader loads every uniform value
+// once per lane; a compute shader once per SIMD group where no lane can be masked, so
+// main() is straight-line: no early return, the background selected at the end
+// (docs/performance.md, "Uniform loads").
 layout(local_size_x = 64, local_size_y = 1) in;  // rows: measured 3-12% faster than 8 x 8 on llvmpipe
 
 layout(binding = 3) uniform sampler2D gAlbedo;
@@ -43,13 +46,10 @@ void main()
 {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     ivec2 size = imageSize(outColor);
-    if (any(greaterThanEqual(pixel, size))) return;
+    bool inside = all(lessThan(pixel, size));
+    pixel = min(pixel, size - 1);
 
     vec4 position = gbufferPosition(pixel);
-    if (position.w == 0.0) {
-        imageStore(outColor, pixel, vec4(linearToSrgb(pc.background.rgb), 1.0));
-        return;
-    }
     vec3 n = gbufferNormal(pixel);
     vec3 albedo = texelFetch(gAlbedo, pixel, 0).rgb;
 
@@ -79,5 +79,7 @@ void main()
 #if LIGHT_COUNT > 8
 #error "shading.comp adds at most 8 lights (config::kMaxLights)"
 #endif
-    imageStore(outColor, pixel, vec4(displayColor(radiance, pc.ambient.w), 1.0));
+    vec3 display = displayColor(radiance, pc.ambient.w);
+    if (position.w == 0.0) display = linearToSrgb(pc.background.rgb);
+    if (inside) imageStore(outColor, pixel, vec4(display, 1.0));
 }

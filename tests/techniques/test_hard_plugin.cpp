@@ -520,6 +520,39 @@ protected:
     }
 };
 
+// The map's layout (face count, texels per face) is compiled into the technique's
+// shaders (render::ShadowMap::shaderDefines): a light that comes back with another face
+// count is refused by name, never looked up as the first; one with the same (a spot
+// that becomes a directional light, the reference's light samples) is taken.
+TEST_F(HardPluginErrors, ALightThatChangesItsFaceCountIsRefused)
+{
+    const plugin::LoadedPlugin& hard = registry->load("hard");
+    const config::RenderConfig cfg = test::defaultTestConfig();  // a spot light
+    ASSERT_EQ(cfg.lights[0].light.type, scene::LightType::Spot);
+    const scene::Scene scene = config::buildScene(cfg.scene);
+    const render::SceneGpu sceneGpu(*context, scene);
+    const render::Casters casters(sceneGpu);
+    const gpu::ShaderCompiler shaders({hard.shaderDir, gpu::engineShaderDir()});
+    const plugin::ParamValues params = hard.defaultParams();
+    const plugin::TechniqueSetup setup{*context,           shaders,        casters, scene,     params,
+                                       cfg.lights[0].light, scene.bounds(), 0,       cfg.width, cfg.height};
+    const std::unique_ptr<plugin::Technique> technique = registry->create(hard, setup, "light 0");
+    technique->update(cfg.lights[0].light, scene.bounds());  // the same type: fine
+
+    config::LightConfig other = cfg.lights[0];
+    test::setLightType(other, scene::LightType::Directional);
+    technique->update(other.light, scene.bounds());  // one face, as the spot's
+    test::setLightType(other, scene::LightType::Point);
+    try {
+        technique->update(other.light, scene.bounds());
+        ADD_FAILURE() << "a spot light's technique took a point light's six faces";
+    } catch (const Error& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("light 0 changed type to point"), std::string::npos) << what;
+        EXPECT_NE(what.find("1 face(s)"), std::string::npos) << what;
+    }
+}
+
 TEST_F(HardPluginErrors, EvenPcfKernelIsRejectedNamingTheParameter)
 {
     plugin::ParamValues params = registry->load("hard").defaultParams();

@@ -97,6 +97,11 @@ ShadowMap::ShadowMap(const ShadowMapSetup& setup, uint32_t resolution, std::stri
     update(setup.light, setup.sceneBounds);
 }
 
+std::vector<gpu::ShaderDefine> ShadowMap::shaderDefines() const
+{
+    return {{"SHADOW_FACE_COUNT", std::to_string(faceCount_)}, {"SHADOW_FACE_TEXELS", std::to_string(resolution_)}};
+}
+
 void ShadowMap::update(const scene::Light& light, const scene::Aabb& sceneBounds)
 {
     if (shadowFaceCount(light.type) != faceCount_) {

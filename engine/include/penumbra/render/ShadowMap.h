@@ -135,7 +135,7 @@ public:
 
     // Refits the frusta to the light and the scene bounds and rewrites buffer(). Call it
     // from Technique::update; throws when the light changed to a type with another face
-    // count (the map was sized for the first).
+    // count (the map was sized, and its shaders compiled, for the first).
     void update(const scene::Light& light, const scene::Aabb& sceneBounds);
 
     // Declares the transient depth image `image` (atlasWidth() x atlasHeight(),
@@ -167,6 +167,12 @@ public:
     void setOwnDepthCompare(int32_t tapRadius) { compareTapRadius_ = tapRadius; }
 
     uint32_t faceCount() const { return faceCount_; }
+    // The map's layout for its shaders: SHADOW_FACE_COUNT and SHADOW_FACE_TEXELS, fixed
+    // for the map's lifetime (update() throws when the light changes its face count), so
+    // that common/shadow_map.glsl's branches on them fold away at compile time and no
+    // lookup loads them. Append them to the defines of every pipeline that reads this
+    // map's buffer().
+    std::vector<gpu::ShaderDefine> shaderDefines() const;
     uint32_t resolution() const { return resolution_; }
     uint32_t atlasWidth() const { return resolution_ * (faceCount_ == kMaxShadowFaces ? 3u : 1u); }
     uint32_t atlasHeight() const { return resolution_ * (faceCount_ == kMaxShadowFaces ? 2u : 1u); }
