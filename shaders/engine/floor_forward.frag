@@ -10,9 +10,8 @@
 layout(location = 0) in vec3 inPositionWorld;
 layout(location = 1) in vec3 inNormalWorld;
 layout(location = 2) in vec2 inUv;
-layout(location = 3) flat in uint inMaterial;
-
-layout(std430, binding = 1) readonly buffer Materials { MaterialData materials[]; };
+layout(location = 3) flat in vec4 inBaseColor;
+layout(location = 4) flat in vec2 inAlphaTest;  // materialAlphaTest
 layout(binding = 2) uniform sampler2D baseColorTexture;  // pushed per group of draws
 layout(std430, binding = 3) readonly buffer Lights { LightData lights[]; };
 
@@ -22,7 +21,7 @@ layout(binding = 4) uniform sampler2DShadow shadowMaps[LIGHT_COUNT];
 #define SHADOW_MAP_ARRAY
 #include "common/shadow_map.glsl"
 
-layout(location = 4) in vec4 inShadowClip[LIGHT_COUNT];
+layout(location = 5) in vec4 inShadowClip[LIGHT_COUNT];
 
 // 1 lit, 0 shadowed; points outside the map are lit (as the hard technique calls them).
 // The caller passes shadowMaps[I] with a constant I (ADD_LIGHT): lavapipe has no dynamic
@@ -60,9 +59,8 @@ layout(location = 0) out vec4 outColor;
 
 void main()
 {
-    MaterialData material = materials[inMaterial];
-    vec4 baseColor = material.baseColor * texture(baseColorTexture, inUv);
-    if (material.alphaMode == ALPHA_MODE_MASK && baseColor.a < material.alphaCutoff) discard;
+    vec4 baseColor = inBaseColor * texture(baseColorTexture, inUv);
+    if (materialCutsHole(baseColor, inAlphaTest)) discard;
     vec3 n = normalize(inNormalWorld);
     if (!gl_FrontFacing) n = -n;  // two-sided, as the G-buffer
     vec3 albedo = baseColor.rgb;

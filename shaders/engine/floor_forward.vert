@@ -8,6 +8,7 @@ layout(location = 1) in vec3 inNormal;
 layout(location = 2) in vec2 inUv;
 
 layout(std430, binding = 0) readonly buffer Instances { InstanceData instances[]; };
+layout(std430, binding = 1) readonly buffer Materials { MaterialData materials[]; };
 
 layout(push_constant) uniform Push {
     mat4 viewProj;
@@ -17,7 +18,8 @@ layout(push_constant) uniform Push {
 layout(location = 0) out vec3 outPositionWorld;
 layout(location = 1) out vec3 outNormalWorld;
 layout(location = 2) out vec2 outUv;
-layout(location = 3) flat out uint outMaterial;
+layout(location = 3) flat out vec4 outBaseColor;
+layout(location = 4) flat out vec2 outAlphaTest;  // materialAlphaTest
 #if SHADOWED
 // As a classic engine's shadow texgen: each light's first face's clip coordinates per
 // vertex, interpolated (projective: linear in clip space). A one-face map (spot,
@@ -25,7 +27,7 @@ layout(location = 3) flat out uint outMaterial;
 #define SHADOW_MAP_BINDING 5
 #define SHADOW_MAP_ARRAY
 #include "common/shadow_map.glsl"
-layout(location = 4) out vec4 outShadowClip[LIGHT_COUNT];
+layout(location = 5) out vec4 outShadowClip[LIGHT_COUNT];
 #endif
 
 void main()
@@ -35,7 +37,9 @@ void main()
     outPositionWorld = world.xyz;
     outNormalWorld = mat3(inst.normalMatrix) * inNormal;
     outUv = inUv;
-    outMaterial = inst.info.x;
+    MaterialData material = materials[inst.info.x];  // as the G-buffer's (gbuffer.vert)
+    outBaseColor = material.baseColor;
+    outAlphaTest = materialAlphaTest(material);
 #if SHADOWED
     for (uint i = 0u; i < uint(LIGHT_COUNT); ++i) {
         shadowMapIndex = i;

@@ -4,9 +4,8 @@
 
 layout(location = 1) in vec3 inNormalWorld;
 layout(location = 2) in vec2 inUv;
-layout(location = 3) flat in uint inMaterial;
-
-layout(std430, binding = 1) readonly buffer Materials { MaterialData materials[]; };
+layout(location = 3) flat in vec4 inBaseColor;
+layout(location = 4) flat in vec2 inAlphaTest;
 layout(binding = 2) uniform sampler2D baseColorTexture;  // pushed per group of draws
 
 // The position is the depth's (common/gbuffer.glsl rebuilds it).
@@ -15,11 +14,10 @@ layout(location = 1) out vec4 outAlbedo;
 
 void main()
 {
-    MaterialData material = materials[inMaterial];
-    vec4 baseColor = material.baseColor * texture(baseColorTexture, inUv);
+    vec4 baseColor = inBaseColor * texture(baseColorTexture, inUv);
     // MASK: below the cutoff is a hole. BLEND is drawn as an opaque surface here (the
     // G-buffer holds one surface per pixel; translucency is the deep-shadow technique's).
-    if (material.alphaMode == ALPHA_MODE_MASK && baseColor.a < material.alphaCutoff) discard;
+    if (materialCutsHole(baseColor, inAlphaTest)) discard;
     vec3 n = normalize(inNormalWorld);
     // Two-sided lighting: a back face seen by the camera is lit from its visible side.
     if (!gl_FrontFacing) n = -n;

@@ -6,6 +6,7 @@ layout(location = 1) in vec3 inNormal;
 layout(location = 2) in vec2 inUv;
 
 layout(std430, binding = 0) readonly buffer Instances { InstanceData instances[]; };
+layout(std430, binding = 1) readonly buffer Materials { MaterialData materials[]; };
 
 layout(push_constant) uniform Push {
     mat4 viewProj;
@@ -13,7 +14,8 @@ layout(push_constant) uniform Push {
 
 layout(location = 1) out vec3 outNormalWorld;
 layout(location = 2) out vec2 outUv;
-layout(location = 3) flat out uint outMaterial;
+layout(location = 3) flat out vec4 outBaseColor;
+layout(location = 4) flat out vec2 outAlphaTest;  // materialAlphaTest
 
 void main()
 {
@@ -21,6 +23,8 @@ void main()
     vec4 world = inst.model * vec4(inPosition, 1.0);
     outNormalWorld = mat3(inst.normalMatrix) * inNormal;
     outUv = inUv;
-    outMaterial = inst.info.x;
+    MaterialData material = materials[inst.info.x];
+    outBaseColor = material.baseColor;
+    outAlphaTest = materialAlphaTest(material);
     gl_Position = pc.viewProj * world;
 }
