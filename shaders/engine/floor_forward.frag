@@ -12,7 +12,13 @@ layout(location = 1) in vec3 inNormalWorld;
 layout(location = 2) in vec2 inUv;
 layout(location = 3) flat in vec4 inBaseColor;
 layout(location = 4) flat in vec2 inAlphaTest;  // materialAlphaTest
+// BASE_COLOR_TEXTURE 0: an untextured material's draws (frame/BaseColorPipelines.h).
+#ifndef BASE_COLOR_TEXTURE
+#define BASE_COLOR_TEXTURE 1
+#endif
+#if BASE_COLOR_TEXTURE
 layout(binding = 2) uniform sampler2D baseColorTexture;  // pushed per group of draws
+#endif
 layout(std430, binding = 3) readonly buffer Lights { LightData lights[]; };
 
 #if SHADOWED
@@ -59,7 +65,11 @@ layout(location = 0) out vec4 outColor;
 
 void main()
 {
+#if BASE_COLOR_TEXTURE
     vec4 baseColor = inBaseColor * texture(baseColorTexture, inUv);
+#else
+    vec4 baseColor = inBaseColor;
+#endif
     if (materialCutsHole(baseColor, inAlphaTest)) discard;
     vec3 n = normalize(inNormalWorld);
     if (!gl_FrontFacing) n = -n;  // two-sided, as the G-buffer

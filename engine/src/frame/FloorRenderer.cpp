@@ -104,10 +104,10 @@ FloorRenderer::FloorRenderer(gpu::Context& context, const scene::Scene& scene, c
     d.depthFormat = kDepthFormat;
     d.depthCompare = VK_COMPARE_OP_GREATER_OR_EQUAL;
     d.cullMode = VK_CULL_MODE_NONE;  // as the G-buffer: open geometry seen from behind still occludes
-    shadowed_ = gpu::Pipeline(context_, compiler_, d);
+    shadowed_ = BaseColorPipelines(context_, compiler_, d);
     d.name = "floor.unshadowed.forward";
     d.defines = {{"LIGHT_COUNT", std::to_string(lights_.size())}, {"SHADOWED", "0"}};
-    unshadowed_ = gpu::Pipeline(context_, compiler_, d);
+    unshadowed_ = BaseColorPipelines(context_, compiler_, d);
     compareSampler_ = render::createShadowCompareSampler(context_);
 
     update(config, scene, {});
@@ -194,20 +194,21 @@ void FloorRenderer::recordForward(graph::PassContext& pass, bool shadowed)
     const VkRect2D scissor{{0, 0}, {width_, height_}};
     vkCmdSetViewport(cmd, 0, 1, &viewport);
     vkCmdSetScissor(cmd, 0, 1, &scissor);
-    const gpu::Pipeline& pipeline = shadowed ? shadowed_ : unshadowed_;
-    pipeline.bind(cmd);
+    BaseColorPipelines& pipelines = shadowed ? shadowed_ : unshadowed_;
+    pipelines.begin();
     const ForwardPush push{cameraViewProj_, kSkyAmbient};
-    pipeline.pushConstants(cmd, &push, sizeof(push));
     std::vector<const gpu::Image*> maps;
     if (shadowed) {
         for (size_t i = 0; i < shadowMaps_.size(); ++i) maps.push_back(&pass.image(floorShadowMapPass(i)));
     }
     sceneGpu_.draw(cmd, render::DrawFilter::All, [&](const gpu::Image& texture) {
+        const gpu::Pipeline& pipeline = pipelines.bindFor(cmd, sceneGpu_, texture, &push, sizeof(push));
         gpu::DescriptorPush descriptors;
         descriptors.storageBuffer("Instances", sceneGpu_.instanceBuffer())
             .storageBuffer("Materials", sceneGpu_.materialBuffer())
-            .sampledImage("baseColorTexture", texture, sceneGpu_.textureSampler())
             .storageBuffer("Lights", lightBuffer_);
+        if (pipelines.textured(pipeline))
+            descriptors.sampledImage("baseColorTexture", texture, sceneGpu_.textureSampler());
         if (shadowed) {
             descriptors.sampledImages("shadowMaps", maps, compareSampler_, pass.layout(floorShadowMapPass(0)))
                 .storageBuffer("ShadowMapArrayBuffer", shadowMapBuffer_);

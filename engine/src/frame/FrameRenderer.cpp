@@ -83,7 +83,7 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
     // Open or single-sided geometry (the ground plane seen from below) must still
     // occlude: no culling; the fragment shader flips back-facing normals.
     g.cullMode = VK_CULL_MODE_NONE;
-    gbufferPipeline_ = gpu::Pipeline(context, compiler_, g);
+    gbufferPipelines_ = BaseColorPipelines(context, compiler_, g);
 
     nearestSampler_ = gpu::createSampler(context, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
     visibility_ = std::make_unique<visibility::Visibility>(context, compiler_, scene, sceneGpu_, config.culling, width_,
@@ -372,16 +372,18 @@ void FrameRenderer::recordGBuffer(graph::PassContext& pass)
     VkRect2D scissor{{0, 0}, {width_, height_}};
     vkCmdSetViewport(cmd, 0, 1, &viewport);
     vkCmdSetScissor(cmd, 0, 1, &scissor);
-    gbufferPipeline_.bind(cmd);
-    gbufferPipeline_.pushConstants(cmd, &cameraViewProj_, sizeof(glm::mat4));
+    gbufferPipelines_.begin();
     sceneGpu_.draw(
         cmd, render::DrawFilter::All,
         [&](const gpu::Image& texture) {
-            gpu::DescriptorPush()
-                .storageBuffer("Instances", sceneGpu_.instanceBuffer())
-                .storageBuffer("Materials", sceneGpu_.materialBuffer())
-                .sampledImage("baseColorTexture", texture, sceneGpu_.textureSampler())
-                .push(context_, cmd, gbufferPipeline_);
+            const gpu::Pipeline& pipeline =
+                gbufferPipelines_.bindFor(cmd, sceneGpu_, texture, &cameraViewProj_, sizeof(glm::mat4));
+            gpu::DescriptorPush descriptors;
+            descriptors.storageBuffer("Instances", sceneGpu_.instanceBuffer())
+                .storageBuffer("Materials", sceneGpu_.materialBuffer());
+            if (gbufferPipelines_.textured(pipeline))
+                descriptors.sampledImage("baseColorTexture", texture, sceneGpu_.textureSampler());
+            descriptors.push(context_, cmd, pipeline);
         },
         visibility_->receivers());
     vkCmdEndRendering(cmd);

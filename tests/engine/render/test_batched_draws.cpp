@@ -95,6 +95,34 @@ TEST_P(BatchedDraws, FrameEqualsOneDrawPerInstance)
     test::expectNoValidationMessages(*context);
 }
 
+// Draws of untextured materials use the G-buffer's (and the floor's) pipeline without
+// the base-colour sample (frame/BaseColorPipelines.h); giving those materials an
+// explicit white texture of their own sends them through the textured variant, and the
+// frame is the same, byte for byte (a sample of white is exactly 1).
+TEST_F(BatchedDraws, UntexturedVariantDrawsWhatAWhiteTextureDraws)
+{
+    const scene::Scene scene = repeatedMeshesScene();
+    scene::Scene whiteTextured = scene;
+    const auto white = int32_t(whiteTextured.textures.size());
+    whiteTextured.textures.push_back({"white", 1, 1, {255, 255, 255, 255}});
+    size_t retextured = 0;
+    for (scene::Material& m : whiteTextured.materials) {
+        if (m.baseColorTexture != scene::kNoTexture) continue;
+        m.baseColorTexture = white;
+        ++retextured;
+    }
+    ASSERT_GT(retextured, 0u) << "the scene has no untextured material to compare";
+    config::RenderConfig cfg = test::halfMaskedQuadConfig();
+    cfg.width = 160;
+    cfg.height = 120;
+    cfg.camera.position = {2.0f, 11.0f, 6.0f};
+    const Frame untextured = renderFrame(*context, scene, cfg, true);
+    const Frame textured = renderFrame(*context, whiteTextured, cfg, true);
+    EXPECT_EQ(untextured.color, textured.color);
+    EXPECT_EQ(untextured.visibility, textured.visibility);
+    test::expectNoValidationMessages(*context);
+}
+
 INSTANTIATE_TEST_SUITE_P(CullingModes, BatchedDraws,
                          ::testing::Values(config::CullingMode::None, config::CullingMode::Frustum,
                                            config::CullingMode::LightOcclusion, config::CullingMode::ReceiverMask),

@@ -14,6 +14,7 @@
 // (the names' prefixes sum to the shadowed and the unshadowed floor frame). Every instance
 // is drawn, into every view: no culling, no batching. Not for display: a measuring stick.
 #include "penumbra/config/RenderConfig.h"
+#include "penumbra/frame/BaseColorPipelines.h"
 #include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/gpu/Pipeline.h"
@@ -85,8 +86,8 @@ private:
     std::vector<std::unique_ptr<render::ShadowMap>> shadowMaps_;
     gpu::Buffer lightBuffer_;      // shaders/common/light.glsl, one row per light
     gpu::Buffer shadowMapBuffer_;  // render::ShadowMapData per light (SHADOW_MAP_ARRAY)
-    gpu::Pipeline shadowed_;
-    gpu::Pipeline unshadowed_;
+    BaseColorPipelines shadowed_;
+    BaseColorPipelines unshadowed_;
     gpu::Sampler compareSampler_;
     std::unique_ptr<graph::RenderGraph> graph_;
     graph::GraphExecutor executor_;

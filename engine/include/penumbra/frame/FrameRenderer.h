@@ -7,6 +7,7 @@
 // a light whose technique is "none" (config::kNoShadowTechnique) has no V_l at all and
 // shading takes V = 1 for it.
 #include "penumbra/config/Config.h"
+#include "penumbra/frame/BaseColorPipelines.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/gpu/Pipeline.h"
 #include "penumbra/gpu/Resources.h"
@@ -139,7 +140,7 @@ private:
     std::unique_ptr<visibility::Visibility> visibility_;
     gpu::Buffer lightBuffer_;
     gpu::Buffer gbufferCamera_;  // GBufferCamera (common/gbuffer.glsl), rewritten by setCamera
-    gpu::Pipeline gbufferPipeline_;
+    BaseColorPipelines gbufferPipelines_;
     gpu::Pipeline shadingPipeline_;
     gpu::Sampler nearestSampler_;
     // One shader compiler per plugin: its folder first, then the engine's shaders/.

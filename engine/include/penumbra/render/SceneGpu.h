@@ -58,6 +58,9 @@ public:
     const gpu::Buffer& instanceBuffer() const { return instances_; }
     const gpu::Buffer& materialBuffer() const { return materials_; }
     VkSampler textureSampler() const { return sampler_; }
+    // Whether `texture` (as draw() hands it to bindTexture) is the white 1x1 default of
+    // untextured materials, whose sample is exactly 1: a pass may skip the sample.
+    bool isUntextured(const gpu::Image& texture) const { return &texture == &textures_.back(); }
 
     // Binds vertex and index buffers and draws the instances that pass `filter` (and,
     // when `instanceMask` is given, have a non-zero entry in it: one per instance); before
