@@ -11,7 +11,7 @@
 #ifndef PENUMBRA_PENUMBRA_ESTIMATE_GLSL
 #define PENUMBRA_PENUMBRA_ESTIMATE_GLSL
 
-bool shadowDirectionalLight() { return shadowMapData.light.w == 0.0; }
+bool shadowDirectionalLight() { return shadowLightType() == 0u; }
 
 // A radius in texels, clamped to [0, maxTexels]; NaN (from 0 * inf) becomes 0, +inf the
 // maximum.

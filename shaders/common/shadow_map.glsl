@@ -9,8 +9,10 @@
 // also defined, the buffer is an array of ShadowMapData (below).
 //
 // A technique's map has one layout for the technique's lifetime; compiled in (the
-// defines of render::ShadowMap::shaderDefines(): SHADOW_FACE_COUNT, SHADOW_FACE_TEXELS),
-// the branches on it fold away and no lookup loads it. Without them (an array of maps, a shader tool) they are
+// defines of render::ShadowMap::shaderDefines(): SHADOW_FACE_COUNT, SHADOW_FACE_TEXELS,
+// SHADOW_LIGHT_TYPE), the branches on it fold away and no lookup loads it. (llvmpipe
+// runs both sides of every branch on a value it cannot see is uniform: the light-type
+// branches of shadowLightAboveHorizon cost a spot light's hard shadows 7 of 24 ms.) Without them (an array of maps, a shader tool) they are
 // read from the buffer.
 //
 // Every function here is branch-free or loads the buffer before it branches: a
@@ -59,8 +61,13 @@ layout(std430, binding = SHADOW_MAP_BINDING) readonly buffer ShadowMapBuffer {
 #define shadowMapData shadowMapBuffer.map
 #endif
 
-#if defined(SHADOW_MAP_ARRAY) && (defined(SHADOW_FACE_COUNT) || defined(SHADOW_FACE_TEXELS))
-#error common/shadow_map.glsl: SHADOW_FACE_COUNT and SHADOW_FACE_TEXELS describe one map, not an array
+#if defined(SHADOW_MAP_ARRAY) && (defined(SHADOW_FACE_COUNT) || defined(SHADOW_FACE_TEXELS) || defined(SHADOW_LIGHT_TYPE))
+#error common/shadow_map.glsl: SHADOW_FACE_COUNT, SHADOW_FACE_TEXELS and SHADOW_LIGHT_TYPE describe one map, not an array
+#endif
+#ifdef SHADOW_LIGHT_TYPE
+#define shadowLightType() uint(SHADOW_LIGHT_TYPE)
+#else
+#define shadowLightType() shadowMapData.lightType
 #endif
 #ifdef SHADOW_FACE_TEXELS
 #define shadowFaceTexels() float(SHADOW_FACE_TEXELS)
@@ -107,7 +114,7 @@ float shadowLightAboveHorizon(vec3 p, vec3 n)
     vec4 light = shadowMapData.light;
     vec4 axis = shadowMapData.lightAxis;
     vec4 tangent = shadowMapData.lightTangent;
-    uint type = shadowMapData.lightType;
+    uint type = shadowLightType();
     // a: the light's centre above the plane; the light's points lie at a + (their offset
     // from the centre) . n.
     float a = dot(n, light.xyz - p);
@@ -163,7 +170,7 @@ vec3 shadowTowardsLight(vec3 p)
     vec3 d = light.xyz - p;
     float len = length(d);
     vec3 towards = len > 0.0 ? d / (len > 0.0 ? len : 1.0) : vec3(0.0);
-    return light.w == 0.0 ? light.xyz : towards;
+    return shadowLightType() == 0u ? light.xyz : towards;  // directional: light.w = 0
 }
 
 // Face uv -> uv in the whole map (the atlas cell of `face`).

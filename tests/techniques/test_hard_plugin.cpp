@@ -520,11 +520,10 @@ protected:
     }
 };
 
-// The map's layout (face count, texels per face) is compiled into the technique's
-// shaders (render::ShadowMap::shaderDefines): a light that comes back with another face
-// count is refused by name, never looked up as the first; one with the same (a spot
-// that becomes a directional light, the reference's light samples) is taken.
-TEST_F(HardPluginErrors, ALightThatChangesItsFaceCountIsRefused)
+// The map's layout (face count, texels per face, light type) is compiled into the
+// technique's shaders (render::ShadowMap::shaderDefines): a light that comes back as
+// another type is refused by name, never looked up as the first.
+TEST_F(HardPluginErrors, ALightThatChangesTypeIsRefusedNamingBothTypes)
 {
     const plugin::LoadedPlugin& hard = registry->load("hard");
     const config::RenderConfig cfg = test::defaultTestConfig();  // a spot light
@@ -539,17 +538,17 @@ TEST_F(HardPluginErrors, ALightThatChangesItsFaceCountIsRefused)
     const std::unique_ptr<plugin::Technique> technique = registry->create(hard, setup, "light 0");
     technique->update(cfg.lights[0].light, scene.bounds());  // the same type: fine
 
-    config::LightConfig other = cfg.lights[0];
-    test::setLightType(other, scene::LightType::Directional);
-    technique->update(other.light, scene.bounds());  // one face, as the spot's
-    test::setLightType(other, scene::LightType::Point);
-    try {
-        technique->update(other.light, scene.bounds());
-        ADD_FAILURE() << "a spot light's technique took a point light's six faces";
-    } catch (const Error& e) {
-        const std::string what = e.what();
-        EXPECT_NE(what.find("light 0 changed type to point"), std::string::npos) << what;
-        EXPECT_NE(what.find("1 face(s)"), std::string::npos) << what;
+    for (const scene::LightType type : {scene::LightType::Directional, scene::LightType::Point}) {
+        config::LightConfig other = cfg.lights[0];
+        test::setLightType(other, type);
+        try {
+            technique->update(other.light, scene.bounds());
+            ADD_FAILURE() << "a spot light's technique took a " << scene::lightTypeName(type) << " light";
+        } catch (const Error& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find("light 0 changed type"), std::string::npos) << what;
+            EXPECT_NE(what.find(scene::lightTypeName(type)), std::string::npos) << what;
+        }
     }
 }
 

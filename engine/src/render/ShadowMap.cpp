@@ -63,6 +63,7 @@ ShadowMap::ShadowMap(const ShadowMapSetup& setup, uint32_t resolution, std::stri
       name_(fmt::format("light{}.{}", setup.lightIndex, technique)),
       resolution_(resolution),
       faceCount_(shadowFaceCount(setup.light.type)),
+      lightType_(setup.light.type),
       buffer_(setup.context, sizeof(ShadowMapData), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, name_ + ".shadow_faces")
 {
     if (resolution_ == 0) throw ConfigError(fmt::format("{}: resolution: must be at least 1 texel, got 0", technique));
@@ -99,7 +100,10 @@ ShadowMap::ShadowMap(const ShadowMapSetup& setup, uint32_t resolution, std::stri
 
 std::vector<gpu::ShaderDefine> ShadowMap::shaderDefines() const
 {
-    return {{"SHADOW_FACE_COUNT", std::to_string(faceCount_)}, {"SHADOW_FACE_TEXELS", std::to_string(resolution_)}};
+    typeCompiledIn_ = true;
+    return {{"SHADOW_FACE_COUNT", std::to_string(faceCount_)},
+            {"SHADOW_FACE_TEXELS", std::to_string(resolution_)},
+            {"SHADOW_LIGHT_TYPE", std::to_string(uint32_t(lightType_))}};
 }
 
 void ShadowMap::update(const scene::Light& light, const scene::Aabb& sceneBounds)
@@ -107,6 +111,11 @@ void ShadowMap::update(const scene::Light& light, const scene::Aabb& sceneBounds
     if (shadowFaceCount(light.type) != faceCount_) {
         throw Error(fmt::format("{}: light {} changed type to {}; the shadow map was created for {} face(s)", name_,
                                 lightIndex_, scene::lightTypeName(light.type), faceCount_));
+    }
+    if (typeCompiledIn_ && light.type != lightType_) {
+        throw Error(fmt::format("{}: light {} changed type from {} to {}; the technique's shaders were compiled for "
+                                "the first",
+                                name_, lightIndex_, scene::lightTypeName(lightType_), scene::lightTypeName(light.type)));
     }
     // Focused on what the camera sees when the config asks for it (visibility/Visibility.h).
     frusta_ = shadowFrusta(light, sceneBounds, casters_.focus());

@@ -135,7 +135,8 @@ public:
 
     // Refits the frusta to the light and the scene bounds and rewrites buffer(). Call it
     // from Technique::update; throws when the light changed to a type with another face
-    // count (the map was sized, and its shaders compiled, for the first).
+    // count (the map was sized for the first), or changed type at all after
+    // shaderDefines() (its shaders were compiled for the first).
     void update(const scene::Light& light, const scene::Aabb& sceneBounds);
 
     // Declares the transient depth image `image` (atlasWidth() x atlasHeight(),
@@ -167,11 +168,12 @@ public:
     void setOwnDepthCompare(int32_t tapRadius) { compareTapRadius_ = tapRadius; }
 
     uint32_t faceCount() const { return faceCount_; }
-    // The map's layout for its shaders: SHADOW_FACE_COUNT and SHADOW_FACE_TEXELS, fixed
-    // for the map's lifetime (update() throws when the light changes its face count), so
-    // that common/shadow_map.glsl's branches on them fold away at compile time and no
-    // lookup loads them. Append them to the defines of every pipeline that reads this
-    // map's buffer().
+    // The map's layout for its shaders: SHADOW_FACE_COUNT, SHADOW_FACE_TEXELS and
+    // SHADOW_LIGHT_TYPE, so that common/shadow_map.glsl's branches on them fold away at
+    // compile time and no lookup loads them. Append them to the defines of every pipeline
+    // that reads this map's buffer(). From the first call on, the light's type is fixed
+    // too: update() throws when it changes (without the call, a map takes any type of its
+    // face count, as the reference's light samples do).
     std::vector<gpu::ShaderDefine> shaderDefines() const;
     uint32_t resolution() const { return resolution_; }
     uint32_t atlasWidth() const { return resolution_ * (faceCount_ == kMaxShadowFaces ? 3u : 1u); }
@@ -188,6 +190,8 @@ private:
     const std::string name_;  // "light0.hard"
     const uint32_t resolution_;
     const uint32_t faceCount_;
+    const scene::LightType lightType_;  // as created
+    mutable bool typeCompiledIn_ = false;  // shaderDefines() was asked for
     gpu::Pipeline depth_;        // solid casters: no fragment shader
     gpu::Pipeline depthMasked_;  // alpha-masked casters: a fragment shader cuts the holes
     gpu::Buffer buffer_;         // data_ for the shaders, host-visible
