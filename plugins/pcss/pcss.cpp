@@ -64,7 +64,7 @@ Settings readSettings(const plugin::ParamValues& params)
 {
     Settings s;
     s.resolution = uint32_t(params.getInt("resolution"));
-    s.lightSizeOverride = params.getFloat("light_size");
+    s.lightSizeOverride = plugin::lightSizeOverride(params, "pcss");
     s.blockerSamples = uint32_t(params.getInt("blocker_samples"));
     s.filterSamples = uint32_t(params.getInt("filter_samples"));
     s.maxSearchTexels = params.getFloat("max_search_radius");

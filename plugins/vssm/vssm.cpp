@@ -115,7 +115,7 @@ Settings readSettings(const plugin::ParamValues& params)
 {
     Settings s;
     s.resolution = uint32_t(params.getInt("resolution"));
-    s.lightSizeOverride = params.getFloat("light_size");
+    s.lightSizeOverride = plugin::lightSizeOverride(params, "vssm");
     s.subdivision = Subdivision(params.getEnumIndex("subdivision"));
     s.blockerSubdivisions = params.getInt("blocker_subdivisions");
     s.filterSubdivisions = params.getInt("filter_subdivisions");

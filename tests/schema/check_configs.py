@@ -75,6 +75,8 @@ bad = {
     "cone on a point light": ({"lights": [dict(point, outer_cone_deg=3)]}, "/lights/0/outer_cone_deg"),
     "negative size": ({"lights": [{"type": "rect", "position": [0, 1, 0], "direction": [0, -1, 0], "size": [1, -2]}]},
                       "/lights/0/size/1"),
+    "pcss light_size between -1 and 0": ({"lights": [dict(point, shadow={"technique": "pcss", "light_size": -0.5})]},
+                                         "/lights/0/shadow/light_size"),
     "zero direction": ({"lights": [{"type": "directional", "direction": [0, 0, 0]}]}, "/lights/0/direction"),
     "unknown light type": ({"lights": [{"type": "area", "position": [0, 1, 0]}]}, "/lights/0/type"),
     "nine lights": ({"lights": [dict(point, name=str(i)) for i in range(9)]}, "/lights"),

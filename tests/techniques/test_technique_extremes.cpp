@@ -216,6 +216,66 @@ TEST_P(TechniqueExtremes, HorizonClipsTheLightOnAWall)
     }
 }
 
+// light_size is -1 (the light's own size) or a size >= 0: a value between, which the
+// parameter's range [-1, 1e9] lets through, stops the render naming it (it was taken as
+// -1); -1 and 0 render.
+TEST_F(Extremes, LightSizeBetweenMinusOneAndZeroIsRefusedNamingIt)
+{
+    for (const char* technique : {"pcss", "vssm"}) {
+        for (const double size : {-0.5, -1e-6, -1.0, 0.0}) {
+            SCOPED_TRACE(fmt::format("{} light_size {}", technique, size));
+            config::RenderConfig cfg = test::defaultTestConfig();
+            cfg.width = 64;
+            cfg.height = 36;
+            test::setShadow(cfg.lights[0], technique, {{"light_size", size}, {"resolution", 256}});
+            const bool meaningful = size == -1.0 || size >= 0.0;
+            try {
+                render(cfg, config::buildScene(cfg.scene));
+                EXPECT_TRUE(meaningful) << "rendered";
+            } catch (const Error& e) {
+                EXPECT_FALSE(meaningful) << e.what();
+                EXPECT_NE(std::string(e.what()).find("light_size"), std::string::npos) << e.what();
+                EXPECT_NE(std::string(e.what()).find(technique), std::string::npos) << e.what();
+            }
+        }
+    }
+}
+
+// A light of size 0 of any kind gives exactly the point light's shadows (the
+// reference's README; configs take a rect size and a disk radius of 0): V of a rect of
+// size [0, 0] and of a disk of radius 0 equals V of a point light at the same place, for
+// the soft techniques (their light size is then 0: the hard compare) and the reference.
+TEST_F(Extremes, ZeroSizeRectAndDiskLightsCastThePointLightsShadows)
+{
+    for (const char* technique : {"hard", "pcss", "vssm", "reference"}) {
+        std::vector<float> v[3];
+        for (int kind = 0; kind < 3; ++kind) {
+            config::RenderConfig cfg = test::defaultTestConfig();
+            cfg.width = 96;
+            cfg.height = 54;
+            test::setLightType(cfg.lights[0], kind == 0 ? scene::LightType::Point
+                                              : kind == 1 ? scene::LightType::Rect
+                                                          : scene::LightType::Disk);
+            cfg.lights[0].light.position = {-3.0f, 9.0f, 4.0f};  // one place for all three
+            cfg.lights[0].light.direction = {0.0f, -1.0f, 0.0f};
+            cfg.lights[0].light.sizeWorld = glm::vec2(0.0f);
+            cfg.lights[0].light.radiusWorld = 0.0f;
+            const nlohmann::json params = std::string(technique) == "reference"
+                                              ? nlohmann::json{{"samples", 4}, {"cache", false}}
+                                              : nlohmann::json{{"resolution", 512}};
+            test::setShadow(cfg.lights[0], technique, params);
+            render(cfg, config::buildScene(cfg.scene));
+            v[kind] = frame->checkedVisibility();
+        }
+        SCOPED_TRACE(technique);
+        size_t shadowed = 0;
+        for (const float x : v[0]) shadowed += x < 0.5f ? 1 : 0;
+        EXPECT_GT(shadowed, 100u) << "the point light must cast shadows for the comparison to mean anything";
+        EXPECT_EQ(v[1], v[0]) << "rect of size 0";
+        EXPECT_EQ(v[2], v[0]) << "disk of radius 0";
+    }
+}
+
 TEST_F(Extremes, ReferenceClipsTheLightOnAWallSampleBySample)
 {
     // 256 correlated multi-jittered samples are stratified along x in 256 strata: the

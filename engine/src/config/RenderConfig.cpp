@@ -154,7 +154,9 @@ LightConfig readLight(const json& v, const Locator& locator, size_t index)
             readAxis(r, lc, true);
             const json& size = r.require("size");
             if (!size.is_array() || size.size() != 2) r.fail(at + "/size", fmt::format("must be [width, height], got {}", size.dump()));
-            for (int i = 0; i < 2; ++i) l.sizeWorld[i] = float(r.checkNumber(size[size_t(i)], fmt::format("{}/size/{}", at, i), 0.0, 1e9, true));
+            // 0 is a size (a line, or with both a point that emits like a rect): every
+            // technique and the reference take it, so that a sweep can reach the limit.
+            for (int i = 0; i < 2; ++i) l.sizeWorld[i] = float(r.checkNumber(size[size_t(i)], fmt::format("{}/size/{}", at, i), 0.0, 1e9, false));
             // The width axis: "tangent" projected onto the emitting plane, else any axis in it.
             glm::vec3 t = r.vec3("tangent", glm::abs(l.direction.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0));
             t -= glm::dot(t, l.direction) * l.direction;
@@ -163,7 +165,7 @@ LightConfig readLight(const json& v, const Locator& locator, size_t index)
         } else {
             l.type = scene::LightType::Disk;
             readAxis(r, lc, true);
-            l.radiusWorld = float(r.number("radius", 0.0, 0.0, 1e9, true));
+            l.radiusWorld = float(r.number("radius", 0.0, 0.0, 1e9));  // 0: a point, as for rect's size
             if (!r.find("radius")) r.fail(at + "/radius", "is required but missing");
         }
     }

@@ -320,8 +320,15 @@ TEST(Config, LightTypesAndTheirKeys)
 
     doc["lights"] = json::parse(R"([{"type": "point", "position": [0, 5, 0], "outer_cone_deg": 30}])");
     EXPECT_NE(errorOf(doc).find("/lights/0/outer_cone_deg: unknown key for a point light"), std::string::npos);
-    doc["lights"] = json::parse(R"([{"type": "rect", "position": [0, 5, 0], "direction": [0, -1, 0], "size": [2, 0]}])");
-    EXPECT_NE(errorOf(doc).find("/lights/0/size/1: must be in (0,"), std::string::npos);
+    doc["lights"] = json::parse(R"([{"type": "rect", "position": [0, 5, 0], "direction": [0, -1, 0], "size": [2, -1]}])");
+    EXPECT_NE(errorOf(doc).find("/lights/0/size/1: must be in [0,"), std::string::npos);
+    // Size 0 is a light of size 0 (a point that emits like the rect or disk), as the
+    // reference and every technique take it.
+    doc["lights"] = json::parse(R"([{"type": "rect", "position": [0, 5, 0], "direction": [0, -1, 0], "size": [0, 0]},
+                                    {"type": "disk", "position": [0, 5, 0], "direction": [0, -1, 0], "radius": 0}])");
+    const config::RenderConfig zero = config::parseConfig(doc, "scene.json");
+    EXPECT_EQ(zero.lights[0].light.sizeWorld, glm::vec2(0.0f));
+    EXPECT_EQ(zero.lights[1].light.radiusWorld, 0.0f);
     doc["lights"] = json::parse(R"([{"type": "disk", "position": [0, 5, 0], "direction": [0, -1, 0]}])");
     EXPECT_NE(errorOf(doc).find("/lights/0/radius: is required"), std::string::npos);
     doc["lights"] = json::parse(R"([{"type": "directional", "direction": [0, 0, 0]}])");

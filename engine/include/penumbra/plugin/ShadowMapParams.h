@@ -3,7 +3,10 @@
 // vssm and the example describe them in the same words. In the plugin module, not beside
 // render::ShadowMap: a ParamSpec is plugin ABI (plugin/Plugin.h), and render sits below
 // plugin.
+#include "penumbra/plugin/Params.h"
 #include "penumbra/plugin/Plugin.h"
+
+#include <string_view>
 
 namespace penumbra::plugin {
 
@@ -22,5 +25,10 @@ inline constexpr ParamSpec kLightSizeParam{
     "light_size", ParamType::Float, -1, -1, 1e9, "world or deg",
     "-1: the light's own size (rect: sqrt(w h), disk: diameter, directional: angular_diameter_deg; spot and "
     "point: 0, a hard shadow); >= 0: this size instead, in world units (directional: angular diameter in degrees)"};
+
+// kLightSizeParam's value: -1 or >= 0. Its range, [-1, 1e9], cannot say that the values
+// between mean nothing: throws penumbra::ConfigError naming `technique`'s light_size for
+// them (-0.5 was taken as -1 before).
+float lightSizeOverride(const ParamValues& params, std::string_view technique);
 
 } // namespace penumbra::plugin
