@@ -69,13 +69,21 @@ const plugin::ParamSpec kParams[] = {
 
 // The version of what a cached image means: raise it whenever the tracing changes the
 // values it produces, so that old files stop matching.
-constexpr char kAlgorithmVersion[] = "penumbra-reference ray_traced 2";
+constexpr char kAlgorithmVersion[] = "penumbra-reference ray_traced 3";
 
-// Shadow rays start this far (relative to the scene's radius plus the point's largest
-// coordinate) off the receiver along its normal: well above the G-buffer position's
-// float error at any scale (about 1e-7 of its coordinates), well below any feature a
-// scene resolves (README.md, "Numerical care").
-constexpr float kRayOffset = 1e-5f;
+// Shadow rays start off the receiver along its normal by this many times the bound on
+// the G-buffer position's distance from the true surface (gbufferPositionError, which
+// GBufferExport hands over in the normal's w: 5e-7 of the point's distance from the eye
+// plus its own magnitude, measured at most 0.4 of it). Four bounds clear the surface
+// and Embree's own rounding (a few ulps of the coordinates) at any scale, and are the
+// least the position allows: the origin's lift shifts a contact shadow by lift / gap of
+// its width (README.md, "Numerical care"). Before, 1e-5 of the scene's radius plus the
+// point's largest coordinate: 15 % of a 1 mm gap under a 20 m ground.
+constexpr float kRayOffsetBounds = 4.0f;
+// Crossings of one surface closer than this (relative to the scene's radius plus the
+// point's largest coordinate) count once: Embree may report a hit twice (shared edges,
+// spatial splits). Far above the hits' rounding, far below any two real surfaces.
+constexpr float kSameSurfaceRelative = 1e-5f;
 
 struct Settings {
     Mode mode = Mode::RayTraced;
@@ -340,7 +348,12 @@ private:
         const glm::vec3 n(normalWorld[0], normalWorld[1], normalWorld[2]);
         const float nLength = glm::length(n);
         const glm::vec3 pAbs = glm::abs(p);
-        const float offset = kRayOffset * (tracer_.sceneRadius() + std::max({pAbs.x, pAbs.y, pAbs.z}));
+        const float sameSurface = kSameSurfaceRelative * (tracer_.sceneRadius() + std::max({pAbs.x, pAbs.y, pAbs.z}));
+        // The position's error bound; a point without one (not finite, not positive) falls
+        // back to the same-surface distance, which bounds it from above at any scale.
+        const float bound = normalWorld[3];
+        const float offset = std::isfinite(bound) && bound > 0.0f ? std::min(kRayOffsetBounds * bound, sameSurface)
+                                                                  : sameSurface;
         // Off the surface on the side the camera sees (the G-buffer's normal faces it).
         // Without a usable normal, each ray starts `offset` along itself instead.
         const bool hasNormal = std::isfinite(nLength) && nLength > 0.5f;
@@ -352,9 +365,9 @@ private:
         double sum = 0.0;
         for (uint32_t s = 0; s < count; ++s) {
             const ShadowRay ray = sampler_.sample(glm::dvec3(origin), stratifiedSample(s, count, pattern));
-            // Stop short of the light sample by the same offset: a caster touching the
-            // light does not count, and nothing at the sample itself is hit.
-            const double length = ray.length - double(offset);
+            // Stop short of the light sample by the same-surface distance: a caster touching
+            // the light does not count, and nothing at the sample itself is hit.
+            const double length = ray.length - double(sameSurface);
             if (!(length > 0.0)) {
                 sum += 1.0;
                 continue;
@@ -370,7 +383,7 @@ private:
             const glm::vec3 start = hasNormal ? origin : origin + offset * dir;
             sum += double(tracer_.transmittance(start, dir, std::isinf(length) ? std::numeric_limits<float>::infinity()
                                                                                 : float(length),
-                                                offset, scratch));
+                                                sameSurface, scratch));
             ++traced;
         }
         const float v = float(sum / double(count));

@@ -8,7 +8,9 @@
 layout(local_size_x = 64, local_size_y = 1) in;
 
 layout(std430, binding = 3) writeonly buffer Positions { vec4 positions[]; };  // w = 1 surface, 0 none
-layout(std430, binding = 4) writeonly buffer Normals { vec4 normals[]; };      // 0 where no surface
+// xyz the unit normal, w the position's error bound (gbufferPositionError, world units:
+// the reference starts its shadow rays a few of them off the surface); 0 where no surface.
+layout(std430, binding = 4) writeonly buffer Normals { vec4 normals[]; };
 
 void main()
 {
@@ -18,5 +20,6 @@ void main()
     uint i = uint(pixel.y) * uint(size.x) + uint(pixel.x);
     vec4 p = gbufferPosition(pixel);
     positions[i] = p;
-    normals[i] = p.w != 0.0 ? vec4(gbufferNormal(pixel), 0.0) : vec4(0.0);
+    vec4 surface = vec4(gbufferNormal(pixel), gbufferPositionError(p.xyz));
+    normals[i] = p.w != 0.0 ? surface : vec4(0.0);
 }

@@ -93,7 +93,8 @@ public:
     // plugin::GBufferExport), four floats per pixel (all 0 where no geometry, w = 1
     // elsewhere).
     std::vector<float> readPositions() const;
-    // G-buffer unit world normals, four floats per pixel (0 where no geometry).
+    // G-buffer unit world normals, four floats per pixel (w: the position's error bound,
+    // gbufferPositionError; all 0 where no geometry).
     std::vector<float> readNormals() const;
 
 private:

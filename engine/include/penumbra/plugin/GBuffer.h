@@ -30,9 +30,10 @@ void readGBuffer(graph::PassBuilder& pass, const GBufferIo& gbuffer);
 void bindGBuffer(const graph::PassContext& pass, const GBufferIo& gbuffer, gpu::DescriptorPush& descriptors);
 
 // The G-buffer for the CPU: per pixel (rows top first) a world position (xyz, w = 1
-// where the pixel sees geometry, all 0 elsewhere) and a unit world normal (xyz, w = 0;
-// 0 where no geometry), both as four floats, computed by gbufferPosition and
-// gbufferNormal on the GPU.
+// where the pixel sees geometry, all 0 elsewhere) and a unit world normal (xyz; w: the
+// position's error bound, gbufferPositionError, in world units; all 0 where no
+// geometry), both as four floats, computed by gbufferPosition, gbufferNormal and
+// gbufferPositionError on the GPU.
 class GBufferExport {
 public:
     static constexpr VkDeviceSize kTexelBytes = 4 * sizeof(float);  // per pixel, in each buffer
