@@ -3,6 +3,7 @@
 #include "FrameCapture.h"
 #include "OutputFolder.h"
 #include "ReferenceTechnique.h"
+#include "VisibilityExr.h"
 
 #include "penumbra/config/Run.h"
 #include "penumbra/core/Error.h"
@@ -80,12 +81,13 @@ struct OutputFiles {
     };
     std::vector<Light> lights;
     fs::path colorTest, colorReference, metrics;
+    fs::path visibilityTest, visibilityReference;  // every light's V as floats (VisibilityExr.h)
 
     std::vector<fs::path> all() const
     {
         std::vector<fs::path> files;
         for (const Light& l : lights) files.insert(files.end(), {l.test, l.reference, l.diff});
-        files.insert(files.end(), {colorTest, colorReference, metrics});
+        files.insert(files.end(), {colorTest, colorReference, visibilityTest, visibilityReference, metrics});
         return files;
     }
 };
@@ -98,6 +100,8 @@ OutputFiles outputFiles(const fs::path& dir, const config::RenderConfig& config)
     }
     files.colorTest = dir / "color.test.png";
     files.colorReference = dir / "color.reference.png";
+    files.visibilityTest = dir / "visibility.test.exr";
+    files.visibilityReference = dir / "visibility.reference.exr";
     files.metrics = dir / "metrics.json";
     return files;
 }
@@ -159,6 +163,10 @@ void writeOutputs(const fs::path& dir, const OutputFiles& files, const FrameImag
     }
     io::writePng(files.colorTest, w, h, test.color);
     io::writePng(files.colorReference, w, h, reference.color);
+    std::vector<std::string> names;
+    for (const auto& light : doc["lights"]) names.push_back(light["name"].get<std::string>());
+    writeVisibilityExr(files.visibilityTest, w, h, names, test.visibility);
+    writeVisibilityExr(files.visibilityReference, w, h, names, reference.visibility);
     // Last: a metrics.json newer than the images says the set is complete.
     io::writeTextFile(files.metrics, doc.dump(2) + "\n");
 }
@@ -212,7 +220,8 @@ int runCompare(const CompareFlags& flags)
         if (!flags.output.empty()) {
             light["files"] = {{"test", files.lights[i].test.filename().string()},
                               {"reference", files.lights[i].reference.filename().string()},
-                              {"diff", files.lights[i].diff.filename().string()}};
+                              {"diff", files.lights[i].diff.filename().string()},
+                              {"channel", visibilityChannel(config.lights[i].name)}};
         }
         doc["lights"].push_back(std::move(light));
         if (c.test.total() > 0) {
@@ -227,6 +236,8 @@ int runCompare(const CompareFlags& flags)
     if (!flags.output.empty()) {
         doc["color"]["files"] = {{"test", files.colorTest.filename().string()},
                                  {"reference", files.colorReference.filename().string()}};
+        doc["visibility_files"] = {{"test", files.visibilityTest.filename().string()},
+                                   {"reference", files.visibilityReference.filename().string()}};
     }
     doc["diff_scale"] = flags.diffScale;
     doc["warnings"] = warnings;
@@ -256,8 +267,9 @@ Command addCompareCommand(CLI::App& app)
     cmd->add_option("config", flags->config, "Scene config (JSON)")->required();
     cmd->add_option("-o,--output", flags->output,
                     "Write <light>.test.png, <light>.reference.png, <light>.diff.png, color.test.png, "
-                    "color.reference.png and metrics.json into this folder (created if missing; other files "
-                    "in it are left alone)");
+                    "color.reference.png, visibility.test.exr and visibility.reference.exr (every light's V as "
+                    "32-bit floats, one channel \"<light name>.V\" each) and metrics.json into this folder "
+                    "(created if missing; other files in it are left alone)");
     addReferenceFlags(*cmd, flags->reference);
     cmd->add_option("--diff-scale", flags->diffScale, "|dV| at which the difference image's colours saturate, in (0, 1]")
         ->capture_default_str();

@@ -2,6 +2,7 @@
 
 #include "FloorComparison.h"
 #include "TimingSummary.h"
+#include "VisibilityExr.h"
 #include "penumbra/config/Run.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/frame/FloorRenderer.h"
@@ -21,6 +22,7 @@ namespace {
 struct RenderFlags {
     std::string config;
     std::string output;
+    std::string visibilityExr;
     std::optional<uint32_t> frames;
     std::optional<uint32_t> warmup;
     bool timings = false;
@@ -50,6 +52,7 @@ int runRender(const RenderFlags& flags)
     if (flags.culling) options.culling = config::parseCullingMode(*flags.culling);
     // Fail on a bad output path before spending seconds rendering.
     io::checkWritable(outputPerFrame(flags.output) ? framePath(flags.output, 0) : flags.output);
+    if (!flags.visibilityExr.empty()) io::checkWritable(flags.visibilityExr);
 
     gpu::Context context(contextOptions(flags.device));
     spdlog::info("device: {} ({})", context.deviceInfo().name, context.deviceInfo().type);
@@ -105,6 +108,16 @@ int runRender(const RenderFlags& flags)
         io::writePng(flags.output, renderer.width(), renderer.height(), renderer.readColor());
         spdlog::info("wrote {}", flags.output);
     }
+    if (!flags.visibilityExr.empty()) {
+        std::vector<std::string> names;
+        std::vector<std::vector<float>> visibility;
+        for (size_t l = 0; l < run.config.lights.size(); ++l) {
+            names.push_back(run.config.lights[l].name);
+            visibility.push_back(renderer.readVisibility(l));
+        }
+        writeVisibilityExr(flags.visibilityExr, renderer.width(), renderer.height(), names, visibility);
+        spdlog::info("wrote {} (V of {} light(s), 32-bit float)", flags.visibilityExr, names.size());
+    }
 
     return validationExitCode(context);
 }
@@ -118,6 +131,9 @@ Command addRenderCommand(CLI::App& app)
     cmd->add_option("config", flags->config, "Scene config (JSON)")->required();
     cmd->add_option("-o,--output", flags->output, "Output PNG; a name with {frame} (e.g. f{frame:04}.png) gets every frame")
         ->required();
+    cmd->add_option("--visibility-exr", flags->visibilityExr,
+                    "Also write every light's visibility image V (the last frame's) as 32-bit floats: an OpenEXR "
+                    "file with one channel per light, \"<light name>.V\"");
     cmd->add_option("--frames", flags->frames, "Frames to render (overrides the config)")->check(CLI::Range(1u, 100000u));
     cmd->add_option("--warmup", flags->warmup,
                     "Untimed frames before the measured ones (default: 1 with --frames > 1 or --timings, else 0)")

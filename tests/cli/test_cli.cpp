@@ -2,6 +2,10 @@
 // and no partial or clobbered output file on failure.
 #include "penumbra/plugin/Plugin.h"
 
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -11,6 +15,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -39,6 +45,33 @@ std::string slurp(const fs::path& p)
     std::ostringstream ss;
     ss << in.rdbuf();
     return ss.str();
+}
+
+// A float OpenEXR file as the CLI writes V (apps/penumbra/VisibilityExr.h): its size and
+// every FLOAT channel by name, rows top first.
+struct Exr {
+    int width = 0, height = 0;
+    std::map<std::string, std::vector<float>> channels;
+};
+
+Exr readExr(const fs::path& path)
+{
+    Imf::InputFile file(path.c_str());
+    const Imath::Box2i window = file.header().dataWindow();
+    Exr exr;
+    exr.width = window.max.x - window.min.x + 1;
+    exr.height = window.max.y - window.min.y + 1;
+    Imf::FrameBuffer frame;
+    for (auto c = file.header().channels().begin(); c != file.header().channels().end(); ++c) {
+        EXPECT_EQ(c.channel().type, Imf::FLOAT) << c.name();
+        std::vector<float>& values = exr.channels[c.name()];
+        values.resize(size_t(exr.width) * exr.height);
+        frame.insert(c.name(), Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(values.data()), sizeof(float),
+                                          sizeof(float) * size_t(exr.width)));
+    }
+    file.setFrameBuffer(frame);
+    file.readPixels(window.min.y, window.max.y);
+    return exr;
 }
 
 class Cli : public ::testing::Test {
@@ -969,7 +1002,7 @@ TEST_F(Cli, CompareWritesEveryImageAndLeavesOtherFilesAlone)
     for (const auto& entry : fs::directory_iterator(out)) names.insert(entry.path().filename().string());
     EXPECT_EQ(names, (std::set<std::string>{"notes.txt", "key.test.png", "key.reference.png", "key.diff.png", "fill.test.png",
                                             "fill.reference.png", "fill.diff.png", "color.test.png", "color.reference.png",
-                                            "metrics.json"}))
+                                            "visibility.test.exr", "visibility.reference.exr", "metrics.json"}))
         << "no temporary file is left";
     EXPECT_EQ(slurp(out / "notes.txt"), "mine");
 
@@ -1018,6 +1051,73 @@ TEST_F(Cli, CompareRendersARealTechniqueAgainstAFilteredOne)
     EXPECT_GT(v["ssim"].get<double>(), 0.5);
     EXPECT_LT(v["ssim"].get<double>(), 1.0);
     EXPECT_TRUE(fs::exists(out / "light0.diff.png"));
+}
+
+// Float output (issue 19): compare -o writes every light's V of both renders as 32-bit
+// floats, one channel "<light name>.V" per light, and they are the values the figures
+// come from: the RMSE over the pixels of geometry, recomputed from the two files (pixels
+// without geometry hold 1 in both), is the reported one.
+TEST_F(Cli, CompareWritesTheFloatVisibilityItsFiguresComeFrom)
+{
+    const fs::path out = dir / "out";
+    const CliResult r = run(fmt::format("compare {} --width 160 --height 90 --set hard.resolution=512 --reference hard "
+                                        "--reference-set filter=poisson --reference-set hard.filter_radius=4 --json "
+                                        "-o '{}'",
+                                        config("two-spots.json"), out.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const nlohmann::json doc = nlohmann::json::parse(r.out);
+    EXPECT_EQ(doc["visibility_files"]["test"], "visibility.test.exr");
+    const Exr test = readExr(out / "visibility.test.exr"), reference = readExr(out / "visibility.reference.exr");
+    ASSERT_EQ(test.width, 160);
+    ASSERT_EQ(test.height, 90);
+    ASSERT_EQ(test.channels.size(), doc["lights"].size());
+    for (const nlohmann::json& light : doc["lights"]) {
+        const std::string channel = light["files"]["channel"];
+        EXPECT_EQ(channel, light["name"].get<std::string>() + ".V");
+        ASSERT_TRUE(test.channels.count(channel) && reference.channels.count(channel)) << channel;
+        const std::vector<float>& v = test.channels.at(channel);
+        const std::vector<float>& vRef = reference.channels.at(channel);
+        double squared = 0.0;
+        size_t shadowed = 0;
+        for (size_t i = 0; i < v.size(); ++i) {
+            squared += (double(v[i]) - vRef[i]) * (double(v[i]) - vRef[i]);
+            shadowed += v[i] < 0.5f ? 1 : 0;
+        }
+        EXPECT_GT(shadowed, 100u) << channel;
+        EXPECT_EQ(v[0], 1.0f) << "the top-left corner is sky";
+        const nlohmann::json& all = light["visibility"]["all"];
+        const double rmse = std::sqrt(squared / all["pixels"].get<double>());
+        EXPECT_NEAR(rmse, all["rmse"].get<double>(), 1e-6 * std::max(1.0, rmse)) << channel;
+        EXPECT_GT(rmse, 0.0) << channel;
+    }
+}
+
+// render --visibility-exr: the last frame's V of every light, next to the PNG; a path
+// that cannot be written stops the run before rendering, naming it, and leaves no file.
+TEST_F(Cli, RenderWritesEveryLightsVisibilityAsFloats)
+{
+    const fs::path exr = dir / "v.exr";
+    CliResult r = run(fmt::format("render {} -o '{}' --width 96 --height 54 --visibility-exr '{}'", config("two-spots.json"),
+                                  (dir / "out.png").string(), exr.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const Exr v = readExr(exr);
+    EXPECT_EQ(v.width, 96);
+    EXPECT_EQ(v.height, 54);
+    ASSERT_EQ(v.channels.size(), 2u);
+    for (const auto& [name, values] : v.channels) {
+        EXPECT_EQ(name.substr(name.size() - 2), ".V");
+        size_t shadowed = 0;
+        for (const float x : values) {
+            ASSERT_TRUE(x >= 0.0f && x <= 1.0f) << name << ": " << x;
+            shadowed += x < 0.5f ? 1 : 0;
+        }
+        EXPECT_GT(shadowed, 20u) << name;
+    }
+    r = run(fmt::format("render {} -o '{}' --width 96 --height 54 --visibility-exr '{}/missing/v.exr'",
+                        config("two-spots.json"), (dir / "again.png").string(), dir.string()));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("missing/v.exr"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "again.png")) << "refused before rendering";
 }
 
 TEST_F(Cli, CompareRefusesBadInputBeforeRenderingOrWriting)
