@@ -282,8 +282,8 @@ std::string referenceKey(const config::RenderConfig& config, size_t light)
 
 struct ReferenceVisibility {
     std::vector<float> visibility;
-    // The reference render's geometry pixels, shared by the lights rendered with it.
-    std::shared_ptr<const metrics::PixelMask> mask;
+    // The pixels the light's figures are taken over (reachMask: geometry the light reaches).
+    metrics::PixelMask mask;
 };
 
 class ReferenceCache {
@@ -327,8 +327,10 @@ private:
         renderer.renderFrame();
         InterruptHandler::check();
         FrameImages images = captureFrame(renderer);
-        auto mask = std::make_shared<const metrics::PixelMask>(metrics::geometryMask(images.width, images.height, images.positions));
-        for (size_t i = 0; i < keys.size(); ++i) cache_[keys[i]] = {std::move(images.visibility[i]), mask};
+        for (size_t i = 0; i < keys.size(); ++i) {
+            cache_[keys[i]] = {std::move(images.visibility[i]),
+                               reachMask(config.lights[i].light, images.width, images.height, images.positions)};
+        }
         ++renders_;
     }
 
@@ -417,7 +419,7 @@ BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& v
         }
         const ReferenceVisibility& reference = *references[l];
         light.visibility = metrics::compareVisibility({images.width, images.height, images.visibility[l]},
-                                                      {images.width, images.height, reference.visibility}, reference.mask.get());
+                                                      {images.width, images.height, reference.visibility}, &reference.mask);
         result.lights.push_back(std::move(light));
     }
     return result;

@@ -150,8 +150,9 @@ void printTable(const json& doc, const std::vector<metrics::VisibilityComparison
     fmt::print("  SSIM (luma) {:.5f}\n", color.ssimLuma);
 }
 
+// `reaches`: per light, the pixels compared (reachMask); the others are grey in its diff.
 void writeOutputs(const fs::path& dir, const OutputFiles& files, const FrameImages& test, const FrameImages& reference,
-                  const metrics::PixelMask& mask, float diffScale, const json& doc)
+                  const std::vector<metrics::PixelMask>& reaches, float diffScale, const json& doc)
 {
     createOutputFolder(dir, fmt::format("-o {}", dir.string()));
     const uint32_t w = test.width, h = test.height;
@@ -159,7 +160,7 @@ void writeOutputs(const fs::path& dir, const OutputFiles& files, const FrameImag
         const metrics::FloatImageView v{w, h, test.visibility[i]}, vRef{w, h, reference.visibility[i]};
         io::writePng(files.lights[i].test, w, h, metrics::visibilityGreyscale(v));
         io::writePng(files.lights[i].reference, w, h, metrics::visibilityGreyscale(vRef));
-        io::writePng(files.lights[i].diff, w, h, metrics::differenceImage(v, vRef, &mask, diffScale));
+        io::writePng(files.lights[i].diff, w, h, metrics::differenceImage(v, vRef, &reaches[i], diffScale));
     }
     io::writePng(files.colorTest, w, h, test.color);
     io::writePng(files.colorReference, w, h, reference.color);
@@ -206,8 +207,11 @@ int runCompare(const CompareFlags& flags)
                 {"height", h},
                 {"reference", {{"technique", flags.reference.technique}, {"params", reference.params}}},
                 {"lights", json::array()}};
+    std::vector<metrics::PixelMask> reaches;
     for (size_t i = 0; i < config.lights.size(); ++i) {
-        comparisons.push_back(metrics::compareVisibility({w, h, test.visibility[i]}, {w, h, ref.visibility[i]}, &mask));
+        reaches.push_back(reachMask(config.lights[i].light, ref.width, ref.height, ref.positions));
+        comparisons.push_back(
+            metrics::compareVisibility({w, h, test.visibility[i]}, {w, h, ref.visibility[i]}, &reaches.back()));
         const metrics::VisibilityComparison& c = comparisons.back();
         const std::string& technique = test.techniques[i];
         json light = {{"index", i},
@@ -244,7 +248,7 @@ int runCompare(const CompareFlags& flags)
 
     // Files first: figures on stdout mean that the files, if asked for, are there too.
     if (!flags.output.empty()) {
-        writeOutputs(dir, files, test, ref, mask, float(flags.diffScale), doc);
+        writeOutputs(dir, files, test, ref, reaches, float(flags.diffScale), doc);
         spdlog::info("wrote {} files into {}", files.all().size(), dir.string());
     }
     if (flags.json) {

@@ -1,6 +1,10 @@
 #pragma once
 // What `compare` and `bench` read back from the renderer for the metrics.
 #include "penumbra/frame/FrameRenderer.h"
+#include "penumbra/metrics/Images.h"
+#include "penumbra/scene/Scene.h"
+
+#include <span>
 
 #include <cstdint>
 #include <string>
@@ -20,5 +24,13 @@ struct FrameImages {
 
 // Reads back the last frame `renderer` rendered.
 FrameImages captureFrame(const frame::FrameRenderer& renderer);
+
+// The pixels where `light`'s figures are taken: those of geometry (metrics::geometryMask)
+// that the light can reach. Outside a spot light's outer cone it gives no light at all:
+// the techniques write V = 1 there by contract (the map has nothing to say) while the
+// reference traces rays, so those pixels would score errors that no image shows
+// (docs/plugins.md, "The contract"). Every other light reaches every pixel.
+metrics::PixelMask reachMask(const scene::Light& light, uint32_t width, uint32_t height,
+                             std::span<const float> positions);
 
 } // namespace penumbra::app
