@@ -110,6 +110,39 @@ struct Frame {
     std::vector<float> visibility, positions, normals;
 };
 
+// A frame of the analytic scene against penumbraVisibility (the closed form of
+// scene/Generators.h) on its ground pixels (the occluder's own are skipped): the RMSE over
+// the penumbra pixels (0 < V < 1 analytically), the largest error anywhere, the umbra and
+// penumbra pixels, and the umbra and lit pixels whose V is not exactly the closed form's
+// 0 or 1 (every sample agrees there).
+struct ClosedFormAgreement {
+    double rmse = 0.0, worst = 0.0;
+    size_t penumbra = 0, umbra = 0, inexact = 0;
+};
+
+ClosedFormAgreement agreementWithClosedForm(const Frame& f, const scene::PenumbraParams& params, const scene::Light& light)
+{
+    const scene::RectAreaLight analyticLight{light.position, light.sizeWorld};
+    ClosedFormAgreement a;
+    double squared = 0.0;
+    for (size_t i = 0; i < f.pixels(); ++i) {
+        if (!f.hasGeometry(i) || f.position(i).y > 0.5 * params.occluderHeight) continue;  // the occluder
+        const glm::dvec3 p = f.position(i);
+        const double expected = scene::penumbraVisibility(params, analyticLight, glm::vec2(p.x, p.z));
+        const double error = std::abs(f.visibility[i] - expected);
+        a.worst = std::max(a.worst, error);
+        if (expected <= 0.0) ++a.umbra;
+        if (expected <= 0.0 || expected >= 1.0) {
+            a.inexact += f.visibility[i] != float(expected) ? 1 : 0;
+            continue;
+        }
+        squared += error * error;
+        ++a.penumbra;
+    }
+    a.rmse = a.penumbra > 0 ? std::sqrt(squared / double(a.penumbra)) : 0.0;
+    return a;
+}
+
 // Every V is a number in [0, 1].
 ::testing::AssertionResult inUnitRange(const std::vector<float>& v)
 {
@@ -128,6 +161,18 @@ scene::PenumbraParams analyticParams(float scale, float occluderSize = 1.0f)
     p.occluderHeight = 1.0f * scale;
     p.groundSize = 20.0f * scale;
     return p;
+}
+
+// A rect light facing down at `position`, its sides along x and z.
+scene::Light downwardRect(glm::vec3 position, glm::vec2 size)
+{
+    scene::Light light;
+    light.type = scene::LightType::Rect;
+    light.position = position;
+    light.direction = {0.0f, -1.0f, 0.0f};
+    light.tangent = {1.0f, 0.0f, 0.0f};
+    light.sizeWorld = size;
+    return light;
 }
 
 class ReferencePlugin : public test::GpuTest {
@@ -222,37 +267,16 @@ TEST_P(ReferenceAtScale, RectLightMatchesTheAnalyticPenumbra)
 {
     const float s = GetParam();
     const scene::PenumbraParams params = analyticParams(s);
-    scene::Light light;
-    light.type = scene::LightType::Rect;
-    light.position = glm::vec3(0.0f, 4.0f, 0.0f) * s;
-    light.direction = {0.0f, -1.0f, 0.0f};
-    light.tangent = {1.0f, 0.0f, 0.0f};
-    light.sizeWorld = glm::vec2(0.8f, 0.5f) * s;
+    const scene::Light light = downwardRect(glm::vec3(0.0f, 4.0f, 0.0f) * s, glm::vec2(0.8f, 0.5f) * s);
     // Oblique enough that some of the umbra shows beside the occluder.
     const scene::Camera camera = lookDown(glm::vec3(1.2f, 5.0f, 0.9f) * s, glm::vec3(0.3f, 0.0f, 0.2f) * s, 36.0f);
-    const Frame& f = render(referenceConfig(96, 72, camera,
-                                            light, {{"samples", 256}}),
-                           scene::generatePenumbra(params));
-    const scene::RectAreaLight analyticLight{light.position, light.sizeWorld};
-    double squared = 0.0;
-    size_t penumbra = 0, umbra = 0;
-    for (size_t i = 0; i < f.pixels(); ++i) {
-        if (!f.hasGeometry(i) || f.position(i).y > 0.5 * params.occluderHeight) continue;  // the occluder's top
-        const glm::dvec3 p = f.position(i);
-        const double expected = scene::penumbraVisibility(params, analyticLight, glm::vec2(p.x, p.z));
-        if (expected <= 0.0) ++umbra;
-        if (expected <= 0.0 || expected >= 1.0) {
-            EXPECT_EQ(f.visibility[i], float(expected)) << "pixel " << i;  // every sample agrees there
-            continue;
-        }
-        squared += (f.visibility[i] - expected) * (f.visibility[i] - expected);
-        ++penumbra;
-    }
-    ASSERT_GT(penumbra, 200u);
-    EXPECT_GT(umbra, 50u);
-    const double rmse = std::sqrt(squared / double(penumbra));
-    RecordProperty("penumbra_rmse", fmt::format("{:.5f}", rmse));
-    EXPECT_LE(rmse, 0.01) << penumbra << " penumbra pixels";
+    const Frame& f = render(referenceConfig(96, 72, camera, light, {{"samples", 256}}), scene::generatePenumbra(params));
+    const ClosedFormAgreement a = agreementWithClosedForm(f, params, light);
+    ASSERT_GT(a.penumbra, 200u);
+    EXPECT_GT(a.umbra, 50u);
+    EXPECT_EQ(a.inexact, 0u) << "umbra and lit pixels hold exactly 0 and 1";
+    RecordProperty("penumbra_rmse", fmt::format("{:.5f}", a.rmse));
+    EXPECT_LE(a.rmse, 0.01) << a.penumbra << " penumbra pixels";
 }
 
 INSTANTIATE_TEST_SUITE_P(Scales, ReferenceAtScale, ::testing::Values(1e-3f, 1.0f, 1e5f),
@@ -275,35 +299,18 @@ TEST_P(ReferenceContact, ContactShadowMatchesTheAnalyticPenumbra)
     const float s = GetParam();
     scene::PenumbraParams params = analyticParams(s);
     params.occluderHeight = 1e-3f * s;
-    scene::Light light;
-    light.type = scene::LightType::Rect;
-    light.position = glm::vec3(0.0f, 3.0f, 0.0f) * s;
-    light.direction = {0.0f, -1.0f, 0.0f};
-    light.tangent = {1.0f, 0.0f, 0.0f};
-    light.sizeWorld = glm::vec2(2.0f, 2.0f) * s;
+    const scene::Light light = downwardRect(glm::vec3(0.0f, 3.0f, 0.0f) * s, glm::vec2(2.0f, 2.0f) * s);
     // The edge x = 0.5: its penumbra on the ground spans x in [0.5 - 1.7e-4, 0.5 + 5e-4];
     // the part under the occluder is hidden from above.
     const glm::vec3 target = glm::vec3(0.5f + 2e-4f, 0.0f, 0.0f) * s;
     const scene::Camera camera = lookDown(target + glm::vec3(0.0f, 1e-2f, 0.0f) * s, target, 8.0f);
     const Frame& f = render(referenceConfig(96, 72, camera, light, {{"samples", 256}}), scene::generatePenumbra(params));
-    const scene::RectAreaLight analyticLight{light.position, light.sizeWorld};
-    double squared = 0.0, worst = 0.0;
-    size_t penumbra = 0;
-    for (size_t i = 0; i < f.pixels(); ++i) {
-        if (!f.hasGeometry(i) || f.position(i).y > 0.5 * params.occluderHeight) continue;  // the occluder
-        const glm::dvec3 p = f.position(i);
-        const double expected = scene::penumbraVisibility(params, analyticLight, glm::vec2(p.x, p.z));
-        const double error = std::abs(f.visibility[i] - expected);
-        worst = std::max(worst, error);
-        if (expected <= 0.0 || expected >= 1.0) continue;
-        squared += error * error;
-        ++penumbra;
-    }
-    ASSERT_GT(penumbra, 500u) << "the view must resolve the penumbra";
-    const double rmse = std::sqrt(squared / double(penumbra));
-    RecordProperty("penumbra_rmse", fmt::format("{:.5f}", rmse));
-    EXPECT_LE(rmse, 0.01) << penumbra << " penumbra pixels";
-    EXPECT_LE(worst, 1.0 / 16.0 + 0.02);
+    const ClosedFormAgreement a = agreementWithClosedForm(f, params, light);
+    ASSERT_GT(a.penumbra, 500u) << "the view must resolve the penumbra";
+    EXPECT_EQ(a.inexact, 0u) << "lit pixels hold exactly 1";
+    RecordProperty("penumbra_rmse", fmt::format("{:.5f}", a.rmse));
+    EXPECT_LE(a.rmse, 0.01) << a.penumbra << " penumbra pixels";
+    EXPECT_LE(a.worst, 1.0 / 16.0 + 0.02);
 }
 
 INSTANTIATE_TEST_SUITE_P(Scales, ReferenceContact, ::testing::Values(1e-4f, 1.0f, 1e6f),
