@@ -1132,8 +1132,13 @@ TEST_F(Cli, CompareCountsOnlyThePixelsASpotLightReaches)
         "position": [-2.0, 9.0, 1.0], "target": [0.0, 0.0, 0.0], "outer_cone_deg": 35.0, "inner_cone_deg": 30.0,
         "intensity": 900.0, "shadow": {{"technique": "hard", "resolution": 2048}}}}]}})",
                                       nlohmann::json(std::string(PENUMBRA_SOURCE_DIR) + "/config/default.json").dump());
+    // The real (Embree) reference in a child process: under AddressSanitizer the leak
+    // check at exit runs while Embree's TBB worker threads wind down, and LeakSanitizer's
+    // thread tracer crashes there about one run in six (SIGSEGV, exit 134). Address
+    // errors are still checked; release builds ignore the variable.
     const CliResult r = run(fmt::format("compare '{}' --width 320 --height 180 --json -o '{}'", cfg.string(),
-                                        (dir / "out").string()));
+                                        (dir / "out").string()),
+                            "ASAN_OPTIONS=detect_leaks=0:abort_on_error=1:strict_string_checks=1");
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const nlohmann::json doc = nlohmann::json::parse(r.out);
     const nlohmann::json& v = doc["lights"][0]["visibility"];
