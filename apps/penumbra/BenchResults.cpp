@@ -299,7 +299,8 @@ std::string summaryMarkdown(const BenchRun& run)
     md += fmt::format("- reference: `{}` `{}`\n\n", run.reference, run.referenceParams.dump());
     md += fmt::format("ms is the time of the light's shadow passes: on the GPU (timestamp queries), and on the CPU "
                       "for host passes; memory is the transient memory of those passes; the errors compare the "
-                      "light's visibility image with the reference's over the pixels that show geometry (penumbra: "
+                      "light's visibility image with the reference's over the pixels that show geometry the light "
+                      "reaches (a spot light: inside its outer cone; penumbra: "
                       "where the reference is above {} and below {}). A ✓ marks the Pareto front: no other variant "
                       "in the same table is both faster and more accurate.\n\n",
                       metrics::kUmbraMaxVisibility, metrics::kLitMinVisibility);
