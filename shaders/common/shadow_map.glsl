@@ -10,10 +10,10 @@
 //
 // A technique's map has one layout for the technique's lifetime; compiled in (the
 // defines of render::ShadowMap::shaderDefines(): SHADOW_FACE_COUNT, SHADOW_FACE_TEXELS,
-// SHADOW_LIGHT_TYPE), the branches on it fold away and no lookup loads it. (llvmpipe
+// SHADOW_LIGHT_TYPE), the branches on it fold away and no lookup loads it (llvmpipe
 // runs both sides of every branch on a value it cannot see is uniform: the light-type
-// branches of shadowLightAboveHorizon cost a spot light's hard shadows 7 of 24 ms.) Without them (an array of maps, a shader tool) they are
-// read from the buffer.
+// branches of shadowLightAboveHorizon cost a spot light's hard shadows 7 of 24 ms).
+// Without them (an array of maps, a shader tool) they are read from the buffer.
 //
 // Every function here is branch-free or loads the buffer before it branches: a
 // full-screen pass loads a uniform value once per SIMD group on llvmpipe only outside
