@@ -152,7 +152,8 @@ void printTable(const json& doc, const std::vector<metrics::VisibilityComparison
 
 // `reaches`: per light, the pixels compared (reachMask); the others are grey in its diff.
 void writeOutputs(const fs::path& dir, const OutputFiles& files, const FrameImages& test, const FrameImages& reference,
-                  const std::vector<metrics::PixelMask>& reaches, float diffScale, const json& doc)
+                  const std::vector<config::LightConfig>& lights, const std::vector<metrics::PixelMask>& reaches,
+                  float diffScale, const json& doc)
 {
     createOutputFolder(dir, fmt::format("-o {}", dir.string()));
     const uint32_t w = test.width, h = test.height;
@@ -164,10 +165,8 @@ void writeOutputs(const fs::path& dir, const OutputFiles& files, const FrameImag
     }
     io::writePng(files.colorTest, w, h, test.color);
     io::writePng(files.colorReference, w, h, reference.color);
-    std::vector<std::string> names;
-    for (const auto& light : doc["lights"]) names.push_back(light["name"].get<std::string>());
-    writeVisibilityExr(files.visibilityTest, w, h, names, test.visibility);
-    writeVisibilityExr(files.visibilityReference, w, h, names, reference.visibility);
+    writeVisibilityExr(files.visibilityTest, w, h, lights, test.visibility);
+    writeVisibilityExr(files.visibilityReference, w, h, lights, reference.visibility);
     // Last: a metrics.json newer than the images says the set is complete.
     io::writeTextFile(files.metrics, doc.dump(2) + "\n");
 }
@@ -248,7 +247,7 @@ int runCompare(const CompareFlags& flags)
 
     // Files first: figures on stdout mean that the files, if asked for, are there too.
     if (!flags.output.empty()) {
-        writeOutputs(dir, files, test, ref, reaches, float(flags.diffScale), doc);
+        writeOutputs(dir, files, test, ref, config.lights, reaches, float(flags.diffScale), doc);
         spdlog::info("wrote {} files into {}", files.all().size(), dir.string());
     }
     if (flags.json) {

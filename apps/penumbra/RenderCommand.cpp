@@ -109,14 +109,10 @@ int runRender(const RenderFlags& flags)
         spdlog::info("wrote {}", flags.output);
     }
     if (!flags.visibilityExr.empty()) {
-        std::vector<std::string> names;
         std::vector<std::vector<float>> visibility;
-        for (size_t l = 0; l < run.config.lights.size(); ++l) {
-            names.push_back(run.config.lights[l].name);
-            visibility.push_back(renderer.readVisibility(l));
-        }
-        writeVisibilityExr(flags.visibilityExr, renderer.width(), renderer.height(), names, visibility);
-        spdlog::info("wrote {} (V of {} light(s), 32-bit float)", flags.visibilityExr, names.size());
+        for (size_t l = 0; l < run.config.lights.size(); ++l) visibility.push_back(renderer.readVisibility(l));
+        writeVisibilityExr(flags.visibilityExr, renderer.width(), renderer.height(), run.config.lights, visibility);
+        spdlog::info("wrote {} (V of {} light(s), 32-bit float)", flags.visibilityExr, visibility.size());
     }
 
     return validationExitCode(context);

@@ -17,15 +17,15 @@ namespace penumbra::app {
 std::string visibilityChannel(const std::string& lightName) { return lightName + ".V"; }
 
 void writeVisibilityExr(const std::filesystem::path& path, uint32_t width, uint32_t height,
-                        const std::vector<std::string>& lightNames, const std::vector<std::vector<float>>& visibility)
+                        const std::vector<config::LightConfig>& lights, const std::vector<std::vector<float>>& visibility)
 {
-    if (width == 0 || height == 0 || lightNames.size() != visibility.size() || visibility.empty()) {
-        throw Error(fmt::format("{}: {} light name(s) for {} visibility image(s) of {}x{}", path.string(),
-                                lightNames.size(), visibility.size(), width, height));
+    if (width == 0 || height == 0 || lights.size() != visibility.size() || visibility.empty()) {
+        throw Error(fmt::format("{}: {} light(s) for {} visibility image(s) of {}x{}", path.string(), lights.size(),
+                                visibility.size(), width, height));
     }
     for (size_t l = 0; l < visibility.size(); ++l) {
         if (visibility[l].size() != size_t(width) * height) {
-            throw Error(fmt::format("{}: light '{}': {} values for a {}x{} image", path.string(), lightNames[l],
+            throw Error(fmt::format("{}: light '{}': {} values for a {}x{} image", path.string(), lights[l].name,
                                     visibility[l].size(), width, height));
         }
     }
@@ -35,7 +35,7 @@ void writeVisibilityExr(const std::filesystem::path& path, uint32_t width, uint3
         header.compression() = Imf::ZIP_COMPRESSION;
         Imf::FrameBuffer frame;
         for (size_t l = 0; l < visibility.size(); ++l) {
-            const std::string channel = visibilityChannel(lightNames[l]);
+            const std::string channel = visibilityChannel(lights[l].name);
             header.channels().insert(channel, Imf::Channel(Imf::FLOAT));
             // Imf reads through a non-const pointer but never writes through it here.
             char* base = reinterpret_cast<char*>(const_cast<float*>(visibility[l].data()));

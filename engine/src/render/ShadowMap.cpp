@@ -98,7 +98,7 @@ ShadowMap::ShadowMap(const ShadowMapSetup& setup, uint32_t resolution, std::stri
     update(setup.light, setup.sceneBounds);
 }
 
-std::vector<gpu::ShaderDefine> ShadowMap::shaderDefines() const
+std::vector<gpu::ShaderDefine> ShadowMap::shaderDefines()
 {
     typeCompiledIn_ = true;
     return {{"SHADOW_FACE_COUNT", std::to_string(faceCount_)},

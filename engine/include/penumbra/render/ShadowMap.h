@@ -174,7 +174,7 @@ public:
     // that reads this map's buffer(). From the first call on, the light's type is fixed
     // too: update() throws when it changes (without the call, a map takes any type of its
     // face count, as the reference's light samples do).
-    std::vector<gpu::ShaderDefine> shaderDefines() const;
+    std::vector<gpu::ShaderDefine> shaderDefines();
     uint32_t resolution() const { return resolution_; }
     uint32_t atlasWidth() const { return resolution_ * (faceCount_ == kMaxShadowFaces ? 3u : 1u); }
     uint32_t atlasHeight() const { return resolution_ * (faceCount_ == kMaxShadowFaces ? 2u : 1u); }
@@ -191,7 +191,7 @@ private:
     const uint32_t resolution_;
     const uint32_t faceCount_;
     const scene::LightType lightType_;  // as created
-    mutable bool typeCompiledIn_ = false;  // shaderDefines() was asked for
+    bool typeCompiledIn_ = false;          // shaderDefines() was asked for
     gpu::Pipeline depth_;        // solid casters: no fragment shader
     gpu::Pipeline depthMasked_;  // alpha-masked casters: a fragment shader cuts the holes
     gpu::Buffer buffer_;         // data_ for the shaders, host-visible
