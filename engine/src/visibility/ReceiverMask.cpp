@@ -67,6 +67,43 @@ std::optional<MaskTexelRange> maskTexels(const ReceiverMask& mask, const TexelRe
                           uint32_t(std::min(y1, last))};
 }
 
+// Back to all ones (no receiver) where the last build may have written a depth: one fill
+// per row's span.
+void clearReceiverDepth(VkCommandBuffer cmd, const ReceiverMask& mask)
+{
+    const VkDeviceSize texel = sizeof(uint32_t), row = VkDeviceSize(mask.resolution) * texel;
+    const VkBuffer buffer = mask.receiverDepth.handle();
+    for (size_t y = 0; y < mask.receiverDepthWritten.size(); ++y) {
+        const RowSpan span = mask.receiverDepthWritten[y];
+        if (span.begin < span.end)
+            vkCmdFillBuffer(cmd, buffer, y * row + span.begin * texel, (span.end - span.begin) * texel, ~0u);
+    }
+}
+
+// Where a build may have written receiver depths: at the texels of the marked mask
+// texels (the scatter marks the mask texel of every texel it writes), up to `margin`
+// texels beside them (receiver_scatter.comp's spread, receiver_depth_min.comp's taps).
+// The mask is dilated by at least that much already; the margin keeps this true for a
+// view of any footprint.
+std::vector<RowSpan> receiverDepthRows(const ReceiverMask& mask, uint32_t margin)
+{
+    const uint32_t size = mask.resolution, b = mask.block;
+    std::vector<RowSpan> rows(size, RowSpan{size, 0});
+    for (uint32_t my = 0; my < mask.size; ++my) {
+        const RowSpan marked = mask.markedRows[my];
+        if (marked.begin >= marked.end) continue;
+        const uint32_t x0 = marked.begin * b > margin ? marked.begin * b - margin : 0;
+        const uint32_t x1 = std::min(marked.end * b + margin, size);
+        const uint32_t y0 = my * b > margin ? my * b - margin : 0;
+        const uint32_t y1 = std::min((my + 1) * b + margin, size);
+        for (uint32_t y = y0; y < y1; ++y) {
+            rows[y].begin = std::min(rows[y].begin, x0);
+            rows[y].end = std::max(rows[y].end, x1);
+        }
+    }
+    return rows;
+}
+
 } // namespace
 
 bool ReceiverMask::rejects(const TexelRect& rect) const
@@ -171,8 +208,11 @@ void ReceiverMaskBuilder::makeReceiverDepth(ReceiverMask& mask, bool withPrefix)
     const VkDeviceSize depthBytes = VkDeviceSize(mask.resolution) * mask.resolution * sizeof(uint32_t);
     const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
     // Host-visible: the CPU culling reads the receiver depths where they are written.
-    if (!mask.receiverDepth.handle())
+    if (!mask.receiverDepth.handle()) {
         mask.receiverDepth = gpu::Buffer(context_, depthBytes, storage, true, name + ".receiver_depth");
+        std::memset(mask.receiverDepth.mapped(), 0xff, depthBytes);  // no receiver anywhere
+        mask.receiverDepthWritten.clear();
+    }
     if (withPrefix && !mask.receiverDepthPrefix.handle())
         mask.receiverDepthPrefix = gpu::Buffer(context_, depthBytes, storage, false, name + ".receiver_depth_prefix");
     if (mask.receiverFloor.handle()) return;
@@ -196,6 +236,7 @@ const ReceiverMask& ReceiverMaskBuilder::build(const render::CasterView& view)
     if (mask.hasReceiverDepth) makeReceiverDepth(mask, tapRadius > 0);
     context_.submitAndWait([&](VkCommandBuffer cmd) { recordMask(cmd, view, mask, tapRadius); });
     sumMarkedTexels(mask);
+    if (mask.hasReceiverDepth) mask.receiverDepthWritten = receiverDepthRows(mask, uint32_t(tapRadius) + 1);
     buildFloorPyramid(mask);
     return mask;
 }
@@ -217,9 +258,7 @@ void ReceiverMaskBuilder::recordMask(VkCommandBuffer cmd, const render::CasterVi
     const VkClearColorValue zero{{0.0f, 0.0f, 0.0f, 0.0f}};
     const VkImageSubresourceRange colorRange{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
     vkCmdClearColorImage(cmd, mask.marked.handle(), VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &colorRange);
-    if (ownDepth) {
-        vkCmdFillBuffer(cmd, mask.receiverDepth.handle(), 0, VK_WHOLE_SIZE, ~0u);  // no receiver
-    }
+    if (ownDepth) clearReceiverDepth(cmd, mask);
     gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT},
                        {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT});
     // The texels the camera's pixels look up, and their depths (receiver_scatter.comp).
@@ -312,6 +351,7 @@ void ReceiverMaskBuilder::sumMarkedTexels(ReceiverMask& mask)
     const uint32_t m = mask.size;
     const auto* texels = static_cast<const uint8_t*>(mask.readback.mapped());
     mask.summedArea.assign(size_t(m + 1) * (m + 1), 0);
+    mask.markedRows.assign(m, RowSpan{m, 0});
     uint32_t x0 = m, y0 = m, x1 = 0, y1 = 0;  // the marked texels' bounds, inclusive
     for (uint32_t y = 0; y < m; ++y) {
         uint32_t row = 0;
@@ -320,6 +360,8 @@ void ReceiverMaskBuilder::sumMarkedTexels(ReceiverMask& mask)
             row += marked ? 1u : 0u;
             mask.summedArea[size_t(y + 1) * (m + 1) + x + 1] = mask.summedArea[size_t(y) * (m + 1) + x + 1] + row;
             if (marked) {
+                mask.markedRows[y].begin = std::min(mask.markedRows[y].begin, x);
+                mask.markedRows[y].end = x + 1;
                 x0 = std::min(x0, x);
                 x1 = std::max(x1, x);
                 y0 = std::min(y0, y);

@@ -46,6 +46,11 @@ struct TexelRect {
     float area() const { return std::max(hi.x - lo.x, 0.0f) * std::max(hi.y - lo.y, 0.0f); }
 };
 
+// Texels [begin, end) of one row; empty when begin >= end.
+struct RowSpan {
+    uint32_t begin = 0, end = 0;
+};
+
 // The receiver mask of the light view last built at one resolution.
 struct ReceiverMask {
     uint32_t resolution = 0;  // the view's texels per side
@@ -54,12 +59,18 @@ struct ReceiverMask {
     gpu::Image marked, dilatedRows, dilated;  // the scatter's marks; the row pass; the dilated mask
     gpu::Buffer readback;                     // the dilated mask, host-visible
     std::vector<uint32_t> summedArea;         // of the dilated mask, (size + 1)^2
+    std::vector<RowSpan> markedRows;          // per mask row, its marked texels' span (mask texels)
     // Views whose technique compares with the receivers' own depth: the farthest receiver
     // depth per view texel, and the scratch of its spreading over the taps; made on
     // first use.
     // Row by row, host-visible (the CPU culling reads it).
     gpu::Buffer receiverDepth, receiverDepthPrefix;
     bool hasReceiverDepth = false;  // this view's receiver depths are in receiverDepth
+    // Per view row, the texels [begin, end) where receiverDepth may hold a depth
+    // (elsewhere it is all ones): the next build clears only these. On lavapipe the fill
+    // of a whole 4096² buffer (64 MB) took a third of a street view's mask
+    // (docs/culling.md); the camera's receivers cover a fifth of such a map or less.
+    std::vector<RowSpan> receiverDepthWritten;
     // With receiver depths: per mask texel the least receiver depth of its block (the bits
     // of a non-negative float, all ones for none), read back; floorLevels[0] holds it as
     // floats (+infinity for none) and each next level the least of 2 x 2 of the last.

@@ -22,7 +22,10 @@
 #include <cstring>
 #include <random>
 #include <ostream>
+#include <iterator>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 using namespace penumbra;
@@ -430,6 +433,62 @@ TEST_F(VisibilityCulling, AStreetViewOfACityCullsMostCasters)
     EXPECT_GT(mask.stats.queriesIssued, 0u);
     EXPECT_GT(mask.stats.nodesVisited, 0u);
     EXPECT_GT(mask.stats.floorRejected, 0u) << "hard's slope bias: culled behind the receivers on the CPU";
+}
+
+// The receiver depths are cleared only where the last frame wrote them
+// (ReceiverMask::receiverDepthWritten): a frame culls as a first frame of its view does,
+// whatever view came before. Under a slab a small box stands on the ground, the sun
+// straight above: seen from above, the slab's top is the only receiver over the box,
+// which lies behind it and is culled. Seen first from beside, under the slab, the ground
+// there is a receiver too; a depth of it left over would keep the box (still exact, but
+// drawn for nothing). Swept over the tap radius that spreads the depths (hard's nearest
+// compare, PCF 3 x 3 and 9 x 9) and both orders.
+TEST_F(VisibilityCulling, ReceiverDepthsOfTheLastFrameNeverKeepACaster)
+{
+    scene::Scene scene = test::planeScene();
+    const uint32_t box = test::addMesh(scene, scene::makeBox("box"));
+    test::addInstance(scene, box, "slab",
+                      glm::scale(glm::translate(glm::mat4(1.0f), {0.0f, 3.0f, 0.0f}), glm::vec3(6.0f, 0.4f, 6.0f)));
+    test::addInstance(scene, box, "small", glm::translate(glm::mat4(1.0f), {0.0f, 0.5f, 0.0f}));
+    config::RenderConfig cfg = smallDefault(scene::LightType::Directional, "hard", {{"resolution", 512}});
+    cfg.culling = CullingMode::ReceiverMask;
+    cfg.lights[0].light.direction = glm::normalize(glm::vec3(0.05f, -1.0f, 0.02f));
+    cfg.camera.up = {0.0f, 1.0f, 0.0f};
+    const std::pair<glm::vec3, glm::vec3> beside{{9.0f, 0.6f, 0.5f}, {0.0f, 0.8f, 0.0f}};
+    const std::pair<glm::vec3, glm::vec3> above{{0.5f, 14.0f, 9.0f}, {0.0f, 3.0f, 0.0f}};
+    for (const int kernel : {1, 3, 9}) {
+        config::RenderConfig c = cfg;
+        if (kernel > 1) {
+            c.lights[0].shadow.setParam("filter", "pcf", "test");
+            c.lights[0].shadow.setParam("pcf_kernel", kernel, "test");
+        }
+        for (const bool besideFirst : {true, false}) {
+            SCOPED_TRACE(fmt::format("pcf {}, {} first", kernel, besideFirst ? "beside" : "above"));
+            config::RenderConfig first = c, second = c;
+            std::tie(first.camera.position, first.camera.target) = besideFirst ? beside : above;
+            std::tie(second.camera.position, second.camera.target) = besideFirst ? above : beside;
+            frame::FrameRenderer fresh(*context, scene, second, test::plugins());
+            const visibility::CullingStats expected = fresh.renderFrame().culling;
+            frame::FrameRenderer continued(*context, scene, first, test::plugins());
+            continued.renderFrame();
+            continued.update(second, scene, {});
+            // A view that kept most of its instances takes its frustum (and builds no
+            // mask) until its next full culling: the depths left are the first view's.
+            visibility::CullingStats actual;
+            for (int frame = 0; frame < 16; ++frame) {
+                actual = continued.renderFrame().culling;
+                if (actual.viewsFellBack == 0 && actual.cameraFellBack == 0) break;
+            }
+            ASSERT_EQ(actual.viewsFellBack, 0u) << "a full culling within 16 frames";
+            if (besideFirst) {
+                EXPECT_EQ(expected.castersDrawn, 1u) << "from above, only the slab";
+            }
+            EXPECT_EQ(actual.castersDrawn, expected.castersDrawn);
+            EXPECT_EQ(actual.trianglesDrawn, expected.trianglesDrawn);
+            EXPECT_EQ(actual.floorRejected, expected.floorRejected);
+            EXPECT_TRUE(sameVisibility(fresh.readVisibility(0), continued.readVisibility(0), c.width));
+        }
+    }
 }
 
 // A technique that compares with the receivers' own depth (hard, slope bias) needs no
