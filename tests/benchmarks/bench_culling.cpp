@@ -40,7 +40,7 @@ using namespace penumbra;
 
 namespace {
 
-constexpr uint32_t kWidth = 640, kHeight = 360;
+constexpr uint32_t kCullingWidth = 640, kCullingHeight = 360;
 
 using bench::context;
 using bench::registry;
@@ -61,8 +61,8 @@ enum class View { Street, BirdsEye };
 config::RenderConfig cityConfig(View view, config::CullingMode mode)
 {
     config::RenderConfig cfg;
-    cfg.width = kWidth;
-    cfg.height = kHeight;
+    cfg.width = kCullingWidth;
+    cfg.height = kCullingHeight;
     cfg.culling = mode;
     const scene::Aabb bounds = city().bounds();
     const glm::vec3 c = bounds.center();
@@ -134,7 +134,7 @@ void BM_Culling(benchmark::State& state, View view, config::CullingMode mode)
     state.counters["receivers"] = double(last.receivers);
 }
 
-[[maybe_unused]] const bool registered = [] {
+[[maybe_unused]] const bool cullingRegistered = [] {
     for (const View view : {View::Street, View::BirdsEye}) {
         for (const config::CullingMode mode : {config::CullingMode::None, config::CullingMode::Frustum,
                                                config::CullingMode::LightOcclusion, config::CullingMode::ReceiverMask}) {

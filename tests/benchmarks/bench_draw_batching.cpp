@@ -95,7 +95,7 @@ void BM_DrawBatching(benchmark::State& state, SceneKind kind, config::CullingMod
     state.counters["culling_ms"] = culled / n;
 }
 
-[[maybe_unused]] const bool registered = [] {
+[[maybe_unused]] const bool batchingRegistered = [] {
     for (const SceneKind kind : {SceneKind::BoxGrid, SceneKind::City}) {
         for (const config::CullingMode culling : {config::CullingMode::None, config::CullingMode::ReceiverMask}) {
             for (const bool batched : {false, true}) {

@@ -15,6 +15,7 @@
 // The same figures for any config: penumbra render CONFIG -o out.png --frames 9 --warmup 2 --timings.
 // Figures: docs/performance.md.
 #include "BenchContext.h"
+#include "TestPaths.h"  // generated: the build tree's paths
 
 #include "penumbra/config/Config.h"
 #include "penumbra/frame/FloorRenderer.h"

@@ -11,6 +11,7 @@
 // The same figures for any config: penumbra render CONFIG -o out.png --frames 30 --timings.
 // Figures: see plugins/pcss/README.md and plugins/vsm/README.md.
 #include "BenchContext.h"
+#include "TestPaths.h"  // generated: the build tree's paths
 
 #include "penumbra/config/Config.h"
 #include "penumbra/frame/FrameRenderer.h"

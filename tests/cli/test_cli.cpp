@@ -1,5 +1,7 @@
 // The `penumbra` command as a user runs it: exit codes, messages that say what and where,
 // and no partial or clobbered output file on failure.
+#include "TestPaths.h"  // generated: the build tree's paths
+
 #include "penumbra/plugin/Plugin.h"
 
 #include <OpenEXR/ImfChannelList.h>

@@ -1,11 +1,28 @@
 #include "TestConfigs.h"
 
+#include "TestPaths.h"  // generated: the build tree's paths
+
 #include "penumbra/scene/Generators.h"
 
 #include <glm/glm.hpp>
 #include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
 
 namespace penumbra::test {
+
+std::ostream& operator<<(std::ostream& os, const LightCase& c) { return os << c.name; }
+
+void expectNear(const glm::vec3& actual, const glm::vec3& expected, float eps)
+{
+    EXPECT_NEAR(actual.x, expected.x, eps) << "y " << actual.y << " z " << actual.z;
+    EXPECT_NEAR(actual.y, expected.y, eps) << "x " << actual.x << " z " << actual.z;
+    EXPECT_NEAR(actual.z, expected.z, eps) << "x " << actual.x << " y " << actual.y;
+}
+
+std::filesystem::path gltfFile(const std::string& name)
+{
+    return std::filesystem::path(PENUMBRA_TEST_DATA_DIR) / "gltf" / name;
+}
 
 config::RenderConfig defaultTestConfig()
 {

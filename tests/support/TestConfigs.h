@@ -7,6 +7,8 @@
 #include <glm/glm.hpp>
 
 #include <cstdint>
+#include <filesystem>
+#include <ostream>
 #include <string>
 
 namespace penumbra::test {
@@ -25,6 +27,24 @@ void scaleConfig(config::RenderConfig& c, float s);
 // the scene box (all six cube faces see casters), rect and disk lights above the grid
 // emitting downwards. Spot: unchanged.
 void setLightType(config::LightConfig& light, scene::LightType type);
+
+// A light type of a parameterised test, printed by name (ctest lists it).
+struct LightCase {
+    const char* name;
+    scene::LightType type;
+    double lightSize = -1.0;  // -1: the light's own (rect 1 x 0.5, disk radius 0.5: setLightType)
+    int resolution = 1024;
+};
+std::ostream& operator<<(std::ostream& os, const LightCase& c);
+
+// A visibility made of 0/1 compares averaged in fp32 counts as 0 or 1 within this.
+inline constexpr float kBinaryTolerance = 1e-5f;
+
+// Each component of `actual` within `eps` of `expected`'s, the others named on failure.
+void expectNear(const glm::vec3& actual, const glm::vec3& expected, float eps = 1e-5f);
+
+// tests/data/gltf/`name`.
+std::filesystem::path gltfFile(const std::string& name);
 
 // A 20 x 20 plane alone at y = 0: a receiver with nothing to cast onto it.
 scene::Scene planeScene();

@@ -37,11 +37,9 @@
 #include <tuple>
 
 using namespace penumbra;
+using test::kBinaryTolerance;
 
 namespace {
-
-// V counts as 0 or 1 within this (filters average compares in fp32).
-constexpr float kBinaryTolerance = 1e-5f;
 
 bool fractional(float v) { return v > kBinaryTolerance && v < 1.0f - kBinaryTolerance; }
 

@@ -3,6 +3,7 @@
 // behaves as the plugin assumes on this device. These run without the plugin loaded:
 // they need only the engine's shader compiler and a device.
 #include "TestContext.h"
+#include "TestPaths.h"  // generated: the build tree's paths
 
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Context.h"

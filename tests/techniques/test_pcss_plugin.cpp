@@ -24,11 +24,9 @@
 #include <string>
 
 using namespace penumbra;
+using test::kBinaryTolerance;
 
 namespace {
-
-// Averages of 0/1 compares in fp32: V counts as 0 or 1 within this.
-constexpr float kBinaryTolerance = 1e-5f;
 
 struct PcssSettings : test::KernelSettings {
     int blockerSamples = 16;
@@ -57,17 +55,9 @@ protected:
 // ---------------------------------------------------------------------------------
 // Every light type, in the default scene.
 
-struct LightCase {
-    const char* name;
-    scene::LightType type;
-    double lightSize;  // -1: the light's own (rect 1 x 0.5, disk radius 0.5: test::setLightType)
-    // The directional light's map spans the whole scene: twice the texels keep the
-    // band around edges as narrow in world units as the spot light's.
-    int resolution = 1024;
-};
-
-// Test parameters print as their names (ctest lists them).
-std::ostream& operator<<(std::ostream& os, const LightCase& c) { return os << c.name; }
+// The directional light's map spans the whole scene: twice the texels keep the band
+// around edges as narrow in world units as the spot light's (LightCase::resolution).
+using test::LightCase;
 
 class PcssLightTypes : public PcssTest, public ::testing::WithParamInterface<LightCase> {};
 

@@ -84,13 +84,7 @@ protected:
 // ---------------------------------------------------------------------------------
 // Every variant on every light type.
 
-struct LightCase {
-    const char* name;
-    scene::LightType type;
-};
-
-// Test parameters print as their names (ctest lists them).
-std::ostream& operator<<(std::ostream& os, const LightCase& c) { return os << c.name; }
+using test::LightCase;
 
 const LightCase kLights[] = {{"spot", scene::LightType::Spot},
                              {"directional", scene::LightType::Directional},

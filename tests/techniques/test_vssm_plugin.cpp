@@ -11,6 +11,7 @@
 #include "RayCastAgreement.h"
 #include "TestConfigs.h"
 #include "TestContext.h"
+#include "TestPaths.h"  // generated: the build tree's paths
 
 #include "penumbra/config/Config.h"
 #include "penumbra/core/Error.h"
@@ -331,14 +332,7 @@ protected:
     }
 };
 
-struct LightCase {
-    const char* name;
-    scene::LightType type;
-    double lightSize;  // -1: the light's own (rect 1 x 0.5, disk radius 0.5: test::setLightType)
-    int resolution = 1024;
-};
-
-std::ostream& operator<<(std::ostream& os, const LightCase& c) { return os << c.name; }
+using test::LightCase;
 
 class VssmLightTypes : public VssmTest, public ::testing::WithParamInterface<std::tuple<LightCase, const char*>> {};
 

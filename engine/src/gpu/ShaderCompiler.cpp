@@ -1,5 +1,6 @@
 #include "penumbra/gpu/ShaderCompiler.h"
 
+#include "BuildPaths.h"  // generated: PENUMBRA_DEFAULT_SHADER_DIR, PENUMBRA_SHADER_DIR_FROM_LIBRARY
 #include "penumbra/core/Error.h"
 
 #include <glslang/SPIRV/GlslangToSpv.h>

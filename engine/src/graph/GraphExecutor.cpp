@@ -1,5 +1,6 @@
 #include "penumbra/graph/GraphExecutor.h"
 
+#include "graph/Align.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Check.h"
 #include "penumbra/gpu/Context.h"
@@ -17,11 +18,6 @@
 namespace penumbra::graph {
 
 namespace {
-
-VkDeviceSize alignUp(VkDeviceSize value, VkDeviceSize alignment)
-{
-    return (value + alignment - 1) / alignment * alignment;
-}
 
 // A layout transition of a combined depth/stencil image must name both aspects (the
 // engine does not use separateDepthStencilLayouts).

@@ -1,5 +1,6 @@
 #include "penumbra/graph/RenderGraph.h"
 
+#include "graph/Align.h"
 #include "penumbra/core/Error.h"
 
 #include <fmt/format.h>
@@ -57,8 +58,6 @@ bool isDepthFormat(VkFormat format)
     default: return false;
     }
 }
-
-VkDeviceSize alignUp(VkDeviceSize value, VkDeviceSize alignment) { return (value + alignment - 1) / alignment * alignment; }
 
 VkDeviceSize imageBytes(const ImageDesc& desc)
 {

@@ -1,5 +1,6 @@
 #include "penumbra/plugin/PluginRegistry.h"
 
+#include "BuildPaths.h"  // generated: PENUMBRA_BUILD_PLUGIN_DIR, PENUMBRA_BUILD_LIBRARY_DIR
 #include "core/Text.h"
 #include "gpu/SanitizerSupport.h"
 

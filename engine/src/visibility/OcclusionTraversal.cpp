@@ -15,6 +15,14 @@
 #include <span>
 
 namespace penumbra::visibility {
+
+// One box of an occlusion query (occlusion_box.vert Boxes). Outside the anonymous
+// namespace: OcclusionTraversal::RoundRecorder, a member class, holds a pointer to it.
+struct GpuBox {
+    glm::vec4 lo;
+    glm::vec4 hi;
+};
+
 namespace {
 
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
@@ -37,11 +45,6 @@ constexpr uint8_t kEmptyDrawFrames = 8;
 // Inner nodes whose projection covers more than this fraction of the view are opened
 // without a query.
 constexpr float kOpenWithoutQueryFraction = 1.0f / 64.0f;
-
-struct GpuBox {
-    glm::vec4 lo;
-    glm::vec4 hi;
-};
 
 struct CulledQueryPush {  // culling_mask.frag / occlusion_box.vert Push
     glm::mat4 viewProj;

@@ -4,6 +4,7 @@
 // while the other lights keep their techniques.
 #include "TestConfigs.h"
 #include "TestContext.h"
+#include "TestPaths.h"  // generated: the build tree's paths
 
 #include "penumbra/config/Config.h"
 #include "penumbra/frame/FrameRenderer.h"

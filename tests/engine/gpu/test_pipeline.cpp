@@ -2,6 +2,8 @@
 // shaders (gpu/ShaderInterface.h), descriptors bound by name, dispatches over a grid.
 #include "ErrorText.h"
 #include "TestContext.h"
+#include "TestPaths.h"  // generated: the build tree's paths
+
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
 #include "penumbra/gpu/Context.h"

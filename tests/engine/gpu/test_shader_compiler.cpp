@@ -1,3 +1,5 @@
+#include "TestPaths.h"  // generated: the build tree's paths
+
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/ShaderCompiler.h"
 

@@ -8,8 +8,11 @@
 // Tests that check the graph's own barriers turn GPU timestamps off: the timer's
 // execution barrier after every start timestamp would order each pass after all earlier
 // ones and so hide a missing write-after-read dependency from synchronization validation.
+#include "ErrorText.h"
 #include "RandomGraph.h"
 #include "TestContext.h"
+#include "TestPaths.h"  // generated: the build tree's paths
+
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
 #include "penumbra/gpu/Context.h"
@@ -29,6 +32,7 @@
 #include <thread>
 
 using namespace penumbra;
+using test::errorOf;
 using namespace penumbra::graph;
 
 namespace {
@@ -99,17 +103,6 @@ int resourceIndex(const CompiledGraph& compiled, const std::string& name)
     for (size_t r = 0; r < compiled.resources.size(); ++r)
         if (compiled.resources[r].name == name) return int(r);
     return -1;
-}
-
-std::string errorOf(const std::function<void()>& action)
-{
-    try {
-        action();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    ADD_FAILURE() << "no penumbra::Error thrown";
-    return {};
 }
 
 using GraphExecutorTest = test::GpuTest;

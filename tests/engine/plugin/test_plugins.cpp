@@ -3,6 +3,7 @@
 // working after each failure, reflected parameters from spec to config to the plugin's
 // own view, and --set overrides. The test plugins are in tests/fixtures/plugins/.
 #include "TestContext.h"
+#include "TestPaths.h"  // generated: the build tree's paths
 
 #include "penumbra/config/Config.h"
 #include "penumbra/config/Overrides.h"

@@ -3,6 +3,8 @@
 // visibility against ray casting.
 #include "ErrorText.h"
 #include "RayCast.h"
+#include "TestPaths.h"  // generated: the build tree's paths
+
 #include "penumbra/core/Error.h"
 #include "penumbra/scene/Generators.h"
 

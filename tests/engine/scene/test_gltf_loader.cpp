@@ -1,6 +1,9 @@
 // glTF loading against the hand-made files in data/gltf (data/gltf/README.md says what
 // each holds): what loads must come out exactly as written, and each class of bad input
 // must be refused with a message that names the file and the element.
+#include "TestConfigs.h"
+#include "TestPaths.h"  // generated: the build tree's paths
+
 #include "penumbra/core/Error.h"
 #include "penumbra/scene/GltfLoader.h"
 
@@ -14,12 +17,13 @@
 #include <fstream>
 
 using namespace penumbra;
+using test::expectNear;
+using test::gltfFile;
 using namespace penumbra::scene;
 namespace fs = std::filesystem;
 
 namespace {
 
-fs::path gltfFile(const std::string& name) { return fs::path(PENUMBRA_TEST_DATA_DIR) / "gltf" / name; }
 
 Scene load(const std::string& name, GltfLoadReport& report, const GltfLoadOptions& options = {})
 {
@@ -48,13 +52,6 @@ std::string errorOf(const std::string& name, const GltfLoadOptions& options = {}
 bool anyContains(const std::vector<std::string>& lines, const std::string& text)
 {
     return std::any_of(lines.begin(), lines.end(), [&](const std::string& l) { return l.find(text) != std::string::npos; });
-}
-
-void expectNear(const glm::vec3& a, const glm::vec3& b, float eps = 1e-5f)
-{
-    EXPECT_NEAR(a.x, b.x, eps) << "y " << a.y << " z " << a.z;
-    EXPECT_NEAR(a.y, b.y, eps) << "x " << a.x << " z " << a.z;
-    EXPECT_NEAR(a.z, b.z, eps) << "x " << a.x << " y " << a.y;
 }
 
 // quad.gltf's JSON, edited and written to a temporary file (its buffer is a data URI,

@@ -2,6 +2,9 @@
 // extreme, every key removed, every value given another type, every GLB header byte
 // overwritten. Each variant must load or be refused with an AssetError — never another
 // exception or a crash (the test-asan workflow runs this under ASan and UBSan).
+#include "TestConfigs.h"
+#include "TestPaths.h"  // generated: the build tree's paths
+
 #include "penumbra/core/Error.h"
 #include "penumbra/scene/GltfLoader.h"
 
@@ -15,13 +18,13 @@
 #include <functional>
 
 using namespace penumbra;
+using test::gltfFile;
 using namespace penumbra::scene;
 using nlohmann::json;
 namespace fs = std::filesystem;
 
 namespace {
 
-fs::path gltfFile(const std::string& name) { return fs::path(PENUMBRA_TEST_DATA_DIR) / "gltf" / name; }
 
 struct Tally {
     size_t loaded = 0;

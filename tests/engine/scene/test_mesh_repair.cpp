@@ -1,5 +1,7 @@
 // Mesh repair: what is dropped, merged and generated, against hand-computed results and
 // a plain reference for the area-weighted normals.
+#include "TestConfigs.h"
+
 #include "penumbra/core/Error.h"
 #include "penumbra/scene/MeshRepair.h"
 
@@ -9,6 +11,7 @@
 #include <limits>
 
 using namespace penumbra;
+using test::expectNear;
 using namespace penumbra::scene;
 
 namespace {
@@ -23,13 +26,6 @@ Mesh meshOf(const std::vector<glm::vec3>& positions, std::vector<uint32_t> indic
     for (const glm::vec3& p : positions) mesh.vertices.push_back({p, normal, glm::vec2(0.0f)});
     mesh.indices = std::move(indices);
     return mesh;
-}
-
-void expectNear(const glm::vec3& a, const glm::vec3& b, float eps = 1e-5f)
-{
-    EXPECT_NEAR(a.x, b.x, eps);
-    EXPECT_NEAR(a.y, b.y, eps);
-    EXPECT_NEAR(a.z, b.z, eps);
 }
 
 // Reference: each vertex's normal is the normalized sum of (b - a) × (c - a) over its

@@ -1,3 +1,5 @@
+#include "TestConfigs.h"
+
 #include "penumbra/core/Error.h"
 #include "penumbra/scene/Generators.h"
 #include "penumbra/scene/Scene.h"
@@ -6,18 +8,13 @@
 #include <gtest/gtest.h>
 
 using namespace penumbra;
+using test::expectNear;
 using namespace penumbra::scene;
 
 namespace {
 
 glm::mat4 translate(float x, float y, float z) { return glm::translate(glm::mat4(1.0f), {x, y, z}); }
 
-void expectNear(const glm::vec3& a, const glm::vec3& b)
-{
-    EXPECT_NEAR(a.x, b.x, 1e-5f);
-    EXPECT_NEAR(a.y, b.y, 1e-5f);
-    EXPECT_NEAR(a.z, b.z, 1e-5f);
-}
 
 } // namespace
 

@@ -36,7 +36,7 @@ using config::CullingMode;
 
 constexpr float kMaxVisibilityChange = 1e-3f;
 
-struct Frame {
+struct CulledFrame {
     std::vector<float> visibility;
     std::vector<float> positions;
     visibility::CullingStats stats;
@@ -71,7 +71,7 @@ size_t countBelow(const std::vector<float>& v, float threshold)
 
 class VisibilityCulling : public test::GpuTest {
 protected:
-    Frame render(const scene::Scene& scene, config::RenderConfig cfg, CullingMode mode)
+    CulledFrame render(const scene::Scene& scene, config::RenderConfig cfg, CullingMode mode)
     {
         cfg.culling = mode;
         frame::FrameRenderer renderer(*context, scene, cfg, test::plugins());
@@ -82,10 +82,10 @@ protected:
     // Renders `cfg` with every mode and expects each to give none's image.
     void expectEveryModeMatches(const scene::Scene& scene, const config::RenderConfig& cfg)
     {
-        const Frame all = render(scene, cfg, CullingMode::None);
+        const CulledFrame all = render(scene, cfg, CullingMode::None);
         for (const CullingMode mode : {CullingMode::Frustum, CullingMode::LightOcclusion, CullingMode::ReceiverMask}) {
             SCOPED_TRACE(config::cullingModeName(mode));
-            const Frame culled = render(scene, cfg, mode);
+            const CulledFrame culled = render(scene, cfg, mode);
             EXPECT_TRUE(sameVisibility(all.visibility, culled.visibility, cfg.width));
             // The G-buffer draws only the instances the camera sees: same surfaces.
             EXPECT_EQ(all.positions, culled.positions);
@@ -172,11 +172,11 @@ TEST_F(VisibilityCulling, ACasterOutsideTheViewShadowsAVisibleReceiver)
     const glm::vec4 tower = viewProj * glm::vec4(-6.0f, 4.0f, 0.0f, 1.0f);
     ASSERT_TRUE(tower.w < 0.0f || std::abs(tower.x) > tower.w || std::abs(tower.y) > tower.w);
 
-    const Frame all = render(scene, cfg, CullingMode::None);
+    const CulledFrame all = render(scene, cfg, CullingMode::None);
     ASSERT_GT(countBelow(all.visibility, 0.5f), cfg.width * cfg.height / 50) << "the tower's shadow is in view";
     for (const CullingMode mode : {CullingMode::Frustum, CullingMode::LightOcclusion, CullingMode::ReceiverMask}) {
         SCOPED_TRACE(config::cullingModeName(mode));
-        const Frame culled = render(scene, cfg, mode);
+        const CulledFrame culled = render(scene, cfg, mode);
         EXPECT_TRUE(sameVisibility(all.visibility, culled.visibility, cfg.width));
         // The frustum leaves the tower out of the G-buffer; light-occlusion culls per BVH
         // leaf, and one leaf holds both instances. Receiver-mask with hard's slope bias
@@ -218,13 +218,13 @@ protected:
         test::addInstance(scene, box, "post",
                           glm::scale(glm::translate(glm::mat4(1.0f), {7.0f, 0.6f, 1.5f}), glm::vec3(0.2f, 1.2f, 0.2f)));
         scene.updateTransforms();
-        const Frame fine = render(scene, cfg, CullingMode::None);
+        const CulledFrame fine = render(scene, cfg, CullingMode::None);
 
         cfg.lights[0].shadow.setParam("resolution", 256, "test");
-        const Frame coarse = render(scene, cfg, CullingMode::ReceiverMask);
+        const CulledFrame coarse = render(scene, cfg, CullingMode::ReceiverMask);
         cfg.shadowFocus = true;
-        const Frame focused = render(scene, cfg, CullingMode::ReceiverMask);
-        const auto meanError = [&](const Frame& f) {
+        const CulledFrame focused = render(scene, cfg, CullingMode::ReceiverMask);
+        const auto meanError = [&](const CulledFrame& f) {
             double sum = 0.0;
             for (size_t i = 0; i < fine.visibility.size(); ++i) sum += std::abs(f.visibility[i] - fine.visibility[i]);
             return sum / double(fine.visibility.size());
@@ -320,7 +320,7 @@ TEST_F(VisibilityCulling, ThinCastersSeenEdgeOnKeepTheirShadows)
         cfg.camera.position = {0.0f, 9.0f, 0.5f};  // the slats from above: edge-on to the camera too
         cfg.camera.target = {0.0f, 0.0f, 0.0f};
         cfg.camera.up = {0.0f, 0.0f, -1.0f};
-        const Frame all = render(scene, cfg, CullingMode::None);
+        const CulledFrame all = render(scene, cfg, CullingMode::None);
         ASSERT_GT(countBelow(all.visibility, 0.5f), 0u);
         for (const CullingMode mode : {CullingMode::LightOcclusion, CullingMode::ReceiverMask}) {
             SCOPED_TRACE(config::cullingModeName(mode));
@@ -390,7 +390,7 @@ TEST_F(VisibilityCulling, AViewWhereCullingCannotPayTakesItsFrustum)
 {
     config::RenderConfig cfg = smallDefault(scene::LightType::Spot, "hard", {{"resolution", 512}});
     const scene::Scene scene = config::buildScene(cfg);
-    const Frame all = render(scene, cfg, CullingMode::None);
+    const CulledFrame all = render(scene, cfg, CullingMode::None);
     cfg.culling = CullingMode::ReceiverMask;
     frame::FrameRenderer renderer(*context, scene, cfg, test::plugins());
     for (int frame = 0; frame < 10; ++frame) {
@@ -420,11 +420,11 @@ TEST_F(VisibilityCulling, AStreetViewOfACityCullsMostCasters)
     cfg.camera.nearWorld = 0.1f;
     cfg.camera.fovYDeg = 60.0f;
     cfg.lights[0].light.direction = glm::normalize(glm::vec3(0.6f, -0.45f, 0.35f));
-    const Frame all = render(scene, cfg, CullingMode::None);
-    const Frame frustum = render(scene, cfg, CullingMode::Frustum);
-    const Frame occlusion = render(scene, cfg, CullingMode::LightOcclusion);
-    const Frame mask = render(scene, cfg, CullingMode::ReceiverMask);
-    for (const Frame* f : {&frustum, &occlusion, &mask})
+    const CulledFrame all = render(scene, cfg, CullingMode::None);
+    const CulledFrame frustum = render(scene, cfg, CullingMode::Frustum);
+    const CulledFrame occlusion = render(scene, cfg, CullingMode::LightOcclusion);
+    const CulledFrame mask = render(scene, cfg, CullingMode::ReceiverMask);
+    for (const CulledFrame* f : {&frustum, &occlusion, &mask})
         EXPECT_TRUE(sameVisibility(all.visibility, f->visibility, cfg.width));
     EXPECT_LT(mask.stats.receivers, scene.instances.size() / 4) << "the camera sees few instances";
     EXPECT_LT(mask.stats.castersDrawn, occlusion.stats.castersDrawn);
@@ -516,8 +516,8 @@ TEST_F(VisibilityCulling, ALitReceiverThatShadowsNothingIsNotDrawn)
             cfg.camera.up = {0.0f, 1.0f, 0.0f};
             cfg.lights[0].light.direction = glm::normalize(glm::vec3(1.0f, -0.7f, 0.0f));
             test::scaleConfig(cfg, scale);
-            const Frame all = render(scene, cfg, CullingMode::None);
-            const Frame mask = render(scene, cfg, CullingMode::ReceiverMask);
+            const CulledFrame all = render(scene, cfg, CullingMode::None);
+            const CulledFrame mask = render(scene, cfg, CullingMode::ReceiverMask);
             EXPECT_TRUE(sameVisibility(all.visibility, mask.visibility, cfg.width));
             EXPECT_EQ(countBelow(mask.visibility, 0.999f), 0u) << "the ground is lit";
             EXPECT_EQ(mask.stats.castersDrawn, std::string(bias) == "slope" ? 0u : 1u);
@@ -556,8 +556,8 @@ TEST_F(VisibilityCulling, ReceiverDepthsKeepAStreetViewNearTheOracle)
         const test::CasterOracle oracle =
             test::casterOracle(scene, renderer.readPositions(), renderer.readNormals(),
                                -glm::normalize(glm::dvec3(cfg.lights[0].light.direction)));
-        const Frame all = render(scene, cfg, CullingMode::None);
-        const Frame mask = render(scene, cfg, CullingMode::ReceiverMask);
+        const CulledFrame all = render(scene, cfg, CullingMode::None);
+        const CulledFrame mask = render(scene, cfg, CullingMode::ReceiverMask);
         EXPECT_TRUE(sameVisibility(all.visibility, mask.visibility, cfg.width));
         ASSERT_GT(oracle.triangles, 0u);
         // Measured: slope 11,222 triangles against an oracle of 4,312 (2.6), normal offset
@@ -583,8 +583,8 @@ TEST_F(VisibilityCulling, ACameraThatSeesNothingDrawsNoCaster)
     config::RenderConfig cfg = smallDefault(scene::LightType::Directional, "hard", {{"resolution", 512}});
     cfg.camera.target = cfg.camera.position + glm::vec3(0.0f, 1.0f, 0.1f);  // up into the sky
     const scene::Scene scene = config::buildScene(cfg);
-    const Frame all = render(scene, cfg, CullingMode::None);
-    const Frame mask = render(scene, cfg, CullingMode::ReceiverMask);
+    const CulledFrame all = render(scene, cfg, CullingMode::None);
+    const CulledFrame mask = render(scene, cfg, CullingMode::ReceiverMask);
     EXPECT_TRUE(sameVisibility(all.visibility, mask.visibility, cfg.width));
     EXPECT_EQ(mask.stats.receivers, 0u);
     EXPECT_EQ(mask.stats.castersDrawn, 0u);
