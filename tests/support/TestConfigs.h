@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <ostream>
 #include <string>
 
@@ -36,6 +37,10 @@ struct LightCase {
     int resolution = 1024;
 };
 std::ostream& operator<<(std::ostream& os, const LightCase& c);
+
+// Non-finite inputs of the guards' tests.
+inline constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+inline constexpr float kInf = std::numeric_limits<float>::infinity();
 
 // A visibility made of 0/1 compares averaged in fp32 counts as 0 or 1 within this.
 inline constexpr float kBinaryTolerance = 1e-5f;

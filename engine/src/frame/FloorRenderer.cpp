@@ -1,5 +1,7 @@
 #include "penumbra/frame/FloorRenderer.h"
 
+#include "core/Clock.h"
+#include "frame/FrameFormats.h"
 #include "frame/LightTable.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/graph/PassContext.h"
@@ -15,8 +17,6 @@
 namespace penumbra::frame {
 namespace {
 
-constexpr VkFormat kColorFormat = VK_FORMAT_R8G8B8A8_UNORM;
-constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
 
 // The graph's images: one colour and one depth target per forward draw (both are read
 // back, so neither is aliased with the other).
@@ -54,11 +54,6 @@ uint32_t floorResolution(const config::LightConfig& light, size_t index)
                                       where->where, index, value->dump()));
     }
     return uint32_t(value->get<int64_t>());
-}
-
-double msSince(std::chrono::steady_clock::time_point start)
-{
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
 } // namespace
@@ -100,8 +95,8 @@ FloorRenderer::FloorRenderer(gpu::Context& context, const scene::Scene& scene, c
                       {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(scene::Vertex, position)},
                        {1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(scene::Vertex, normal)},
                        {2, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(scene::Vertex, uv)}}};
-    d.colorFormats = {kColorFormat};
-    d.depthFormat = kDepthFormat;
+    d.colorFormats = {kFrameColorFormat};
+    d.depthFormat = kFrameDepthFormat;
     d.depthCompare = VK_COMPARE_OP_GREATER_OR_EQUAL;
     d.cullMode = VK_CULL_MODE_NONE;  // as the G-buffer: open geometry seen from behind still occludes
     shadowed_ = BaseColorPipelines(context_, compiler_, d);
@@ -140,10 +135,10 @@ void FloorRenderer::buildGraph()
     graph_ = std::make_unique<graph::RenderGraph>();
     graph::RenderGraph& g = *graph_;
     for (size_t i = 0; i < shadowMaps_.size(); ++i) shadowMaps_[i]->addDepthPass(g, floorShadowMapPass(i), kFloorBias);
-    g.declareImage({kShadowedColor, width_, height_, kColorFormat});
-    g.declareImage({kShadowedDepth, width_, height_, kDepthFormat});
-    g.declareImage({kUnshadowedColor, width_, height_, kColorFormat});
-    g.declareImage({kUnshadowedDepth, width_, height_, kDepthFormat});
+    g.declareImage({kShadowedColor, width_, height_, kFrameColorFormat});
+    g.declareImage({kShadowedDepth, width_, height_, kFrameDepthFormat});
+    g.declareImage({kUnshadowedColor, width_, height_, kFrameColorFormat});
+    g.declareImage({kUnshadowedDepth, width_, height_, kFrameDepthFormat});
     graph::PassBuilder shadowed = g.addPass(std::string(kFloorShadowedForward), graph::QueueKind::Graphics);
     shadowed.write(kShadowedColor, graph::Usage::ColorAttachment)
         .write(kShadowedDepth, graph::Usage::DepthAttachment)
@@ -164,7 +159,7 @@ FrameTimings FloorRenderer::renderFrame()
     FrameTimings timings;
     executor_.execute(*graph_);
     timings.passes = executor_.collectTimings();
-    timings.frameCpuMs = msSince(start);
+    timings.frameCpuMs = core::msSince(start);
     return timings;
 }
 

@@ -1,5 +1,7 @@
 #include "penumbra/frame/FrameRenderer.h"
 
+#include "core/Clock.h"
+#include "frame/FrameFormats.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
 #include "frame/LightTable.h"
@@ -19,8 +21,6 @@ namespace {
 // The G-buffer's formats: shaders/common/gbuffer.glsl.
 constexpr VkFormat kNormalFormat = VK_FORMAT_R16G16_SNORM;
 constexpr VkFormat kAlbedoFormat = VK_FORMAT_R8G8B8A8_UNORM;
-constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
-constexpr VkFormat kColorFormat = VK_FORMAT_R8G8B8A8_UNORM;
 constexpr VkFormat kVisibilityFormat = VK_FORMAT_R16_UNORM;  // shaders/common/visibility.glsl
 
 struct GBufferCameraData {  // matches GBufferCamera in shaders/common/gbuffer.glsl (std140)
@@ -33,11 +33,6 @@ struct ShadingPush {
     glm::vec4 ambient;
     glm::vec4 background;
 };
-
-double msSince(std::chrono::steady_clock::time_point start)
-{
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
 
 // Graph names of the engine's images (plugin::LightPassIo refers to the G-buffer ones).
 constexpr const char* kGNormal = "gbuffer.normal";
@@ -78,7 +73,7 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
                        {1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(scene::Vertex, normal)},
                        {2, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(scene::Vertex, uv)}}};
     g.colorFormats = {kNormalFormat, kAlbedoFormat};
-    g.depthFormat = kDepthFormat;
+    g.depthFormat = kFrameDepthFormat;
     g.depthCompare = VK_COMPARE_OP_GREATER_OR_EQUAL;
     // Open or single-sided geometry (the ground plane seen from below) must still
     // occlude: no culling; the fragment shader flips back-facing normals.
@@ -205,8 +200,8 @@ void FrameRenderer::buildGraph()
         graph::RenderGraph& g = *graph_;
         g.declareImage({kGNormal, width_, height_, kNormalFormat});
         g.declareImage({kGAlbedo, width_, height_, kAlbedoFormat});
-        g.declareImage({kGDepth, width_, height_, kDepthFormat});
-        g.declareImage({kColor, width_, height_, kColorFormat});
+        g.declareImage({kGDepth, width_, height_, kFrameDepthFormat});
+        g.declareImage({kColor, width_, height_, kFrameColorFormat});
         g.addPass("gbuffer", graph::QueueKind::Graphics)
             .write(kGNormal, graph::Usage::ColorAttachment)
             .write(kGAlbedo, graph::Usage::ColorAttachment)
@@ -337,7 +332,7 @@ FrameTimings FrameRenderer::renderFrame()
     executor_.execute(*graph_);
     timings.passes = executor_.collectTimings();
     timings.culling = visibility_->stats();
-    timings.frameCpuMs = msSince(frameStart);
+    timings.frameCpuMs = core::msSince(frameStart);
     return timings;
 }
 

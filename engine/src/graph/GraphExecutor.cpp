@@ -1,5 +1,6 @@
 #include "penumbra/graph/GraphExecutor.h"
 
+#include "core/Clock.h"
 #include "graph/Align.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Check.h"
@@ -453,11 +454,6 @@ const CompiledGraph& GraphExecutor::prepare(RenderGraph& graph)
 
 namespace {
 
-double msSince(std::chrono::steady_clock::time_point start)
-{
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
-
 // Runs a pass's callback; an exception becomes an Error naming the pass.
 void runCallback(const ExecuteFn& fn, PassContext& context, const CompiledPass& pass, const char* doing)
 {
@@ -492,7 +488,7 @@ void GraphExecutor::recordGpuPass(VkCommandBuffer cmd, RenderGraph& graph, size_
         resources.context.endLabel(cmd);
         throw;
     }
-    resources.cpuMs.push_back(msSince(start));
+    resources.cpuMs.push_back(core::msSince(start));
     resources.timerScope.push_back(scope);
     if (scope >= 0) resources.timer->endScope(cmd, uint32_t(scope));
     resources.context.endLabel(cmd);
@@ -509,7 +505,7 @@ void GraphExecutor::runHostPass(RenderGraph& graph, size_t index)
     context.pass_ = &pass;
     const auto start = std::chrono::steady_clock::now();
     runCallback(graph.executeFn(pass.declarationIndex), context, pass, "running on the host");
-    resources.cpuMs.push_back(msSince(start));
+    resources.cpuMs.push_back(core::msSince(start));
     resources.timerScope.push_back(-1);
 }
 

@@ -25,7 +25,7 @@ struct GpuBox {
 
 namespace {
 
-constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
+constexpr VkFormat kOccluderDepthFormat = VK_FORMAT_D32_SFLOAT;
 
 // lavapipe (PLATFORM.md): in a long run of queries inside one rendering instance about
 // one in 1,000 over-counts; ending and resuming rendering every few hundred keeps them
@@ -117,7 +117,7 @@ OccluderDepth::OccluderDepth(gpu::Context& context, uint32_t width, uint32_t hei
                              const std::string& name)
     : width(width),
       height(height),
-      image(context, {width, height, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | usage, name})
+      image(context, {width, height, kOccluderDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | usage, name})
 {}
 
 // One traversal: its inputs, and what carries over from one round to the next.
@@ -330,7 +330,7 @@ OcclusionTraversal::OcclusionTraversal(gpu::Context& context, const gpu::ShaderC
     d.vertexShader = "engine/shadow_depth.vert";
     d.pushConstantBytes = sizeof(glm::mat4);
     d.vertexLayout = positions;
-    d.depthFormat = kDepthFormat;
+    d.depthFormat = kOccluderDepthFormat;
     d.depthCompare = VK_COMPARE_OP_GREATER_OR_EQUAL;
     d.depthBias = true;
     d.cullMode = VK_CULL_MODE_NONE;

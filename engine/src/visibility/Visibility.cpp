@@ -1,5 +1,6 @@
 #include "visibility/Visibility.h"
 
+#include "core/Clock.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
 #include "penumbra/gpu/Context.h"
@@ -17,11 +18,6 @@ namespace {
 // frustum takes its frustum's instances, for up to kRecheckFrames frames.
 constexpr double kFallbackKeptFraction = 0.4;
 constexpr uint32_t kRecheckFrames = 8;
-
-double msSince(std::chrono::steady_clock::time_point start)
-{
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
 
 size_t countMarked(const std::vector<uint8_t>& list) { return size_t(std::count(list.begin(), list.end(), uint8_t(1))); }
 
@@ -95,7 +91,7 @@ void Visibility::beginFrame(const glm::mat4& cameraViewProj)
     case config::CullingMode::ReceiverMask: cullCamera(cameraViewProj); break;
     }
     stats_.receivers = uint64_t(countMarked(receivers_));
-    stats_.cameraMs = msSince(start);
+    stats_.cameraMs = core::msSince(start);
 }
 
 // Step 1: the receivers, by occlusion culling of the camera view, which leaves the camera
@@ -189,7 +185,7 @@ void Visibility::cullLightView(const render::CasterView& view, CulledLightView& 
     const auto start = std::chrono::steady_clock::now();
     if (mode_ == config::CullingMode::Frustum || view.resolution == 0) {
         cullFrustum(view.viewProj, culled.casters);
-        stats_.casterCullMs += msSince(start);
+        stats_.casterCullMs += core::msSince(start);
         return;
     }
     // Culling that cannot pay is skipped: when the last full culling of this view kept
@@ -201,7 +197,7 @@ void Visibility::cullLightView(const render::CasterView& view, CulledLightView& 
         cullFrustum(view.viewProj, culled.casters);
         ++culled.framesSinceFull;
         ++stats_.viewsFellBack;
-        stats_.casterCullMs += msSince(start);
+        stats_.casterCullMs += core::msSince(start);
         return;
     }
     cullLightViewFully(view, culled);
@@ -222,18 +218,18 @@ void Visibility::cullLightViewFully(const render::CasterView& view, CulledLightV
     traversal.bias = view.depthBias;
     if (masks_) {
         traversal.mask = &masks_->build(view);
-        stats_.maskMs += msSince(start);
+        stats_.maskMs += core::msSince(start);
         start = std::chrono::steady_clock::now();
         if (traversal.mask->hasReceiverDepth) {
             cullBehindReceivers(bvh_, scene_, view.viewProj, view.depthBias, *traversal.mask, culled.casters, stats_);
-            stats_.casterCullMs += msSince(start);
+            stats_.casterCullMs += core::msSince(start);
             return;
         }
     }
     OccluderDepth& depth = lightDepth(view.resolution);
     traversal.area = traversal.mask ? traversal.mask->bounds : VkRect2D{{0, 0}, {depth.width, depth.height}};
     traversal_->cull(depth, traversal, culled.history, culled.casters, stats_);
-    stats_.casterCullMs += msSince(start);
+    stats_.casterCullMs += core::msSince(start);
 }
 
 } // namespace penumbra::visibility

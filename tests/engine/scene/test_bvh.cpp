@@ -1,5 +1,7 @@
 // InstanceBvh against brute force over the same boxes: every query on random scenes of
 // mixed boxes (points, flat and huge ones among them), degenerate inputs, refits.
+#include "TestConfigs.h"
+
 #include "penumbra/core/Error.h"
 #include "penumbra/render/Projection.h"
 #include "penumbra/scene/Bvh.h"
@@ -19,12 +21,12 @@
 #include <string>
 
 using namespace penumbra;
+using test::kInf;
+using test::kNaN;
 using namespace penumbra::scene;
 
 namespace {
 
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-constexpr float kInf = std::numeric_limits<float>::infinity();
 
 Aabb box(glm::vec3 min, glm::vec3 max) { return Aabb{min, max}; }
 

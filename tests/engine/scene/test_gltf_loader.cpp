@@ -44,7 +44,7 @@ std::string errorOfPath(const fs::path& path, const GltfLoadOptions& options = {
     return {};
 }
 
-std::string errorOf(const std::string& name, const GltfLoadOptions& options = {})
+std::string loadErrorOf(const std::string& name, const GltfLoadOptions& options = {})
 {
     return errorOfPath(gltfFile(name), options);
 }
@@ -274,30 +274,30 @@ TEST(GltfLoader, NonFinitePositionsAreRepairedNotRefused)
 
 TEST(GltfLoaderErrors, MissingFile)
 {
-    EXPECT_NE(errorOf("nope.gltf").find("nope.gltf: glTF file not found"), std::string::npos);
+    EXPECT_NE(loadErrorOf("nope.gltf").find("nope.gltf: glTF file not found"), std::string::npos);
 }
 
 TEST(GltfLoaderErrors, MalformedJson)
 {
-    const std::string e = errorOf("malformed.gltf");
+    const std::string e = loadErrorOf("malformed.gltf");
     EXPECT_NE(e.find("malformed.gltf: malformed JSON: parse error at line 3, column 24"), std::string::npos) << e;
 }
 
 TEST(GltfLoaderErrors, MissingBinFile)
 {
-    const std::string e = errorOf("missing_bin.gltf");
+    const std::string e = loadErrorOf("missing_bin.gltf");
     EXPECT_NE(e.find("missing_bin.gltf: buffer file 'quad_missing.bin' not found"), std::string::npos) << e;
 }
 
 TEST(GltfLoaderErrors, MissingTextureFile)
 {
-    const std::string e = errorOf("missing_texture.gltf");
+    const std::string e = loadErrorOf("missing_texture.gltf");
     EXPECT_NE(e.find("missing_texture.gltf: /images/0: texture file 'checker_missing.png' not found"), std::string::npos) << e;
 }
 
 TEST(GltfLoaderErrors, AbsurdAccessorCountIsCheckedAgainstItsBufferView)
 {
-    const std::string e = errorOf("huge_accessor.gltf");
+    const std::string e = loadErrorOf("huge_accessor.gltf");
     EXPECT_NE(e.find("huge_accessor.gltf: /accessors/0: count 4294967295 × 12 bytes exceeds buffer view 0 (128 bytes)"),
               std::string::npos)
         << e;
@@ -305,7 +305,7 @@ TEST(GltfLoaderErrors, AbsurdAccessorCountIsCheckedAgainstItsBufferView)
 
 TEST(GltfLoaderErrors, BufferViewOutsideItsBuffer)
 {
-    const std::string e = errorOf("bufferview_out_of_range.gltf");
+    const std::string e = loadErrorOf("bufferview_out_of_range.gltf");
     EXPECT_NE(e.find("bufferview_out_of_range.gltf: /bufferViews/1: byteOffset 128 + byteLength 400 exceeds buffer 0 (140 bytes)"),
               std::string::npos)
         << e;
@@ -313,7 +313,7 @@ TEST(GltfLoaderErrors, BufferViewOutsideItsBuffer)
 
 TEST(GltfLoaderErrors, AccessorIndexOutOfRange)
 {
-    const std::string e = errorOf("missing_accessor.gltf");
+    const std::string e = loadErrorOf("missing_accessor.gltf");
     EXPECT_NE(e.find("missing_accessor.gltf: /meshes/0/primitives/0/attributes/NORMAL: accessor 9 does not exist (4 accessors)"),
               std::string::npos)
         << e;
@@ -321,7 +321,7 @@ TEST(GltfLoaderErrors, AccessorIndexOutOfRange)
 
 TEST(GltfLoaderErrors, VertexIndexOutOfRange)
 {
-    const std::string e = errorOf("index_out_of_range.gltf");
+    const std::string e = loadErrorOf("index_out_of_range.gltf");
     EXPECT_NE(e.find("index_out_of_range.gltf: /meshes/0/primitives/0/indices: index 7 at position 4 (accessor 3) is out of "
                      "range of 4 vertices"),
               std::string::npos)
@@ -330,7 +330,7 @@ TEST(GltfLoaderErrors, VertexIndexOutOfRange)
 
 TEST(GltfLoaderErrors, NodeCycle)
 {
-    const std::string e = errorOf("node_cycle.gltf");
+    const std::string e = loadErrorOf("node_cycle.gltf");
     EXPECT_NE(e.find("node_cycle.gltf: /nodes/2: nodes form a cycle, each the parent of the next: node 2 'a' -> node 3 'b' -> "
                      "node 4 'c' -> node 2 'a'"),
               std::string::npos)
@@ -339,13 +339,13 @@ TEST(GltfLoaderErrors, NodeCycle)
 
 TEST(GltfLoaderErrors, NodeWithTwoParents)
 {
-    const std::string e = errorOf("two_parents.gltf");
+    const std::string e = loadErrorOf("two_parents.gltf");
     EXPECT_NE(e.find("two_parents.gltf: /nodes/2: node 2 'shared' has two parents: nodes 0 and 1"), std::string::npos) << e;
 }
 
 TEST(GltfLoaderErrors, UnsupportedRequiredExtension)
 {
-    const std::string e = errorOf("draco_required.gltf");
+    const std::string e = loadErrorOf("draco_required.gltf");
     EXPECT_NE(e.find("draco_required.gltf: required extension KHR_draco_mesh_compression is not supported"), std::string::npos)
         << e;
 }
@@ -353,7 +353,7 @@ TEST(GltfLoaderErrors, UnsupportedRequiredExtension)
 TEST(GltfLoaderErrors, Gltf1IsRefused)
 {
     for (const char* name : {"gltf1.gltf", "gltf1.glb"}) {
-        const std::string e = errorOf(name);
+        const std::string e = loadErrorOf(name);
         EXPECT_NE(e.find(std::string(name) + ": glTF 1.0 is not supported"), std::string::npos) << e;
     }
 }
@@ -362,19 +362,19 @@ TEST(GltfLoaderErrors, VertexAndTriangleLimits)
 {
     GltfLoadOptions options;
     options.maxVertices = 3;
-    std::string e = errorOf("quad.gltf", options);
+    std::string e = loadErrorOf("quad.gltf", options);
     EXPECT_NE(e.find("quad.gltf: /accessors/0: count 4 exceeds 3 (vertices left of the limit of 3 per file)"),
               std::string::npos)
         << e;
     options = {};
     options.maxTriangles = 1;
-    e = errorOf("quad.gltf", options);
+    e = loadErrorOf("quad.gltf", options);
     EXPECT_NE(e.find("quad.gltf: /accessors/3: count 6 exceeds 5 (indices for the 1 triangles left of the limit of 1 per file)"),
               std::string::npos)
         << e;
     // A strip of t triangles has t + 2 indices.
     options.maxTriangles = 0;
-    e = errorOf("modes.gltf", options);
+    e = loadErrorOf("modes.gltf", options);
     EXPECT_NE(e.find("modes.gltf: /accessors/1: count 5 exceeds 2"), std::string::npos) << e;
 }
 
@@ -382,11 +382,11 @@ TEST(GltfLoaderErrors, TextureSizeLimitBeforeDecoding)
 {
     GltfLoadOptions options;
     options.maxImageTexels = 3;
-    std::string e = errorOf("textured.gltf", options);
+    std::string e = loadErrorOf("textured.gltf", options);
     EXPECT_NE(e.find("textured.gltf: /images/0: 2×2 texels exceed the limit of 3 per image"), std::string::npos) << e;
     options = {};
     options.maxTotalTexels = 3;
-    e = errorOf("textured.gltf", options);
+    e = loadErrorOf("textured.gltf", options);
     EXPECT_NE(e.find("textured.gltf: /images/0: 2×2 texels exceed the 3 left of the limit for all the file's images"),
               std::string::npos)
         << e;
@@ -396,12 +396,12 @@ TEST(GltfLoaderErrors, BytesReadLimit)
 {
     GltfLoadOptions options;
     options.maxBytesRead = 100;
-    std::string e = errorOf("quad.gltf", options);
+    std::string e = loadErrorOf("quad.gltf", options);
     EXPECT_NE(e.find("quad.gltf: glTF file 1534 bytes exceed the 100 bytes left of the limit on bytes read"), std::string::npos)
         << e;
     // quad_external.gltf (1317 bytes) fits, quad.bin (140 bytes) then does not.
     options.maxBytesRead = 1400;
-    e = errorOf("quad_external.gltf", options);
+    e = loadErrorOf("quad_external.gltf", options);
     EXPECT_NE(e.find("quad_external.gltf: buffer file '"), std::string::npos) << e;
     EXPECT_NE(e.find("quad.bin' cannot be read: 140 bytes exceed the 83 bytes left"), std::string::npos) << e;
 }
@@ -410,7 +410,7 @@ TEST(GltfLoaderErrors, InstanceLimit)
 {
     GltfLoadOptions options;
     options.maxInstances = 3;
-    const std::string e = errorOf("hierarchy.gltf", options);
+    const std::string e = loadErrorOf("hierarchy.gltf", options);
     EXPECT_NE(e.find("hierarchy.gltf: /nodes/0/mesh: instances exceed the limit of 3 per file"), std::string::npos) << e;
 }
 

@@ -11,13 +11,13 @@
 #include <limits>
 
 using namespace penumbra;
+using test::kInf;
+using test::kNaN;
 using test::expectNear;
 using namespace penumbra::scene;
 
 namespace {
 
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-constexpr float kInf = std::numeric_limits<float>::infinity();
 
 Mesh meshOf(const std::vector<glm::vec3>& positions, std::vector<uint32_t> indices, glm::vec3 normal = glm::vec3(0.0f))
 {
