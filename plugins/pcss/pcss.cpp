@@ -36,10 +36,12 @@ const plugin::ParamSpec kParams[] = {
     plugin::kLightSizeParam,
     {"blocker_samples", ParamType::Int, 16, kSamplesMin, kSamplesMax, "", "depth taps of the blocker search"},
     {"filter_samples", ParamType::Int, 32, kSamplesMin, kSamplesMax, "", "compares of the penumbra filter"},
-    {"max_search_radius", ParamType::Float, 16, 0.5, 128, "texels",
-     "largest blocker-search radius (the light seen from the receiver is clamped to it)"},
-    {"max_filter_radius", ParamType::Float, 16, 0.5, 128, "texels",
-     "largest filter radius (the estimated penumbra is clamped to it)"},
+    plugin::kernelLimitParam("max_search_radius", 0.5,
+                             "largest blocker-search radius, a fraction of the face's side (the light seen from the "
+                             "receiver is clamped to it)"),
+    plugin::kernelLimitParam("max_filter_radius", 0.5,
+                             "largest filter radius, a fraction of the face's side (the estimated penumbra is clamped "
+                             "to it)"),
     {"bias_mode", ParamType::Enum, double(BiasMode::ReceiverPlane), 0, 0, "",
      "receiver_plane: every tap compares against the receiver's plane at that tap; slope: rasterizer slope bias",
      kBiasModeNames, uint32_t(std::size(kBiasModeNames))},
@@ -53,8 +55,8 @@ struct Settings {
     float lightSizeOverride = -1.0f;
     uint32_t blockerSamples = 16;
     uint32_t filterSamples = 32;
-    float maxSearchTexels = 16.0f;
-    float maxFilterTexels = 16.0f;
+    float maxSearchTexels = 1024.0f;  // the limits' fractions of the face, in its texels
+    float maxFilterTexels = 1024.0f;
     BiasMode bias = BiasMode::ReceiverPlane;
     float depthBias = 4.0f;
     float slopeBias = 2.0f;
@@ -67,8 +69,8 @@ Settings readSettings(const plugin::ParamValues& params)
     s.lightSizeOverride = plugin::lightSizeOverride(params, "pcss");
     s.blockerSamples = uint32_t(params.getInt("blocker_samples"));
     s.filterSamples = uint32_t(params.getInt("filter_samples"));
-    s.maxSearchTexels = params.getFloat("max_search_radius");
-    s.maxFilterTexels = params.getFloat("max_filter_radius");
+    s.maxSearchTexels = plugin::kernelLimitTexels(params.getFloat("max_search_radius"), s.resolution);
+    s.maxFilterTexels = plugin::kernelLimitTexels(params.getFloat("max_filter_radius"), s.resolution);
     s.bias = BiasMode(params.getEnumIndex("bias_mode"));
     s.depthBias = params.getFloat("depth_bias");
     s.slopeBias = params.getFloat("slope_bias");
@@ -93,6 +95,9 @@ public:
 
 private:
     bool usesReceiverPlane() const { return settings_.bias == BiasMode::ReceiverPlane; }
+    // The culling footprint (and, with slope bias, the own-depth taps) of this light's
+    // kernels, after each refit of the map.
+    void fitFootprint();
 
     gpu::Context& context_;
     const Settings settings_;
@@ -108,11 +113,6 @@ PcssShadow::PcssShadow(const plugin::TechniqueSetup& setup)
       settings_(readSettings(setup.params)),
       shadowMap_(setup, settings_.resolution, "pcss")
 {
-    // The blocker search and the filter are clamped to these radii; one texel more for the
-    // taps' rounding.
-    shadowMap_.setFootprint(std::max(settings_.maxSearchTexels, settings_.maxFilterTexels) + 1.0f);
-    // Slope bias: the search and the filter compare each tap with the receiver's own depth.
-    if (settings_.bias == BiasMode::Slope) shadowMap_.setOwnDepthCompare(int32_t(std::ceil(shadowMap_.footprint())));
     gpu::ComputePipelineDesc c;
     c.name = fmt::format("light{}.pcss.visibility", setup.lightIndex);
     c.shader = "visibility.comp";
@@ -127,12 +127,24 @@ PcssShadow::PcssShadow(const plugin::TechniqueSetup& setup)
     compareSampler_ = render::createShadowCompareSampler(context_);
     depthSampler_ = render::createShadowDepthSampler(context_);
     lightSize_ = render::softShadowLightSize(setup.light, settings_.lightSizeOverride);
+    fitFootprint();
 }
 
 void PcssShadow::update(const scene::Light& light, const scene::Aabb& sceneBounds)
 {
     shadowMap_.update(light, sceneBounds);
     lightSize_ = render::softShadowLightSize(light, settings_.lightSizeOverride);
+    fitFootprint();
+}
+
+void PcssShadow::fitFootprint()
+{
+    // The search and the filter reach no further than the light's size allows on this map,
+    // nor past their limits.
+    const float footprint =
+        shadowMap_.setSoftShadowFootprint(lightSize_, std::max(settings_.maxSearchTexels, settings_.maxFilterTexels));
+    // Slope bias: the search and the filter compare each tap with the receiver's own depth.
+    if (settings_.bias == BiasMode::Slope) shadowMap_.setOwnDepthCompare(int32_t(std::ceil(footprint)));
 }
 
 void PcssShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io)

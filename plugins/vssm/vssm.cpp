@@ -58,8 +58,9 @@ const plugin::ParamSpec kParams[] = {
     {"blocker_subdivisions", ParamType::Int, 5, 1, 16, "", "m: sub-kernels per side of the blocker search (uniform)"},
     {"filter_subdivisions", ParamType::Int, 8, 1, 16, "", "n: sub-kernels per side of the filter (uniform)"},
     {"tree_height", ParamType::Int, 3, 0, kMaxTreeHeight, "", "H: levels of the adaptive quad-tree (4^H leaves)"},
-    {"max_search_radius", ParamType::Float, 64, 0.5, 1024, "texels", "largest blocker-search half-width"},
-    {"max_filter_radius", ParamType::Float, 64, 0.5, 1024, "texels", "largest penumbra-filter half-width"},
+    plugin::kernelLimitParam("max_search_radius", 0.5, "largest blocker-search half-width, a fraction of the face's side"),
+    plugin::kernelLimitParam("max_filter_radius", 0.5,
+                             "largest penumbra-filter half-width, a fraction of the face's side"),
     {"lit_variance", ParamType::Float, 1e-4, 0, 1, "r^2",
      "Threshold of Algorithm 2: a sub-kernel behind the receiver with a variance below lit_variance r^2 is lit "
      "(r: the scene's bounding radius; paper 6.5)"},
@@ -84,8 +85,8 @@ struct Settings {
     int blockerSubdivisions = 5;
     int filterSubdivisions = 8;
     int treeHeight = 3;
-    float maxSearchTexels = 64.0f;
-    float maxFilterTexels = 64.0f;
+    float maxSearchTexels = 512.0f;  // the limits' fractions of the face, in its texels
+    float maxFilterTexels = 512.0f;
     float litVariance = 1e-4f;
     float contactEpsilon = 0.01f;
     BiasMode bias = BiasMode::ReceiverPlane;
@@ -120,8 +121,8 @@ Settings readSettings(const plugin::ParamValues& params)
     s.blockerSubdivisions = params.getInt("blocker_subdivisions");
     s.filterSubdivisions = params.getInt("filter_subdivisions");
     s.treeHeight = params.getInt("tree_height");
-    s.maxSearchTexels = params.getFloat("max_search_radius");
-    s.maxFilterTexels = params.getFloat("max_filter_radius");
+    s.maxSearchTexels = plugin::kernelLimitTexels(params.getFloat("max_search_radius"), s.resolution);
+    s.maxFilterTexels = plugin::kernelLimitTexels(params.getFloat("max_filter_radius"), s.resolution);
     s.litVariance = params.getFloat("lit_variance");
     s.contactEpsilon = params.getFloat("contact_epsilon");
     s.bias = BiasMode(params.getEnumIndex("bias_mode"));
@@ -197,6 +198,8 @@ public:
 
 private:
     void checkDevice() const;
+    // The culling footprint of this light's kernels, after each refit of the map.
+    void fitFootprint();
     void recordSat(const graph::PassContext& pass, const std::string& map, const std::string& sat) const;
     void recordHsm(const graph::PassContext& pass, const std::string& map, const std::string& hsm) const;
     void bindVisibility(const graph::PassContext& pass, gpu::DescriptorPush& descriptors, const std::string& map,
@@ -228,8 +231,6 @@ VssmShadow::VssmShadow(const plugin::TechniqueSetup& setup)
       shadowMap_(setup, settings_.resolution, "vssm")
 {
     checkDevice();
-    // The kernels are clamped to these half-widths; one texel more for the taps' rounding.
-    shadowMap_.setFootprint(std::max(settings_.maxSearchTexels, settings_.maxFilterTexels) + 1.0f);
     const std::string name = fmt::format("light{}.vssm.", setup.lightIndex);
 
     gpu::ComputePipelineDesc c;
@@ -259,6 +260,7 @@ VssmShadow::VssmShadow(const plugin::TechniqueSetup& setup)
     depthSampler_ = render::createShadowDepthSampler(context_);
     lightSize_ = render::softShadowLightSize(setup.light, settings_.lightSizeOverride);
     sceneRadius_ = boundingRadius(setup.sceneBounds);
+    fitFootprint();
 }
 
 // The table needs 64-bit integers in shaders, and its box queries fp64 (sat.glsl); both
@@ -288,6 +290,14 @@ void VssmShadow::update(const scene::Light& light, const scene::Aabb& sceneBound
     shadowMap_.update(light, sceneBounds);
     lightSize_ = render::softShadowLightSize(light, settings_.lightSizeOverride);
     sceneRadius_ = boundingRadius(sceneBounds);
+    fitFootprint();
+}
+
+void VssmShadow::fitFootprint()
+{
+    // The kernels reach no further than the light's size allows on this map, nor past
+    // their limits (the 0.5-texel least kernel is inside the footprint's extra texel).
+    shadowMap_.setSoftShadowFootprint(lightSize_, std::max(settings_.maxSearchTexels, settings_.maxFilterTexels));
 }
 
 void VssmShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io)

@@ -20,6 +20,8 @@ namespace penumbra::test {
 struct KernelSettings {
     double lightSize = -1.0;  // the light's own
     int resolution = 1024;
+    // The kernel limits in texels of `resolution`; the plugins take them as fractions of
+    // the face (plugin::kernelLimitParam). 0: the plugin's default.
     double maxSearchTexels = 8.0;
     double maxFilterTexels = 8.0;
     std::string biasMode = "receiver_plane";
@@ -27,11 +29,10 @@ struct KernelSettings {
     // As setShadow takes them.
     nlohmann::json params() const
     {
-        return {{"light_size", lightSize},
-                {"resolution", resolution},
-                {"max_search_radius", maxSearchTexels},
-                {"max_filter_radius", maxFilterTexels},
-                {"bias_mode", biasMode}};
+        nlohmann::json p = {{"light_size", lightSize}, {"resolution", resolution}, {"bias_mode", biasMode}};
+        if (maxSearchTexels > 0.0) p["max_search_radius"] = maxSearchTexels / resolution;
+        if (maxFilterTexels > 0.0) p["max_filter_radius"] = maxFilterTexels / resolution;
+        return p;
     }
     // Away from penumbrae for a ray-cast comparison: as far as the kernels reach, plus
     // two texels.

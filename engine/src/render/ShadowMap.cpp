@@ -264,4 +264,28 @@ float softShadowLightSize(const scene::Light& light, float overrideSize)
     }
 }
 
+float softShadowKernelReach(const ShadowMapData& data, float lightSize)
+{
+    float reach = 0.0f;
+    const uint32_t faces = std::min(data.faceCount, kMaxShadowFaces);
+    for (uint32_t f = 0; f < faces; ++f) {
+        const ShadowFaceData& face = data.faces[f];
+        const float texel = face.texel.x, near = face.depthRange.x, far = face.depthRange.y;
+        const bool orthographic = face.depthRange.z != 0.0f;
+        if (!(texel > 0.0f)) continue;  // a degenerate face: the techniques take one compare there
+        // Written as the shaders divide, so that an inf or a NaN lands where theirs does:
+        // a NaN (0 * inf, 0 / 0) counts 0, an inf stays and the limit clamps it.
+        const float extent = orthographic ? std::max(far - near, 0.0f) * lightSize : lightSize / near;
+        const float texels = 0.5f * extent / texel;
+        if (texels > reach) reach = texels;
+    }
+    return reach;
+}
+
+float ShadowMap::setSoftShadowFootprint(float lightSize, float maxKernelTexels)
+{
+    footprint_ = std::min(softShadowKernelReach(data_, lightSize), maxKernelTexels) + 1.0f;
+    return footprint_;
+}
+
 } // namespace penumbra::render

@@ -6,6 +6,7 @@
 #include "penumbra/plugin/Params.h"
 #include "penumbra/plugin/Plugin.h"
 
+#include <cstdint>
 #include <string_view>
 
 namespace penumbra::plugin {
@@ -25,6 +26,18 @@ inline constexpr ParamSpec kLightSizeParam{
     "light_size", ParamType::Float, -1, -1, 1e9, "world or deg",
     "-1: the light's own size (rect: sqrt(w h), disk: diameter, directional: angular_diameter_deg; spot and "
     "point: 0, a hard shadow); >= 0: this size instead, in world units (directional: angular diameter in degrees)"};
+
+// The PCSS framework's kernel limits (pcss, vssm: `max_search_radius`,
+// `max_filter_radius`): the largest half-width of the blocker search or of the penumbra
+// filter, as a fraction of a face's side. Relative to the face, not in texels, so that a
+// penumbra keeps its width in the world at every resolution: a limit in texels cut wide
+// penumbrae the more the finer the map (16 texels held a 2048-texel face's penumbra to
+// 1/64 of the face). The shaders take kernelLimitTexels().
+constexpr ParamSpec kernelLimitParam(const char* name, double defaultFraction, const char* description)
+{
+    return {name, ParamType::Float, defaultFraction, 1e-4, 1, "face", description};
+}
+inline float kernelLimitTexels(float fraction, uint32_t faceTexels) { return fraction * float(faceTexels); }
 
 // kLightSizeParam's value: -1 or >= 0. Its range, [-1, 1e9], cannot say that the values
 // between mean nothing: throws penumbra::ConfigError naming `technique`'s light_size for

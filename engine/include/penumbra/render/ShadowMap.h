@@ -88,6 +88,16 @@ static_assert(sizeof(ShadowFaceData) == 96 && sizeof(ShadowMapData) == 64 + 6 * 
 // (world units; directional: degrees).
 float softShadowLightSize(const scene::Light& light, float overrideSize);
 
+// The widest half-width, in texels of a face, that the PCSS framework's kernels
+// (penumbra_estimate.glsl: the blocker search and the penumbra filter) reach on the map
+// `data` describes for a light of `lightSize` (softShadowLightSize), before a technique's
+// own limit. Perspective faces: both are at most lightSize / near as an angle (the search
+// (lightSize / near) (d_r - near) / d_r, the filter (gap / d_r) lightSize / max(d_b,
+// near)); orthographic: (far - near) lightSize in world units. 0 for a light of size 0 or
+// a degenerate face (texel 0 or NaN); +inf where the bound overflows (a technique's limit
+// then holds).
+float softShadowKernelReach(const ShadowMapData& data, float lightSize);
+
 // Samplers that read a shadow map by its conventions, clamped to the edge (lookups stay
 // in their face: the shaders clamp them). The comparison sampler's compareOp is
 // GREATER_OR_EQUAL (reversed-Z: a receiver is lit where its depth is at least the stored
@@ -159,6 +169,12 @@ public:
     // 0 (a single nearest compare) until set.
     void setFootprint(float texels) { footprint_ = texels; }
     float footprint() const { return footprint_; }
+    // For the PCSS framework's kernels clamped to `maxKernelTexels` (half-widths): sets the
+    // footprint to the least of that and softShadowKernelReach(data(), lightSize), plus one
+    // texel for the taps' rounding, and returns it. Call it after every update(): the
+    // reach follows the frusta, so a light whose kernels never grow wide keeps caster
+    // culling tight however generous the technique's limit.
+    float setSoftShadowFootprint(float lightSize, float maxKernelTexels);
 
     // Declares that every lookup compares the map with the receiver point's own depth,
     // reading the texels within `tapRadius` (a square) of the one the point projects to
