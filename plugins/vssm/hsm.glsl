@@ -56,10 +56,14 @@ vec2 hsmRange(ivec2 first, ivec2 last, ivec2 size)
     int level = 0;
     while ((1 << level) < extent && level < levels - 1) ++level;
     ivec2 a = first >> level, b = last >> level;
+    // The level's place in the buffer once, not per texel (hsmTexel walks the levels).
+    ivec2 levelSize = hsmLevelSize(size, level);
+    int offset = level > 0 ? hsmLevelOffset(size, level) : 0;
     vec2 range = vec2(1.0, 0.0);
     for (int y = a.y; y <= b.y; ++y)
         for (int x = a.x; x <= b.x; ++x) {
-            vec2 v = hsmTexel(size, level, ivec2(x, y));
+            ivec2 texel = clamp(ivec2(x, y), ivec2(0), levelSize - 1);
+            vec2 v = level == 0 ? vec2(hsmLevel0(texel)) : hsmTexels[offset + texel.y * levelSize.x + texel.x];
             range = vec2(min(range.x, v.x), max(range.y, v.y));
         }
     return range;

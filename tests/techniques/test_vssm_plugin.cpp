@@ -514,8 +514,10 @@ TEST_F(VssmTest, SubdivisionRemovesTheIncorrectlyLitAreaOfOverlappingBlockers)
     }
     EXPECT_GT(shadowedTop, 500u) << "the plate shadows the pillar's top";
     EXPECT_GT(incorrectlyLit["none"], shadowedTop / 10) << "without subdivision the umbra at the edge is lit";
+    // Measured: none 56,160; uniform, adaptive and mixed 0 (adaptive and mixed 2,160 while
+    // the quad-tree handed every node in front of the receiver to Chebyshev).
     for (const char* subdivision : {"uniform", "adaptive", "mixed"})
-        EXPECT_LT(incorrectlyLit[subdivision], incorrectlyLit["none"] / 10) << subdivision;
+        EXPECT_LT(incorrectlyLit[subdivision], incorrectlyLit["none"] / 100) << subdivision;
 }
 
 // ---------------------------------------------------------------------------------
