@@ -480,6 +480,7 @@ int runBench(const BenchFlags& flags)
     run.warmup = flags.warmup;
     run.reference = flags.reference.technique;
     run.referenceParams = reference.params;
+    if (!variants.empty()) run.notes = variants.front().config.notes;  // a sweep of /notes: the first variant's
     try {
         ReferenceCache references(context, plugins, reference);
         Progress progress(variants.size(), flags.warmup + flags.frames);

@@ -305,6 +305,11 @@ std::string summaryMarkdown(const BenchRun& run)
                       "in the same table is both faster and more accurate.\n\n",
                       metrics::kUmbraMaxVisibility, metrics::kLitMinVisibility);
     md += fmt::format("Regenerate with:\n\n```sh\n{}\n```\n", shellCommand(run.command));
+    if (!run.notes.empty()) {
+        md += "\n## Notes\n\n";
+        for (const std::string& note : run.notes) md += note + "\n\n";
+        md.pop_back();
+    }
     for (const TradeoffPanel& panel : tradeoffPanels(run)) {
         md += fmt::format("\n## {}\n\n", panel.title);
         md += fmt::format("| technique | variant | ms | memory | RMSE | RMSE penumbra | MAE | max | > {} | > {} | SSIM | "

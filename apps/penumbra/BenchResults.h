@@ -65,6 +65,7 @@ struct BenchRun {
     size_t referenceRenders = 0;       // one per distinct (scene, camera, light) at most
     std::vector<BenchVariant> variants;
     std::vector<std::string> warnings;
+    std::vector<std::string> notes;    // the config's "notes", for the summary
 };
 
 // The lights measured under one context (same scene, light size, ...; same light):

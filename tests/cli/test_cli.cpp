@@ -1377,7 +1377,9 @@ TEST_F(Cli, BenchMeasuresEveryVariantAgainstOneReferenceRender)
 TEST_F(Cli, BenchSummaryIsAMarkdownTablePerPanel)
 {
     const fs::path cfg = dir / "cfg.json";
-    std::ofstream(cfg) << benchConfig();
+    nlohmann::json withNotes = nlohmann::json::parse(benchConfig());
+    withNotes["notes"] = {"First *note*.", "Second note."};
+    std::ofstream(cfg) << withNotes.dump();
     const fs::path summary = dir / "tradeoff.md";
     const CliResult r = run(fmt::format("bench '{}' {} --frames 1 --warmup 0 --summary '{}'", cfg.string(), kTestGoodReference,
                                         summary.string()),
@@ -1393,6 +1395,7 @@ TEST_F(Cli, BenchSummaryIsAMarkdownTablePerPanel)
                              "| 0 B | 0.2500 | 0.2500 | 0.2500 | 0.250 | 100.00% | 100.00% |", "| testgood | fill=0.25 |",
                              "| unshadowed | – |", "- reference: `testgood` `{", "- frames: 1 measured after 0 warm-up",
                              "Regenerate with:\n\n```sh\n", "\n## Against the floor\n",
+                             "```\n\n## Notes\n\nFirst *note*.\n\nSecond note.\n\n## light 'key'\n",
                              "| variant | frame ms | floor frame ms | x floor | passes (x floor) |"}) {
         EXPECT_TRUE(has(md, text)) << text << "\n" << md;
     }

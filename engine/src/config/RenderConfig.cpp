@@ -279,6 +279,16 @@ RenderConfig parseConfig(const ConfigDocument& document)
     }
     config.frames = r.integer("frames", config.frames, 1, 1000000);
     config.animation = readAnimation(r, config.lights);
+    if (const json* notes = r.find("notes")) {
+        if (!notes->is_array()) r.fail("/notes", fmt::format("must be an array of Markdown paragraphs (strings), got {}", notes->dump()));
+        for (size_t i = 0; i < notes->size(); ++i) {
+            const json& note = (*notes)[i];
+            if (!note.is_string() || note.get<std::string>().empty()) {
+                r.fail(fmt::format("/notes/{}", i), fmt::format("must be a non-empty string (a Markdown paragraph), got {}", note.dump()));
+            }
+            config.notes.push_back(note.get<std::string>());
+        }
+    }
     r.finish();
     return config;
 }

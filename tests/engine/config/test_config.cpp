@@ -362,6 +362,20 @@ TEST(Config, ShadowFocusNeedsAnOcclusionMode)
     EXPECT_NE(errorOf(doc).find("/shadow_focus: needs culling \"receiver-mask\""), std::string::npos) << errorOf(doc);
 }
 
+TEST(Config, NotesAreMarkdownParagraphs)
+{
+    json doc = minimal();
+    EXPECT_TRUE(config::parseConfig(doc, "scene.json").notes.empty());
+    doc["notes"] = {"One.", "Two *words*."};
+    EXPECT_EQ(config::parseConfig(doc, "scene.json").notes, (std::vector<std::string>{"One.", "Two *words*."}));
+    doc["notes"] = "One.";
+    EXPECT_NE(errorOf(doc).find("/notes: must be an array of Markdown paragraphs"), std::string::npos) << errorOf(doc);
+    doc["notes"] = {"One.", 2};
+    EXPECT_NE(errorOf(doc).find("/notes/1: must be a non-empty string"), std::string::npos) << errorOf(doc);
+    doc["notes"] = {"One.", ""};
+    EXPECT_NE(errorOf(doc).find("/notes/1: must be a non-empty string"), std::string::npos) << errorOf(doc);
+}
+
 TEST(Config, DrawBatchingIsBatchedOrPerInstance)
 {
     json doc = minimal();

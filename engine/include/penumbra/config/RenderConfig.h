@@ -93,6 +93,9 @@ struct RenderConfig {
     uint32_t height = 720;
     uint32_t frames = 1;
     Animation animation;
+    // "notes": Markdown paragraphs about the run that its figures cannot show (a limit of a
+    // technique the sweep measures, say); `penumbra bench --summary` prints them.
+    std::vector<std::string> notes;
 };
 
 // Validates a document (its "sweep" is ignored: the unswept values are the base run).
