@@ -36,10 +36,10 @@ const plugin::ParamSpec kParams[] = {
     plugin::kLightSizeParam,
     {"blocker_samples", ParamType::Int, 16, kSamplesMin, kSamplesMax, "", "depth taps of the blocker search"},
     {"filter_samples", ParamType::Int, 32, kSamplesMin, kSamplesMax, "", "compares of the penumbra filter"},
-    plugin::kernelLimitParam("max_search_radius", 0.5,
+    plugin::kernelLimitParam("max_search_radius", 0.0625,
                              "largest blocker-search radius, a fraction of the face's side (the light seen from the "
                              "receiver is clamped to it)"),
-    plugin::kernelLimitParam("max_filter_radius", 0.5,
+    plugin::kernelLimitParam("max_filter_radius", 0.0625,
                              "largest filter radius, a fraction of the face's side (the estimated penumbra is clamped "
                              "to it)"),
     {"bias_mode", ParamType::Enum, double(BiasMode::ReceiverPlane), 0, 0, "",
@@ -55,8 +55,8 @@ struct Settings {
     float lightSizeOverride = -1.0f;
     uint32_t blockerSamples = 16;
     uint32_t filterSamples = 32;
-    float maxSearchTexels = 1024.0f;  // the limits' fractions of the face, in its texels
-    float maxFilterTexels = 1024.0f;
+    float maxSearchTexels = 128.0f;  // the limits' fractions of the face, in its texels
+    float maxFilterTexels = 128.0f;
     BiasMode bias = BiasMode::ReceiverPlane;
     float depthBias = 4.0f;
     float slopeBias = 2.0f;

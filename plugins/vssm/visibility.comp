@@ -161,15 +161,18 @@ NodeDepths nodeDepths(vec2 lo, vec2 hi)
 // beyond the paper's Algorithm 2, which hands every such node to Chebyshev: the bound
 // P = σ² / (σ² + (t - μ)²) is loose wherever the node's depths spread widely, as under a
 // blocker tilted against the light (its depth ramps across the kernel) or where the
-// kernel covers a blocker and the ground beside it. So a node whose HSM range lies wholly
-// in front of the receiver is all blockers (exact, no bound), and one whose range
-// straddles the receiver is split while it is not a leaf; only leaves take Chebyshev.
-// Returns 1 for all blockers, -1 to split, 0 to go on by the paper's rule.
-int hierarchyRule(vec2 lo, vec2 hi, bool leaf)
+// kernel covers a blocker and the ground beside it. With the node's HSM range:
+//   - every texel in front of every reference over the node: all blockers (exact);
+//   - the range straddling the receiver, not a leaf: split (the filter), or split where
+//     eq. 4 would put the blockers nearer the light than the nearest texel (the search);
+//   - else the tighter of Chebyshev's bound and Markov's, below.
+// Markov's inequality on x - z_min >= 0: μ - z_min >= (t - z_min) P(x >= t), so
+// P(x >= t) <= (μ - z_min) / (t - z_min), a valid bound that is tight where the blockers
+// lie close to the node's nearest texel and far in front of the receiver; t > μ >= z_min
+// here, so the division is by more than 0 (guarded all the same).
+float markovBound(SatMoments m, float t, float zMin)
 {
-    NodeDepths n = nodeDepths(lo, hi);
-    if (n.range.y < n.reference.x) return 1;
-    return !leaf && n.range.x < n.reference.y ? -1 : 0;
+    return clamp((m.mean - zMin) / max(t - zMin, 1e-12), 0.0, 1.0);
 }
 
 // ---- Blocker estimate (step 3) ------------------------------------------------------
@@ -206,13 +209,17 @@ void addBlockerNode(SatMoments m, vec2 lo, vec2 hi, bool leaf, bool pcfLeaves, b
     if (m.mean < t) {
         // Eq. 4 with z_unocc = t: the blockers are the share 1 - P of the box, at mean
         // depth (z_avg - P t) / (1 - P). P -> 1 leaves no blocker worth the division.
+        // Eq. 4 puts them nearer the light than the node's nearest texel exactly where
+        // Chebyshev's P exceeds the Markov bound of the HSM's min.
         float p = chebyshev(m, t);
-        float blocking = 1.0 - p;
-        float estimate = (m.mean - p * t) / max(blocking, 1e-6);
-        if (!leaf && estimate < depths.range.x) {
+        float markov = tree ? markovBound(m, t, depths.range.x) : 1.0;
+        if (tree && !leaf && (p > markov || depths.range.x < depths.reference.y)) {
             descend = true;
             return;
         }
+        p = min(p, markov);
+        float blocking = 1.0 - p;
+        float estimate = (m.mean - p * t) / max(blocking, 1e-6);
         if (blocking > 1e-6) {
             float zOcc = clamp(estimate, depths.range.x, t);
             b.area += blocking * m.area;
@@ -253,18 +260,22 @@ void addFilterNode(SatMoments m, vec2 lo, vec2 hi, bool leaf, bool pcfLeaves, bo
     ++gVisited;
     if (!(m.area > 0.0)) return;
     float t = referenceT(0.5 * (lo + hi));
-    int rule = tree && m.mean < t ? hierarchyRule(lo, hi, leaf) : 0;
-    if (rule == 1) {  // all blockers: none of it lit
-        f.area += m.area;
-        return;
-    }
-    if (rule == -1) {
-        descend = true;
-        return;
-    }
     if (m.mean < t) {
+        float p = chebyshev(m, t);
+        if (tree) {
+            NodeDepths n = nodeDepths(lo, hi);
+            if (n.range.y < n.reference.x) {  // all blockers: none of it lit
+                f.area += m.area;
+                return;
+            }
+            if (!leaf && n.range.x < n.reference.y) {  // straddles the receiver: split
+                descend = true;
+                return;
+            }
+            p = min(p, markovBound(m, t, n.range.x));
+        }
         f.area += m.area;
-        f.litArea += chebyshev(m, t) * m.area;
+        f.litArea += p * m.area;
         return;
     }
     if (m.variance < gLitVariance || !pcfLeaves) {

@@ -58,8 +58,8 @@ const plugin::ParamSpec kParams[] = {
     {"blocker_subdivisions", ParamType::Int, 5, 1, 16, "", "m: sub-kernels per side of the blocker search (uniform)"},
     {"filter_subdivisions", ParamType::Int, 8, 1, 16, "", "n: sub-kernels per side of the filter (uniform)"},
     {"tree_height", ParamType::Int, 3, 0, kMaxTreeHeight, "", "H: levels of the adaptive quad-tree (4^H leaves)"},
-    plugin::kernelLimitParam("max_search_radius", 0.5, "largest blocker-search half-width, a fraction of the face's side"),
-    plugin::kernelLimitParam("max_filter_radius", 0.5,
+    plugin::kernelLimitParam("max_search_radius", 0.0625, "largest blocker-search half-width, a fraction of the face's side"),
+    plugin::kernelLimitParam("max_filter_radius", 0.0625,
                              "largest penumbra-filter half-width, a fraction of the face's side"),
     {"lit_variance", ParamType::Float, 1e-4, 0, 1, "r^2",
      "Threshold of Algorithm 2: a sub-kernel behind the receiver with a variance below lit_variance r^2 is lit "
@@ -85,8 +85,8 @@ struct Settings {
     int blockerSubdivisions = 5;
     int filterSubdivisions = 8;
     int treeHeight = 3;
-    float maxSearchTexels = 512.0f;  // the limits' fractions of the face, in its texels
-    float maxFilterTexels = 512.0f;
+    float maxSearchTexels = 64.0f;  // the limits' fractions of the face, in its texels
+    float maxFilterTexels = 64.0f;
     float litVariance = 1e-4f;
     float contactEpsilon = 0.01f;
     BiasMode bias = BiasMode::ReceiverPlane;

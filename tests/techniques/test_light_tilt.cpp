@@ -207,9 +207,7 @@ TEST_P(LightTilt, DeepUmbraIsDark)
 INSTANTIATE_TEST_SUITE_P(
     Techniques, LightTilt,
     ::testing::Values(TiltCase{"hard", "hard", nlohmann::json::object()},
-                      // plugins/pcss/README.md, "One average blocker depth": a few taps
-                      // of the 32 land past a tilted blocker's edge.
-                      TiltCase{"pcss", "pcss", nlohmann::json::object(), 60.0, 0.2f},
+                      TiltCase{"pcss", "pcss", nlohmann::json::object()},
                       TiltCase{"vsm", "vsm", nlohmann::json::object()},
                       // plugins/vssm/README.md: `none` lights a non-planar search kernel
                       // (SAVSM's incorrectly-lit case, the paper's baseline).

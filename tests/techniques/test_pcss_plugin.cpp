@@ -359,8 +359,8 @@ TEST(PcssPluginEntry, ReflectsEveryParameterWithItsDefault)
     EXPECT_EQ(params.getFloat("light_size"), -1.0f);
     EXPECT_EQ(params.getInt("blocker_samples"), 16);
     EXPECT_EQ(params.getInt("filter_samples"), 32);
-    EXPECT_EQ(params.getFloat("max_search_radius"), 0.5f);  // of the face's side
-    EXPECT_EQ(params.getFloat("max_filter_radius"), 0.5f);
+    EXPECT_EQ(params.getFloat("max_search_radius"), 0.0625f);  // of the face's side
+    EXPECT_EQ(params.getFloat("max_filter_radius"), 0.0625f);
     EXPECT_EQ(params.getEnum("bias_mode"), "receiver_plane");
     EXPECT_EQ(params.getFloat("depth_bias"), 4.0f);
     EXPECT_EQ(params.getFloat("slope_bias"), 2.0f);

@@ -699,8 +699,8 @@ TEST(VssmPluginEntry, ReflectsEveryParameterWithItsDefault)
     EXPECT_EQ(params.getInt("tree_height"), 3);           // and H (6.2)
     EXPECT_FLOAT_EQ(params.getFloat("lit_variance"), 1e-4f);
     EXPECT_FLOAT_EQ(params.getFloat("contact_epsilon"), 0.01f);
-    EXPECT_EQ(params.getFloat("max_search_radius"), 0.5f);  // of the face's side: the whole face
-    EXPECT_EQ(params.getFloat("max_filter_radius"), 0.5f);
+    EXPECT_EQ(params.getFloat("max_search_radius"), 0.0625f);  // of the face's side
+    EXPECT_EQ(params.getFloat("max_filter_radius"), 0.0625f);
     EXPECT_EQ(params.getEnum("debug_view"), "off");
     for (const plugin::ParamSpec& spec : params.specs()) EXPECT_NE(std::string(spec.doc), "") << spec.name;
 }
