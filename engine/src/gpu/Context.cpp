@@ -143,10 +143,19 @@ ContextOptions contextOptionsFromEnvironment(ContextOptions base)
     if (const char* env = std::getenv("PENUMBRA_VALIDATION"); env && *env) {
         base.validation = std::string(env) != "0";
     }
+    if (const char* env = std::getenv("PENUMBRA_GPU_TIMEOUT_S"); env && *env) {
+        char* end = nullptr;
+        const double seconds = std::strtod(env, &end);
+        if (end == env || *end != '\0' || !(seconds > 0.0 && seconds <= 1e6)) {
+            throw ConfigError(fmt::format("PENUMBRA_GPU_TIMEOUT_S: must be a number of seconds in (0, 1e6], got \"{}\"",
+                                          env));
+        }
+        base.submitTimeoutSeconds = seconds;
+    }
     return base;
 }
 
-Context::Context(const ContextOptions& options)
+Context::Context(const ContextOptions& options) : submitTimeoutSeconds_(options.submitTimeoutSeconds)
 {
     try {
         createInstance(options.validation);
@@ -470,12 +479,15 @@ void Context::submitAndWait(VkCommandBuffer cmd)
     submit.commandBufferInfoCount = 1;
     submit.pCommandBufferInfos = &cmdInfo;
     check(vkQueueSubmit2(queue_, 1, &submit, fence_), "vkQueueSubmit2");
-    // A finite wait: a hung submission becomes an error, never a hang (60 s is far above
-    // any frame this engine renders, even on a CPU rasterizer).
-    constexpr uint64_t kTimeoutNs = 60ull * 1000 * 1000 * 1000;
-    const VkResult waited = vkWaitForFences(device_, 1, &fence_, VK_TRUE, kTimeoutNs);
+    // A finite wait: a hung submission becomes an error, never a hang
+    // (ContextOptions::submitTimeoutSeconds).
+    const double seconds = std::clamp(submitTimeoutSeconds_, 1e-3, 1e6);
+    const auto timeoutNs = uint64_t(seconds * 1e9);
+    const VkResult waited = vkWaitForFences(device_, 1, &fence_, VK_TRUE, timeoutNs);
     if (waited == VK_TIMEOUT) {
-        throw GpuError("GPU submission did not finish within 60 s (device hang?)");
+        throw GpuError(fmt::format("GPU submission did not finish within {} s (device hang? PENUMBRA_GPU_TIMEOUT_S "
+                                   "raises the limit)",
+                                   seconds));
     }
     check(waited, "vkWaitForFences");
     check(vkResetFences(device_, 1, &fence_), "vkResetFences");

@@ -5,6 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <optional>
+#include <string>
+
 using namespace penumbra;
 
 TEST(Device, CreatesOnLavapipeWithValidation)
@@ -59,6 +63,29 @@ TEST(Device, ListsLavapipe)
     bool found = false;
     for (const auto& d : devices) found |= d.name.find("llvmpipe") != std::string::npos;
     EXPECT_TRUE(found);
+}
+
+TEST(Device, EnvironmentSetsTheSubmissionTimeoutOrNamesTheVariable)
+{
+    // The sanitizer presets set it; restore whatever the run had.
+    const char* before = std::getenv("PENUMBRA_GPU_TIMEOUT_S");
+    const std::optional<std::string> saved = before ? std::optional<std::string>(before) : std::nullopt;
+    setenv("PENUMBRA_GPU_TIMEOUT_S", "120.5", 1);
+    EXPECT_EQ(gpu::contextOptionsFromEnvironment({}).submitTimeoutSeconds, 120.5);
+    for (const char* bad : {"0", "-1", "abc", "5s", "1e7", "nan", "inf"}) {
+        setenv("PENUMBRA_GPU_TIMEOUT_S", bad, 1);
+        try {
+            gpu::contextOptionsFromEnvironment({});
+            ADD_FAILURE() << bad << " was accepted";
+        } catch (const ConfigError& e) {
+            EXPECT_NE(std::string(e.what()).find("PENUMBRA_GPU_TIMEOUT_S: must be a number of seconds in (0, 1e6]"),
+                      std::string::npos)
+                << e.what();
+        }
+    }
+    unsetenv("PENUMBRA_GPU_TIMEOUT_S");
+    EXPECT_EQ(gpu::contextOptionsFromEnvironment({}).submitTimeoutSeconds, 60.0) << "the default";
+    if (saved) setenv("PENUMBRA_GPU_TIMEOUT_S", saved->c_str(), 1);
 }
 
 TEST(Device, EnvironmentPicksDevice)

@@ -27,10 +27,17 @@ struct ContextOptions {
     // Loads VK_LAYER_KHRONOS_validation with synchronization validation and counts
     // every warning or error it reports (see Context::validationMessageCount).
     bool validation = validationByDefault();
+    // How long one submission may run before submitAndWait calls it a hang (a GpuError,
+    // never a hang of the process). Far above any frame this engine renders, even on a CPU
+    // rasterizer; sanitizer runs, which slow the driver's own memory calls, raise it
+    // (CMakePresets.json's sanitizer test presets).
+    double submitTimeoutSeconds = 60.0;
 };
 
-// Reads PENUMBRA_DEVICE ("name" or "type:cpu") and PENUMBRA_VALIDATION (0/1) so that a
-// flag is not the only way to pick a device; explicit fields in `base` win.
+// Reads PENUMBRA_DEVICE ("name" or "type:cpu"), PENUMBRA_VALIDATION (0/1) and
+// PENUMBRA_GPU_TIMEOUT_S (seconds, > 0: submitTimeoutSeconds) so that a flag is not the
+// only way to set them; explicit device fields in `base` win. Throws penumbra::ConfigError
+// naming PENUMBRA_GPU_TIMEOUT_S when it is not a number in (0, 1e6].
 ContextOptions contextOptionsFromEnvironment(ContextOptions base);
 
 // Validation messages reported to every Context of this process, including those during
@@ -111,6 +118,7 @@ private:
     uint32_t queueFamily_ = 0;
     VkCommandPool commandPool_ = VK_NULL_HANDLE;
     VkFence fence_ = VK_NULL_HANDLE;
+    double submitTimeoutSeconds_ = 60.0;
     DeviceInfo info_;
     VkPhysicalDeviceProperties properties_{};
     VkPhysicalDeviceMemoryProperties memoryProperties_{};
