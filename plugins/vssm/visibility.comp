@@ -143,7 +143,7 @@ vec2 offsetTo(vec2 at) { return at - gReceiver.uv * gFaceTexels; }
 // The HSM's min and max of t over the face texels [lo, hi) (cut to the face), and the
 // least and largest reference over it (at its corners: the plane's depth is monotonic
 // along each axis). A node whose every texel lies in front of every reference there is
-// all blockers; the early-out of step 2 is this test on the whole search kernel.
+// all blockers; step 2's early-out is this test on the whole search kernel.
 struct NodeDepths {
     vec2 range;      // (min t, max t) of the texels, conservative (hsmRange)
     vec2 reference;  // (least, largest) reference
@@ -431,19 +431,14 @@ Result vssmVisibility(ivec2 pixel)
     vec2 centre = gReceiver.uv * gFaceTexels;
     float tReceiver = referenceT(centre);
 
-    // 1-2. The search kernel and the HSM's early-out. The references at its corners bound
-    // those inside (the plane's depth is monotonic along each axis).
+    // 1-2. The search kernel and the HSM's early-out: nodeDepths over the whole kernel.
     float search = max(shadowSearchRadiusTexels(face, pc.lightSize, dReceiver, pc.maxSearchTexels), 0.5);
     vec2 lo = centre - search, hi = centre + search;
     vec2 cutLo = clamp(lo, vec2(0.0), vec2(gFaceTexels)), cutHi = clamp(hi, vec2(0.0), vec2(gFaceTexels));
-    ivec2 first = ivec2(gFaceOrigin) + ivec2(floor(cutLo));
-    ivec2 last = max(ivec2(gFaceOrigin) + ivec2(ceil(cutHi)) - 1, first);
-    vec2 range = hsmRange(first, last, pc.atlasSize);
-    float t00 = referenceT(cutLo), t11 = referenceT(cutHi);
-    float t10 = referenceT(vec2(cutHi.x, cutLo.y)), t01 = referenceT(vec2(cutLo.x, cutHi.y));
-    float tMin = min(min(t00, t11), min(t10, t01)), tMax = max(max(t00, t11), max(t10, t01));
-    if (range.x >= tMax) return res;  // every texel behind the receiver: lit
-    if (range.y < tMin) {             // every texel in front: umbra
+    NodeDepths kernel = nodeDepths(lo, hi);
+    vec2 range = kernel.range;
+    if (range.x >= kernel.reference.y) return res;  // every texel behind the receiver: lit
+    if (range.y < kernel.reference.x) {              // every texel in front: umbra
         res.v = 0.0;
         res.classification = kClassUmbra;
         return res;
