@@ -37,10 +37,10 @@ void main()
     float compare = shadowCompareTap(shadowMap, r, vec2(0.0));
     // Outside every face or behind the light the map has nothing to say: lit (the spot
     // cone in shading gives no light there anyway).
-    float v = inMap ? compare : 1.0;
     // The contract (common/visibility.glsl): light from below the surface's tangent plane
-    // is blocked by the surface itself.
-    v *= shadowLightAboveHorizon(position.xyz, gbufferNormal(pixel));
+    // is blocked by the surface itself; where the light straddles that plane the map's
+    // word yields to the part above it (common/shadow_map.glsl).
+    float v = shadowVisibilityAboveHorizon(inMap ? compare : 1.0, position.xyz, gbufferNormal(pixel));
     // Pixels that see no geometry hold 1.
     v = position.w != 0.0 ? v : VISIBILITY_NO_GEOMETRY;
     if (inImage) imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));

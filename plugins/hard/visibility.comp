@@ -105,8 +105,7 @@ void main()
     ShadowReceiver r;
     bool inMap = makeShadowReceiver(pixel, position.xyz, pc.normalOffsetTexels, r);
     float filtered = filteredVisibility(r, pixel);
-    float v = inMap ? filtered : 1.0;
-    v *= shadowLightAboveHorizon(position.xyz, gbufferNormal(pixel));
+    float v = shadowVisibilityAboveHorizon(inMap ? filtered : 1.0, position.xyz, gbufferNormal(pixel));
     v = position.w != 0.0 ? v : VISIBILITY_NO_GEOMETRY;
     if (inImage) imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
 }

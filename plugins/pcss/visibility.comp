@@ -105,9 +105,8 @@ void main()
     vec4 position = gbufferPosition(pixel);
     ShadowReceiver r;
     bool inMap = makeShadowReceiver(pixel, position.xyz, 0.0, r);
-    float horizon = shadowLightAboveHorizon(position.xyz, gbufferNormal(pixel));
     float pcss = pcssVisibility(r, pixel);
-    float v = (inMap ? pcss : 1.0) * horizon;
+    float v = shadowVisibilityAboveHorizon(inMap ? pcss : 1.0, position.xyz, gbufferNormal(pixel));
     v = position.w != 0.0 ? v : VISIBILITY_NO_GEOMETRY;
     if (inImage) imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
 }

@@ -199,7 +199,7 @@ void main()
     float t = shadowLinearDepth(r.face, r.depth);
     float moments = momentVisibility(filteredMoments(r, pixel, position.xyz), t, pc.exponents, pc.minVariance,
                                      pc.bleedingReduction);
-    float v = (inMap ? moments : 1.0) * shadowLightAboveHorizon(position.xyz, gbufferNormal(pixel));
+    float v = shadowVisibilityAboveHorizon(inMap ? moments : 1.0, position.xyz, gbufferNormal(pixel));
     v = position.w != 0.0 ? v : VISIBILITY_NO_GEOMETRY;
     if (inImage) imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
 }

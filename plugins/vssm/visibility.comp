@@ -126,7 +126,7 @@ SatMoments faceBox(vec2 lo, vec2 hi)
 // The depth t a texel at face texel position `at` is compared with (see the top).
 float referenceT(vec2 at)
 {
-    return shadowLinearDepth(gReceiver.face, shadowReferenceDepth(gReceiver, at / gFaceTexels));
+    return shadowLinearDepth(gReceiver.face, shadowPlaneDepth(gReceiver, at / gFaceTexels));
 }
 
 // Chebyshev's one-tailed bound P(x >= t) for moments with mean < t (eq. 1): the
@@ -496,10 +496,9 @@ void main()
     gFaceTexels = shadowFaceTexels();
     gFaceOrigin = shadowFaceCount() == 6u ? vec2(float(gReceiver.face % 3u), float(gReceiver.face / 3u)) * gFaceTexels
                                           : vec2(0.0);
-    float horizon = shadowLightAboveHorizon(position.xyz, gbufferNormal(pixel));
     Result res = vssmVisibility(pixel);
     res = inMap ? res : Result(VISIBILITY_NO_GEOMETRY, 0.0, kClassLit);
-    float v = res.v * horizon;
+    float v = shadowVisibilityAboveHorizon(res.v, position.xyz, gbufferNormal(pixel));
     // The debug views replace V where there is geometry (the contract keeps 1 elsewhere).
     float kernel = res.kernelTexels / max(maxFilterTexels, 0.5);
     float subkernels = inMap ? float(gVisited) * debugScale : 0.0;  // outside the map: none looked at

@@ -136,6 +136,44 @@ float shadowLightAboveHorizon(vec3 p, vec3 n)
     return dot(n, n) > 0.0 ? above : 1.0;
 }
 
+// A technique's V from what its map says (`mapVisibility`, seen from the light's centre)
+// and the horizon: what every shadow-map technique writes.
+//
+// Where an area light straddles a receiver's tangent plane with its centre below it (a
+// box side lit by a rect light that reaches past the side's plane), the segment from the
+// centre to the receiver lies wholly below the plane, and so does every caster the map
+// can hold nearer than the receiver's plane: the receiver's own solid. Such casters
+// cannot block the part of the light above the plane, which is all the horizon leaves,
+// and the map from below the plane holds nothing about the casters above it. So there
+// the horizon alone is V (exact for a convex solid; a caster above the plane that hides
+// that part is missed). Taking the map's word instead drew such sides dark, V ~ 0.1
+// where the truth is 0.4, as the centre's point light would.
+//
+// With the centre just above the plane the map sees the receiver almost edge-on, past
+// what a receiver-side bias can hold (kShadowGrazingCos: 88 degrees from the normal,
+// shadow_receiver.glsl's kShadowMaxTan), and its own surface shadows it in speckles and
+// bands; while the light straddles the plane, the part above it is lit from well above
+// the plane, so such a receiver is not negligible in shading. There the map's word fades
+// out between 85 and 88 degrees, and out as the light comes to straddle the plane (over
+// the last 5 % of it above): a light wholly above the plane (a point light, a low sun)
+// keeps the map's word at every angle.
+const float kShadowTrustedCos = 0.08716;  // cos(85 degrees)
+const float kShadowGrazingCos = 0.03490;  // cos(88 degrees)
+float shadowVisibilityAboveHorizon(float mapVisibility, vec3 p, vec3 n)
+{
+    vec4 light = shadowMapData.light;
+    float horizon = shadowLightAboveHorizon(p, n);
+    // light.w = 0: light.xyz is the unit direction towards a directional light.
+    vec3 towards = light.w == 0.0 ? light.xyz : light.xyz - p;
+    float len = length(towards);
+    float cosCentre = len > 0.0 ? dot(n, towards) / (len > 0.0 ? len : 1.0) : 1.0;
+    float straddles = clamp((1.0 - horizon) / 0.05, 0.0, 1.0);
+    float grazing = 1.0 - smoothstep(kShadowGrazingCos, kShadowTrustedCos, cosCentre);
+    float untrusted = cosCentre > 0.0 ? grazing * straddles : 1.0;
+    untrusted = dot(n, n) > 0.0 ? untrusted : 0.0;
+    return mix(mapVisibility, 1.0, untrusted) * horizon;
+}
+
 // Face order +X -X +Y -Y +Z -Z, as render/Projection.cpp builds them.
 uint shadowCubeFace(vec3 d)
 {

@@ -34,12 +34,30 @@ struct ShadowReceiver {
 #endif
 };
 
-// The depth to compare the map with at face uv `uv`: the receiver's own, or its plane's
-// there.
-float shadowReferenceDepth(ShadowReceiver r, vec2 uv)
+// The receiver's depth at face uv `uv` with its margin: its own, or its plane's there.
+// What the mean depth of the receiver's own surface over a region centred at `uv` is
+// (vssm's sub-kernels).
+float shadowPlaneDepth(ShadowReceiver r, vec2 uv)
 {
 #if SHADOW_RECEIVER_BIAS == SHADOW_RECEIVER_BIAS_PLANE
     return r.depth + dot(r.dDepthDUv, uv - r.uv) + r.epsilon;
+#else
+    return r.depth;
+#endif
+}
+
+// The depth a caster's texel at face uv `uv` is compared with: the receiver's plane
+// there with its margin, never farther from the light than the receiver itself. A caster
+// farther than the receiver cannot stand between it and any point of the light (every
+// segment from the receiver to the light comes nearer along the face's axis, wherever
+// the receiver is farther than the light's own extent along it), but a plane seen
+// almost edge-on runs far away within a few texels: the ground beside the foot of a box
+// side lit at 80-88 degrees from its normal lay in front of the side's plane there, and
+// the filters drew dark specks along the foot (tests/techniques/test_straddled_faces.cpp).
+float shadowReferenceDepth(ShadowReceiver r, vec2 uv)
+{
+#if SHADOW_RECEIVER_BIAS == SHADOW_RECEIVER_BIAS_PLANE
+    return max(shadowPlaneDepth(r, uv), r.depth + r.epsilon);  // reversed-Z: larger is nearer
 #else
     return r.depth;
 #endif
