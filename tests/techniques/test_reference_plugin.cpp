@@ -3,6 +3,7 @@
 // is known: hard shadows against the CPU ray caster (tests/support/RayCast.h), soft
 // shadows against closed forms, translucent and alpha-masked casters against their
 // alpha, at scene scales 1e-3 to 1e5; then determinism, the disk cache, refitting.
+#include "ExactVisibility.h"
 #include "RayCast.h"
 #include "TestConfigs.h"
 #include "TestContext.h"
@@ -342,7 +343,7 @@ TEST_F(ReferencePlugin, DiskLightMatchesTheCircularSegmentAtAStraightEdge)
         if (!f.hasGeometry(i) || p.y > 0.5 * h || std::abs(p.z) > 1.0) continue;
         // Light points with x below the back-projected edge are hidden.
         const double d = std::clamp((p.x + (half - p.x) * H / h) / R, -1.0, 1.0);
-        const double expected = (std::acos(d) - d * std::sqrt(1.0 - d * d)) / std::numbers::pi;
+        const double expected = test::diskBeyondChord(-d);
         if (expected <= 0.0 || expected >= 1.0) continue;
         squared += (f.visibility[i] - expected) * (f.visibility[i] - expected);
         ++penumbra;

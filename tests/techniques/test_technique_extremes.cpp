@@ -13,6 +13,7 @@
 // Light size 0, huge lights, blockers touching their receiver, grazing light and scene
 // scales 1e-3 and 1e5 are covered per technique in test_hard_plugin.cpp,
 // test_pcss_plugin.cpp, test_vsm_plugin.cpp and test_vssm_plugin.cpp.
+#include "ExactVisibility.h"
 #include "PluginFrame.h"
 #include "TestConfigs.h"
 #include "TestContext.h"
@@ -140,12 +141,6 @@ struct HorizonCase {
     double expected;  // V on the wall's +x side: the part of the light with x > 0.5
 };
 
-// The area fraction of a unit disk beyond a chord at signed distance h from its centre.
-double circularSegment(double h)
-{
-    return (std::acos(-h) + h * std::sqrt(1.0 - h * h)) / std::numbers::pi;
-}
-
 std::vector<HorizonCase> horizonCases()
 {
     scene::Light rect;
@@ -161,7 +156,7 @@ std::vector<HorizonCase> horizonCases()
     away.position = {-3.0f, 3.0f, 0.0f};
     away.sizeWorld = {0.5f, 0.5f};  // x in [-3.25, -2.75]: all of it behind the wall's +x side
     return {{"rect_straddling", rect, 1.5 / 4.0},
-            {"disk_straddling", disk, circularSegment(-0.25)},
+            {"disk_straddling", disk, test::diskBeyondChord(-0.25)},
             {"rect_behind", away, 0.0}};
 }
 
