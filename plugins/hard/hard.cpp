@@ -127,7 +127,11 @@ private:
 HardShadow::HardShadow(const plugin::TechniqueSetup& setup)
     : context_(setup.context),
       settings_(readSettings(setup.params)),
-      shadowMap_(setup, settings_.resolution, "hard")
+      // A filter's taps past a cube edge are read in the receiver's own face.
+      shadowMap_(setup, settings_.resolution, "hard",
+                 footprintWidthTexels(settings_) > 1.0f
+                     ? render::kernelGuardTexels(0.5f * footprintWidthTexels(settings_), settings_.resolution)
+                     : 0u)
 {
     // The filter's half width, and the normal offset that moves the lookup (scaled by the
     // filter width, as in shadow_receiver.glsl).

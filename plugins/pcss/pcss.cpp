@@ -111,7 +111,10 @@ private:
 PcssShadow::PcssShadow(const plugin::TechniqueSetup& setup)
     : context_(setup.context),
       settings_(readSettings(setup.params)),
-      shadowMap_(setup, settings_.resolution, "pcss")
+      // Taps reach the kernel limits past a cube edge: read in the receiver's own face.
+      shadowMap_(setup, settings_.resolution, "pcss",
+                 render::kernelGuardTexels(std::max(settings_.maxSearchTexels, settings_.maxFilterTexels),
+                                           settings_.resolution))
 {
     gpu::ComputePipelineDesc c;
     c.name = fmt::format("light{}.pcss.visibility", setup.lightIndex);

@@ -228,7 +228,12 @@ VsmShadow::VsmShadow(const plugin::TechniqueSetup& setup)
     : context_(setup.context),
       settings_(readSettings(setup.params)),
       levels_(levelCount(settings_)),
-      shadowMap_(setup, settings_.resolution, "vsm")
+      // A blur reaching past a cube edge reads the texels there in the face's own guard
+      // band; mip chains keep power-of-two faces and their cube edges (README).
+      shadowMap_(setup, settings_.resolution, "vsm",
+                 settings_.blurs() && !settings_.mips()
+                     ? render::kernelGuardTexels(float(settings_.blurRadius) + 1.0f, settings_.resolution)
+                     : 0u)
 {
     // A blurred map is read bilinearly (one texel) after a blur of blur_radius texels; a
     // mip chain may be read at any level, so every texel can matter.
@@ -365,7 +370,7 @@ void VsmShadow::recordBlur(const graph::PassContext& pass, const std::string& in
         .storageImage("momentsIn", pass.image(in))
         .storageImage("momentsOut", pass.image(out))
         .push(context_, cmd, blur_);
-    const BlurPush push{axis, settings_.blurRadius, int32_t(shadowMap_.resolution()), settings_.exponents.x};
+    const BlurPush push{axis, settings_.blurRadius, int32_t(shadowMap_.faceTexels()), settings_.exponents.x};
     blur_.pushConstants(cmd, &push, sizeof(push));
     blur_.dispatchOver(cmd, pass.image(out));
 }

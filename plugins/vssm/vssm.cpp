@@ -228,7 +228,10 @@ float boundingRadius(const scene::Aabb& bounds)
 VssmShadow::VssmShadow(const plugin::TechniqueSetup& setup)
     : context_(setup.context),
       settings_(readSettings(setup.params)),
-      shadowMap_(setup, settings_.resolution, "vssm")
+      // Kernels reach the limits past a cube edge: boxes there lie in the receiver's face.
+      shadowMap_(setup, settings_.resolution, "vssm",
+                 render::kernelGuardTexels(std::max(settings_.maxSearchTexels, settings_.maxFilterTexels),
+                                           settings_.resolution))
 {
     checkDevice();
     const std::string name = fmt::format("light{}.vssm.", setup.lightIndex);

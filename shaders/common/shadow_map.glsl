@@ -1,6 +1,8 @@
 // A light's shadow map as render::ShadowMap (render/ShadowMap.h) describes it: one face
-// (spot: perspective, directional: orthographic) or six 90° cube faces (point, rect and
-// disk lights) packed 3 x 2 in one atlas, each with its world -> clip matrix. Every map
+// (spot: perspective, directional: orthographic) or six cube faces (point, rect and
+// disk lights: 90° each plus the technique's guard band beyond every edge, which
+// receivers never pick, they land in the 90° part) packed 3 x 2 in one atlas, each with
+// its world -> clip matrix. Every map
 // is reversed-Z: NDC depth 1 at the near plane, towards 0 away from the light, 0 where
 // nothing was drawn.
 //
@@ -226,9 +228,10 @@ uint shadowFaceOfTexel(ivec2 texel)
 }
 
 // Keeps a lookup `marginTexels` inside its face: the next cell of the atlas is another
-// cube face, not the continuation of this one. Lookups beyond a cube edge read the
-// face's border texels instead of the adjacent face (an error confined to a filter
-// radius around cube edges); for a one-face map this is the clamp to the map's edge.
+// cube face, not the continuation of this one. A cube face reaches past its 90° by the
+// technique's guard band (render::ShadowMap guardTexels), where lookups beyond the cube
+// edge read the casters there; only lookups beyond the band read its border texels. For
+// a one-face map this is the clamp to the map's edge.
 // `faceTexels`: texels per face side of the image read (a filtered map's level may have
 // fewer than the depth map).
 vec2 shadowClampToFace(vec2 uv, float marginTexels, float faceTexels)

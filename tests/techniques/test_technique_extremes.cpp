@@ -317,7 +317,13 @@ TEST_P(TechniqueExtremes, NearFarRatioOf1e6)
     cfg.camera.nearWorld = 1e-3f;
     const std::vector<float> v = renderTechnique(cfg, std::move(wide), GetParam());
 
-    size_t same = 0, differ = 0, farGround = 0, brighter = 0;
+    // Darker counts beyond 0.1: re-rasterised caster edges (a map's projection differs
+    // by rounding, flipping a few texels' coverage) move a blurred VSM penumbra both ways
+    // by a few hundredths (measured at one pixel: 0.730-0.752 as cube faces' guard bands
+    // shift their texel grid by whole texels), and a shadow added by the depth range
+    // would darken by far more.
+    constexpr float kDarker = 0.1f;
+    size_t same = 0, differ = 0, farGround = 0, darker = 0;
     for (size_t i = 0; i < v.size(); ++i) {
         if (!frame->hasGeometry(i)) continue;
         const glm::vec3 p = frame->position(i);
@@ -329,13 +335,14 @@ TEST_P(TechniqueExtremes, NearFarRatioOf1e6)
         if (glm::length(p - q) > 1e-3f) continue;
         ++same;
         differ += std::abs(v[i] - base[i]) > 0.05f;
-        brighter += v[i] - base[i] > 0.05f;
+        darker += base[i] - v[i] > kDarker;
     }
     EXPECT_GT(farGround, 0u) << "the far ground is in view";
     EXPECT_GT(same, v.size() / 2);
     EXPECT_LE(double(differ), GetParam().nearFarChanged * double(same))
-        << differ << " of " << same << " pixels differ by more than 0.05, " << brighter << " brighter";
-    EXPECT_EQ(brighter, differ) << "darker pixels: shadow where there was none";
+        << differ << " of " << same << " pixels differ by more than 0.05, " << darker << " darker by more than "
+        << kDarker;
+    EXPECT_EQ(darker, 0u) << "darker pixels: shadow where there was none";
 }
 
 // ---------------------------------------------------------------------------------

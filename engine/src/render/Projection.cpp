@@ -126,7 +126,8 @@ float focusedTanHalfAngle(const LightFrustum& f, const scene::Aabb& focus)
 
 } // namespace
 
-std::vector<LightFrustum> shadowFrusta(const scene::Light& light, const scene::Aabb& bounds, const scene::Aabb* focus)
+std::vector<LightFrustum> shadowFrusta(const scene::Light& light, const scene::Aabb& bounds, const scene::Aabb* focus,
+                                       float cubeHalfTan)
 {
     switch (light.type) {
     case scene::LightType::Directional:
@@ -148,14 +149,14 @@ std::vector<LightFrustum> shadowFrusta(const scene::Light& light, const scene::A
     case scene::LightType::Point:
     case scene::LightType::Rect:
     case scene::LightType::Disk: {
-        // Six 90° faces around the centre, in the order +X -X +Y -Y +Z -Z that
-        // plugins/hard/visibility.comp selects by the dominant axis.
+        // Six faces around the centre, in the order +X -X +Y -Y +Z -Z that
+        // shaders/common/shadow_map.glsl selects by the dominant axis: 90° each, plus the
+        // guard band (a NaN or a value below 1 gives 90°; at most 16, 172°).
         static const glm::vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
         static const glm::vec3 ups[6] = {{0, 1, 0}, {0, 1, 0}, {0, 0, 1}, {0, 0, 1}, {0, 1, 0}, {0, 1, 0}};
+        const float fov = 2.0f * std::atan(cubeHalfTan >= 1.0f ? std::min(cubeHalfTan, 16.0f) : 1.0f);
         std::vector<LightFrustum> faces;
-        for (int i = 0; i < 6; ++i) {
-            faces.push_back(perspectiveFrustum(light.position, axes[i], ups[i], glm::radians(90.0f), bounds));
-        }
+        for (int i = 0; i < 6; ++i) faces.push_back(perspectiveFrustum(light.position, axes[i], ups[i], fov, bounds));
         return faces;
     }
     }

@@ -56,13 +56,21 @@ glm::vec2 depthRange(const LightFrustum& f, const scene::Aabb& bounds)
 
 } // namespace
 
-ShadowMap::ShadowMap(const ShadowMapSetup& setup, uint32_t resolution, std::string_view technique)
+uint32_t kernelGuardTexels(float reachTexels, uint32_t resolution)
+{
+    if (!(reachTexels > 0.0f)) return 0;
+    const float most = std::ceil(0.25f * float(resolution));
+    return uint32_t(std::ceil(std::min(reachTexels, most))) + 1;
+}
+
+ShadowMap::ShadowMap(const ShadowMapSetup& setup, uint32_t resolution, std::string_view technique, uint32_t guardTexels)
     : context_(setup.context),
       casters_(setup.casters),
       lightIndex_(setup.lightIndex),
       name_(fmt::format("light{}.{}", setup.lightIndex, technique)),
       resolution_(resolution),
       faceCount_(shadowFaceCount(setup.light.type)),
+      guard_(faceCount_ == kMaxShadowFaces ? std::min(guardTexels, resolution) : 0u),
       lightType_(setup.light.type),
       buffer_(setup.context, sizeof(ShadowMapData), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, name_ + ".shadow_faces")
 {
@@ -70,10 +78,12 @@ ShadowMap::ShadowMap(const ShadowMapSetup& setup, uint32_t resolution, std::stri
     const uint32_t maxDimension = context_.properties().limits.maxImageDimension2D;
     if (atlasWidth() > maxDimension) {
         const bool cube = faceCount_ == kMaxShadowFaces;
-        throw ConfigError(fmt::format("{}: resolution: {} texels per face {}needs a {}-texel wide map, more than this "
-                                      "device's largest image ({}); use at most {}",
-                                      technique, resolution_, cube ? "in a 3 x 2 cube atlas " : "", atlasWidth(),
-                                      maxDimension, maxDimension / (cube ? 3u : 1u)));
+        throw ConfigError(fmt::format("{}: resolution: {} texels per face {}{}needs a {}-texel wide map, more than "
+                                      "this device's largest image ({}); use at most {}",
+                                      technique, resolution_, cube ? "in a 3 x 2 cube atlas " : "",
+                                      guard_ > 0 ? fmt::format("with {} guard texels beyond each edge ", guard_) : "",
+                                      atlasWidth(), maxDimension,
+                                      uint64_t(maxDimension / (cube ? 3u : 1u)) * resolution_ / faceTexels()));
     }
 
     gpu::GraphicsPipelineDesc d;
@@ -102,7 +112,7 @@ std::vector<gpu::ShaderDefine> ShadowMap::shaderDefines()
 {
     typeCompiledIn_ = true;
     return {{"SHADOW_FACE_COUNT", std::to_string(faceCount_)},
-            {"SHADOW_FACE_TEXELS", std::to_string(resolution_)},
+            {"SHADOW_FACE_TEXELS", std::to_string(faceTexels())},
             {"SHADOW_LIGHT_TYPE", std::to_string(uint32_t(lightType_))}};
 }
 
@@ -118,14 +128,15 @@ void ShadowMap::update(const scene::Light& light, const scene::Aabb& sceneBounds
                                 name_, lightIndex_, scene::lightTypeName(lightType_), scene::lightTypeName(light.type)));
     }
     // Focused on what the camera sees when the config asks for it (visibility/Visibility.h).
-    frusta_ = shadowFrusta(light, sceneBounds, casters_.focus());
+    // A cube face's guard band widens it beyond 90° at the same texel density.
+    frusta_ = shadowFrusta(light, sceneBounds, casters_.focus(), float(faceTexels()) / float(resolution_));
     data_ = {};
     data_.faceCount = faceCount_;
-    data_.faceTexels = float(resolution_);
+    data_.faceTexels = float(faceTexels());
     for (size_t i = 0; i < frusta_.size(); ++i) {
         const LightFrustum& f = frusta_[i];
         const glm::vec2 range = depthRange(f, sceneBounds);
-        data_.faces[i] = {f.viewProj, glm::vec4(worldTexelPerW(f.proj, resolution_), 0.0f, 0.0f, 0.0f),
+        data_.faces[i] = {f.viewProj, glm::vec4(worldTexelPerW(f.proj, faceTexels()), 0.0f, 0.0f, 0.0f),
                           glm::vec4(range.x, range.y, isOrthographic(f.proj) ? 1.0f : 0.0f, 0.0f)};
     }
     if (light.type == scene::LightType::Directional) {
@@ -189,7 +200,7 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
     // negated; a negative clamp bounds the bias from below (Vulkan: max(bias, clamp)).
     vkCmdSetDepthBias(cmd, -bias.constant, -bias.clamp, -bias.slope);
 
-    const uint32_t size = resolution_;
+    const uint32_t size = faceTexels();
     const bool masked = casters_.hasAlphaMasked();
     bool solidBound = false;
     for (const ShadowMapPlacement& map : maps) {

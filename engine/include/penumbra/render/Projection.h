@@ -30,8 +30,13 @@ struct LightFrustum {
 // focusing). A directional light's box is then fitted to it across the light and on its
 // far side, and keeps the scene's side nearest the light; a spot light's cone is
 // narrowed about its axis to it. Cube maps (point, rect, disk lights) ignore it: their
-// six faces already cover every direction, each at its own fixed 90°.
+// six faces already cover every direction.
+//
+// `cubeHalfTan` (>= 1): a cube face spans ±cubeHalfTan in tan about its axis, 1 for
+// exactly 90°; more gives each face a guard band beyond its 90° that overlaps its
+// neighbours (ShadowMap's guard texels: filter taps near a cube edge read the texels
+// beyond it in the receiver's own face). Face i's axis and up are as for 90°.
 std::vector<LightFrustum> shadowFrusta(const scene::Light& light, const scene::Aabb& sceneBounds,
-                                       const scene::Aabb* focus = nullptr);
+                                       const scene::Aabb* focus = nullptr, float cubeHalfTan = 1.0f);
 
 } // namespace penumbra::render

@@ -5,8 +5,10 @@
 //
 //   spot                 one perspective map over the outer cone
 //   directional          one orthographic map fitted around the scene
-//   point, rect, disk    six 90° cube faces around the light's centre, +X -X +Y -Y +Z -Z,
-//                        packed 3 x 2 in one atlas (face f at cell (f % 3, f / 3))
+//   point, rect, disk    six cube faces around the light's centre, +X -X +Y -Y +Z -Z,
+//                        packed 3 x 2 in one atlas (face f at cell (f % 3, f / 3)): 90°
+//                        each, plus the technique's guard band beyond every edge
+//                        (guardTexels; docs/plugins.md, "Cube edges")
 //
 // Frusta come from render::shadowFrusta (Projection.h). Every map is reversed-Z
 // D32_SFLOAT: 1 at the near plane, 0 where nothing was drawn. Alpha-masked casters cut
@@ -98,6 +100,13 @@ float softShadowLightSize(const scene::Light& light, float overrideSize);
 // then holds).
 float softShadowKernelReach(const ShadowMapData& data, float lightSize);
 
+// The guard band (ShadowMap's guardTexels) a filter needs whose taps reach `reachTexels`
+// (half-width, texels of a `resolution`-texel face) from the receiver's texel: that
+// plus one texel for the taps' rounding to texel centres, at most a quarter of the face
+// plus that texel (then (1.5)² the texels; taps beyond the band read its edge). 0 for
+// no reach (or NaN).
+uint32_t kernelGuardTexels(float reachTexels, uint32_t resolution);
+
 // Samplers that read a shadow map by its conventions, clamped to the edge (lookups stay
 // in their face: the shaders clamp them). The comparison sampler's compareOp is
 // GREATER_OR_EQUAL (reversed-Z: a receiver is lit where its depth is at least the stored
@@ -136,10 +145,15 @@ struct ShadowMapSetup {
 class ShadowMap {
 public:
     // For the technique created with `setup`; `technique` ("hard") names its GPU objects
-    // ("light0.hard.shadow_map") and prefixes errors. Throws penumbra::ConfigError when
-    // the atlas of `resolution` texels per face exceeds the device's largest image
-    // (naming `resolution`), penumbra::Error when a shader does not compile.
-    ShadowMap(const ShadowMapSetup& setup, uint32_t resolution, std::string_view technique);
+    // ("light0.hard.shadow_map") and prefixes errors. `resolution`: texels across a face
+    // (a cube face's 90°). `guardTexels` (cube maps; ignored for one face): texels each
+    // cube face holds beyond each of its 90° edges, at the same density, so that a
+    // filter whose taps reach that far past a cube edge reads them in the receiver's own
+    // face (kernelGuardTexels); they cost (1 + 2 guard / resolution)² in texels drawn
+    // and stored. Throws penumbra::ConfigError when the atlas exceeds the device's
+    // largest image (naming `resolution`), penumbra::Error when a shader does not
+    // compile.
+    ShadowMap(const ShadowMapSetup& setup, uint32_t resolution, std::string_view technique, uint32_t guardTexels = 0);
     ShadowMap(const ShadowMap&) = delete;
     ShadowMap& operator=(const ShadowMap&) = delete;
 
@@ -192,8 +206,11 @@ public:
     // face count, as the reference's light samples do).
     std::vector<gpu::ShaderDefine> shaderDefines();
     uint32_t resolution() const { return resolution_; }
-    uint32_t atlasWidth() const { return resolution_ * (faceCount_ == kMaxShadowFaces ? 3u : 1u); }
-    uint32_t atlasHeight() const { return resolution_ * (faceCount_ == kMaxShadowFaces ? 2u : 1u); }
+    // Texels beyond each edge of a cube face (0 for one face), and per face side in all.
+    uint32_t guardTexels() const { return guard_; }
+    uint32_t faceTexels() const { return resolution_ + 2 * guard_; }
+    uint32_t atlasWidth() const { return faceTexels() * (faceCount_ == kMaxShadowFaces ? 3u : 1u); }
+    uint32_t atlasHeight() const { return faceTexels() * (faceCount_ == kMaxShadowFaces ? 2u : 1u); }
     // ShadowMapData, as shaders/common/shadow_map.glsl binds it (a storage buffer).
     const gpu::Buffer& buffer() const { return buffer_; }
     const ShadowMapData& data() const { return data_; }
@@ -206,6 +223,7 @@ private:
     const std::string name_;  // "light0.hard"
     const uint32_t resolution_;
     const uint32_t faceCount_;
+    const uint32_t guard_;  // 0 for one face
     const scene::LightType lightType_;  // as created
     bool typeCompiledIn_ = false;          // shaderDefines() was asked for
     gpu::Pipeline depth_;        // solid casters: no fragment shader
