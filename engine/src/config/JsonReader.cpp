@@ -15,12 +15,12 @@ namespace penumbra::config {
 
 std::string Locator::where(const std::string& pointer) const
 {
-    return fmt::format("{}: {}", document_.fileFor(pointer), pointer);
+    return fmt::format("{}: {}", document_.fileFor(pointer), shortText(pointer));
 }
 
 void Locator::fail(const std::string& pointer, const std::string& what) const
 {
-    throw ConfigError(fmt::format("{}: {}: {}", document_.fileFor(pointer), pointer.empty() ? "/" : pointer, what));
+    throw ConfigError(fmt::format("{}: {}: {}", document_.fileFor(pointer), pointer.empty() ? "/" : shortText(pointer), what));
 }
 
 ObjectReader::ObjectReader(const json& value, const Locator& locator, std::string pointer)

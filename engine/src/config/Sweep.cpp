@@ -25,13 +25,20 @@ json::json_pointer readSweepPointer(const json& text, const ObjectReader& r, con
 {
     if (!text.is_string()) r.fail(at, "must be a JSON pointer string such as \"/lights/0/shadow/resolution\"");
     const std::string s = text.get<std::string>();
+    // Counted before the pointer is built: a path of a million levels took minutes in
+    // the pointer's own string handling, and no config nests that deep.
+    const auto levels = std::count(s.begin(), s.end(), '/');
+    if (levels > kMaxConfigNesting) {
+        r.fail(at, fmt::format("a path of {} levels ({} characters); a config nests at most {}", levels, s.size(),
+                               kMaxConfigNesting));
+    }
     json::json_pointer pointer;
     try {
         pointer = json::json_pointer(s);
     } catch (const json::exception& e) {
-        r.fail(at, fmt::format("\"{}\" is not a JSON pointer ({})", s, e.what()));
+        r.fail(at, fmt::format("\"{}\" is not a JSON pointer ({})", shortText(s), e.what()));
     }
-    if (s.empty() || s.rfind("/sweep", 0) == 0 || s.rfind("/include", 0) == 0) r.fail(at, fmt::format("cannot sweep \"{}\"", s));
+    if (s.empty() || s.rfind("/sweep", 0) == 0 || s.rfind("/include", 0) == 0) r.fail(at, fmt::format("cannot sweep \"{}\"", shortText(s)));
     return pointer;
 }
 
@@ -104,15 +111,23 @@ void setSwept(json& doc, const json::json_pointer& pointer, const json& value, c
     const std::string text = pointer.to_string();
     const json::json_pointer parent = pointer.parent_pointer();
     const std::string in = variant.empty() ? "" : fmt::format(" (in the variant {})", variant);
-    if (!doc.contains(parent) || !(doc[parent].is_object() || doc[parent].is_array())) {
-        locator.fail(at, fmt::format("\"{}\": the config has no \"{}\" to set it in{}", text, parent.to_string(), in));
+    bool settable = false;
+    try {
+        // An array index beyond 64 bits makes the lookup throw rather than miss.
+        settable = doc.contains(parent) && (doc[parent].is_object() || doc[parent].is_array());
+    } catch (const json::exception&) {
+        settable = false;
+    }
+    if (!settable) {
+        locator.fail(at, fmt::format("\"{}\": the config has no \"{}\" to set it in{}", shortText(text),
+                                     shortText(parent.to_string()), in));
     }
     if (doc[parent].is_array()) {
         const std::string& index = pointer.back();
         const bool digits = !index.empty() && std::all_of(index.begin(), index.end(), [](unsigned char c) { return std::isdigit(c); });
         if (!digits || index.size() > 9 || std::stoul(index) >= doc[parent].size()) {
             locator.fail(at, fmt::format("\"{}\": \"{}\" has {} elements; a sweep replaces an element, it does not add one{}",
-                                         text, parent.to_string(), doc[parent].size(), in));
+                                         shortText(text), shortText(parent.to_string()), doc[parent].size(), in));
         }
     }
     doc[pointer] = value;

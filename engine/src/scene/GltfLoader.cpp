@@ -155,6 +155,40 @@ std::string describeParseError(const std::string& err, const fs::path& baseDir)
     return "cannot parse: " + text;
 }
 
+// The deepest nesting of objects and arrays in JSON text, by one pass over it (strings and
+// their escapes skipped): no recursion, whatever the depth. Stops counting at `most` + 1.
+int jsonNestingDepth(std::string_view text, int most)
+{
+    int depth = 0, deepest = 0;
+    bool inString = false;
+    for (size_t i = 0; i < text.size() && deepest <= most; ++i) {
+        const char c = text[i];
+        if (inString) {
+            if (c == '\\') ++i;
+            else if (c == '"') inString = false;
+        } else if (c == '"') {
+            inString = true;
+        } else if (c == '{' || c == '[') {
+            deepest = std::max(deepest, ++depth);
+        } else if (c == '}' || c == ']') {
+            depth = std::max(depth - 1, 0);
+        }
+    }
+    return deepest;
+}
+
+// The file's JSON: the whole of a .gltf, a .glb's first chunk (as far as the file holds
+// it; tinygltf reports a malformed one).
+std::string_view jsonText(const std::vector<unsigned char>& bytes)
+{
+    const char* data = reinterpret_cast<const char*>(bytes.data());
+    if (!isGlb(bytes)) return {data, bytes.size()};
+    if (bytes.size() < 20) return {};
+    uint32_t length;
+    std::memcpy(&length, bytes.data() + 12, sizeof length);
+    return {data + 20, std::min<size_t>(length, bytes.size() - 20)};
+}
+
 // Parses the file with tinygltf into `model`. Required extensions are checked even
 // when tinygltf fails: a Draco-compressed file fails there for want of the extension.
 void parseModel(const fs::path& file, const GltfLoadOptions& options, gltf::ImageDecoder& images,
@@ -170,6 +204,11 @@ void parseModel(const fs::path& file, const GltfLoadOptions& options, gltf::Imag
         throw AssetError(fmt::format("{}: glTF file of {} bytes; 4 GiB is the most glTF allows", name, bytes.size()));
     }
     if (isGlb(bytes)) checkGlbHeader(name, bytes);
+    if (jsonNestingDepth(jsonText(bytes), kMaxGltfNesting) > kMaxGltfNesting) {
+        throw AssetError(fmt::format("{}: its JSON nests objects and arrays deeper than {} levels (glTF needs 6; "
+                                     "look in extras and extensions)",
+                                     name, kMaxGltfNesting));
+    }
 
     tinygltf::TinyGLTF loader;
     loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &readExternalFile, &tinygltf::WriteWholeFile,

@@ -490,3 +490,58 @@ TEST_F(EditedQuad, UnusedMaterialsAndImagesCannotFailTheLoad)
     EXPECT_EQ(scene.triangleCount(), 2u);
     EXPECT_TRUE(scene.textures.empty());
 }
+
+// JSON nested past kMaxGltfNesting in `extras` or `extensions` (anything goes there) is
+// refused by a scan of the text before tinygltf parses it: its conversion of extras
+// recursed per level, and ~15,000 levels overflowed the stack. Within the limit it loads.
+TEST_F(EditedQuad, NestingInExtrasIsLimitedBeforeParsing)
+{
+    const auto nested = [](int levels, bool arrays) {
+        std::string open, close;
+        for (int i = 0; i < levels; ++i) {
+            open += arrays ? "[" : "{\"a\":";
+            close += arrays ? "]" : "}";
+        }
+        return open + "1" + close;
+    };
+    // The edited quad's own JSON nests 5 levels at most below its root, so `extras` of a
+    // node at /nodes/0/extras adds 3 (the root, "nodes", the node) to its own levels.
+    for (const char* where : {"/nodes/0/extras", "/meshes/0/extensions"}) {
+        for (bool arrays : {false, true}) {
+            for (int levels : {kMaxGltfNesting - 3, kMaxGltfNesting - 2, 15000}) {
+                SCOPED_TRACE(testing::Message() << where << (arrays ? " arrays " : " objects ") << levels);
+                nlohmann::json edited = doc;
+                const nlohmann::json::json_pointer at(where);
+                edited[at] = arrays ? nlohmann::json::array({"@@DEEP@@"}) : nlohmann::json::object({{"deep", "@@DEEP@@"}});
+                std::string text = edited.dump();
+                const std::string inner = arrays ? nested(levels - 1, true) : nested(levels - 1, false);
+                text.replace(text.find("\"@@DEEP@@\""), 10, inner);
+                for (bool glb : {false, true}) {
+                    const fs::path path = dir / (glb ? "deep.glb" : "deep.gltf");
+                    std::ofstream out(path, std::ios::binary);
+                    if (glb) {
+                        while (text.size() % 4) text += ' ';
+                        const uint32_t length = uint32_t(12 + 8 + text.size()), json = uint32_t(text.size());
+                        out.write("glTF", 4);
+                        const uint32_t version = 2, type = 0x4E4F534A;  // "JSON"
+                        out.write(reinterpret_cast<const char*>(&version), 4);
+                        out.write(reinterpret_cast<const char*>(&length), 4);
+                        out.write(reinterpret_cast<const char*>(&json), 4);
+                        out.write(reinterpret_cast<const char*>(&type), 4);
+                    }
+                    out << text;
+                    out.close();
+                    GltfLoadReport report;
+                    if (levels <= kMaxGltfNesting - 3) {
+                        EXPECT_NO_THROW(loadGltf(path, report)) << path;
+                    } else {
+                        const std::string e = errorOfPath(path);
+                        EXPECT_NE(e.find(path.filename().string() + ": its JSON nests objects and arrays deeper than 256"),
+                                  std::string::npos)
+                            << e.substr(0, 300);
+                    }
+                }
+            }
+        }
+    }
+}

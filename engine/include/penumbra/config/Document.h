@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <string_view>
 
 namespace penumbra::config {
 
@@ -18,10 +19,25 @@ struct ConfigDocument {
     std::string fileFor(const std::string& pointer) const;
 };
 
+// Objects and arrays nest at most this deep in a config file (the shipped configs nest 5
+// levels). Checked while the file is parsed, before anything walks the value
+// recursively: a hostile file nested 40,000 levels deep overflowed the stack and took
+// memory quadratic in its depth. Sweep paths address at most this many levels too.
+inline constexpr int kMaxConfigNesting = 64;
+
 // Reads `file` and its includes: `"include": "base.json"` or a list, paths relative to
 // the including file, merged in order with RFC 7386 merge-patch semantics (objects merge
 // key by key, everything else - arrays too - is replaced, null removes a key), then the
 // including file on top. Include cycles and missing files are errors naming the chain.
+// Every error is a ConfigError naming the file and, where the JSON is at fault, the JSON
+// path: malformed JSON (with line and column), a number beyond a double's range, nesting
+// beyond kMaxConfigNesting, a file name the file system refuses (too long: shown
+// shortened).
 ConfigDocument loadDocument(const std::filesystem::path& file);
+
+// `text` (a path, a JSON pointer) for a message: whole up to 160 characters, else its
+// start and end around "…" with its length.
+std::string shortText(std::string_view text);
+inline std::string displayPath(const std::filesystem::path& path) { return shortText(path.string()); }
 
 } // namespace penumbra::config

@@ -36,6 +36,11 @@ inline constexpr uint64_t kMaxGltfTotalTexels = uint64_t(1) << 28;
 // The .gltf/.glb and every external buffer and image file it reads, summed (tinygltf
 // reads each file whole).
 inline constexpr uint64_t kMaxGltfBytesRead = uint64_t(4) << 30;
+// Objects and arrays nest at most this deep in a file's JSON (glTF itself nests 6
+// levels; `extras` and `extensions` hold anything). Checked by a scan of the text before
+// tinygltf parses it: its conversion of `extras` recurses per level, and ~15,000 levels
+// overflowed the stack.
+inline constexpr int kMaxGltfNesting = 256;
 
 struct GltfLoadOptions {
     uint64_t maxVertices = kMaxGltfVertices;
