@@ -284,6 +284,39 @@ TEST_F(Cli, InvalidConfigNamesJsonPath)
     EXPECT_FALSE(fs::exists(dir / "out.png"));
 }
 
+// Hostile configs (issue 20) exit 1 with the place named, for every command that reads
+// a config: never 2 (an internal error), never a crash.
+TEST_F(Cli, HostileConfigsExitOneNamingThePlace)
+{
+    const std::string longName(5000, 'n');
+    const struct {
+        const char* file;
+        std::string text;
+        std::string expected;
+    } cases[] = {
+        {"big.json", R"({"camera": {"position": [0, 1e309, 10]}})", "big.json: /camera/position/1: number overflow"},
+        {"deep.json", "{\"x\":" + std::string(40000, '[') + std::string(40000, ']') + "}", "nested deeper than 64 levels"},
+        {"inc.json", "{\"include\": \"" + longName + ".json\"}", "inc.json: /include: cannot resolve"},
+        {"sweep.json",
+         R"({"camera": {"position": [0, 5, 10], "target": [0, 0, 0]}, "lights": [{"position": [0, 10, 0], "target": [0, 0, 0]}],
+             "sweep": [{"path": "/lights/99999999999999999999999/intensity", "values": [1, 2]}]})",
+         "sweep.json: /sweep/0/path: "},
+    };
+    for (const auto& c : cases) {
+        const fs::path cfg = dir / c.file;
+        std::ofstream(cfg) << c.text;
+        for (const char* command : {"validate", "render"}) {
+            if (std::string(c.file) == "sweep.json" && std::string(command) == "render") continue;  // render ignores sweeps
+            SCOPED_TRACE(std::string(command) + " " + c.file);
+            const std::string output = std::string(command) == "render" ? fmt::format(" -o '{}/out.png'", dir.string()) : "";
+            const CliResult r = run(fmt::format("{} '{}'{}", command, cfg.string(), output));
+            EXPECT_EQ(r.exitCode, 1) << r.err.substr(0, 400);
+            EXPECT_NE(r.err.find(c.expected), std::string::npos) << r.err.substr(0, 400);
+            EXPECT_FALSE(fs::exists(dir / "out.png"));
+        }
+    }
+}
+
 TEST_F(Cli, UnknownDeviceNameListsDevices)
 {
     const CliResult r = run(fmt::format("render {} -o '{}/out.png' --device no-such-gpu", config("default.json"), dir.string()));
