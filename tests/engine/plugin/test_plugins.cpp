@@ -18,9 +18,13 @@
 #include <gtest/gtest.h>
 
 #include <dlfcn.h>
+#include <link.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmath>
+#include <cstddef>
+#include <cstring>
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
@@ -385,6 +389,82 @@ TEST_F(Registry, TruncatedAndEmptyFilesAreNotLibraries)
     }
     EXPECT_TRUE(contains(messages["penumbra-truncated.so"], "the ELF header is truncated (6 bytes)"));
     EXPECT_TRUE(contains(messages["penumbra-empty.so"], "it is not an ELF file"));
+    EXPECT_EQ(local.load("testgood").name(), "testgood");
+    fs::remove_all(dir);
+}
+
+// Damaged copies of a real plugin, and things named like plugins that are not files
+// (issue 20): a truncated library or one whose headers point past its end made dlopen
+// die of SIGBUS, a FIFO blocked the read forever, a directory passed `plugins --strict`
+// and failed `render`. Each is not-a-library, the same way for the listing
+// (discoverAll) as for a load by name (render).
+TEST_F(Registry, DamagedLibrariesAndNonFilesAreNotLibrariesEverywhere)
+{
+    const fs::path dir = fs::temp_directory_path() / fmt::format("penumbra_damaged_{}", ::getpid());
+    fs::create_directories(dir);
+    std::vector<char> good;
+    {
+        std::ifstream in(kPlugins / "penumbra-testgood.so", std::ios::binary);
+        good.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    ASSERT_GT(good.size(), 4096u);
+    const auto write = [&](const std::string& name, const std::vector<char>& bytes) {
+        std::ofstream(dir / ("penumbra-" + name + ".so"), std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+    };
+    std::map<std::string, std::string> expected;  // plugin name -> what the message says
+    for (size_t keep : {size_t(64) + 8, good.size() / 8, good.size() / 4, good.size() / 2, good.size() * 3 / 4,
+                        good.size() - 1}) {
+        const std::string name = fmt::format("cut{}", keep);
+        write(name, std::vector<char>(good.begin(), good.begin() + std::ptrdiff_t(keep)));
+        expected[name] = "it is damaged or truncated";
+    }
+    // Header fields pointing past the end: the program header table, a segment's offset
+    // and its size (a flipped high bit each).
+    ElfW(Ehdr) header;
+    std::memcpy(&header, good.data(), sizeof header);
+    const auto flipped = [&](size_t offset, size_t bytes) {
+        std::vector<char> copy = good;
+        copy[offset + bytes - 1] = char(copy[offset + bytes - 1] ^ 0x40);
+        return copy;
+    };
+    write("phoff", flipped(offsetof(ElfW(Ehdr), e_phoff), sizeof header.e_phoff));
+    expected["phoff"] = "program header table";
+    size_t load = header.e_phoff;
+    for (size_t i = 0; i < header.e_phnum; ++i, load += sizeof(ElfW(Phdr))) {
+        ElfW(Phdr) p;
+        std::memcpy(&p, good.data() + load, sizeof p);
+        if (p.p_type == PT_LOAD) break;
+    }
+    write("segoffset", flipped(load + offsetof(ElfW(Phdr), p_offset), sizeof(ElfW(Phdr)::p_offset)));
+    write("segsize", flipped(load + offsetof(ElfW(Phdr), p_filesz), sizeof(ElfW(Phdr)::p_filesz)));
+    expected["segoffset"] = expected["segsize"] = "beyond the file's end";
+    // Not regular files.
+    ASSERT_EQ(::mkfifo((dir / "penumbra-fifo.so").c_str(), 0600), 0);
+    fs::create_directories(dir / "penumbra-folder.so");
+    fs::create_symlink(dir / "nowhere.so", dir / "penumbra-dangling.so");
+    expected["fifo"] = "it is a FIFO";
+    expected["folder"] = "it is a directory";
+    expected["dangling"] = "it is a dangling link";
+
+    PluginRegistry local({dir, kPlugins});
+    std::map<std::string, std::string> listed;
+    for (const PluginError& e : local.discoverAll().errors) {
+        if (e.file().parent_path() != dir) continue;
+        EXPECT_EQ(e.kind(), PluginErrorKind::NotALibrary) << e.what();
+        listed[e.file().filename().string()] = e.what();
+    }
+    for (const auto& [name, what] : expected) {
+        SCOPED_TRACE(name);
+        const std::string file = "penumbra-" + name + ".so";
+        EXPECT_TRUE(contains(listed[file], what)) << listed[file];
+        try {
+            local.load(name);
+            ADD_FAILURE() << "loaded";
+        } catch (const PluginError& e) {
+            EXPECT_EQ(e.kind(), PluginErrorKind::NotALibrary) << e.what();
+            EXPECT_EQ(std::string(e.what()), listed[file]) << "the same report for a load by name";
+        }
+    }
     EXPECT_EQ(local.load("testgood").name(), "testgood");
     fs::remove_all(dir);
 }
