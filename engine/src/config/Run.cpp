@@ -10,7 +10,7 @@
 
 namespace penumbra::config {
 
-scene::Scene buildScene(const SceneSource& source, std::vector<scene::Light>* fileLights)
+scene::Scene buildScene(const SceneSource& source, std::vector<scene::GltfLight>* fileLights)
 {
     scene::Scene scene;
     if (source.kind == SceneSource::Kind::Gltf) {
@@ -21,11 +21,11 @@ scene::Scene buildScene(const SceneSource& source, std::vector<scene::Light>* fi
         }
         for (const scene::GltfLight& l : report.lights) {
             if (!fileLights) break;
-            scene::Light light = l.light;
+            scene::GltfLight light = l;
             // Scaling the scene about the origin moves its lights with it; radiant
             // intensity times s² keeps the irradiance it gives the scaled scene.
-            light.position *= source.scale;
-            if (light.type != scene::LightType::Directional) light.intensity *= source.scale * source.scale;
+            light.light.position *= source.scale;
+            if (light.light.type != scene::LightType::Directional) light.light.intensity *= source.scale * source.scale;
             fileLights->push_back(light);
         }
     } else {
@@ -38,7 +38,7 @@ scene::Scene buildScene(const SceneSource& source, std::vector<scene::Light>* fi
 scene::Scene buildScene(RenderConfig& config)
 {
     scene::Scene scene;
-    std::vector<scene::Light> fileLights;
+    std::vector<scene::GltfLight> fileLights;
     try {
         scene = buildScene(config.scene, &fileLights);
     } catch (const ConfigError&) {
@@ -53,10 +53,16 @@ scene::Scene buildScene(RenderConfig& config)
                                           config.file.string(), kMaxLights, config.scene.gltf.string(), fileLights.size()));
         }
         config.lights.clear();
+        std::set<std::string> names;
         for (size_t i = 0; i < fileLights.size(); ++i) {
             LightConfig lc;
-            lc.name = fmt::format("light{}", i);
-            lc.light = fileLights[i];
+            // The loader names an unnamed light light<its index in the file>; a name an
+            // earlier light took gets light<i>, then light<i>_2, ..., until it is free.
+            lc.name = fileLights[i].name;
+            for (int n = 1; lc.name.empty() || names.count(lc.name); ++n)
+                lc.name = n == 1 ? fmt::format("light{}", i) : fmt::format("light{}_{}", i, n);
+            names.insert(lc.name);
+            lc.light = fileLights[i].light;
             config.lights.push_back(lc);
         }
     }

@@ -478,11 +478,44 @@ TEST(Config, LightsFromAGltfScene)
     std::set<scene::LightType> types;
     for (const auto& l : c.lights) types.insert(l.light.type);
     EXPECT_EQ(types.size(), 3u);
+    // Named as the file names them, for compare's files and bench's tables.
+    std::set<std::string> names;
+    for (const auto& l : c.lights) names.insert(l.name);
+    EXPECT_EQ(names, (std::set<std::string>{"sun", "lamp", "bulb"}));
     EXPECT_FALSE(s.instances.empty());
 
     json doc = minimal();
     doc["lights"] = "scene";
     EXPECT_NE(errorOf(doc).find("/lights: \"scene\" takes the lights of a glTF scene"), std::string::npos);
+}
+
+TEST(Config, SceneLightsWithoutANameOrWithATakenOneAreNumbered)
+{
+    // hierarchy.gltf (data URIs only) with its lights named "", "sun", "sun".
+    std::ifstream in(fs::path(PENUMBRA_TEST_DATA_DIR) / "gltf/hierarchy.gltf");
+    json gltf = json::parse(in);
+    json& lights = gltf["extensions"]["KHR_lights_punctual"]["lights"];
+    lights[0].erase("name");
+    lights[1]["name"] = "sun";
+    lights[2]["name"] = "sun";
+    const fs::path dir = fs::temp_directory_path() / ("penumbra_scene_lights_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    std::ofstream(dir / "named.gltf") << gltf.dump();
+    std::ofstream(dir / "config.json") << R"({"scene": {"gltf": "named.gltf"},
+        "camera": {"position": [6, 8, 12], "target": [0, 0, 0]}, "lights": "scene"})";
+    config::RenderConfig c = config::loadConfig(dir / "config.json");
+    config::buildScene(c);
+    ASSERT_EQ(c.lights.size(), 3u);
+    // The lights come in node order: one of the two "sun"s keeps the name; the nameless one
+    // is light0 (its index in the file, as the loader names it), the other "sun" is
+    // numbered by its place; no two alike.
+    std::set<std::string> names;
+    for (const auto& l : c.lights) names.insert(l.name);
+    EXPECT_EQ(names.size(), 3u);
+    EXPECT_EQ(names.count("sun"), 1u);
+    EXPECT_EQ(names.count("light0"), 1u);
+    for (const std::string& n : names) EXPECT_TRUE(n == "sun" || n.rfind("light", 0) == 0) << n;
+    fs::remove_all(dir);
 }
 
 TEST(Config, CommittedAssetMatchesItsGenerator)

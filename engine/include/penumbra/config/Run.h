@@ -6,6 +6,7 @@
 // that exist only once the scene is loaded.
 #include "penumbra/config/Overrides.h"
 #include "penumbra/config/RenderConfig.h"
+#include "penumbra/scene/GltfLoader.h"
 #include "penumbra/scene/Scene.h"
 
 #include <cstdint>
@@ -47,10 +48,13 @@ PreparedRun prepareRun(const std::filesystem::path& file, const RunOptions& opti
 
 // Builds the scene that the config's scene source describes (at its scale), and checks
 // that the animation's node tracks name nodes of that scene. With "lights": "scene" it
-// also fills config.lights from the glTF file's lights. prepareRun does this first.
+// also fills config.lights from the glTF file's lights, each named as the file names it
+// (one without a name: `light<its index in the file>`; a name an earlier light took:
+// `light<i>`, or `light<i>_2`, ... if that is taken too), so that
+// compare's files and bench's tables say "sun", not "light0". prepareRun does this first.
 scene::Scene buildScene(RenderConfig& config);
-// `fileLights` (optional) receives a glTF file's KHR_lights_punctual lights, placed and
-// scaled with the scene.
-scene::Scene buildScene(const SceneSource& source, std::vector<scene::Light>* fileLights = nullptr);
+// `fileLights` (optional) receives a glTF file's KHR_lights_punctual lights with their
+// names, placed and scaled with the scene.
+scene::Scene buildScene(const SceneSource& source, std::vector<scene::GltfLight>* fileLights = nullptr);
 
 } // namespace penumbra::config
