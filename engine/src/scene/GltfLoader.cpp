@@ -7,6 +7,7 @@
 #include "scene/gltf/Lights.h"
 #include "scene/gltf/Materials.h"
 #include "scene/gltf/Nodes.h"
+#include "scene/gltf/Preflight.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -209,6 +210,8 @@ void parseModel(const fs::path& file, const GltfLoadOptions& options, gltf::Imag
                                      "look in extras and extensions)",
                                      name, kMaxGltfNesting));
     }
+    // Within the nesting limit nlohmann's parse and the checks below cannot recurse deep.
+    gltf::preflight(name, nlohmann::json::parse(jsonText(bytes), nullptr, false), file.parent_path(), options);
 
     tinygltf::TinyGLTF loader;
     loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &readExternalFile, &tinygltf::WriteWholeFile,

@@ -545,3 +545,56 @@ TEST_F(EditedQuad, NestingInExtrasIsLimitedBeforeParsing)
         }
     }
 }
+
+// What tinygltf reported without a JSON path (or with a whole base64 payload), what it
+// dropped silently, and sizes the limits refuse anyway: each is named before tinygltf
+// loads the file (scene/gltf/Preflight.h), before any external buffer is read.
+TEST_F(EditedQuad, PreflightNamesWhatTinygltfWouldNot)
+{
+    // A byteLength beyond the data URI: named, without the payload.
+    doc["buffers"][0]["byteLength"] = doc["buffers"][0]["byteLength"].get<int>() + 1000;
+    std::string e = errorOfPath(write());
+    EXPECT_NE(e.find("edited.gltf: /buffers/0: byteLength 1140 exceeds the 140 bytes its data URI holds"), std::string::npos)
+        << e;
+    EXPECT_EQ(e.find("base64"), std::string::npos) << e;
+    SetUp();
+    // An indices accessor the file does not have.
+    doc["meshes"][0]["primitives"][0]["indices"] = 99;
+    e = errorOfPath(write());
+    EXPECT_NE(e.find("edited.gltf: /meshes/0/primitives/0/indices: accessor 99 does not exist (4 accessors)"),
+              std::string::npos)
+        << e;
+    SetUp();
+    // A primitive without attributes: refused, not dropped into a file of no triangles.
+    doc["meshes"][0]["primitives"][0].erase("attributes");
+    e = errorOfPath(write());
+    EXPECT_NE(e.find("edited.gltf: /meshes/0/primitives/0: has no \"attributes\" object"), std::string::npos) << e;
+}
+
+TEST_F(EditedQuad, ExternalBufferSizesAreCheckedBeforeItIsRead)
+{
+    // quad_external.gltf with its quad.bin copied beside it.
+    std::ifstream in(gltfFile("quad_external.gltf"));
+    nlohmann::json external = nlohmann::json::parse(in);
+    fs::copy_file(gltfFile("quad.bin"), dir / "quad.bin");
+    const uint64_t binBytes = fs::file_size(dir / "quad.bin");
+    // A byteLength beyond the file.
+    external["buffers"][0]["byteLength"] = binBytes + 8;
+    std::ofstream(dir / "long.gltf") << external.dump();
+    std::string e = errorOfPath(dir / "long.gltf");
+    EXPECT_NE(e.find(fmt::format("long.gltf: /buffers/0: byteLength {} exceeds the {} bytes of its file 'quad.bin'",
+                                 binBytes + 8, binBytes)),
+              std::string::npos)
+        << e;
+    // The vertex limit refuses the file before the buffer is read: with a byte budget the
+    // .bin would overrun, the limit is what is reported.
+    external["buffers"][0]["byteLength"] = binBytes;
+    std::ofstream(dir / "limited.gltf") << external.dump();
+    GltfLoadOptions options;
+    options.maxVertices = 3;
+    options.maxBytesRead = fs::file_size(dir / "limited.gltf") + binBytes / 2;
+    e = errorOfPath(dir / "limited.gltf", options);
+    EXPECT_NE(e.find("limited.gltf: /accessors/0: count 4 exceeds 3 (vertices left of the limit of 3 per file)"),
+              std::string::npos)
+        << e;
+}
