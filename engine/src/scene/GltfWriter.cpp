@@ -270,9 +270,33 @@ void writeGlb(tinygltf::Model& model, const fs::path& path)
     file.commit();
 }
 
+// The name of the buffer file written beside `<stem>.gltf` for `bytes`: `<stem>.<16 hex
+// digits of the bytes' FNV-1a hash>.bin`. A new buffer gets a new name, so writing it never
+// replaces the buffer the old .gltf references: the .gltf's rename alone switches from
+// the old pair to the new one (a kill between two renames left the new .bin beside the
+// old .gltf, which then failed to load). Equal bytes get the same name.
+std::string bufferFileName(const std::string& stem, const std::vector<unsigned char>& bytes)
+{
+    uint64_t hash = 14695981039346656037ull;  // FNV-1a, 64-bit
+    for (unsigned char b : bytes) hash = (hash ^ b) * 1099511628211ull;
+    return fmt::format("{}.{:016x}.bin", stem, hash);
+}
+
+// Whether `name` is a buffer file this writer names for `stem` (above), or the plain
+// `<stem>.bin` it wrote before.
+bool ownBufferName(const std::string& name, const std::string& stem)
+{
+    if (name == stem + ".bin") return true;
+    if (name.size() != stem.size() + 1 + 16 + 4 || name.rfind(stem + ".", 0) != 0 || !name.ends_with(".bin")) return false;
+    return std::all_of(name.begin() + std::ptrdiff_t(stem.size() + 1), name.end() - 4,
+                       [](unsigned char c) { return std::isxdigit(c) && !std::isupper(c); });
+}
+
 // tinygltf's stream writer embeds buffers as base64 and its file writer ignores write
 // errors, so the JSON comes from tinygltf without the buffer, which is written here to
-// `<stem>.bin`, its URI added to the JSON.
+// its own file (bufferFileName), its URI added to the JSON. Once the .gltf is in place,
+// the writer's other buffer files for this stem (the old .gltf's, or ones a killed run
+// left) are removed.
 void writeGltfWithBin(tinygltf::Model& model, const fs::path& path)
 {
     std::vector<unsigned char> bytes;
@@ -285,7 +309,8 @@ void writeGltfWithBin(tinygltf::Model& model, const fs::path& path)
     }
     nlohmann::json document = nlohmann::json::parse(text.str());
 
-    const std::string binName = path.stem().string() + ".bin";
+    const std::string stem = path.stem().string();
+    const std::string binName = bytes.empty() ? std::string() : bufferFileName(stem, bytes);
     io::StagedFile json(path);
     std::optional<io::StagedFile> bin;
     if (!bytes.empty()) {
@@ -298,10 +323,19 @@ void writeGltfWithBin(tinygltf::Model& model, const fs::path& path)
     std::ofstream out = json.openTemp();
     out << document.dump(2) << '\n';
     closeChecked(out, path);
-    // The .bin first, so that the new .gltf never appears without its buffer. (An old
-    // .gltf meets the new .bin only if this second rename in the same folder fails.)
+    // The .bin first (under its new name, beside the old pair), then the .gltf: either
+    // the old pair or the new one is complete at every moment.
     if (bin) bin->commit();
     json.commit();
+    std::error_code ec;
+    const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
+    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+        const std::string name = it->path().filename().string();
+        if (name != binName && ownBufferName(name, stem)) {
+            std::error_code removeError;
+            fs::remove(it->path(), removeError);  // best effort: a stale buffer is harmless
+        }
+    }
 }
 
 } // namespace

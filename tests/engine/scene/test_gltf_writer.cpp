@@ -3,12 +3,14 @@
 // file behind and the existing one intact.
 #include "penumbra/core/Error.h"
 #include "penumbra/scene/Generators.h"
+#include "penumbra/scene/GltfLoader.h"
 #include "penumbra/scene/GltfWriter.h"
 
 #include <fmt/format.h>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
 #include <unistd.h>
@@ -214,6 +216,20 @@ std::string slurp(const fs::path& p)
     return ss.str();
 }
 
+// The buffer file a written .gltf references (its URI as written).
+std::string bufferUri(const fs::path& gltf)
+{
+    return nlohmann::json::parse(slurp(gltf))["buffers"][0]["uri"].get<std::string>();
+}
+
+// `<stem>.<16 lowercase hex digits>.bin`: the writer's content-named buffer.
+bool isContentNamedBuffer(const std::string& name, const std::string& stem)
+{
+    const std::string hex = name.substr(std::min(name.size(), stem.size() + 1), 16);
+    return name.size() == stem.size() + 21 && name.rfind(stem + ".", 0) == 0 && name.ends_with(".bin") &&
+           hex.find_first_not_of("0123456789abcdef") == std::string::npos;
+}
+
 } // namespace
 
 TEST_F(GltfWriter, HandMadeSceneRoundTrips)
@@ -222,7 +238,12 @@ TEST_F(GltfWriter, HandMadeSceneRoundTrips)
     expectRoundTrip(scene, dir / "hand.gltf");
     expectRoundTrip(scene, dir / "hand.glb");
     // Nothing but the outputs: no temporary files.
-    EXPECT_EQ(filesInDir(), (std::vector<std::string>{"hand.bin", "hand.glb", "hand.gltf"}));
+    const std::vector<std::string> files = filesInDir();
+    ASSERT_EQ(files.size(), 3u);
+    EXPECT_TRUE(isContentNamedBuffer(files[0], "hand")) << files[0];
+    EXPECT_EQ(files[0], bufferUri(dir / "hand.gltf"));
+    EXPECT_EQ(files[1], "hand.glb");
+    EXPECT_EQ(files[2], "hand.gltf");
 }
 
 TEST_F(GltfWriter, GeneratedScenesRoundTrip)
@@ -236,8 +257,12 @@ TEST_F(GltfWriter, GeneratedScenesRoundTrip)
 TEST_F(GltfWriter, BinaryFileNameIsUriEncoded)
 {
     expectRoundTrip(generatePenumbra({}), dir / "a b+c.gltf");
-    EXPECT_NE(slurp(dir / "a b+c.gltf").find("\"uri\": \"a%20b%2Bc.bin\""), std::string::npos);
-    EXPECT_TRUE(fs::exists(dir / "a b+c.bin"));
+    const std::string uri = bufferUri(dir / "a b+c.gltf");
+    EXPECT_EQ(uri.rfind("a%20b%2Bc.", 0), 0u) << uri;
+    const std::vector<std::string> files = filesInDir();
+    ASSERT_EQ(files.size(), 2u);
+    EXPECT_TRUE(isContentNamedBuffer(files[0], "a b+c")) << files[0];
+    EXPECT_EQ("a%20b%2Bc." + files[0].substr(std::string("a b+c.").size()), uri);
 }
 
 TEST_F(GltfWriter, RejectsBadPathsAndLeavesNoFile)
@@ -274,8 +299,44 @@ TEST_F(GltfWriter, FailedWriteKeepsTheExistingFiles)
     EXPECT_EQ(slurp(dir / "scene.gltf"), "keep me");
     EXPECT_EQ(slurp(dir / "scene.bin"), "and me");
     EXPECT_EQ(filesInDir(), (std::vector<std::string>{"scene.bin", "scene.gltf"}));
-    // A good write then replaces both.
+    // A good write then replaces both: the .gltf, and its buffer under a new name (the
+    // plain scene.bin of earlier versions goes once the new .gltf is in place).
     writeGltf(generatePenumbra({}), dir / "scene.gltf");
     EXPECT_NE(slurp(dir / "scene.gltf"), "keep me");
-    EXPECT_EQ(filesInDir(), (std::vector<std::string>{"scene.bin", "scene.gltf"}));
+    EXPECT_EQ(filesInDir(), (std::vector<std::string>{bufferUri(dir / "scene.gltf"), "scene.gltf"}));
+}
+
+// Multi-file output all or nothing (issue 20): a kill between the renames of a rewrite
+// left the new scene.bin beside the old scene.gltf, which then failed to load. Each
+// buffer is named by its content, so writing the new one never touches the one the old
+// .gltf reads, and the .gltf's rename switches pairs at once.
+TEST_F(GltfWriter, RewriteSwitchesTheGltfAndItsBufferAtOnce)
+{
+    const Scene first = generatePenumbra({});
+    const Scene second = generateScene("fence", {{"holes_x", "3"}, {"holes_y", "2"}});
+    writeGltf(first, dir / "scene.gltf");
+    const std::string firstBin = bufferUri(dir / "scene.gltf");
+    // Killed after the new buffer's rename, before the .gltf's: the old .gltf still
+    // loads the first scene from its own buffer.
+    const fs::path staged = dir / "staged";
+    fs::create_directories(staged);
+    writeGltf(second, staged / "scene.gltf");
+    const std::string secondBin = bufferUri(staged / "scene.gltf");
+    ASSERT_NE(secondBin, firstBin);
+    fs::copy_file(staged / secondBin, dir / secondBin);
+    fs::remove_all(staged);
+    GltfLoadReport report;
+    EXPECT_EQ(loadGltf(dir / "scene.gltf", report).meshes.size(), first.meshes.size());
+    EXPECT_EQ(loadGltf(dir / "scene.gltf", report).meshes[0].vertices.front().position,
+              first.meshes[0].vertices.front().position);
+    // The next write completes the switch and removes the stale buffers.
+    writeGltf(second, dir / "scene.gltf");
+    EXPECT_EQ(bufferUri(dir / "scene.gltf"), secondBin);
+    EXPECT_EQ(filesInDir(), (std::vector<std::string>{secondBin, "scene.gltf"}));
+    EXPECT_EQ(loadGltf(dir / "scene.gltf", report).meshes.size(), second.meshes.size());
+    EXPECT_EQ(loadGltf(dir / "scene.gltf", report).meshes[0].vertices.front().position,
+              second.meshes[0].vertices.front().position);
+    // Rewriting the same scene keeps the same name.
+    writeGltf(second, dir / "scene.gltf");
+    EXPECT_EQ(filesInDir(), (std::vector<std::string>{secondBin, "scene.gltf"}));
 }
