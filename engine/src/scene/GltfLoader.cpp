@@ -94,9 +94,8 @@ void checkGlbHeader(const std::string& file, const std::vector<unsigned char>& b
 
 // A .gltf tinygltf could not parse may be glTF 1.0, whose top-level collections are
 // objects keyed by id where glTF 2.0 has arrays.
-void refuseGltf1Layout(const std::string& file, const std::vector<unsigned char>& bytes)
+void refuseGltf1Layout(const std::string& file, const nlohmann::json& doc)
 {
-    const nlohmann::json doc = nlohmann::json::parse(bytes.begin(), bytes.end(), nullptr, false);
     if (!doc.is_object()) return;
     for (const char* key : {"accessors", "bufferViews", "buffers", "meshes", "nodes", "materials"}) {
         auto it = doc.find(key);
@@ -210,8 +209,10 @@ void parseModel(const fs::path& file, const GltfLoadOptions& options, gltf::Imag
                                      "look in extras and extensions)",
                                      name, kMaxGltfNesting));
     }
-    // Within the nesting limit nlohmann's parse and the checks below cannot recurse deep.
-    gltf::preflight(name, nlohmann::json::parse(jsonText(bytes), nullptr, false), file.parent_path(), options);
+    // Within the nesting limit nlohmann's parse and the checks on it cannot recurse deep.
+    // Parsed once for the preflight and, should tinygltf fail, the glTF 1.0 check.
+    const nlohmann::json json = nlohmann::json::parse(jsonText(bytes), nullptr, false);
+    gltf::preflight(name, json, file.parent_path(), options);
 
     tinygltf::TinyGLTF loader;
     loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &readExternalFile, &tinygltf::WriteWholeFile,
@@ -230,7 +231,7 @@ void parseModel(const fs::path& file, const GltfLoadOptions& options, gltf::Imag
                                                      baseDir.string());
     checkRequiredExtensions(name, model);
     if (!ok) {
-        if (!isGlb(bytes)) refuseGltf1Layout(name, bytes);
+        if (!isGlb(bytes)) refuseGltf1Layout(name, json);
         throw AssetError(fmt::format("{}: {}", name, describeParseError(err, baseDir)));
     }
     // tinygltf reports some schema violations (a missing required property) in `err`

@@ -4,6 +4,8 @@
 // config::kMaxConfigNesting (checked while parsing, before anything recurses), file names
 // the file system refuses, sweep paths with array indices beyond 64 bits or a million
 // levels; long names and paths are shortened in messages.
+#include "ScratchFolder.h"
+
 #include "penumbra/config/Config.h"
 #include "penumbra/config/Document.h"
 #include "penumbra/config/Sweep.h"
@@ -15,7 +17,6 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
-#include <unistd.h>
 
 using namespace penumbra;
 namespace fs = std::filesystem;
@@ -25,13 +26,7 @@ namespace {
 // A folder of its own per test, removed after it.
 class HostileConfig : public ::testing::Test {
 protected:
-    void SetUp() override
-    {
-        dir_ = fs::temp_directory_path() /
-               ("penumbra_hostile_" + std::to_string(::getpid()) + "_" +
-                ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::create_directories(dir_);
-    }
+    void SetUp() override { dir_ = test::makeScratchFolder("hostile"); }
     void TearDown() override { fs::remove_all(dir_); }
 
     fs::path write(const std::string& name, const std::string& text) const
@@ -88,14 +83,7 @@ TEST_F(HostileConfig, NestingIsLimitedWhileParsing)
     // kMaxConfigNesting levels parse (the config is then refused for what it says, not
     // for its depth); one more, of objects or arrays, is refused naming the limit and the
     // path it reached.
-    const auto nested = [](int levels, bool arrays) {
-        std::string open, close;
-        for (int i = 1; i < levels; ++i) {
-            open += arrays ? "[" : "{\"a\":";
-            close += arrays ? "]" : "}";
-        }
-        return "{\"x\":" + open + "1" + close + "}";
-    };
+    const auto nested = [](int levels, bool arrays) { return "{\"x\":" + test::nestedJson(levels - 1, arrays) + "}"; };
     for (bool arrays : {false, true}) {
         SCOPED_TRACE(arrays ? "arrays" : "objects");
         const std::string ok = errorLoading(write("ok.json", nested(config::kMaxConfigNesting, arrays)));

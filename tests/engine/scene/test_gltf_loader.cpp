@@ -1,6 +1,7 @@
 // glTF loading against the hand-made files in data/gltf (data/gltf/README.md says what
 // each holds): what loads must come out exactly as written, and each class of bad input
 // must be refused with a message that names the file and the element.
+#include "ScratchFolder.h"
 #include "TestConfigs.h"
 #include "TestPaths.h"  // generated: the build tree's paths
 
@@ -60,9 +61,7 @@ class EditedQuad : public ::testing::Test {
 protected:
     void SetUp() override
     {
-        dir = fs::temp_directory_path() / fmt::format("penumbra_gltf_{}_{}", ::getpid(),
-                                                      ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::create_directories(dir);
+        dir = test::makeScratchFolder("gltf");
         std::ifstream in(gltfFile("quad.gltf"));
         doc = nlohmann::json::parse(in);
     }
@@ -496,14 +495,6 @@ TEST_F(EditedQuad, UnusedMaterialsAndImagesCannotFailTheLoad)
 // recursed per level, and ~15,000 levels overflowed the stack. Within the limit it loads.
 TEST_F(EditedQuad, NestingInExtrasIsLimitedBeforeParsing)
 {
-    const auto nested = [](int levels, bool arrays) {
-        std::string open, close;
-        for (int i = 0; i < levels; ++i) {
-            open += arrays ? "[" : "{\"a\":";
-            close += arrays ? "]" : "}";
-        }
-        return open + "1" + close;
-    };
     // The edited quad's own JSON nests 5 levels at most below its root, so `extras` of a
     // node at /nodes/0/extras adds 3 (the root, "nodes", the node) to its own levels.
     for (const char* where : {"/nodes/0/extras", "/meshes/0/extensions"}) {
@@ -514,7 +505,7 @@ TEST_F(EditedQuad, NestingInExtrasIsLimitedBeforeParsing)
                 const nlohmann::json::json_pointer at(where);
                 edited[at] = arrays ? nlohmann::json::array({"@@DEEP@@"}) : nlohmann::json::object({{"deep", "@@DEEP@@"}});
                 std::string text = edited.dump();
-                const std::string inner = arrays ? nested(levels - 1, true) : nested(levels - 1, false);
+                const std::string inner = test::nestedJson(levels - 1, arrays);
                 text.replace(text.find("\"@@DEEP@@\""), 10, inner);
                 for (bool glb : {false, true}) {
                     const fs::path path = dir / (glb ? "deep.glb" : "deep.gltf");

@@ -1,6 +1,8 @@
 // glTF export: what tinygltf reads back is the scene that was written (counts,
 // hierarchy, transformed vertices, materials, textures), and a failed write leaves no
 // file behind and the existing one intact.
+#include "ScratchFolder.h"
+
 #include "penumbra/core/Error.h"
 #include "penumbra/scene/Generators.h"
 #include "penumbra/scene/GltfLoader.h"
@@ -29,9 +31,7 @@ class GltfWriter : public ::testing::Test {
 protected:
     void SetUp() override
     {
-        dir = fs::temp_directory_path() /
-              fmt::format("penumbra_gltf_{}_{}", ::getpid(), ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::create_directories(dir);
+        dir = test::makeScratchFolder("gltf_writer");
     }
     void TearDown() override { fs::remove_all(dir); }
 

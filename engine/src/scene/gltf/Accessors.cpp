@@ -6,7 +6,6 @@
 #include <cstring>
 
 namespace penumbra::scene::gltf {
-namespace {
 
 size_t componentBytes(int componentType)
 {
@@ -20,6 +19,8 @@ size_t componentBytes(int componentType)
     default: return 0;
     }
 }
+
+namespace {
 
 std::string componentName(int componentType)
 {

@@ -23,6 +23,10 @@ struct CountLimit {
     std::string what;  // "vertices left of the limit of 16777216 per file"
 };
 
+// Bytes of one component of a glTF componentType (5120 BYTE ... 5126 FLOAT); 0 for any
+// other value.
+size_t componentBytes(int componentType);
+
 // The accessor's element count (checks only that the accessor exists).
 size_t accessorCount(const Document& doc, int accessor, std::string_view element);
 

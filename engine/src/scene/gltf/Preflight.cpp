@@ -1,6 +1,7 @@
 #include "scene/gltf/Preflight.h"
 
 #include "penumbra/core/Error.h"
+#include "scene/gltf/Accessors.h"
 
 #include <fmt/format.h>
 
@@ -68,7 +69,7 @@ bool fitsItsView(const json& doc, const json& accessors, const json& index)
         !component->is_number_integer())
         return false;
     const int64_t c = component->get<int64_t>();
-    const uint64_t bytes = c == 5120 || c == 5121 ? 1 : c == 5122 || c == 5123 ? 2 : c == 5125 || c == 5126 ? 4 : 0;
+    const uint64_t bytes = c >= INT32_MIN && c <= INT32_MAX ? componentBytes(int(c)) : 0;
     if (bytes == 0) return false;
     const uint64_t element = bytes * kComponents.at(type->get<std::string>());
     const auto offsetIt = a.find("byteOffset");

@@ -1,0 +1,39 @@
+#pragma once
+// A folder of the running test's own under the temporary directory, and hostile input
+// written into it: what the tests of file handling share.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+namespace penumbra::test {
+
+// temp/penumbra_<prefix>_<pid>_<test name>, created (and emptied first, should a killed
+// run have left it): one per test and process, so parallel tests never share one. The
+// caller removes it (std::filesystem::remove_all) in its TearDown.
+inline std::filesystem::path makeScratchFolder(std::string_view prefix)
+{
+    const std::filesystem::path dir =
+        std::filesystem::temp_directory_path() /
+        fmt::format("penumbra_{}_{}_{}", prefix, ::getpid(), ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    return dir;
+}
+
+// JSON text: `levels` nested objects ({"a": ...}) or arrays ([...]) around the number 1,
+// as deep as a hostile file nests them.
+inline std::string nestedJson(int levels, bool arrays)
+{
+    std::string open, close;
+    for (int i = 0; i < levels; ++i) {
+        open += arrays ? "[" : "{\"a\":";
+        close += arrays ? "]" : "}";
+    }
+    return open + "1" + close;
+}
+
+} // namespace penumbra::test
