@@ -497,18 +497,24 @@ int runBench(const BenchFlags& flags)
     }
     markParetoFronts(run);
 
-    // Files first, results.json last: a results.json newer than the others says the set
-    // is complete. Figures on stdout mean that the files are there too.
+    // Files first: figures on stdout mean that the files are there too. The -o set goes
+    // into a staging folder that then takes the folder's place, all or nothing, with the
+    // summary when it is written into the same folder.
+    const bool summaryInSet = !flags.output.empty() && !flags.summary.empty() && sameFolder(summaryDir, dir);
     if (!flags.output.empty()) {
-        createOutputFolder(dir, outputFlag);
-        io::writeTextFile(plotFile, paretoSvg(run));
-        io::writeTextFile(csvFile, resultsCsv(run));
-        io::writeTextFile(jsonFile, resultsJson(run).dump(2) + "\n");
+        OutputSet set(dir, outputFlag);
+        io::writeTextFile(set.folder() / plotFile.filename(), paretoSvg(run));
+        io::writeTextFile(set.folder() / csvFile.filename(), resultsCsv(run));
+        io::writeTextFile(set.folder() / jsonFile.filename(), resultsJson(run).dump(2) + "\n");
+        if (summaryInSet) io::writeTextFile(set.folder() / summary.filename(), summaryMarkdown(run));
+        set.commit();
         spdlog::info("wrote {}, {} and {}", csvFile.string(), jsonFile.string(), plotFile.string());
     }
     if (!flags.summary.empty()) {
-        createOutputFolder(summaryDir, summaryFlag);
-        io::writeTextFile(summary, summaryMarkdown(run));
+        if (!summaryInSet) {
+            createOutputFolder(summaryDir, summaryFlag);
+            io::writeTextFile(summary, summaryMarkdown(run));
+        }
         spdlog::info("wrote {}", flags.summary);
     }
     printTable(run);

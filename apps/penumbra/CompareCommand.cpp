@@ -151,11 +151,10 @@ void printTable(const json& doc, const std::vector<metrics::VisibilityComparison
 }
 
 // `reaches`: per light, the pixels compared (reachMask); the others are grey in its diff.
-void writeOutputs(const fs::path& dir, const OutputFiles& files, const FrameImages& test, const FrameImages& reference,
+void writeOutputs(const OutputFiles& files, const FrameImages& test, const FrameImages& reference,
                   const std::vector<config::LightConfig>& lights, const std::vector<metrics::PixelMask>& reaches,
                   float diffScale, const json& doc)
 {
-    createOutputFolder(dir, fmt::format("-o {}", dir.string()));
     const uint32_t w = test.width, h = test.height;
     for (size_t i = 0; i < files.lights.size(); ++i) {
         const metrics::FloatImageView v{w, h, test.visibility[i]}, vRef{w, h, reference.visibility[i]};
@@ -167,7 +166,6 @@ void writeOutputs(const fs::path& dir, const OutputFiles& files, const FrameImag
     io::writePng(files.colorReference, w, h, reference.color);
     writeVisibilityExr(files.visibilityTest, w, h, lights, test.visibility);
     writeVisibilityExr(files.visibilityReference, w, h, lights, reference.visibility);
-    // Last: a metrics.json newer than the images says the set is complete.
     io::writeTextFile(files.metrics, doc.dump(2) + "\n");
 }
 
@@ -247,7 +245,10 @@ int runCompare(const CompareFlags& flags)
 
     // Files first: figures on stdout mean that the files, if asked for, are there too.
     if (!flags.output.empty()) {
-        writeOutputs(dir, files, test, ref, config.lights, reaches, float(flags.diffScale), doc);
+        // Into a staging folder that then takes the folder's place: all or nothing.
+        OutputSet set(dir, fmt::format("-o {}", dir.string()));
+        writeOutputs(outputFiles(set.folder(), config), test, ref, config.lights, reaches, float(flags.diffScale), doc);
+        set.commit();
         spdlog::info("wrote {} files into {}", files.all().size(), dir.string());
     }
     if (flags.json) {

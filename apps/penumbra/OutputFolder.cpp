@@ -4,10 +4,133 @@
 #include "penumbra/io/StagedFile.h"
 
 #include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <fcntl.h>
+#include <stdio.h>  // renameat2 (glibc 2.28)
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <set>
 
 namespace fs = std::filesystem;
 
 namespace penumbra::app {
+namespace {
+
+constexpr std::string_view kStageInfix = ".penumbra-";
+constexpr size_t kStageRandomChars = 6;  // mkdtemp's XXXXXX
+
+// `dir` made absolute with its links resolved (as far as it exists): the folder the
+// exchange must swap, not a link to it.
+fs::path realFolder(const fs::path& dir)
+{
+    std::error_code ec;
+    fs::path real = fs::weakly_canonical(fs::absolute(dir, ec), ec);
+    if (ec) real = fs::absolute(dir).lexically_normal();
+    if (real.filename().empty() && real.has_parent_path() && real != real.root_path()) real = real.parent_path();  // "out/"
+    return real;
+}
+
+std::string stagePrefix(const fs::path& real) { return "." + real.filename().string() + std::string(kStageInfix); }
+
+std::set<std::string> entryNames(const fs::path& dir)
+{
+    std::set<std::string> names;
+    for (const auto& e : fs::directory_iterator(dir)) names.insert(e.path().filename().string());
+    return names;
+}
+
+} // namespace
+
+bool sameFolder(const fs::path& a, const fs::path& b) { return realFolder(a) == realFolder(b); }
+
+int removeStaleOutputStages(const fs::path& dir)
+{
+    const fs::path real = realFolder(dir);
+    const std::string prefix = stagePrefix(real);
+    int removed = 0;
+    std::error_code ec;
+    for (fs::directory_iterator it(real.parent_path(), ec), end; !ec && it != end; it.increment(ec)) {
+        const std::string name = it->path().filename().string();
+        if (name.size() != prefix.size() + kStageRandomChars || name.compare(0, prefix.size(), prefix) != 0) continue;
+        // A live run holds an flock on its staging folder; a killed one's died with it.
+        const int fd = ::open(it->path().c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+        if (fd < 0) continue;
+        std::error_code removeError;
+        if (::flock(fd, LOCK_EX | LOCK_NB) == 0 && fs::remove_all(it->path(), removeError) > 0 && !removeError) ++removed;
+        ::close(fd);
+    }
+    return removed;
+}
+
+OutputSet::OutputSet(fs::path dir, std::string who) : dir_(std::move(dir)), real_(realFolder(dir_)), who_(std::move(who))
+{
+    removeStaleOutputStages(real_);
+    std::string pattern = (real_.parent_path() / (stagePrefix(real_) + std::string(kStageRandomChars, 'X'))).string();
+    if (!::mkdtemp(pattern.data())) {
+        throw Error(fmt::format("{}: cannot create a staging folder beside it: {}", who_, std::strerror(errno)));
+    }
+    stage_ = pattern;
+    lock_ = ::open(stage_.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (lock_ >= 0) ::flock(lock_, LOCK_EX);
+}
+
+OutputSet::~OutputSet()
+{
+    if (!committed_) {
+        std::error_code ec;
+        fs::remove_all(stage_, ec);
+    }
+    if (lock_ >= 0) ::close(lock_);
+}
+
+bool OutputSet::commit()
+{
+    const std::set<std::string> written = entryNames(stage_);
+    std::error_code ec;
+    if (::mkdir(real_.c_str(), 0777) != 0 && errno != EEXIST) {
+        throw Error(fmt::format("{}: cannot create the folder: {}", who_, std::strerror(errno)));
+    }
+    // Why the exchange cannot keep the user's files, if it cannot.
+    std::string why;
+    const fs::path cwd = fs::current_path(ec);
+    const auto [end, _] = std::mismatch(real_.begin(), real_.end(), cwd.begin(), cwd.end());
+    if (!ec && end == real_.end()) why = "it is the working folder or holds it";
+    for (const auto& entry : fs::directory_iterator(real_)) {
+        if (!why.empty()) break;
+        const std::string name = entry.path().filename().string();
+        if (written.count(name)) continue;  // the command's own file: replaced
+        if (entry.is_directory(ec) && !entry.is_symlink(ec)) {
+            why = fmt::format("it holds the folder '{}', which cannot be hard-linked", name);
+        } else if (::linkat(AT_FDCWD, entry.path().c_str(), AT_FDCWD, (stage_ / name).c_str(), 0) != 0) {
+            why = fmt::format("'{}' cannot be hard-linked ({})", name, std::strerror(errno));
+        }
+    }
+    if (why.empty()) {
+        struct stat st {};
+        if (::stat(real_.c_str(), &st) == 0) ::chmod(stage_.c_str(), st.st_mode & 07777);
+        if (::renameat2(AT_FDCWD, stage_.c_str(), AT_FDCWD, real_.c_str(), RENAME_EXCHANGE) == 0) {
+            // stage_ now names the old folder: its set and the second links of the user's files.
+            committed_ = true;
+            fs::remove_all(stage_, ec);
+            return true;
+        }
+        why = fmt::format("the file system cannot exchange two folders ({})", std::strerror(errno));
+    }
+    spdlog::warn("{}: {}; its files are replaced one by one instead of all at once", who_, why);
+    for (const std::string& name : written) {
+        fs::rename(stage_ / name, real_ / name, ec);
+        if (ec) throw Error(fmt::format("{}: cannot move '{}' into place: {}", who_, name, ec.message()));
+    }
+    committed_ = true;
+    fs::remove_all(stage_, ec);  // and the links made for the exchange
+    return false;
+}
 
 fs::path outputFolder(const std::string& flag)
 {

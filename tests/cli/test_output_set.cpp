@@ -1,0 +1,209 @@
+// The output set of `compare -o DIR` and `bench -o DIR` (apps/penumbra/OutputFolder.h,
+// issue 20 item 5): DIR holds the whole old set or the whole new one at every moment,
+// the user's other files (and links) are kept, and what a killed run leaves is removed by
+// the next. Compiled into the unit tests with the CLI's OutputFolder.cpp.
+#include "ScratchFolder.h"
+
+#include "OutputFolder.h"
+
+#include <gtest/gtest.h>
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+using namespace penumbra;
+namespace fs = std::filesystem;
+
+namespace {
+
+class OutputSetTest : public ::testing::Test {
+protected:
+    void SetUp() override
+    {
+        root_ = test::makeScratchFolder("outset");
+        dir_ = root_ / "out";
+    }
+    void TearDown() override { fs::remove_all(root_); }
+
+    static void put(const fs::path& file, const std::string& text) { std::ofstream(file, std::ios::binary) << text; }
+    static std::string read(const fs::path& file)
+    {
+        std::ifstream in(file, std::ios::binary);
+        std::ostringstream text;
+        text << in.rdbuf();
+        return text.str();
+    }
+    static std::set<std::string> entries(const fs::path& dir)
+    {
+        std::set<std::string> names;
+        for (const auto& e : fs::directory_iterator(dir)) names.insert(e.path().filename().string());
+        return names;
+    }
+    // A set as bench writes it, with `tag` in every file.
+    void writeSet(const app::OutputSet& set, const std::string& tag) const
+    {
+        for (const char* name : {"results.csv", "results.json", "pareto.svg"}) put(set.folder() / name, tag);
+    }
+    void expectSet(const std::string& tag) const
+    {
+        for (const char* name : {"results.csv", "results.json", "pareto.svg"}) EXPECT_EQ(read(dir_ / name), tag) << name;
+    }
+
+    fs::path root_, dir_;
+};
+
+} // namespace
+
+TEST_F(OutputSetTest, ANewFolderAppearsWithTheWholeSet)
+{
+    {
+        app::OutputSet set(dir_, "-o out");
+        writeSet(set, "new");
+        EXPECT_FALSE(fs::exists(dir_)) << "nothing is visible before the commit";
+        EXPECT_TRUE(set.commit());
+    }
+    expectSet("new");
+    EXPECT_EQ(entries(root_), std::set<std::string>{"out"}) << "no staging folder is left";
+}
+
+TEST_F(OutputSetTest, TheSetIsReplacedAtOnceAndTheUsersFilesAndLinksStay)
+{
+    fs::create_directory(dir_);
+    put(dir_ / "results.csv", "old");
+    put(dir_ / "results.json", "old");
+    put(dir_ / "pareto.svg", "old");
+    put(dir_ / "notes.txt", "mine");
+    fs::create_symlink("notes.txt", dir_ / "notes.link");
+    fs::create_symlink("/nonexistent/penumbra", dir_ / "dangling.link");
+    ::chmod(dir_.c_str(), 0750);
+    struct stat before {};
+    ASSERT_EQ(::stat((dir_ / "notes.txt").c_str(), &before), 0);
+    {
+        app::OutputSet set(dir_, "-o out");
+        writeSet(set, "new");
+        expectSet("old");
+        EXPECT_TRUE(set.commit()) << "replaced at once";
+    }
+    expectSet("new");
+    EXPECT_EQ(entries(dir_), (std::set<std::string>{"results.csv", "results.json", "pareto.svg", "notes.txt", "notes.link",
+                                                    "dangling.link"}));
+    struct stat after {};
+    ASSERT_EQ(::stat((dir_ / "notes.txt").c_str(), &after), 0);
+    EXPECT_EQ(after.st_ino, before.st_ino) << "the user's file is the same file, not a copy";
+    EXPECT_EQ(read(dir_ / "notes.txt"), "mine");
+    EXPECT_TRUE(fs::is_symlink(dir_ / "notes.link"));
+    EXPECT_EQ(fs::read_symlink(dir_ / "dangling.link"), "/nonexistent/penumbra");
+    struct stat folder {};
+    ASSERT_EQ(::stat(dir_.c_str(), &folder), 0);
+    EXPECT_EQ(folder.st_mode & 0777, 0750u) << "the folder keeps its mode";
+    EXPECT_EQ(entries(root_), std::set<std::string>{"out"});
+}
+
+TEST_F(OutputSetTest, ALinkToTheFolderStaysALinkAndItsTargetGetsTheSet)
+{
+    fs::create_directory(root_ / "real");
+    put(root_ / "real" / "notes.txt", "mine");
+    fs::create_directory_symlink("real", dir_);
+    {
+        app::OutputSet set(dir_, "-o out");
+        writeSet(set, "new");
+        EXPECT_TRUE(set.commit());
+    }
+    EXPECT_TRUE(fs::is_symlink(dir_));
+    expectSet("new");
+    EXPECT_EQ(read(root_ / "real" / "notes.txt"), "mine");
+    EXPECT_EQ(entries(root_), (std::set<std::string>{"out", "real"}));
+}
+
+TEST_F(OutputSetTest, AFolderInsideIsKeptAndTheFilesAreMovedOneByOne)
+{
+    fs::create_directories(dir_ / "plots");
+    put(dir_ / "plots" / "mine.svg", "mine");
+    put(dir_ / "results.csv", "old");
+    {
+        app::OutputSet set(dir_, "-o out");
+        writeSet(set, "new");
+        EXPECT_FALSE(set.commit()) << "a folder cannot be hard-linked: one by one";
+    }
+    expectSet("new");
+    EXPECT_EQ(read(dir_ / "plots" / "mine.svg"), "mine");
+    EXPECT_EQ(entries(root_), std::set<std::string>{"out"});
+}
+
+TEST_F(OutputSetTest, ARunKilledBeforeTheCommitLeavesTheOldSetAndTheNextRunClearsItsStage)
+{
+    fs::create_directory(dir_);
+    put(dir_ / "results.csv", "old");
+    put(dir_ / "results.json", "old");
+    put(dir_ / "pareto.svg", "old");
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+        app::OutputSet set(dir_, "-o out");
+        writeSet(set, "killed");
+        ::raise(SIGKILL);
+        ::_exit(0);
+    }
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    ASSERT_TRUE(WIFSIGNALED(status));
+    expectSet("old");
+    EXPECT_EQ(entries(root_).size(), 2u) << "the killed run's hidden staging folder";
+    {
+        app::OutputSet set(dir_, "-o out");
+        writeSet(set, "new");
+        EXPECT_TRUE(set.commit());
+    }
+    expectSet("new");
+    EXPECT_EQ(entries(root_), std::set<std::string>{"out"});
+}
+
+TEST_F(OutputSetTest, OnlyStagesNoLiveRunHoldsAreStale)
+{
+    fs::create_directory(dir_);
+    for (const char* name : {".out.penumbra-abc123", ".out.penumbra-live00", ".out.penumbra-toolong1", ".other.penumbra-abc123"}) {
+        fs::create_directory(root_ / name);
+        put(root_ / name / "results.csv", "x");
+    }
+    const int live = ::open((root_ / ".out.penumbra-live00").c_str(), O_RDONLY | O_DIRECTORY);
+    ASSERT_GE(live, 0);
+    ASSERT_EQ(::flock(live, LOCK_EX), 0);
+    EXPECT_EQ(app::removeStaleOutputStages(dir_), 1);
+    EXPECT_EQ(entries(root_), (std::set<std::string>{"out", ".out.penumbra-live00", ".out.penumbra-toolong1",
+                                                     ".other.penumbra-abc123"}));
+    ::close(live);
+    EXPECT_EQ(app::removeStaleOutputStages(root_ / "out/"), 1) << "\"out/\" names the same folder";
+}
+
+TEST_F(OutputSetTest, AnAbandonedSetLeavesNothing)
+{
+    fs::create_directory(dir_);
+    put(dir_ / "results.csv", "old");
+    {
+        app::OutputSet set(dir_, "-o out");
+        writeSet(set, "new");
+    }
+    EXPECT_EQ(read(dir_ / "results.csv"), "old");
+    EXPECT_EQ(entries(root_), std::set<std::string>{"out"});
+    EXPECT_EQ(entries(dir_), std::set<std::string>{"results.csv"});
+}
+
+TEST(OutputFolders, SameFolderResolvesLinksAndTrailingSlashes)
+{
+    const fs::path root = test::makeScratchFolder("samefolder");
+    fs::create_directory(root / "real");
+    fs::create_directory_symlink("real", root / "link");
+    EXPECT_TRUE(app::sameFolder(root / "real", root / "link"));
+    EXPECT_TRUE(app::sameFolder(root / "real/", root / "real"));
+    EXPECT_TRUE(app::sameFolder(root / "missing", root / "missing/"));
+    EXPECT_FALSE(app::sameFolder(root / "real", root / "missing"));
+    fs::remove_all(root);
+}
