@@ -30,6 +30,32 @@ const char* resultName(VkResult result)
     }
 }
 
+std::string formatName(VkFormat format)
+{
+    switch (format) {
+    case VK_FORMAT_R8_UNORM: return "R8_UNORM";
+    case VK_FORMAT_R8G8B8A8_UNORM: return "R8G8B8A8_UNORM";
+    case VK_FORMAT_R8G8B8A8_SRGB: return "R8G8B8A8_SRGB";
+    case VK_FORMAT_R16_UNORM: return "R16_UNORM";
+    case VK_FORMAT_R16_SFLOAT: return "R16_SFLOAT";
+    case VK_FORMAT_R16G16_SNORM: return "R16G16_SNORM";
+    case VK_FORMAT_R16G16B16A16_SFLOAT: return "R16G16B16A16_SFLOAT";
+    case VK_FORMAT_R32_UINT: return "R32_UINT";
+    case VK_FORMAT_R32_SFLOAT: return "R32_SFLOAT";
+    case VK_FORMAT_R32G32_SFLOAT: return "R32G32_SFLOAT";
+    case VK_FORMAT_R32G32B32_SFLOAT: return "R32G32B32_SFLOAT";
+    case VK_FORMAT_R32G32B32A32_UINT: return "R32G32B32A32_UINT";
+    case VK_FORMAT_R32G32B32A32_SFLOAT: return "R32G32B32A32_SFLOAT";
+    case VK_FORMAT_D16_UNORM: return "D16_UNORM";
+    case VK_FORMAT_X8_D24_UNORM_PACK32: return "X8_D24_UNORM_PACK32";
+    case VK_FORMAT_D32_SFLOAT: return "D32_SFLOAT";
+    case VK_FORMAT_D16_UNORM_S8_UINT: return "D16_UNORM_S8_UINT";
+    case VK_FORMAT_D24_UNORM_S8_UINT: return "D24_UNORM_S8_UINT";
+    case VK_FORMAT_D32_SFLOAT_S8_UINT: return "D32_SFLOAT_S8_UINT";
+    default: return fmt::format("VkFormat {}", int(format));
+    }
+}
+
 void check(VkResult result, std::string_view what)
 {
     if (result >= 0) {
@@ -42,8 +68,9 @@ void check(VkResult result, std::string_view what)
     } else if (result == VK_ERROR_DEVICE_LOST) {
         hint = " (the device was lost: the driver crashed or a submission hung)";
     }
-    throw GpuError(fmt::format("Vulkan call failed: {}: {} ({}){}", what, resultName(result),
-                               static_cast<int>(result), hint));
+    throw VulkanError(fmt::format("Vulkan call failed: {}: {} ({}){}", what, resultName(result),
+                                  static_cast<int>(result), hint),
+                      result);
 }
 
 } // namespace penumbra::gpu

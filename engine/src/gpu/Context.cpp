@@ -143,6 +143,9 @@ ContextOptions contextOptionsFromEnvironment(ContextOptions base)
     if (const char* env = std::getenv("PENUMBRA_VALIDATION"); env && *env) {
         base.validation = std::string(env) != "0";
     }
+    if (const char* env = std::getenv("PENUMBRA_ISOLATE_PASSES"); env && *env) {
+        base.isolatePasses = std::string(env) != "0";
+    }
     if (const char* env = std::getenv("PENUMBRA_GPU_TIMEOUT_S"); env && *env) {
         char* end = nullptr;
         const double seconds = std::strtod(env, &end);
@@ -155,7 +158,8 @@ ContextOptions contextOptionsFromEnvironment(ContextOptions base)
     return base;
 }
 
-Context::Context(const ContextOptions& options) : submitTimeoutSeconds_(options.submitTimeoutSeconds)
+Context::Context(const ContextOptions& options)
+    : submitTimeoutSeconds_(options.submitTimeoutSeconds), isolatePasses_(options.isolatePasses)
 {
     try {
         createInstance(options.validation);
@@ -447,6 +451,28 @@ uint32_t Context::findMemoryType(uint32_t typeBits, VkMemoryPropertyFlags requir
     return *fallback;
 }
 
+VkDeviceMemory Context::allocateMemory(const VkMemoryAllocateInfo& info, std::string_view what, std::string_view lower)
+{
+    VkResult result = faultHooks_.allocate ? faultHooks_.allocate(info.allocationSize, what) : VK_SUCCESS;
+    VkDeviceMemory memory = VK_NULL_HANDLE;
+    if (result == VK_SUCCESS) result = vkAllocateMemory(device_, &info, nullptr, &memory);
+    if (result == VK_ERROR_OUT_OF_DEVICE_MEMORY || result == VK_ERROR_OUT_OF_HOST_MEMORY) {
+        const uint32_t heap = info.memoryTypeIndex < memoryProperties_.memoryTypeCount
+                                  ? memoryProperties_.memoryTypes[info.memoryTypeIndex].heapIndex
+                                  : 0;
+        constexpr double kMiB = 1024.0 * 1024.0;
+        throw VulkanError(fmt::format("out of {} memory: {} needs {:.1f} MiB ({} bytes) of heap {} ({:.0f} MiB on '{}'); "
+                                      "{} ({})",
+                                      result == VK_ERROR_OUT_OF_DEVICE_MEMORY ? "device" : "host", what,
+                                      double(info.allocationSize) / kMiB, uint64_t(info.allocationSize), heap,
+                                      double(memoryProperties_.memoryHeaps[heap].size) / kMiB, info_.name, lower,
+                                      resultName(result)),
+                          result);
+    }
+    check(result, fmt::format("vkAllocateMemory for {}", what));
+    return memory;
+}
+
 void Context::submitAndWait(const std::function<void(VkCommandBuffer)>& record)
 {
     VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
@@ -478,7 +504,8 @@ void Context::submitAndWait(VkCommandBuffer cmd)
     VkSubmitInfo2 submit{VK_STRUCTURE_TYPE_SUBMIT_INFO_2};
     submit.commandBufferInfoCount = 1;
     submit.pCommandBufferInfos = &cmdInfo;
-    check(vkQueueSubmit2(queue_, 1, &submit, fence_), "vkQueueSubmit2");
+    const VkResult injected = faultHooks_.submit ? faultHooks_.submit() : VK_SUCCESS;
+    check(injected == VK_SUCCESS ? vkQueueSubmit2(queue_, 1, &submit, fence_) : injected, "vkQueueSubmit2");
     // A finite wait: a hung submission becomes an error, never a hang
     // (ContextOptions::submitTimeoutSeconds).
     const double seconds = std::clamp(submitTimeoutSeconds_, 1e-3, 1e6);

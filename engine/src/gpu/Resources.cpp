@@ -27,7 +27,8 @@ Buffer::Buffer(Context& context, VkDeviceSize size, VkBufferUsageFlags usage, bo
                                  VK_MEMORY_PROPERTY_HOST_CACHED_BIT)
         : context.findMemoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
     try {
-        check(vkAllocateMemory(device_, &alloc, nullptr, &memory_), "vkAllocateMemory buffer " + name);
+        memory_ = context.allocateMemory(alloc, fmt::format("buffer '{}' ({} bytes)", name, uint64_t(size)),
+                                         "lower what sets its size");
         check(vkBindBufferMemory(device_, buffer_, memory_, 0), "vkBindBufferMemory " + name);
         if (hostVisible) {
             check(vkMapMemory(device_, memory_, 0, VK_WHOLE_SIZE, 0, &mapped_), "vkMapMemory " + name);
@@ -127,6 +128,11 @@ uint32_t texelSize(VkFormat format)
     }
 }
 
+std::string describe(const ImageDesc& desc)
+{
+    return fmt::format("image '{}' ({} x {} {})", desc.name, desc.width, desc.height, formatName(desc.format));
+}
+
 Image::Image(Context& context, const ImageDesc& desc) : device_(context.device()), desc_(desc)
 {
     createHandle(context);
@@ -135,7 +141,7 @@ Image::Image(Context& context, const ImageDesc& desc) : device_(context.device()
         VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
         alloc.allocationSize = req.size;
         alloc.memoryTypeIndex = context.findMemoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-        check(vkAllocateMemory(device_, &alloc, nullptr, &memory_), "vkAllocateMemory image " + desc.name);
+        memory_ = context.allocateMemory(alloc, describe(desc), "lower the resolution or output size that sets its size");
         memorySize_ = req.size;
         check(vkBindImageMemory(device_, image_, memory_, 0), "vkBindImageMemory " + desc.name);
         createView();

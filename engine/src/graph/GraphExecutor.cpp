@@ -35,6 +35,19 @@ VkImageAspectFlags barrierAspect(VkFormat format)
 
 const char* kindName(const CompiledResource& res) { return res.isImage ? "image" : "buffer"; }
 
+// How an out-of-memory message names a transient: its size and the pass that first
+// writes it (whose technique's parameters set that size).
+std::string describeResource(const CompiledGraph& graph, uint32_t r)
+{
+    const CompiledResource& res = graph.resources[r];
+    const std::string size = res.isImage ? fmt::format("{} x {} {}", res.width, res.height, gpu::formatName(res.format))
+                                         : fmt::format("{} bytes", uint64_t(res.sizeBytes));
+    const std::string pass = res.firstUse >= 0 && size_t(res.firstUse) < graph.passes.size()
+                                 ? fmt::format(", first used by pass '{}'", graph.passes[size_t(res.firstUse)].name)
+                                 : "";
+    return fmt::format("render graph {} '{}' ({}{})", kindName(res), res.name, size, pass);
+}
+
 // The executed passes that use resource `r`, for error messages: "'a', 'b'".
 std::string passesUsing(const CompiledGraph& graph, uint32_t r)
 {
@@ -100,6 +113,7 @@ struct GraphExecutor::DeviceResources {
     std::vector<int> timerScope;     // per executed pass: its GPU timestamp scope, -1 for none
     bool frameRecorded = false;
     VkCommandBuffer cmd = VK_NULL_HANDLE;  // execute()'s, reused by every segment
+    std::vector<std::string> segmentPasses;  // the GPU passes recorded into the open segment
 
     struct Block {
         VkDeviceMemory memory = VK_NULL_HANDLE;
@@ -178,7 +192,7 @@ void GraphExecutor::DeviceResources::createTransients(const CompiledGraph& graph
     for (uint32_t r = 0; r < count; ++r) {
         const CompiledResource& res = graph.resources[r];
         if (res.imported || res.firstUse < 0 || res.memorySlot >= 0) continue;
-        bind(graph, r, allocate(requirements[r].size, requirements[r].memoryTypeBits, res.hostVisible, res.name));
+        bind(graph, r, allocate(requirements[r].size, requirements[r].memoryTypeBits, res.hostVisible, describeResource(graph, r)));
     }
 }
 
@@ -201,18 +215,18 @@ void GraphExecutor::DeviceResources::placeSlot(const CompiledGraph& graph, uint3
             // say, depth images in a type of their own): it gets its own allocation. It
             // still shares nothing with a live resource, so correctness is unaffected;
             // only the saving is lost.
-            bind(graph, r, allocate(req.size, req.memoryTypeBits, hostVisible, graph.resources[r].name));
+            bind(graph, r, allocate(req.size, req.memoryTypeBits, hostVisible, describeResource(graph, r)));
             continue;
         }
         typeBits &= req.memoryTypeBits;
         size = std::max(size, req.size);
         alignment = std::max(alignment, req.alignment);
         shared.push_back(r);
-        names += fmt::format("{}{}", names.empty() ? "" : ", ", graph.resources[r].name);
+        names += fmt::format("{}{}", names.empty() ? "" : "; ", describeResource(graph, r));
     }
     if (shared.empty()) return;
     const Block block = allocate(alignUp(size, alignment), typeBits, hostVisible,
-                                 fmt::format("render graph slot {}: {}", slot, names));
+                                 fmt::format("render graph memory slot {}, shared by: {}", slot, names));
     for (uint32_t r : shared) bind(graph, r, block);
 }
 
@@ -230,8 +244,9 @@ GraphExecutor::DeviceResources::Block GraphExecutor::DeviceResources::allocate(V
                                              VK_MEMORY_PROPERTY_HOST_CACHED_BIT)
                     : context.findMemoryType(typeBits, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
     Block block;
-    gpu::check(vkAllocateMemory(context.device(), &info, nullptr, &block.memory),
-               fmt::format("vkAllocateMemory ({} bytes for {})", size, name));
+    block.memory = context.allocateMemory(info, name,
+                                          "lower what sets the size of the pass's images (its technique's resolution "
+                                          "parameter, or the output's --width/--height)");
     memory.push_back(block.memory);
     bytesAllocated += size;
     context.setName(VK_OBJECT_TYPE_DEVICE_MEMORY, reinterpret_cast<uint64_t>(block.memory), name);
@@ -263,12 +278,32 @@ void GraphExecutor::DeviceResources::beginSegment()
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     gpu::check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer (render graph)");
+    segmentPasses.clear();
 }
 
 void GraphExecutor::DeviceResources::submitSegment()
 {
     gpu::check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer (render graph)");
-    context.submitAndWait(cmd);
+    try {
+        context.submitAndWait(cmd);
+    } catch (const gpu::VulkanError& e) {
+        if (e.result() != VK_ERROR_DEVICE_LOST) throw;
+        // A lost device cannot say where it failed (no checkpoints on every driver): the
+        // passes of the submission are the suspects, and isolation narrows them to one.
+        std::string passes;
+        for (const std::string& name : segmentPasses) passes += fmt::format("{}'{}'", passes.empty() ? "" : ", ", name);
+        if (segmentPasses.size() == 1) {
+            throw gpu::VulkanError(fmt::format("the device was lost running render graph pass {}: the driver crashed or "
+                                               "the pass faulted or hung ({})",
+                                               passes, e.what()),
+                                   e.result());
+        }
+        throw gpu::VulkanError(
+            fmt::format("the device was lost in a submission of render graph passes {}: the driver crashed or one of them "
+                        "faulted or hung; PENUMBRA_ISOLATE_PASSES=1 submits each pass alone to name it ({})",
+                        passes.empty() ? "(none: barriers only)" : passes, e.what()),
+            e.result());
+    }
 }
 
 void GraphExecutor::DeviceResources::resolveImports(const CompiledGraph& graph)
@@ -474,6 +509,7 @@ void GraphExecutor::recordGpuPass(VkCommandBuffer cmd, RenderGraph& graph, size_
     const CompiledPass& pass = compiled_->passes[index];
     resources.recordBarriers(cmd, *compiled_, pass.barriersBefore);
     resources.context.beginLabel(cmd, pass.name);
+    resources.segmentPasses.push_back(pass.name);
     const int scope = resources.timed ? int(resources.timer->beginScope(cmd, pass.name)) : -1;
     PassContext context;
     context.cmd_ = cmd;
@@ -527,6 +563,10 @@ void GraphExecutor::execute(RenderGraph& graph)
         const CompiledPass& pass = compiled.passes[i];
         if (pass.queue != QueueKind::Host) {
             recordGpuPass(resources.cmd, graph, i);
+            if (resources.context.isolatePasses() && i + 1 < compiled.passes.size()) {
+                resources.submitSegment();
+                resources.beginSegment();
+            }
             continue;
         }
         // The host pass's barriers end the segment before it: their HOST destination

@@ -8,6 +8,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace penumbra::gpu {
@@ -32,10 +33,13 @@ struct ContextOptions {
     // rasterizer; sanitizer runs, which slow the driver's own memory calls, raise it
     // (CMakePresets.json's sanitizer test presets).
     double submitTimeoutSeconds = 60.0;
+    // Submit every render graph pass on its own and wait for it (PENUMBRA_ISOLATE_PASSES=1):
+    // slow, but a lost device or a hang then names the one pass that caused it.
+    bool isolatePasses = false;
 };
 
-// Reads PENUMBRA_DEVICE ("name" or "type:cpu"), PENUMBRA_VALIDATION (0/1) and
-// PENUMBRA_GPU_TIMEOUT_S (seconds, > 0: submitTimeoutSeconds) so that a flag is not the
+// Reads PENUMBRA_DEVICE ("name" or "type:cpu"), PENUMBRA_VALIDATION (0/1),
+// PENUMBRA_ISOLATE_PASSES (0/1) and PENUMBRA_GPU_TIMEOUT_S (seconds, > 0: submitTimeoutSeconds) so that a flag is not the
 // only way to set them; explicit device fields in `base` win. Throws penumbra::ConfigError
 // naming PENUMBRA_GPU_TIMEOUT_S when it is not a number in (0, 1e6].
 ContextOptions contextOptionsFromEnvironment(ContextOptions base);
@@ -44,6 +48,14 @@ ContextOptions contextOptionsFromEnvironment(ContextOptions base);
 // a Context's destruction (objects still alive at vkDestroyDevice), which no Context
 // outlives to count.
 uint64_t validationMessagesInProcess();
+
+// Failures of the device on demand, for tests: each hook returns the VkResult that the
+// call reports instead of calling Vulkan, or VK_SUCCESS to let the call through. `what`
+// says what the memory is for (Context::allocateMemory's description).
+struct FaultHooks {
+    std::function<VkResult(VkDeviceSize bytes, std::string_view what)> allocate;  // before each vkAllocateMemory
+    std::function<VkResult()> submit;                                             // before each vkQueueSubmit2
+};
 
 struct DeviceInfo {
     std::string name;
@@ -68,6 +80,7 @@ public:
     const VkPhysicalDeviceProperties& properties() const { return properties_; }
     const VkPhysicalDeviceMemoryProperties& memoryProperties() const { return memoryProperties_; }
     bool validationEnabled() const { return validation_; }
+    bool isolatePasses() const { return isolatePasses_; }
     // The core features the device was created with (the optional ones where it has them).
     const VkPhysicalDeviceFeatures& enabledFeatures() const { return enabledFeatures_; }
 
@@ -80,6 +93,15 @@ public:
     // one that also has `preferred`. Throws GpuError when none fits.
     uint32_t findMemoryType(uint32_t typeBits, VkMemoryPropertyFlags required,
                             VkMemoryPropertyFlags preferred = 0) const;
+
+    // vkAllocateMemory, through the fault hook. Out of device or host memory is a
+    // GpuError that names `what` ("image 'pcss/depth' (16384 x 16384 D32_SFLOAT)"), how
+    // many MiB it asked for of which heap, and `lower`: what the user can lower for it.
+    VkDeviceMemory allocateMemory(const VkMemoryAllocateInfo& info, std::string_view what, std::string_view lower);
+
+    // Tests: make the next allocations or submissions fail (FaultHooks). Empty hooks
+    // switch injection off.
+    void setFaultHooks(FaultHooks hooks) { faultHooks_ = std::move(hooks); }
 
     // Records commands into a one-time command buffer, submits and waits for them.
     void submitAndWait(const std::function<void(VkCommandBuffer)>& record);
@@ -119,6 +141,7 @@ private:
     VkCommandPool commandPool_ = VK_NULL_HANDLE;
     VkFence fence_ = VK_NULL_HANDLE;
     double submitTimeoutSeconds_ = 60.0;
+    bool isolatePasses_ = false;
     DeviceInfo info_;
     VkPhysicalDeviceProperties properties_{};
     VkPhysicalDeviceMemoryProperties memoryProperties_{};
@@ -132,6 +155,7 @@ private:
     PFN_vkCmdEndDebugUtilsLabelEXT cmdEndLabel_ = nullptr;
     PFN_vkCmdPushDescriptorSetKHR cmdPushDescriptorSet_ = nullptr;
     VkPhysicalDeviceFeatures enabledFeatures_{};
+    FaultHooks faultHooks_;
 };
 
 } // namespace penumbra::gpu

@@ -54,6 +54,8 @@ struct ImageDesc {
     VkImageUsageFlags usage = 0;
     std::string name;
 };
+// "image 'name' (W x H FORMAT)": how messages name an image.
+std::string describe(const ImageDesc& desc);
 
 class Image {
 public:
