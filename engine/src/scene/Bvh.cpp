@@ -1,6 +1,7 @@
 #include "penumbra/scene/Bvh.h"
 
 #include "penumbra/core/Error.h"
+#include "core/Finite.h"
 
 #include <fmt/format.h>
 
@@ -28,7 +29,7 @@ static_assert(kMaxSahDepth + 30 + 1 <= kStackCapacity);
 // planesCutting's answer for a box entirely outside one plane (a real mask has 6 bits).
 constexpr uint32_t kOutside = std::numeric_limits<uint32_t>::max();
 
-bool isFinite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+using core::isFinite;
 
 // `!(min <= max)` also catches NaN, which fails every comparison.
 bool isPlaceable(const Aabb& box)

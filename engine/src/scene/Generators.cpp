@@ -633,7 +633,11 @@ template <class Params> RegisteredGenerator registerGenerator(std::string name, 
     };
     auto build = [name, generate, parameters](const Settings& settings) {
         Params params;
-        for (const auto& [key, text] : settings) {
+        for (const auto& setting : settings) {
+            // Named references, not a structured binding: Clang 14 (the fuzz build)
+            // cannot capture a binding in the lambda below.
+            const auto& key = setting.first;
+            const auto& text = setting.second;
             bool known = false;
             visitParams(params, [&](const char* k, auto& value) {
                 if (key != k) return;

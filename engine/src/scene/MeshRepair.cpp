@@ -1,6 +1,7 @@
 #include "penumbra/scene/MeshRepair.h"
 
 #include "penumbra/core/Error.h"
+#include "core/Finite.h"
 
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <fmt/format.h>
@@ -14,7 +15,7 @@ namespace {
 
 using TopologyMesh = OpenMesh::TriMesh_ArrayKernelT<>;
 
-bool isFinite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+using core::isFinite;
 
 // The glTF loader writes a zero normal where the file has none.
 enum class NormalState { Valid, Missing, NonFinite };

@@ -3,7 +3,8 @@
 // error, a crash or a hang. Numbers beyond a double's range, nesting beyond
 // config::kMaxConfigNesting (checked while parsing, before anything recurses), file names
 // the file system refuses, sweep paths with array indices beyond 64 bits or a million
-// levels; long names and paths are shortened in messages.
+// levels; FIFOs, devices and files beyond config::kMaxConfigBytes; long names and paths
+// are shortened in messages.
 #include "ScratchFolder.h"
 
 #include "penumbra/config/Config.h"
@@ -11,8 +12,10 @@
 #include "penumbra/config/Sweep.h"
 #include "penumbra/core/Error.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <sys/stat.h>
 
 #include <filesystem>
 #include <fstream>
@@ -112,6 +115,34 @@ TEST_F(HostileConfig, FileNamesTheFileSystemRefusesAreNamedShortened)
     const std::string what = errorLoading(dir_ / (longName + ".json"));
     EXPECT_NE(what.find("too long"), std::string::npos) << what;
     EXPECT_LT(what.size(), 600u);
+}
+
+TEST_F(HostileConfig, OnlyRegularFilesOfBoundedSizeAreRead)
+{
+    // A FIFO would block the read forever, a device never end it: refused by type, as the
+    // config itself and as an include, before any read.
+    const fs::path fifo = dir_ / "pipe.json";
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    std::string what = errorLoading(fifo);
+    EXPECT_NE(what.find("pipe.json: is a FIFO (named pipe), expected a JSON config file"), std::string::npos) << what;
+    what = errorLoading(write("inc.json", R"({"include": "pipe.json"})"));
+    EXPECT_NE(what.find("a FIFO"), std::string::npos) << what;
+    for (const char* device : {"/dev/zero", "/dev/null"}) {
+        what = errorLoading(write("dev.json", fmt::format(R"({{"include": "{}"}})", device)));
+        EXPECT_NE(what.find(fmt::format("{}: is a device", device)), std::string::npos) << what;
+    }
+    // One byte beyond kMaxConfigBytes (a sparse file: nothing is written) is refused by
+    // its size; a file of exactly the limit is read (and refused as JSON, not for size).
+    const fs::path big = write("big.json", "");
+    fs::resize_file(big, config::kMaxConfigBytes + 1);
+    what = errorLoading(big);
+    EXPECT_NE(what.find(fmt::format("big.json: is {} bytes; a config file holds at most 64 MiB", config::kMaxConfigBytes + 1)),
+              std::string::npos)
+        << what;
+    fs::resize_file(big, config::kMaxConfigBytes);
+    what = errorLoading(big);
+    EXPECT_EQ(what.find("at most 64 MiB"), std::string::npos) << what;
+    EXPECT_NE(what.find("malformed JSON"), std::string::npos) << what;
 }
 
 TEST_F(HostileConfig, SweepPathsBeyondTheConfigAreRefused)

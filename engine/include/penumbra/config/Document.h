@@ -3,6 +3,7 @@
 // from: what config/Config.h reads a RenderConfig from, and config/Sweep.h expands.
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -25,6 +26,10 @@ struct ConfigDocument {
 // memory quadratic in its depth. Sweep paths address at most this many levels too.
 inline constexpr int kMaxConfigNesting = 64;
 
+// A config file (and each file it includes) is at most this big: the shipped ones are a
+// few KB, and the JSON library holds a file in about ten times its size.
+inline constexpr uintmax_t kMaxConfigBytes = uintmax_t(64) << 20;
+
 // Reads `file` and its includes: `"include": "base.json"` or a list, paths relative to
 // the including file, merged in order with RFC 7386 merge-patch semantics (objects merge
 // key by key, everything else - arrays too - is replaced, null removes a key), then the
@@ -32,7 +37,8 @@ inline constexpr int kMaxConfigNesting = 64;
 // Every error is a ConfigError naming the file and, where the JSON is at fault, the JSON
 // path: malformed JSON (with line and column), a number beyond a double's range, nesting
 // beyond kMaxConfigNesting, a file name the file system refuses (too long: shown
-// shortened).
+// shortened), a file that is not a regular one (a FIFO, a device) or is beyond
+// kMaxConfigBytes.
 ConfigDocument loadDocument(const std::filesystem::path& file);
 
 // `text` (a path, a JSON pointer) for a message: whole up to 160 characters, else its

@@ -1,0 +1,81 @@
+// libFuzzer target: the config reader as `penumbra render/compare/bench CONFIG` runs it.
+// The input is the top-level config file; beside it lie files it may include (the fuzzer
+// finds "include" and their names in config.dict). Each input is read with its includes,
+// its sweep expanded and every variant parsed into a RenderConfig.
+//
+// The contract under test: a config either loads or is refused with a penumbra::Error
+// (the CLI's exit 1, naming the file and JSON path). Any other exception escapes to
+// libFuzzer as a finding (the CLI's exit 2, "internal error"), as do crashes, sanitizer
+// reports, hangs (-timeout) and runaway memory (-rss_limit_mb).
+#include "FuzzScratch.h"
+
+#include "penumbra/config/Document.h"
+#include "penumbra/config/Sweep.h"
+#include "penumbra/core/Error.h"
+
+#include <memory>
+
+namespace {
+
+penumbra::fuzz::ScratchFolder* scratch = nullptr;
+
+// Files an input may include: a complete config, a partial one, one that includes
+// another (a chain), one that includes itself (a cycle) and one that is not JSON.
+void writeIncludes(const penumbra::fuzz::ScratchFolder& folder)
+{
+    folder.write("base.json", R"({"scene": {"generator": "box-grid", "params": {"columns": 2, "rows": 2}},
+ "camera": {"position": [15, 11, 17], "target": [1, 0, 0], "fov_y_deg": 45, "near": 0.05},
+ "lights": [{"type": "spot", "position": [-9, 16, 7], "target": [1.5, 0, 0], "outer_cone_deg": 42,
+             "inner_cone_deg": 34, "intensity": 900, "shadow": {"technique": "hard", "resolution": 256}}],
+ "output": {"width": 64, "height": 48}, "frames": 1})");
+    folder.write("lights.json", R"({"lights": [{"type": "directional", "direction": [0, -1, 0.2],
+ "shadow": {"technique": "pcss"}}, {"type": "point", "position": [0, 3, 0], "intensity": 50}]})");
+    folder.write("chain.json", R"({"include": "base.json", "camera": {"fov_deg": 70}})");
+    folder.write("cycle.json", R"({"include": "cycle.json"})");
+    folder.write("broken.json", R"({"scene": )");
+    std::filesystem::create_directories(folder.path() / "sub");
+    folder.write("sub/up.json", R"({"include": ["../base.json", "../lights.json"]})");
+}
+
+// The number of variants a sweep asks for, counted as the engine does (the product of
+// its entries' "values" sizes; malformed entries count 1 and are refused by the engine).
+size_t sweepCombinations(const nlohmann::json& document)
+{
+    const auto it = document.find("sweep");
+    if (it == document.end() || !it->is_array()) return 1;
+    size_t combinations = 1;
+    for (const nlohmann::json& entry : *it) {
+        if (!entry.is_object()) continue;
+        const auto values = entry.find("values");
+        if (values != entry.end() && values->is_array() && !values->empty()) combinations *= values->size();
+        if (combinations > 1'000'000) break;
+    }
+    return combinations;
+}
+
+} // namespace
+
+extern "C" int LLVMFuzzerInitialize(int*, char***)
+{
+    scratch = new penumbra::fuzz::ScratchFolder();
+    std::atexit([] { delete scratch; });
+    writeIncludes(*scratch);
+    return 0;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
+{
+    const std::filesystem::path file = scratch->write("config.json", data, size);
+    try {
+        const penumbra::config::ConfigDocument document = penumbra::config::loadDocument(file);
+        // A sweep of up to 100,000 variants is allowed and each is a copy of the
+        // document: memory by design, not a finding. Larger products are refused by the
+        // engine before any copy, so those are expanded too.
+        const size_t combinations = sweepCombinations(document.json);
+        if (combinations <= 64 || combinations > 100'000) penumbra::config::expandSweep(document);
+        else penumbra::config::parseConfig(document);
+    } catch (const penumbra::Error&) {
+        // Refused with a message: the contract.
+    }
+    return 0;
+}
