@@ -99,10 +99,12 @@ bool OutputSet::commit()
     // Why the exchange cannot keep the user's files, if it cannot.
     std::string why;
     const fs::path cwd = fs::current_path(ec);
-    const auto [end, _] = std::mismatch(real_.begin(), real_.end(), cwd.begin(), cwd.end());
-    if (!ec && end == real_.end()) why = "it is the working folder or holds it";
-    for (const auto& entry : fs::directory_iterator(real_)) {
-        if (!why.empty()) break;
+    if (!ec && std::mismatch(real_.begin(), real_.end(), cwd.begin(), cwd.end()).first == real_.end()) {
+        why = "it is the working folder or holds it";  // a shell there would be left in the old folder
+    }
+    std::error_code listError;
+    for (fs::directory_iterator it(real_, listError), end; why.empty() && !listError && it != end; it.increment(listError)) {
+        const fs::directory_entry& entry = *it;
         const std::string name = entry.path().filename().string();
         if (written.count(name)) continue;  // the command's own file: replaced
         if (entry.is_directory(ec) && !entry.is_symlink(ec)) {
@@ -111,6 +113,7 @@ bool OutputSet::commit()
             why = fmt::format("'{}' cannot be hard-linked ({})", name, std::strerror(errno));
         }
     }
+    if (why.empty() && listError) why = fmt::format("its files cannot be listed ({})", listError.message());
     if (why.empty()) {
         struct stat st {};
         if (::stat(real_.c_str(), &st) == 0) ::chmod(stage_.c_str(), st.st_mode & 07777);

@@ -138,6 +138,31 @@ TEST_F(OutputSetTest, AFolderInsideIsKeptAndTheFilesAreMovedOneByOne)
     EXPECT_EQ(entries(root_), std::set<std::string>{"out"});
 }
 
+TEST_F(OutputSetTest, TheWorkingFolderIsNotExchangedUnderTheShellInIt)
+{
+    // `-o .` (or a folder above the working one): exchanging it would leave the process,
+    // and a shell in it, in the removed old folder; its files move one by one.
+    fs::create_directories(dir_);
+    put(dir_ / "results.csv", "old");
+    const fs::path before = fs::current_path();
+    for (const fs::path& cwd : {dir_, dir_ / "sub"}) {
+        fs::create_directories(cwd);
+        fs::current_path(cwd);
+        bool exchanged = true;
+        {
+            app::OutputSet set(dir_, "-o .");
+            writeSet(set, "new");
+            exchanged = set.commit();
+        }
+        const bool stillThere = fs::exists(fs::current_path() / ".");
+        fs::current_path(before);
+        EXPECT_FALSE(exchanged) << cwd;
+        EXPECT_TRUE(stillThere);
+        expectSet("new");
+        EXPECT_EQ(entries(root_), std::set<std::string>{"out"});
+    }
+}
+
 TEST_F(OutputSetTest, ARunKilledBeforeTheCommitLeavesTheOldSetAndTheNextRunClearsItsStage)
 {
     fs::create_directory(dir_);
