@@ -8,11 +8,14 @@
 #include "penumbra/frame/FloorRenderer.h"
 #include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/io/Png.h"
+#include "penumbra/metrics/DebugImage.h"
 #include "penumbra/plugin/PluginRegistry.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <cmath>
+#include <cstdlib>
 #include <memory>
 #include <optional>
 
@@ -28,9 +31,51 @@ struct RenderFlags {
     bool timings = false;
     bool stats = false;
     std::optional<std::string> culling;
+    std::string debugImage;       // --debug-image: the PNG shows this graph image instead of the colour
+    std::string debugMapping = "linear";
+    std::string debugRange;       // "MIN,MAX"; empty: the image's finite values
     RunFlags run;
     DeviceFlags device;
 };
+
+// --debug-range "MIN,MAX": finite, MIN <= MAX.
+std::optional<metrics::DebugRange> parseDebugRange(const std::string& text)
+{
+    if (text.empty()) return std::nullopt;
+    const size_t comma = text.find(',');
+    metrics::DebugRange range;
+    char* end = nullptr;
+    bool ok = comma != std::string::npos;
+    if (ok) {
+        const std::string low = text.substr(0, comma), high = text.substr(comma + 1);
+        range.min = std::strtod(low.c_str(), &end);
+        ok = !low.empty() && *end == '\0';
+        range.max = std::strtod(high.c_str(), &end);
+        ok = ok && !high.empty() && *end == '\0';
+    }
+    if (!ok || !std::isfinite(range.min) || !std::isfinite(range.max) || range.min > range.max) {
+        throw Error(fmt::format("--debug-range '{}': expected MIN,MAX, two finite numbers with MIN <= MAX", text));
+    }
+    return range;
+}
+
+// The PNG of a frame: its colour image, or the requested debug image mapped to RGBA8.
+void writeFramePng(const std::string& path, const frame::FrameRenderer& renderer, const RenderFlags& flags)
+{
+    if (flags.debugImage.empty()) {
+        io::writePng(path, renderer.width(), renderer.height(), renderer.readColor());
+        return;
+    }
+    const metrics::DebugMapping mapping = metrics::parseDebugMapping(flags.debugMapping);
+    const metrics::DebugImageValues image = renderer.readImage(flags.debugImage);
+    const metrics::DebugRange found = metrics::finiteRange(image, mapping);
+    const metrics::DebugRange range = parseDebugRange(flags.debugRange).value_or(found);
+    io::writePng(path, image.width, image.height, metrics::debugImageRgba(image, mapping, range));
+    spdlog::info("debug image '{}': {} x {}, {} channel(s), values in [{}, {}]{}; shown {} over [{}, {}]", flags.debugImage,
+                 image.width, image.height, image.channels, found.min, found.max,
+                 found.nonFinite ? fmt::format(" and {} non-finite (magenta)", found.nonFinite) : "",
+                 metrics::debugMappingName(mapping), range.min, range.max);
+}
 
 // "-o frames/f{frame:04}.png" writes every measured frame; a plain name, the last one.
 bool outputPerFrame(const std::string& output) { return output.find("{frame") != std::string::npos; }
@@ -53,6 +98,8 @@ int runRender(const RenderFlags& flags)
     // Fail on a bad output path before spending seconds rendering.
     io::checkWritable(outputPerFrame(flags.output) ? framePath(flags.output, 0) : flags.output);
     if (!flags.visibilityExr.empty()) io::checkWritable(flags.visibilityExr);
+    metrics::parseDebugMapping(flags.debugMapping);
+    parseDebugRange(flags.debugRange);
 
     gpu::Context context(contextOptions(flags.device));
     spdlog::info("device: {} ({})", context.deviceInfo().name, context.deviceInfo().type);
@@ -60,6 +107,7 @@ int runRender(const RenderFlags& flags)
     plugin::PluginRegistry plugins;
     frame::FrameRenderer renderer(context, run.scene, run.config, plugins);
     for (const std::string& warning : renderer.warnings()) spdlog::warn("{}", warning);
+    if (!flags.debugImage.empty()) renderer.requestImage(flags.debugImage);
     const config::RenderConfig& resolved = run.rest;
     spdlog::info("scene: {} instances, {} triangles; {}x{}, {} light(s), {} frame(s)", run.scene.instances.size(),
                  run.scene.triangleCount(), resolved.width, resolved.height, resolved.lights.size(), resolved.frames);
@@ -88,7 +136,7 @@ int runRender(const RenderFlags& flags)
         }
         measured.push_back(std::move(t));
         if (outputPerFrame(flags.output)) {
-            io::writePng(framePath(flags.output, frame), renderer.width(), renderer.height(), renderer.readColor());
+            writeFramePng(framePath(flags.output, frame), renderer, flags);
         }
         if (floor) floorMeasured.push_back(floor->renderFrame());
     }
@@ -105,7 +153,7 @@ int runRender(const RenderFlags& flags)
         spdlog::info("wrote {} frames: {} ... {}", run.config.frames, framePath(flags.output, 0),
                      framePath(flags.output, run.config.frames - 1));
     } else {
-        io::writePng(flags.output, renderer.width(), renderer.height(), renderer.readColor());
+        writeFramePng(flags.output, renderer, flags);
         spdlog::info("wrote {}", flags.output);
     }
     if (!flags.visibilityExr.empty()) {
@@ -142,6 +190,14 @@ Command addRenderCommand(CLI::App& app)
                   "visited, queries issued, ms of each step");
     cmd->add_option("--culling", flags->culling, "Caster culling mode (overrides the config)")
         ->check(CLI::IsMember({"none", "frustum", "light-occlusion", "receiver-mask"}));
+    cmd->add_option("--debug-image", flags->debugImage,
+                    "Write this image of the frame's graph to the PNG instead of the colour (a shadow map, a moment "
+                    "map, a visibility image: `penumbra graph CONFIG` lists them); its passes run even where nothing "
+                    "else reads it");
+    cmd->add_option("--debug-map", flags->debugMapping, "How --debug-image maps values: linear, log or false-color")
+        ->capture_default_str();
+    cmd->add_option("--debug-range", flags->debugRange,
+                    "The values --debug-image maps to black and white, MIN,MAX (default: its finite values' range)");
     addSizeFlags(*cmd, flags->run);
     addParamOverrideFlag(*cmd, flags->run.settings);
     addDeviceFlags(*cmd, flags->device);

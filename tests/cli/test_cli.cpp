@@ -1612,3 +1612,72 @@ TEST_F(Cli, BenchInterruptedWritesNothing)
     EXPECT_TRUE(has(slurp(err), "penumbra: interrupted after 0 of 1 variant(s); nothing written")) << slurp(err);
     EXPECT_FALSE(fs::exists(out));
 }
+
+// --debug-image (issue 21, debug views): any image of the frame's graph, by name, written
+// as the PNG; the frame's own images and every technique's intermediate ones.
+TEST_F(Cli, DebugImageWritesAnyGraphImageByName)
+{
+    struct Case {
+        const char* config;
+        const char* image;
+        const char* mapping;
+        int channels;
+        size_t colours;  // at least this many distinct colours in a sample of pixels
+    };
+    // A depth map, a moment map, a summed-area-table-based technique's map, the G-buffer's
+    // packed normal (two channels), the colour image (four), a visibility image.
+    // A hard shadow's visibility is 0 or 1: two colours.
+    const Case cases[] = {{"default.json", "light0.hard.shadow_map", "linear", 1, 3},
+                          {"vsm.json", "light0.vsm.moments", "false-color", 4, 3},
+                          {"pcss.json", "light0.pcss.shadow_map", "log", 1, 3},
+                          {"default.json", "gbuffer.normal", "linear", 2, 3},
+                          {"default.json", "color", "linear", 4, 3},
+                          {"default.json", "light0.visibility", "linear", 1, 2}};
+    for (const Case& c : cases) {
+        SCOPED_TRACE(fmt::format("{} {}", c.config, c.image));
+        const fs::path png = dir / "debug.png";
+        fs::remove(png);
+        const CliResult r = run(fmt::format("render {} -o '{}' --width 96 --height 64 --validation --debug-image {} "
+                                            "--debug-map {}",
+                                            config(c.config), png.string(), c.image, c.mapping));
+        if (r.exitCode == 1 && has(r.err, "the frame has no such image")) {
+            ADD_FAILURE() << r.err;  // the names below say what the frame has
+            continue;
+        }
+        ASSERT_EQ(r.exitCode, 0) << r.err;
+        EXPECT_TRUE(has(r.err, fmt::format("debug image '{}': ", c.image))) << r.err;
+        EXPECT_TRUE(has(r.err, fmt::format("{} channel(s)", c.channels))) << r.err;
+        const Png image = readPng(png);
+        ASSERT_GT(image.width, 0);
+        std::set<std::vector<int>> colours;
+        for (int y = 0; y < image.height; y += 7)
+            for (int x = 0; x < image.width; x += 7) colours.insert(image.at(x, y));
+        EXPECT_GE(colours.size(), c.colours) << "a map with content maps to several colours";
+    }
+}
+
+TEST_F(Cli, DebugImageRefusesUnknownNamesAndBadMappingsNamingThem)
+{
+    const fs::path png = dir / "x.png";
+    CliResult r = run(fmt::format("render {} -o '{}' --width 64 --height 48 --debug-image nope", config("default.json"),
+                                  png.string()));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(has(r.err, "debug image 'nope': the frame has no such image; its images: ")) << r.err;
+    EXPECT_TRUE(has(r.err, "light0.hard.shadow_map")) << r.err;
+    EXPECT_TRUE(has(r.err, "gbuffer.normal")) << r.err;
+    EXPECT_FALSE(fs::exists(png));
+    for (const char* flags : {"--debug-map sqrt", "--debug-range 1", "--debug-range 2,1", "--debug-range 0,inf",
+                              "--debug-range a,b"}) {
+        SCOPED_TRACE(flags);
+        r = run(fmt::format("render {} -o '{}' --debug-image color {}", config("default.json"), png.string(), flags));
+        EXPECT_EQ(r.exitCode, 1) << r.err;
+        EXPECT_TRUE(has(r.err, "--debug-range '") || has(r.err, "debug image mapping 'sqrt'")) << r.err;
+        EXPECT_FALSE(has(r.err, "scene:")) << "refused before rendering: " << r.err;
+        EXPECT_FALSE(fs::exists(png));
+    }
+    // An explicit range maps its ends to black and white.
+    r = run(fmt::format("render {} -o '{}' --width 64 --height 48 --debug-image light0.visibility --debug-range 0,1",
+                        config("default.json"), png.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(has(r.err, "shown linear over [0, 1]")) << r.err;
+}

@@ -11,6 +11,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -414,6 +415,31 @@ std::vector<uint8_t> FrameRenderer::readColor() const
 std::vector<float> FrameRenderer::readFloats(const std::string& name) const
 {
     return gpu::readImageFloats(context_, executor_.image(name), executor_.finalLayout(name));
+}
+
+std::vector<std::string> FrameRenderer::imageNames() const { return graph_->writtenImages(); }
+
+void FrameRenderer::requestImage(const std::string& name)
+{
+    const std::vector<std::string> names = imageNames();
+    if (std::find(names.begin(), names.end(), name) == names.end()) {
+        std::string list;
+        for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+        throw ConfigError(fmt::format("debug image '{}': the frame has no such image; its images: {}", name, list));
+    }
+    // An output is kept with its writers, and stays readable after the frame.
+    graph_->markOutput(name);
+}
+
+metrics::DebugImageValues FrameRenderer::readImage(const std::string& name) const
+{
+    const gpu::Image& image = executor_.image(name);
+    metrics::DebugImageValues values;
+    values.width = image.desc().width;
+    values.height = image.desc().height;
+    values.channels = gpu::channelCount(image.desc().format);
+    values.values = readFloats(name);
+    return values;
 }
 
 std::vector<float> FrameRenderer::readVisibility(size_t light) const

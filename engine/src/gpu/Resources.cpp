@@ -110,11 +110,27 @@ bool isDepthFormat(VkFormat format)
            format == VK_FORMAT_D32_SFLOAT_S8_UINT;
 }
 
+uint32_t channelCount(VkFormat format)
+{
+    switch (format) {
+    case VK_FORMAT_R16G16_SNORM:
+    case VK_FORMAT_R32G32_SFLOAT: return 2;
+    case VK_FORMAT_R8G8B8A8_UNORM:
+    case VK_FORMAT_R8G8B8A8_SRGB:
+    case VK_FORMAT_R16G16B16A16_SFLOAT:
+    case VK_FORMAT_R32G32B32A32_UINT:
+    case VK_FORMAT_R32G32B32A32_SFLOAT: return 4;
+    default: return 1;
+    }
+}
+
 uint32_t texelSize(VkFormat format)
 {
     switch (format) {
+    case VK_FORMAT_R8_UNORM: return 1;
     case VK_FORMAT_R8G8B8A8_UNORM:
     case VK_FORMAT_R8G8B8A8_SRGB:
+    case VK_FORMAT_R16G16_SNORM:
     case VK_FORMAT_R32_SFLOAT:
     case VK_FORMAT_D32_SFLOAT:
     case VK_FORMAT_R32_UINT: return 4;
@@ -122,6 +138,7 @@ uint32_t texelSize(VkFormat format)
     case VK_FORMAT_R16_UNORM: return 2;
     case VK_FORMAT_R16G16B16A16_SFLOAT:
     case VK_FORMAT_R32G32_SFLOAT: return 8;
+    case VK_FORMAT_R32G32B32A32_UINT:
     case VK_FORMAT_R32G32B32A32_SFLOAT: return 16;
     default: throw GpuError(fmt::format("texelSize: format {} is not supported for read-back",
                                         static_cast<int>(format)));
@@ -352,10 +369,28 @@ std::vector<float> readImageFloats(Context& context, const Image& image, VkImage
         for (size_t i = 0; i < values.size(); ++i) out[i] = float(values[i]) / 65535.0f;
         return out;
     }
+    if (format == VK_FORMAT_R8_UNORM || format == VK_FORMAT_R8G8B8A8_UNORM || format == VK_FORMAT_R8G8B8A8_SRGB) {
+        // The stored bytes over 255 (an sRGB image's encoded values, not decoded).
+        std::vector<float> out(bytes.size());
+        for (size_t i = 0; i < bytes.size(); ++i) out[i] = float(std::to_integer<uint8_t>(bytes[i])) / 255.0f;
+        return out;
+    }
+    if (format == VK_FORMAT_R16G16_SNORM) {
+        std::vector<int16_t> values(bytes.size() / sizeof(int16_t));
+        std::memcpy(values.data(), bytes.data(), values.size() * sizeof(int16_t));
+        std::vector<float> out(values.size());
+        for (size_t i = 0; i < values.size(); ++i) out[i] = std::max(float(values[i]) / 32767.0f, -1.0f);
+        return out;
+    }
+    if (format == VK_FORMAT_R32_UINT || format == VK_FORMAT_R32G32B32A32_UINT) {
+        std::vector<uint32_t> values(bytes.size() / sizeof(uint32_t));
+        std::memcpy(values.data(), bytes.data(), values.size() * sizeof(uint32_t));
+        return std::vector<float>(values.begin(), values.end());
+    }
     if (format != VK_FORMAT_R32_SFLOAT && format != VK_FORMAT_R32G32B32A32_SFLOAT &&
         format != VK_FORMAT_D32_SFLOAT && format != VK_FORMAT_R32G32_SFLOAT) {
-        throw GpuError(fmt::format("readImageFloats: image '{}' is not a 16- or 32-bit float or 16-bit unorm format",
-                                   image.desc().name));
+        throw GpuError(fmt::format("readImageFloats: image '{}' has format {}, which is not read back as numbers",
+                                   image.desc().name, formatName(format)));
     }
     std::vector<float> out(bytes.size() / sizeof(float));
     std::memcpy(out.data(), bytes.data(), out.size() * sizeof(float));

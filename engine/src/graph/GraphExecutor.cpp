@@ -113,7 +113,9 @@ struct GraphExecutor::DeviceResources {
     std::vector<int> timerScope;     // per executed pass: its GPU timestamp scope, -1 for none
     bool frameRecorded = false;
     VkCommandBuffer cmd = VK_NULL_HANDLE;  // execute()'s, reused by every segment
-    std::vector<std::string> segmentPasses;  // the GPU passes recorded into the open segment
+    // The names of the GPU passes recorded into the open segment (the compiled graph's:
+    // valid while it executes; the vector keeps its capacity, so a frame allocates nothing).
+    std::vector<const std::string*> segmentPasses;
 
     struct Block {
         VkDeviceMemory memory = VK_NULL_HANDLE;
@@ -192,7 +194,8 @@ void GraphExecutor::DeviceResources::createTransients(const CompiledGraph& graph
     for (uint32_t r = 0; r < count; ++r) {
         const CompiledResource& res = graph.resources[r];
         if (res.imported || res.firstUse < 0 || res.memorySlot >= 0) continue;
-        bind(graph, r, allocate(requirements[r].size, requirements[r].memoryTypeBits, res.hostVisible, describeResource(graph, r)));
+        bind(graph, r,
+             allocate(requirements[r].size, requirements[r].memoryTypeBits, res.hostVisible, describeResource(graph, r)));
     }
 }
 
@@ -291,7 +294,7 @@ void GraphExecutor::DeviceResources::submitSegment()
         // A lost device cannot say where it failed (no checkpoints on every driver): the
         // passes of the submission are the suspects, and isolation narrows them to one.
         std::string passes;
-        for (const std::string& name : segmentPasses) passes += fmt::format("{}'{}'", passes.empty() ? "" : ", ", name);
+        for (const std::string* name : segmentPasses) passes += fmt::format("{}'{}'", passes.empty() ? "" : ", ", *name);
         if (segmentPasses.size() == 1) {
             throw gpu::VulkanError(fmt::format("the device was lost running render graph pass {}: the driver crashed or "
                                                "the pass faulted or hung ({})",
@@ -509,7 +512,7 @@ void GraphExecutor::recordGpuPass(VkCommandBuffer cmd, RenderGraph& graph, size_
     const CompiledPass& pass = compiled_->passes[index];
     resources.recordBarriers(cmd, *compiled_, pass.barriersBefore);
     resources.context.beginLabel(cmd, pass.name);
-    resources.segmentPasses.push_back(pass.name);
+    resources.segmentPasses.push_back(&pass.name);
     const int scope = resources.timed ? int(resources.timer->beginScope(cmd, pass.name)) : -1;
     PassContext context;
     context.cmd_ = cmd;

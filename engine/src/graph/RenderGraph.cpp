@@ -187,6 +187,15 @@ bool RenderGraph::isWritten(std::string_view resource) const
     });
 }
 
+std::vector<std::string> RenderGraph::writtenImages() const
+{
+    std::vector<std::string> names;
+    for (const ResourceDecl& r : resources_) {
+        if (r.isImage && isWritten(r.image.name)) names.push_back(r.image.name);
+    }
+    return names;
+}
+
 PassBuilder& PassBuilder::execute(ExecuteFn fn)
 {
     graph_->passes_[pass_].execute = std::move(fn);

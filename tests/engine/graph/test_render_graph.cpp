@@ -99,6 +99,9 @@ TEST(RenderGraph, CulledPassesNeverRunAndTheirProducersAreCulledToo)
     EXPECT_EQ(compiled->resources[0].firstUse, -1) << "a culled pass's resource is never allocated";
     EXPECT_EQ(compiled->resources[0].memorySlot, -1);
 
+    // A debug view asks for any written image by name (FrameRenderer::requestImage):
+    // marked, it keeps its culled producers.
+    EXPECT_EQ(graph.writtenImages(), (std::vector<std::string>{"a", "debug", "color"}));
     graph.markOutput("debug");
     EXPECT_EQ(passOrder(*graph.compile()),
               (std::vector<std::string>{"feedsDebugOnly", "debugView", "main", "readback"}));

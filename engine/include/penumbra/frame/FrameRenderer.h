@@ -14,6 +14,7 @@
 #include "penumbra/gpu/ShaderCompiler.h"
 #include "penumbra/graph/GraphExecutor.h"
 #include "penumbra/graph/RenderGraph.h"
+#include "penumbra/metrics/DebugImage.h"
 #include "penumbra/plugin/GBuffer.h"
 #include "penumbra/plugin/PluginRegistry.h"
 #include "penumbra/render/Casters.h"
@@ -84,6 +85,16 @@ public:
     // with sizes and aliasing), and the executor that allocated its memory.
     const graph::CompiledGraph& compiledGraph();
     const graph::GraphExecutor& executor() const { return executor_; }
+
+    // Debug images: any image a pass of the frame writes (imageNames(): the G-buffer,
+    // every technique's maps and tables, the visibility images, the colour image), by
+    // name. A requested image is kept, with the passes that write it, even where nothing
+    // else reads it (graph culling would drop them), and readImage() reads it after
+    // renderFrame(); unrequested, it costs nothing. Throws ConfigError naming an unknown
+    // name and listing the frame's images.
+    std::vector<std::string> imageNames() const;
+    void requestImage(const std::string& name);
+    metrics::DebugImageValues readImage(const std::string& name) const;
 
     // Read-back after renderFrame(): sRGB RGBA8 rows, top row first.
     std::vector<uint8_t> readColor() const;

@@ -95,6 +95,8 @@ private:
 bool isDepthFormat(VkFormat format);
 // Bytes per texel of the formats the engine reads back.
 uint32_t texelSize(VkFormat format);
+// Components per texel as readImageFloats returns them (1 for depth and single-channel formats).
+uint32_t channelCount(VkFormat format);
 
 // Creates a device-local buffer filled with `bytes` (through a staging copy).
 Buffer uploadBuffer(Context& context, std::span<const std::byte> bytes, VkBufferUsageFlags usage,
@@ -115,8 +117,9 @@ Image uploadImage(Context& context, uint32_t width, uint32_t height, VkFormat fo
 // tightly packed. Used for PNG output and for tests.
 std::vector<std::byte> readImage(Context& context, const Image& image, VkImageLayout layout);
 
-// Same, as floats: one per channel (R32F gives one per texel, RGBA16F/RGBA32F four);
-// half floats are widened, 16-bit unorm values divided by 65535.
+// Same, as floats: one per channel (channelCount: R32F gives one per texel, RGBA16F and
+// RGBA32F four); half floats are widened, unorm values divided by 255 or 65535 (an sRGB
+// image's stored bytes, not decoded), RG16 snorm by 32767, unsigned integers converted.
 std::vector<float> readImageFloats(Context& context, const Image& image, VkImageLayout layout);
 
 } // namespace penumbra::gpu

@@ -205,6 +205,9 @@ public:
 
     // Whether any declared pass writes `resource` (before culling).
     bool isWritten(std::string_view resource) const;
+    // The declared images that some pass writes, in declaration order (before culling):
+    // what a debug view may ask for by name.
+    std::vector<std::string> writtenImages() const;
 
     // The execute callback of the pass declared `declarationIndex`-th (see
     // CompiledPass::declarationIndex); empty when none was set.
