@@ -1624,9 +1624,10 @@ TEST_F(Cli, DebugImageWritesAnyGraphImageByName)
         int channels;
         size_t colours;  // at least this many distinct colours in a sample of pixels
     };
-    // A depth map, a moment map, a summed-area-table-based technique's map, the G-buffer's
-    // packed normal (two channels), the colour image (four), a visibility image.
-    // A hard shadow's visibility is 0 or 1: two colours.
+    // A depth map, a moment map, a point light's cube atlas (pcss), the G-buffer's packed
+    // normal (two channels), the colour image (four), a visibility image (a hard shadow's
+    // is 0 or 1: two colours). The maps at 256² (--set), small enough to read back and
+    // encode quickly under the sanitizers.
     const Case cases[] = {{"default.json", "light0.hard.shadow_map", "linear", 1, 3},
                           {"vsm.json", "light0.vsm.moments", "false-color", 4, 3},
                           {"pcss.json", "light0.pcss.shadow_map", "log", 1, 3},
@@ -1637,9 +1638,15 @@ TEST_F(Cli, DebugImageWritesAnyGraphImageByName)
         SCOPED_TRACE(fmt::format("{} {}", c.config, c.image));
         const fs::path png = dir / "debug.png";
         fs::remove(png);
+        // "light0.<technique>.<map>": that technique's maps at 256².
+        const std::string name = c.image;
+        const size_t dot = name.find('.'), next = name.find('.', dot + 1);
+        const std::string size = name.rfind("light", 0) == 0 && next != std::string::npos
+                                     ? fmt::format("--set {}.resolution=256", name.substr(dot + 1, next - dot - 1))
+                                     : "";
         const CliResult r = run(fmt::format("render {} -o '{}' --width 96 --height 64 --validation --debug-image {} "
-                                            "--debug-map {}",
-                                            config(c.config), png.string(), c.image, c.mapping));
+                                            "--debug-map {} {}",
+                                            config(c.config), png.string(), c.image, c.mapping, size));
         if (r.exitCode == 1 && has(r.err, "the frame has no such image")) {
             ADD_FAILURE() << r.err;  // the names below say what the frame has
             continue;
