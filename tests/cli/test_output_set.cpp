@@ -17,7 +17,6 @@
 #include <csignal>
 #include <fstream>
 #include <set>
-#include <sstream>
 
 using namespace penumbra;
 namespace fs = std::filesystem;
@@ -34,19 +33,8 @@ protected:
     void TearDown() override { fs::remove_all(root_); }
 
     static void put(const fs::path& file, const std::string& text) { std::ofstream(file, std::ios::binary) << text; }
-    static std::string read(const fs::path& file)
-    {
-        std::ifstream in(file, std::ios::binary);
-        std::ostringstream text;
-        text << in.rdbuf();
-        return text.str();
-    }
-    static std::set<std::string> entries(const fs::path& dir)
-    {
-        std::set<std::string> names;
-        for (const auto& e : fs::directory_iterator(dir)) names.insert(e.path().filename().string());
-        return names;
-    }
+    static std::string read(const fs::path& file) { return test::readFile(file); }
+    static std::set<std::string> entries(const fs::path& dir) { return test::entryNames(dir); }
     // A set as bench writes it, with `tag` in every file.
     void writeSet(const app::OutputSet& set, const std::string& tag) const
     {

@@ -6,6 +6,9 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
 #include <string>
 #include <string_view>
 
@@ -34,6 +37,23 @@ inline std::string nestedJson(int levels, bool arrays)
         close += arrays ? "]" : "}";
     }
     return open + "1" + close;
+}
+
+// A file's whole content ("" when it cannot be read).
+inline std::string readFile(const std::filesystem::path& file)
+{
+    std::ifstream in(file, std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+// The names in a folder: what a test of outputs checks is all that is left there.
+inline std::set<std::string> entryNames(const std::filesystem::path& dir)
+{
+    std::set<std::string> names;
+    for (const auto& e : std::filesystem::directory_iterator(dir)) names.insert(e.path().filename().string());
+    return names;
 }
 
 } // namespace penumbra::test

@@ -17,7 +17,6 @@
 #include <csignal>
 #include <fstream>
 #include <set>
-#include <sstream>
 
 using namespace penumbra;
 namespace fs = std::filesystem;
@@ -29,19 +28,8 @@ protected:
     void SetUp() override { dir_ = test::makeScratchFolder("staged"); }
     void TearDown() override { fs::remove_all(dir_); }
 
-    std::set<std::string> entries() const
-    {
-        std::set<std::string> names;
-        for (const auto& e : fs::directory_iterator(dir_)) names.insert(e.path().filename().string());
-        return names;
-    }
-    static std::string read(const fs::path& file)
-    {
-        std::ifstream in(file, std::ios::binary);
-        std::ostringstream text;
-        text << in.rdbuf();
-        return text.str();
-    }
+    std::set<std::string> entries() const { return test::entryNames(dir_); }
+    static std::string read(const fs::path& file) { return test::readFile(file); }
     void writeFile(const std::string& name, const std::string& text) const
     {
         std::ofstream(dir_ / name, std::ios::binary) << text;
