@@ -14,6 +14,7 @@
 #include "RenderCommand.h"
 #include "ValidateCommand.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/core/LeakCheck.h"
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -24,7 +25,9 @@
 #include <exception>
 #include <vector>
 
-int main(int argc, char** argv)
+namespace {
+
+int runCommandLine(int argc, char** argv)
 {
     namespace app = penumbra::app;
     // Logs go to stderr so that stdout carries only results (timings) for scripts.
@@ -63,4 +66,15 @@ int main(int argc, char** argv)
         return 2;
     }
     return 0;
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+    const int status = runCommandLine(argc, argv);
+    // After the command's objects are gone, before the libraries' destructors stop their
+    // worker threads (Embree's TBB: the reference technique).
+    penumbra::checkLeaksBeforeExit();
+    return status;
 }

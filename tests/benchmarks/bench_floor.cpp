@@ -15,7 +15,7 @@
 // The same figures for any config: penumbra render CONFIG -o out.png --frames 9 --warmup 2 --timings.
 // Figures: docs/performance.md.
 #include "BenchContext.h"
-#include "TestPaths.h"  // generated: the build tree's paths
+#include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/config/Config.h"
 #include "penumbra/frame/FloorRenderer.h"
@@ -37,7 +37,7 @@ using bench::registry;
 
 void BM_FrameAgainstFloor(benchmark::State& state, const char* configName)
 {
-    const config::RenderConfig cfg = config::loadConfig(std::filesystem::path(PENUMBRA_SOURCE_DIR) / "config" / configName);
+    const config::RenderConfig cfg = config::loadConfig(penumbra::test::sourceDir() / "config" / configName);
     const scene::Scene scene = config::buildScene(cfg.scene);
     frame::FrameRenderer renderer(context(), scene, cfg, registry());
     frame::FloorRenderer floor(context(), scene, cfg);

@@ -11,7 +11,7 @@
 // The same figures for any config: penumbra render CONFIG -o out.png --frames 30 --timings.
 // Figures: see plugins/pcss/README.md and plugins/vsm/README.md.
 #include "BenchContext.h"
-#include "TestPaths.h"  // generated: the build tree's paths
+#include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/config/Config.h"
 #include "penumbra/frame/FrameRenderer.h"
@@ -56,7 +56,7 @@ using bench::registry;
 
 void BM_ShadowTechnique(benchmark::State& state, const Technique& technique)
 {
-    config::RenderConfig cfg = config::loadConfig(std::filesystem::path(PENUMBRA_SOURCE_DIR) / "config/default.json");
+    config::RenderConfig cfg = config::loadConfig(penumbra::test::sourceDir() / "config/default.json");
     cfg.width = 1280;
     cfg.height = 720;
     config::ShadowSettings& shadow = cfg.lights[0].shadow;

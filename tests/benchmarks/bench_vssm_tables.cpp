@@ -20,7 +20,7 @@
 //
 // Figures: docs/vssm-bench.md, "The tables against a plain prefix sum".
 #include "BenchContext.h"
-#include "TestPaths.h"  // generated: the build tree's paths
+#include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/config/Config.h"
 #include "penumbra/core/Error.h"
@@ -88,8 +88,8 @@ class PrefixSumFloor {
 public:
     PrefixSumFloor(gpu::Context& context, uint32_t width, uint32_t height)
         : context_(context), width_(width), height_(height), timer_(context, 2),
-          compiler_({std::filesystem::path(PENUMBRA_SOURCE_DIR) / "tests/benchmarks/shaders", gpu::engineShaderDir(),
-                     std::filesystem::path(PENUMBRA_SOURCE_DIR) / "plugins/vssm"}),
+          compiler_({penumbra::test::sourceDir() / "tests/benchmarks/shaders", gpu::engineShaderDir(),
+                     penumbra::test::sourceDir() / "plugins/vssm"}),
           sampler_(gpu::createSampler(context, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE))
     {
         std::vector<float> depths(size_t(width) * height);
@@ -168,7 +168,7 @@ const graph::CompiledResource& resource(const graph::CompiledGraph& graph, const
 
 void BM_VssmTables(benchmark::State& state, const Case& c)
 {
-    config::RenderConfig cfg = config::loadConfig(std::filesystem::path(PENUMBRA_SOURCE_DIR) / "config/default.json");
+    config::RenderConfig cfg = config::loadConfig(penumbra::test::sourceDir() / "config/default.json");
     cfg.width = 640;
     cfg.height = 360;
     cfg.lights = {vssmLight(c)};

@@ -1,6 +1,6 @@
 // The `penumbra` command as a user runs it: exit codes, messages that say what and where,
 // and no partial or clobbered output file on failure.
-#include "TestPaths.h"  // generated: the build tree's paths
+#include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/plugin/Plugin.h"
 
@@ -90,7 +90,7 @@ protected:
     CliResult run(const std::string& args, const std::string& env = "") const
     {
         const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-        const std::string cmd = fmt::format("{} '{}' {} > '{}' 2> '{}' < /dev/null", env, PENUMBRA_EXE, args,
+        const std::string cmd = fmt::format("{} '{}' {} > '{}' 2> '{}' < /dev/null", env, penumbra::test::penumbraExecutable().string(), args,
                                             out.string(), err.string());
         const int status = std::system(cmd.c_str());
         CliResult r;
@@ -100,7 +100,7 @@ protected:
         return r;
     }
 
-    std::string config(const std::string& name) const { return fmt::format("'{}/config/{}'", PENUMBRA_SOURCE_DIR, name); }
+    std::string config(const std::string& name) const { return fmt::format("'{}/config/{}'", penumbra::test::sourceDir().string(), name); }
 
     // `command` (all but -o) refuses an -o that names a file, or a folder whose parent is
     // missing, and changes neither.
@@ -116,7 +116,7 @@ protected:
         EXPECT_NE(r.err.find("/a/b: cannot create the folder: '"), std::string::npos) << r.err;
         EXPECT_FALSE(fs::exists(dir / "a"));
     }
-    std::string data(const std::string& name) const { return fmt::format("'{}/{}'", PENUMBRA_TEST_DATA_DIR, name); }
+    std::string data(const std::string& name) const { return fmt::format("'{}/{}'", penumbra::test::testDataDir().string(), name); }
 
     fs::path dir;
 };
@@ -618,7 +618,7 @@ TEST_F(Cli, GraphSaysCullingRunsOutsideTheGraph)
 {
     const fs::path cfg = dir / "culled.json";
     std::ofstream(cfg) << fmt::format(R"({{"include": "{}/config/default.json", "culling": "receiver-mask"}})",
-                                      PENUMBRA_SOURCE_DIR);
+                                      penumbra::test::sourceDir().string());
     const CliResult r = run(fmt::format("graph '{}' --width 160 --height 90", cfg.string()));
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const size_t section = r.out.find("outside the graph: culling receiver-mask");
@@ -651,8 +651,8 @@ TEST_F(Cli, GraphRejectsABadFormat)
 
 namespace {
 
-const std::string kTestPlugins = PENUMBRA_TEST_PLUGIN_DIR;
-const std::string kShadowedPlugins = PENUMBRA_TEST_SHADOWED_PLUGIN_DIR;
+const std::string kTestPlugins = penumbra::test::testPluginDir().string();
+const std::string kShadowedPlugins = penumbra::test::shadowedTestPluginDir().string();
 
 // The test plugins (tests/fixtures/plugins/) on the search path, the shadowed folder second.
 std::string pluginPath() { return fmt::format("PENUMBRA_PLUGIN_PATH='{}:{}'", kTestPlugins, kShadowedPlugins); }
@@ -1170,7 +1170,7 @@ TEST_F(Cli, CompareCountsOnlyThePixelsASpotLightReaches)
     std::ofstream(cfg) << fmt::format(R"({{"include": {}, "lights": [{{"name": "lamp", "type": "spot",
         "position": [-2.0, 9.0, 1.0], "target": [0.0, 0.0, 0.0], "outer_cone_deg": 35.0, "inner_cone_deg": 30.0,
         "intensity": 900.0, "shadow": {{"technique": "hard", "resolution": 2048}}}}]}})",
-                                      nlohmann::json(std::string(PENUMBRA_SOURCE_DIR) + "/config/default.json").dump());
+                                      nlohmann::json(penumbra::test::sourceDir().string() + "/config/default.json").dump());
     // The real (Embree) reference in a child process: under AddressSanitizer the leak
     // check at exit runs while Embree's TBB worker threads wind down, and LeakSanitizer's
     // thread tracer crashes there about one run in six (SIGSEGV, exit 134). Address
@@ -1606,7 +1606,7 @@ TEST_F(Cli, BenchInterruptedWritesNothing)
         "{} '{}' bench '{}' {} --frames 100000 -o '{}' 2> '{}' > /dev/null < /dev/null & pid=$!; "
         "for i in $(seq 1 600); do grep -q 'variant 1/1' '{}' && break; sleep 0.1; done; sleep 0.5; "
         "kill -TERM $pid; wait $pid; echo $? > '{}'",
-        pluginPath(), PENUMBRA_EXE, cfg.string(), kTestGoodReference, out.string(), err.string(), err.string(), code.string());
+        pluginPath(), penumbra::test::penumbraExecutable().string(), cfg.string(), kTestGoodReference, out.string(), err.string(), err.string(), code.string());
     ASSERT_EQ(std::system(script.c_str()), 0);
     EXPECT_EQ(slurp(code), "143\n") << slurp(err);
     EXPECT_TRUE(has(slurp(err), "penumbra: interrupted after 0 of 1 variant(s); nothing written")) << slurp(err);

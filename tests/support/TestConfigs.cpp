@@ -1,6 +1,6 @@
 #include "TestConfigs.h"
 
-#include "TestPaths.h"  // generated: the build tree's paths
+#include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/scene/Generators.h"
 
@@ -21,12 +21,12 @@ void expectNear(const glm::vec3& actual, const glm::vec3& expected, float eps)
 
 std::filesystem::path gltfFile(const std::string& name)
 {
-    return std::filesystem::path(PENUMBRA_TEST_DATA_DIR) / "gltf" / name;
+    return penumbra::test::testDataDir() / "gltf" / name;
 }
 
 config::RenderConfig defaultTestConfig()
 {
-    config::RenderConfig c = config::loadConfig(std::filesystem::path(PENUMBRA_SOURCE_DIR) / "config/default.json");
+    config::RenderConfig c = config::loadConfig(penumbra::test::sourceDir() / "config/default.json");
     c.width = 320;
     c.height = 180;
     return c;

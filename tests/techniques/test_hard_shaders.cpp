@@ -3,7 +3,7 @@
 // behaves as the plugin assumes on this device. These run without the plugin loaded:
 // they need only the engine's shader compiler and a device.
 #include "TestContext.h"
-#include "TestPaths.h"  // generated: the build tree's paths
+#include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Context.h"
@@ -23,7 +23,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const fs::path kPluginDir = fs::path(PENUMBRA_SOURCE_DIR) / "plugins/hard";
+const fs::path kPluginDir = penumbra::test::sourceDir() / "plugins/hard";
 
 // The search path the engine gives a plugin: its own folder first, then shaders/.
 gpu::ShaderCompiler pluginCompiler() { return gpu::ShaderCompiler({kPluginDir, gpu::engineShaderDir()}); }
@@ -125,7 +125,7 @@ protected:
         gpu::Buffer probes(*context, points.size() * sizeof(glm::vec4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true,
                            "probe.points");
         std::memcpy(probes.mapped(), points.data(), points.size() * sizeof(glm::vec4));
-        const gpu::ShaderCompiler compiler({fs::path(PENUMBRA_TEST_DATA_DIR) / "shaders", gpu::engineShaderDir()});
+        const gpu::ShaderCompiler compiler({penumbra::test::testDataDir() / "shaders", gpu::engineShaderDir()});
         gpu::ComputePipelineDesc desc;
         desc.name = "depth_compare_probe";
         desc.shader = "depth_compare_probe.comp";

@@ -11,7 +11,7 @@
 #include "RayCastAgreement.h"
 #include "TestConfigs.h"
 #include "TestContext.h"
-#include "TestPaths.h"  // generated: the build tree's paths
+#include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/config/Config.h"
 #include "penumbra/core/Error.h"
@@ -126,8 +126,8 @@ protected:
         gpu::Buffer results(*context, boxes.size() * sizeof(glm::dvec4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true,
                             "sat_test.results");
 
-        const gpu::ShaderCompiler compiler({fs::path(PENUMBRA_SOURCE_DIR) / "plugins/vssm",
-                                            fs::path(PENUMBRA_TEST_DATA_DIR) / "shaders", gpu::engineShaderDir()});
+        const gpu::ShaderCompiler compiler({penumbra::test::sourceDir() / "plugins/vssm",
+                                            penumbra::test::testDataDir() / "shaders", gpu::engineShaderDir()});
         gpu::ComputePipelineDesc scanDesc;
         scanDesc.name = "sat_test.scan";
         scanDesc.shader = "sat.comp";

@@ -1,7 +1,8 @@
 #include "penumbra/gpu/ShaderCompiler.h"
 
-#include "BuildPaths.h"  // generated: PENUMBRA_DEFAULT_SHADER_DIR, PENUMBRA_SHADER_DIR_FROM_LIBRARY
 #include "penumbra/core/Error.h"
+
+#include "core/BuildTree.h"
 
 #include <glslang/SPIRV/GlslangToSpv.h>
 #include <glslang/Public/ResourceLimits.h>
@@ -139,7 +140,7 @@ std::string formatLog(const std::string& log, const std::string& mainName)
     return out.str();
 }
 
-// An installed engine's GLSL: <folder of this library>/PENUMBRA_SHADER_DIR_FROM_LIBRARY
+// An installed engine's GLSL: <folder of this library>/core::shaderDirFromLibrary()
 // (../share/penumbra/shaders), found at run time so that the install prefix can move.
 // Empty when that folder does not exist (a build-tree library).
 fs::path installedShaderDir()
@@ -147,7 +148,7 @@ fs::path installedShaderDir()
     Dl_info self{};
     if (dladdr(reinterpret_cast<const void*>(&engineShaderDir), &self) == 0 || self.dli_fname == nullptr) return {};
     std::error_code ec;
-    const fs::path dir = fs::weakly_canonical(fs::path(self.dli_fname).parent_path() / PENUMBRA_SHADER_DIR_FROM_LIBRARY, ec);
+    const fs::path dir = fs::weakly_canonical(fs::path(self.dli_fname).parent_path() / core::shaderDirFromLibrary(), ec);
     return !ec && fs::is_directory(dir, ec) ? dir : fs::path();
 }
 
@@ -177,7 +178,7 @@ fs::path engineShaderDir()
     if (fs::path installed = installedShaderDir(); !installed.empty()) {
         return installed;
     }
-    return PENUMBRA_DEFAULT_SHADER_DIR;
+    return core::buildTreeShaderDir();
 }
 
 ShaderCompiler::ShaderCompiler(std::vector<fs::path> searchPath) : searchPath_(std::move(searchPath)) {}

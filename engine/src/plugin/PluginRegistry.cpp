@@ -2,7 +2,7 @@
 
 #include "penumbra/plugin/LibraryFile.h"
 
-#include "BuildPaths.h"  // generated: PENUMBRA_BUILD_PLUGIN_DIR, PENUMBRA_BUILD_LIBRARY_DIR
+#include "core/BuildTree.h"
 #include "core/Text.h"
 #include "gpu/SanitizerSupport.h"
 
@@ -105,7 +105,7 @@ fs::path enginePluginDir()
     const fs::path library = engineLibraryDir();
     if (library.empty()) return {};
     std::error_code ec;
-    if (fs::equivalent(library, PENUMBRA_BUILD_LIBRARY_DIR, ec)) return PENUMBRA_BUILD_PLUGIN_DIR;
+    if (fs::equivalent(library, core::buildTreeLibraryDir(), ec)) return core::buildTreePluginDir();
     return library / "penumbra" / "plugins";
 }
 

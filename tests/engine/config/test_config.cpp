@@ -1,4 +1,4 @@
-#include "TestPaths.h"  // generated: the build tree's paths
+#include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/config/Config.h"
 #include "penumbra/core/Error.h"
@@ -41,7 +41,7 @@ std::string errorOf(const json& doc)
 
 TEST(Config, DefaultConfigLoads)
 {
-    const config::RenderConfig c = config::loadConfig(fs::path(PENUMBRA_SOURCE_DIR) / "config/default.json");
+    const config::RenderConfig c = config::loadConfig(penumbra::test::sourceDir() / "config/default.json");
     EXPECT_EQ(c.width, 1280u);
     EXPECT_EQ(c.height, 720u);
     ASSERT_EQ(c.lights.size(), 1u);
@@ -51,7 +51,7 @@ TEST(Config, DefaultConfigLoads)
     EXPECT_NEAR(glm::length(c.lights[0].light.direction), 1.0f, 1e-6f);
 }
 
-const fs::path kConfigs = fs::path(PENUMBRA_TEST_DATA_DIR) / "configs";
+const fs::path kConfigs = penumbra::test::testDataDir() / "configs";
 
 std::string loadError(const fs::path& file)
 {
@@ -68,7 +68,7 @@ TEST(Config, EveryShippedConfigLoads)
 {
     size_t count = 0;
     // config/ and its folders (bench/, bench/streets/), the JSON schema aside.
-    for (const auto& entry : fs::recursive_directory_iterator(fs::path(PENUMBRA_SOURCE_DIR) / "config")) {
+    for (const auto& entry : fs::recursive_directory_iterator(penumbra::test::sourceDir() / "config")) {
         if (entry.path().extension() != ".json" || entry.path().parent_path().filename() == "schema") continue;
         SCOPED_TRACE(entry.path().string());
         const config::ConfigDocument doc = config::loadDocument(entry.path());
@@ -123,7 +123,7 @@ TEST(Config, MissingIncludeIsNamed)
 
 TEST(Config, SweepExpandsTheCartesianProduct)
 {
-    const config::ConfigDocument doc = config::loadDocument(fs::path(PENUMBRA_SOURCE_DIR) / "config/sweep-resolution.json");
+    const config::ConfigDocument doc = config::loadDocument(penumbra::test::sourceDir() / "config/sweep-resolution.json");
     const std::vector<config::SweepVariant> v = config::expandSweep(doc);
     ASSERT_EQ(v.size(), 8u);
     EXPECT_EQ(*v[0].config.lights[0].shadow.param("resolution"), 512);
@@ -286,7 +286,7 @@ TEST(Config, TheTradeoffBenchmarkCoversEveryBaselineAtTwoLightSizesOnTwoScenes)
 {
     // config/bench/tradeoff.json (docs/tradeoff.md): every variant parses and builds its
     // scene; its plugins are checked by `penumbra validate` once pcss and vsm exist.
-    const config::ConfigDocument doc = config::loadDocument(fs::path(PENUMBRA_SOURCE_DIR) / "config/bench/tradeoff.json");
+    const config::ConfigDocument doc = config::loadDocument(penumbra::test::sourceDir() / "config/bench/tradeoff.json");
     const std::vector<config::SweepVariant> variants = config::expandSweep(doc);
     ASSERT_EQ(variants.size(), 2u * 2u * 7u);
     std::set<std::string> scenes, techniques, labels;
@@ -430,7 +430,7 @@ TEST(Animation, Interpolates)
 
 TEST(Animation, MovesCameraLightsAndNodes)
 {
-    config::RenderConfig c = config::loadConfig(fs::path(PENUMBRA_SOURCE_DIR) / "config/animated.json");
+    config::RenderConfig c = config::loadConfig(penumbra::test::sourceDir() / "config/animated.json");
     scene::Scene s = config::buildScene(c);
     const glm::vec3 before = c.lights[0].light.direction;
     config::applyAnimation(c.animation, 1.0f, c, s);
@@ -492,7 +492,7 @@ TEST(Config, LightsFromAGltfScene)
 TEST(Config, SceneLightsWithoutANameOrWithATakenOneAreNumbered)
 {
     // hierarchy.gltf (data URIs only) with its lights named "", "sun", "sun".
-    std::ifstream in(fs::path(PENUMBRA_TEST_DATA_DIR) / "gltf/hierarchy.gltf");
+    std::ifstream in(penumbra::test::testDataDir() / "gltf/hierarchy.gltf");
     json gltf = json::parse(in);
     json& lights = gltf["extensions"]["KHR_lights_punctual"]["lights"];
     lights[0].erase("name");
@@ -522,8 +522,8 @@ TEST(Config, CommittedAssetMatchesItsGenerator)
 {
     // assets/penumbra.glb is `penumbra generate penumbra`: loading it gives the scene the
     // generator makes (config/penumbra-gltf.json swaps the generator for the file).
-    config::RenderConfig fromFile = config::loadConfig(fs::path(PENUMBRA_SOURCE_DIR) / "config/penumbra-gltf.json");
-    config::RenderConfig generated = config::loadConfig(fs::path(PENUMBRA_SOURCE_DIR) / "config/penumbra-scene.json");
+    config::RenderConfig fromFile = config::loadConfig(penumbra::test::sourceDir() / "config/penumbra-gltf.json");
+    config::RenderConfig generated = config::loadConfig(penumbra::test::sourceDir() / "config/penumbra-scene.json");
     ASSERT_EQ(fromFile.scene.kind, config::SceneSource::Kind::Gltf);
     const scene::Scene a = config::buildScene(fromFile), b = config::buildScene(generated);
     EXPECT_EQ(a.triangleCount(), b.triangleCount());
@@ -626,7 +626,7 @@ TEST(Config, TooManyLights)
 
 TEST(Config, MalformedJsonNamesLine)
 {
-    const fs::path file = fs::path(PENUMBRA_TEST_DATA_DIR) / "configs/malformed.json";
+    const fs::path file = penumbra::test::testDataDir() / "configs/malformed.json";
     try {
         config::loadConfig(file);
         FAIL() << "expected ConfigError";
@@ -686,7 +686,7 @@ TEST(Run, TheScenesLightsExistBeforeTheOverridesApply)
 
 TEST(Run, EveryPoseStartsFromTheRestState)
 {
-    config::PreparedRun run = config::prepareRun(fs::path(PENUMBRA_SOURCE_DIR) / "config/animated.json", {});
+    config::PreparedRun run = config::prepareRun(penumbra::test::sourceDir() / "config/animated.json", {});
     const glm::vec3 restCamera = run.rest.camera.position;
     EXPECT_EQ(run.config.camera.position, restCamera) << "unposed until poseAt";
     EXPECT_EQ(run.poseAt(1.0f).size(), 1u);  // the sphere moved

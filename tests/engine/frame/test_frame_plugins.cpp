@@ -4,7 +4,7 @@
 // while the other lights keep their techniques.
 #include "TestConfigs.h"
 #include "TestContext.h"
-#include "TestPaths.h"  // generated: the build tree's paths
+#include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/config/Config.h"
 #include "penumbra/frame/FrameRenderer.h"
@@ -24,7 +24,7 @@ namespace {
 // The test plugins first, then the build tree's (hard).
 std::vector<std::filesystem::path> searchPath()
 {
-    std::vector<std::filesystem::path> path{PENUMBRA_TEST_PLUGIN_DIR};
+    std::vector<std::filesystem::path> path{penumbra::test::testPluginDir()};
     for (const auto& dir : plugin::defaultPluginSearchPath()) path.push_back(dir);
     return path;
 }

@@ -2,7 +2,7 @@
 // shaders (gpu/ShaderInterface.h), descriptors bound by name, dispatches over a grid.
 #include "ErrorText.h"
 #include "TestContext.h"
-#include "TestPaths.h"  // generated: the build tree's paths
+#include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const fs::path kData = fs::path(PENUMBRA_TEST_DATA_DIR) / "shaders";
+const fs::path kData = penumbra::test::testDataDir() / "shaders";
 
 gpu::ShaderCompiler compiler() { return gpu::ShaderCompiler({kData, gpu::engineShaderDir()}); }
 

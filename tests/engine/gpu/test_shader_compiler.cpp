@@ -1,4 +1,4 @@
-#include "TestPaths.h"  // generated: the build tree's paths
+#include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/ShaderCompiler.h"
@@ -12,7 +12,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const fs::path kData = fs::path(PENUMBRA_TEST_DATA_DIR) / "shaders";
+const fs::path kData = penumbra::test::testDataDir() / "shaders";
 
 gpu::ShaderCompiler compiler() { return gpu::ShaderCompiler({gpu::engineShaderDir(), kData}); }
 
@@ -57,7 +57,7 @@ TEST(ShaderCompiler, CompilesEveryPluginShader)
     // Every plugin's GLSL compiles with the search path a technique gets
     // (TechniqueSetup::shaders: the plugin's folder, then the engine's shaders/).
     size_t count = 0;
-    for (const auto& plugin : fs::directory_iterator(fs::path(PENUMBRA_SOURCE_DIR) / "plugins")) {
+    for (const auto& plugin : fs::directory_iterator(penumbra::test::sourceDir() / "plugins")) {
         if (!plugin.is_directory()) continue;
         const gpu::ShaderCompiler pluginCompiler({plugin.path(), gpu::engineShaderDir()});
         for (const auto& entry : fs::recursive_directory_iterator(plugin.path())) {

@@ -11,7 +11,7 @@
 #include "ErrorText.h"
 #include "RandomGraph.h"
 #include "TestContext.h"
-#include "TestPaths.h"  // generated: the build tree's paths
+#include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
@@ -37,7 +37,7 @@ using namespace penumbra::graph;
 
 namespace {
 
-const std::filesystem::path kShaders = std::filesystem::path(PENUMBRA_TEST_DATA_DIR) / "shaders";
+const std::filesystem::path kShaders = penumbra::test::testDataDir() / "shaders";
 
 constexpr ExecutorOptions kNoTimestamps{false};
 

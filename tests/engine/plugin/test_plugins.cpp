@@ -3,7 +3,7 @@
 // working after each failure, reflected parameters from spec to config to the plugin's
 // own view, and --set overrides. The test plugins are in tests/fixtures/plugins/.
 #include "TestContext.h"
-#include "TestPaths.h"  // generated: the build tree's paths
+#include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/config/Config.h"
 #include "penumbra/config/Overrides.h"
@@ -44,8 +44,8 @@ using plugin::PluginRegistry;
 
 namespace {
 
-const fs::path kPlugins = PENUMBRA_TEST_PLUGIN_DIR;
-const fs::path kShadowedPlugins = PENUMBRA_TEST_SHADOWED_PLUGIN_DIR;
+const fs::path kPlugins = penumbra::test::testPluginDir();
+const fs::path kShadowedPlugins = penumbra::test::shadowedTestPluginDir();
 
 ::testing::AssertionResult contains(const std::string& text, const std::string& part)
 {
@@ -330,7 +330,7 @@ TEST_F(Registry, LoadsTheGoodPlugin)
     EXPECT_EQ(good.info->abiVersion, PENUMBRA_PLUGIN_ABI_VERSION);
     EXPECT_EQ(good.file, kPlugins / "penumbra-testgood.so");
     // Its declared shader folder exists, so it is used as is.
-    EXPECT_EQ(good.shaderDir, fs::path(PENUMBRA_TEST_PLUGIN_SOURCE_DIR));
+    EXPECT_EQ(good.shaderDir, penumbra::test::testPluginSourceDir());
     EXPECT_EQ(&registry.load("testgood"), &good) << "a second load returns the plugin loaded before";
     EXPECT_EQ(good.defaultParams().toJson(),
               json::parse(R"({"enabled": true, "kernel": 5, "fill": 0.5, "bias": 0.01, "mode": "clear"})"));
@@ -594,7 +594,7 @@ TEST(PluginRegistry, DefaultSearchPathFollowsTheEnvironmentThenTheBuildTree)
 TEST(PluginRegistry, TheBuildTreesEngineSearchesTheBuildTreesPluginsAlone)
 {
     const ScopedEnv unset("PENUMBRA_PLUGIN_PATH", "");
-    const fs::path installedLayout = fs::path(PENUMBRA_ENGINE_LIBRARY_DIR) / "penumbra";
+    const fs::path installedLayout = penumbra::test::engineLibraryDir() / "penumbra";
     struct RemoveIfCreated {
         fs::path dir;
         bool created;
@@ -605,7 +605,7 @@ TEST(PluginRegistry, TheBuildTreesEngineSearchesTheBuildTreesPluginsAlone)
         }
     } cleanup{installedLayout, !fs::exists(installedLayout)};
     fs::create_directories(installedLayout / "plugins");
-    EXPECT_EQ(plugin::defaultPluginSearchPath(), std::vector<fs::path>{PENUMBRA_BUILD_PLUGIN_DIR});
+    EXPECT_EQ(plugin::defaultPluginSearchPath(), std::vector<fs::path>{penumbra::test::buildPluginDir()});
 }
 
 // --- parameters from config to plugin ------------------------------------------------

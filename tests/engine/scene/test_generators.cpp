@@ -3,7 +3,7 @@
 // visibility against ray casting.
 #include "ErrorText.h"
 #include "RayCast.h"
-#include "TestPaths.h"  // generated: the build tree's paths
+#include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/core/Error.h"
 #include "penumbra/scene/Generators.h"
@@ -94,7 +94,7 @@ TEST(Generators, ListedByName)
 // editors; one the schema lacked would make it refuse configs that the engine takes.
 TEST(Generators, ConfigSchemaListsEveryParameterWithItsDefault)
 {
-    std::ifstream in(std::filesystem::path(PENUMBRA_SOURCE_DIR) / "config/schema/penumbra-config.schema.json");
+    std::ifstream in(penumbra::test::sourceDir() / "config/schema/penumbra-config.schema.json");
     const nlohmann::json schema = nlohmann::json::parse(in);
     std::vector<std::string> names = generatorNames();
     names.push_back("null");

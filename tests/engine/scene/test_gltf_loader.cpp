@@ -3,7 +3,6 @@
 // must be refused with a message that names the file and the element.
 #include "ScratchFolder.h"
 #include "TestConfigs.h"
-#include "TestPaths.h"  // generated: the build tree's paths
 
 #include "penumbra/core/Error.h"
 #include "penumbra/scene/GltfLoader.h"

@@ -3,7 +3,6 @@
 // overwritten. Each variant must load or be refused with an AssetError — never another
 // exception or a crash (the test-asan workflow runs this under ASan and UBSan).
 #include "TestConfigs.h"
-#include "TestPaths.h"  // generated: the build tree's paths
 
 #include "penumbra/core/Error.h"
 #include "penumbra/scene/GltfLoader.h"
