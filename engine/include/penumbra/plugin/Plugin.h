@@ -73,6 +73,12 @@ using PenumbraPluginEntryFn = const PenumbraPluginInfo* (*)();
 
 } // extern "C"
 
+// Where a plugin built with penumbra_add_plugin finds its GLSL when built: that helper
+// defines it in a generated file of its own and PENUMBRA_PLUGIN_SHADER_DIR as a call to it
+// (the absolute path then stays off the plugin's other compile lines). A plugin built
+// without the helper defines PENUMBRA_PLUGIN_SHADER_DIR as a string itself.
+const char* penumbra_plugin_shader_dir();
+
 // Defines the plugin's entry point, penumbra_plugin_entry, returning a static
 // PenumbraPluginInfo: this ABI version, the name (configs' "technique"; the file is
 // penumbra-<name>.so), the plugin's version, a one-line summary, the ParamSpec array
