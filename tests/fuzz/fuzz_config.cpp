@@ -37,22 +37,6 @@ void writeIncludes(const penumbra::fuzz::ScratchFolder& folder)
     folder.write("sub/up.json", R"({"include": ["../base.json", "../lights.json"]})");
 }
 
-// The number of variants a sweep asks for, counted as the engine does (the product of
-// its entries' "values" sizes; malformed entries count 1 and are refused by the engine).
-size_t sweepCombinations(const nlohmann::json& document)
-{
-    const auto it = document.find("sweep");
-    if (it == document.end() || !it->is_array()) return 1;
-    size_t combinations = 1;
-    for (const nlohmann::json& entry : *it) {
-        if (!entry.is_object()) continue;
-        const auto values = entry.find("values");
-        if (values != entry.end() && values->is_array() && !values->empty()) combinations *= values->size();
-        if (combinations > 1'000'000) break;
-    }
-    return combinations;
-}
-
 } // namespace
 
 extern "C" int LLVMFuzzerInitialize(int*, char***)
@@ -68,11 +52,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     const std::filesystem::path file = scratch->write("config.json", data, size);
     try {
         const penumbra::config::ConfigDocument document = penumbra::config::loadDocument(file);
-        // A sweep of up to 100,000 variants is allowed and each is a copy of the
-        // document: memory by design, not a finding. Larger products are refused by the
-        // engine before any copy, so those are expanded too.
-        const size_t combinations = sweepCombinations(document.json);
-        if (combinations <= 64 || combinations > 100'000) penumbra::config::expandSweep(document);
+        // A sweep of up to kMaxSweepCombinations variants is allowed and each is a copy
+        // of the document: memory by design, not a finding. Counting them reads and
+        // checks every entry (and refuses larger products); small sweeps are expanded.
+        if (penumbra::config::sweepCombinations(document) <= 64) penumbra::config::expandSweep(document);
         else penumbra::config::parseConfig(document);
     } catch (const penumbra::Error&) {
         // Refused with a message: the contract.

@@ -2,6 +2,8 @@
 
 #include "penumbra/core/Error.h"
 
+#include "core/Text.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -86,17 +88,11 @@ json readJson(const fs::path& file)
     const bool exists = fs::exists(file, ec);
     if (ec) throw ConfigError(fmt::format("{}: cannot open config file: {}", displayPath(file), ec.message()));
     if (!exists) throw ConfigError(fmt::format("{}: config file not found", displayPath(file)));
-    if (fs::is_directory(file, ec)) throw ConfigError(fmt::format("{}: is a directory, expected a JSON config file", displayPath(file)));
     // A FIFO would block the read forever, a device (/dev/zero, /dev/stdin) read without
     // end or wait for a terminal: only a regular file (or a link to one) is read.
-    const fs::file_type type = fs::status(file, ec).type();
-    if (type != fs::file_type::regular) {
+    if (const fs::file_type type = fs::status(file, ec).type(); type != fs::file_type::regular)
         throw ConfigError(fmt::format("{}: is {}, expected a JSON config file (a regular file)", displayPath(file),
-                                      type == fs::file_type::fifo ? "a FIFO (named pipe)"
-                                      : type == fs::file_type::socket ? "a socket"
-                                      : type == fs::file_type::block || type == fs::file_type::character ? "a device"
-                                                                                                        : "not a regular file"));
-    }
+                                      core::fileTypeName(type)));
     if (const uintmax_t bytes = fs::file_size(file, ec); !ec && bytes > kMaxConfigBytes) {
         throw ConfigError(fmt::format("{}: is {} bytes; a config file holds at most {} MiB (its scene is a glTF file)",
                                       displayPath(file), bytes, kMaxConfigBytes >> 20));

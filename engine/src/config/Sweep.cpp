@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <utility>
 
 using nlohmann::json;
 
@@ -133,13 +134,12 @@ void setSwept(json& doc, const json::json_pointer& pointer, const json& value, c
     doc[pointer] = value;
 }
 
-} // namespace
-
-std::vector<SweepVariant> expandSweep(const ConfigDocument& document)
+// The document's sweep entries, read and checked, and the number of variants they make
+// (at most kMaxSweepCombinations). No "sweep": no entries, one variant.
+std::pair<std::vector<SweepAxis>, size_t> readSweepAxes(const ConfigDocument& document, const Locator& locator)
 {
-    const Locator locator(document);
     auto it = document.json.find("sweep");
-    if (it == document.json.end()) return {{"", {}, parseConfig(document)}};
+    if (it == document.json.end()) return {{}, 1};
     const json& sweep = *it;
     if (!sweep.is_array() || sweep.empty()) locator.fail("/sweep", "must be a non-empty array of {\"path\", \"values\"}");
     std::vector<SweepAxis> axes;
@@ -148,8 +148,24 @@ std::vector<SweepVariant> expandSweep(const ConfigDocument& document)
         const std::string at = fmt::format("/sweep/{}", i);
         axes.push_back(readSweepAxis(sweep[i], locator, at));
         combinations *= axes.back().values.size();
-        if (combinations > 100000) locator.fail(at + "/values", "the sweep has more than 100000 combinations");
+        if (combinations > kMaxSweepCombinations)
+            locator.fail(at + "/values", fmt::format("the sweep has more than {} combinations", kMaxSweepCombinations));
     }
+    return {std::move(axes), combinations};
+}
+
+} // namespace
+
+size_t sweepCombinations(const ConfigDocument& document)
+{
+    return readSweepAxes(document, Locator(document)).second;
+}
+
+std::vector<SweepVariant> expandSweep(const ConfigDocument& document)
+{
+    const Locator locator(document);
+    const auto [axes, combinations] = readSweepAxes(document, locator);
+    if (axes.empty()) return {{"", {}, parseConfig(document)}};
     std::vector<SweepVariant> variants;
     for (size_t c = 0; c < combinations; ++c) {
         // The first entry varies slowest. Entries are applied in order, so a later one may

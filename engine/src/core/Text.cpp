@@ -34,4 +34,19 @@ std::string closestMatch(std::string_view word, const std::vector<std::string>& 
     return best;
 }
 
+const char* fileTypeName(std::filesystem::file_type type)
+{
+    using std::filesystem::file_type;
+    switch (type) {
+    case file_type::regular: return "a regular file";
+    case file_type::directory: return "a directory";
+    case file_type::fifo: return "a FIFO (named pipe)";
+    case file_type::socket: return "a socket";
+    case file_type::block: return "a block device";
+    case file_type::character: return "a character device";
+    case file_type::not_found: return "a dangling link or a missing file";
+    default: return "not a regular file";
+    }
+}
+
 } // namespace penumbra::core

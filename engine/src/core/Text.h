@@ -1,7 +1,8 @@
 #pragma once
 // Text helpers for messages: "did you mean" suggestions for misspelt names (config keys,
-// plugin parameters, technique names).
+// plugin parameters, technique names), what kind of file a path names.
 #include <cstddef>
+#include <filesystem>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -14,5 +15,9 @@ size_t editDistance(std::string_view a, std::string_view b);
 // The candidate closest to `word` when it is within `maxDistance` edits (a likely typo),
 // else an empty string. Ties go to the earlier candidate.
 std::string closestMatch(std::string_view word, const std::vector<std::string>& candidates, size_t maxDistance = 2);
+
+// What a file that is not a regular one is, for "<path>: is a FIFO (named pipe), expected
+// ...": "a directory", "a FIFO (named pipe)", "a socket", "a block device", ...
+const char* fileTypeName(std::filesystem::file_type type);
 
 } // namespace penumbra::core

@@ -2,6 +2,8 @@
 
 #include "penumbra/plugin/PluginRegistry.h"
 
+#include "core/Text.h"
+
 #include <fmt/format.h>
 
 #include <link.h>
@@ -14,22 +16,6 @@
 namespace fs = std::filesystem;
 
 namespace penumbra::plugin {
-namespace {
-
-const char* fileTypeName(fs::file_type type)
-{
-    switch (type) {
-    case fs::file_type::directory: return "a directory";
-    case fs::file_type::fifo: return "a FIFO (named pipe)";
-    case fs::file_type::socket: return "a socket";
-    case fs::file_type::block: return "a block device";
-    case fs::file_type::character: return "a character device";
-    case fs::file_type::not_found: return "a dangling link or a missing file";
-    default: return "not a regular file";
-    }
-}
-
-} // namespace
 
 void checkSharedLibraryFile(const fs::path& file, const std::string& who)
 {
@@ -42,7 +28,7 @@ void checkSharedLibraryFile(const fs::path& file, const std::string& who)
     };
     std::error_code ec;
     const fs::file_status status = fs::status(file, ec);  // follows links
-    if (status.type() != fs::file_type::regular) fail(fmt::format("it is {}", fileTypeName(status.type())));
+    if (status.type() != fs::file_type::regular) fail(fmt::format("it is {}", core::fileTypeName(status.type())));
     const uintmax_t size = fs::file_size(file, ec);
     if (ec) fail(fmt::format("cannot read its size ({})", ec.message()));
     std::ifstream in(file, std::ios::binary);

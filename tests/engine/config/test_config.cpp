@@ -282,6 +282,36 @@ TEST(Config, BadSweepEntriesNameTheirJsonPath)
     }
 }
 
+TEST(Config, SweepCombinationsCountsTheVariantsWithoutMakingThem)
+{
+    const config::ConfigDocument doc = config::loadDocument(penumbra::test::sourceDir() / "config/sweep-resolution.json");
+    EXPECT_EQ(config::sweepCombinations(doc), config::expandSweep(doc).size());
+    config::ConfigDocument plain{"plain.json", minimal(), {}};
+    EXPECT_EQ(config::sweepCombinations(plain), 1u);
+    // 2 x 3 x (paths together) 2; at the limit and one entry past it.
+    config::ConfigDocument swept{"sweep.json", minimal(), {}};
+    swept.json["sweep"] = json::parse(R"([{"path": "/lights/0/intensity", "values": [1, 2]},
+        {"path": "/camera/position", "values": [[0, 5, 10], [0, 6, 10], [0, 7, 10]]},
+        {"paths": ["/lights/0/outer_cone_deg", "/camera/target"], "values": [[40, [0, 0, 0]], [50, [1, 0, 0]]]}])");
+    EXPECT_EQ(config::sweepCombinations(swept), 12u);
+    EXPECT_EQ(config::expandSweep(swept).size(), 12u);
+    json values = json::array();
+    for (size_t i = 0; i < config::kMaxSweepCombinations / 10; ++i) values.push_back(i + 1);
+    swept.json["sweep"] = json::array({{{"path", "/lights/0/intensity"}, {"values", values}},
+                                       {{"path", "/lights/0/outer_cone_deg"}, {"values", json::array({1, 2, 3, 4, 5, 6, 7, 8, 9, 10})}}});
+    EXPECT_EQ(config::sweepCombinations(swept), config::kMaxSweepCombinations);
+    swept.json["sweep"][1]["values"].push_back(11);
+    try {
+        config::sweepCombinations(swept);
+        ADD_FAILURE() << "more than kMaxSweepCombinations variants are refused";
+    } catch (const ConfigError& e) {
+        EXPECT_TRUE(has(e.what(), "sweep.json: /sweep/1/values: the sweep has more than 100000 combinations")) << e.what();
+    }
+    // A malformed entry is refused as expandSweep refuses it.
+    swept.json["sweep"] = json::parse(R"([{"path": "lights/0/intensity", "values": [1]}])");
+    EXPECT_THROW(config::sweepCombinations(swept), ConfigError);
+}
+
 TEST(Config, TheTradeoffBenchmarkCoversEveryBaselineAtTwoLightSizesOnTwoScenes)
 {
     // config/bench/tradeoff.json (docs/tradeoff.md): every variant parses and builds its

@@ -129,8 +129,13 @@ TEST_F(HostileConfig, OnlyRegularFilesOfBoundedSizeAreRead)
     EXPECT_NE(what.find("a FIFO"), std::string::npos) << what;
     for (const char* device : {"/dev/zero", "/dev/null"}) {
         what = errorLoading(write("dev.json", fmt::format(R"({{"include": "{}"}})", device)));
-        EXPECT_NE(what.find(fmt::format("{}: is a device", device)), std::string::npos) << what;
+        EXPECT_NE(what.find(fmt::format("{}: is a character device, expected a JSON config file", device)), std::string::npos)
+            << what;
     }
+    what = errorLoading(dir_);
+    EXPECT_NE(what.find(fmt::format("{}: is a directory, expected a JSON config file", dir_.filename().string())),
+              std::string::npos)
+        << what;
     // One byte beyond kMaxConfigBytes (a sparse file: nothing is written) is refused by
     // its size; a file of exactly the limit is read (and refused as JSON, not for size).
     const fs::path big = write("big.json", "");

@@ -28,7 +28,15 @@ struct SweepVariant {
     std::vector<SweepChoice> choices;  // one per sweep entry, in order; empty without a sweep
     RenderConfig config;
 };
+// The most variants one sweep may make: each is a copy of the document.
+inline constexpr size_t kMaxSweepCombinations = 100000;
+
 // Throws ConfigError naming the entry (and the variant where a path exists in some only).
 std::vector<SweepVariant> expandSweep(const ConfigDocument& document);
+
+// How many variants expandSweep makes (1 without a sweep), without making them: the
+// entries are read and checked as expandSweep does (ConfigError for a malformed entry or
+// more than kMaxSweepCombinations), the variants' paths and configs are not.
+size_t sweepCombinations(const ConfigDocument& document);
 
 } // namespace penumbra::config
