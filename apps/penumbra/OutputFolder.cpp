@@ -53,19 +53,10 @@ int removeStaleOutputStages(const fs::path& dir)
 {
     const fs::path real = realFolder(dir);
     const std::string prefix = stagePrefix(real);
-    int removed = 0;
-    std::error_code ec;
-    for (fs::directory_iterator it(real.parent_path(), ec), end; !ec && it != end; it.increment(ec)) {
-        const std::string name = it->path().filename().string();
-        if (name.size() != prefix.size() + kStageRandomChars || name.compare(0, prefix.size(), prefix) != 0) continue;
-        // A live run holds an flock on its staging folder; a killed one's died with it.
-        const int fd = ::open(it->path().c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
-        if (fd < 0) continue;
-        std::error_code removeError;
-        if (::flock(fd, LOCK_EX | LOCK_NB) == 0 && fs::remove_all(it->path(), removeError) > 0 && !removeError) ++removed;
-        ::close(fd);
-    }
-    return removed;
+    // A live run holds an flock on its staging folder; a killed one's died with it.
+    return io::removeAbandoned(real.parent_path(), io::Leftover::Folder, [&](const std::string& name) {
+        return name.size() == prefix.size() + kStageRandomChars && name.compare(0, prefix.size(), prefix) == 0;
+    });
 }
 
 OutputSet::OutputSet(fs::path dir, std::string who) : dir_(std::move(dir)), real_(realFolder(dir_)), who_(std::move(who))

@@ -65,25 +65,37 @@ bool isTemporaryNameOf(const fs::path& target, const fs::path& candidate)
     return true;
 }
 
-int removeStaleTemporaries(const fs::path& target)
+int removeAbandoned(const fs::path& folder, Leftover kind, const std::function<bool(const std::string& name)>& isLeftover)
 {
+    const bool wantFolder = kind == Leftover::Folder;
     int removed = 0;
     std::error_code ec;
-    for (fs::directory_iterator it(folderOf(target), ec), end; !ec && it != end; it.increment(ec)) {
+    for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
         const fs::path candidate = it->path();
-        if (!isTemporaryNameOf(target, candidate)) continue;
-        // A live writer holds an flock on its file; a killed one's lock died with it.
-        const int fd = ::open(candidate.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+        if (!isLeftover(candidate.filename().string())) continue;
+        // O_NOFOLLOW: a link is never opened (nor removed); O_NONBLOCK: a FIFO named like
+        // a leftover does not block the open.
+        const int fd = ::open(candidate.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC | (wantFolder ? O_DIRECTORY : 0));
         if (fd < 0) continue;
         struct stat opened {}, named {};
-        if (::flock(fd, LOCK_EX | LOCK_NB) == 0 && ::fstat(fd, &opened) == 0 && S_ISREG(opened.st_mode) &&
-            ::lstat(candidate.c_str(), &named) == 0 && named.st_ino == opened.st_ino && named.st_dev == opened.st_dev &&
-            ::unlink(candidate.c_str()) == 0) {
-            ++removed;
+        const bool abandoned = ::flock(fd, LOCK_EX | LOCK_NB) == 0 && ::fstat(fd, &opened) == 0 &&
+                               (wantFolder ? S_ISDIR(opened.st_mode) : S_ISREG(opened.st_mode)) &&
+                               ::lstat(candidate.c_str(), &named) == 0 && named.st_ino == opened.st_ino &&
+                               named.st_dev == opened.st_dev;
+        if (abandoned) {
+            std::error_code removeError;
+            if (wantFolder ? fs::remove_all(candidate, removeError) > 0 && !removeError : ::unlink(candidate.c_str()) == 0)
+                ++removed;
         }
         ::close(fd);
     }
     return removed;
+}
+
+int removeStaleTemporaries(const fs::path& target)
+{
+    return removeAbandoned(folderOf(target), Leftover::File,
+                           [&](const std::string& name) { return isTemporaryNameOf(target, name); });
 }
 
 StagedFile::StagedFile(fs::path target) : target_(std::move(target))

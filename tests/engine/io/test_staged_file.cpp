@@ -148,3 +148,27 @@ TEST(StagedFileNames, TemporaryNamesAreTheTargetsNameDotTmpAndEightHexDigits)
     EXPECT_FALSE(io::isTemporaryNameOf("out.png", "out.png.bak0123abcd"));
     EXPECT_FALSE(io::isTemporaryNameOf("out.png", "out.png"));
 }
+
+TEST_F(StagedFileTest, AbandonedEntriesAreRemovedOnlyOfTheKindAskedForAndNeverThroughALinkOrALock)
+{
+    // Named like leftovers: a folder, a locked folder, a file, a FIFO, a link to a folder.
+    const auto leftover = [](const std::string& name) { return name.rfind("stage-", 0) == 0; };
+    fs::create_directories(dir_ / "stage-killed" / "inside");
+    writeFile("stage-killed/inside/file", "x");
+    fs::create_directory(dir_ / "stage-live");
+    fs::create_directory(dir_ / "kept");
+    writeFile("stage-file", "x");
+    ASSERT_EQ(::mkfifo((dir_ / "stage-fifo").c_str(), 0600), 0);
+    fs::create_directory_symlink(dir_ / "kept", dir_ / "stage-link");
+    const int live = ::open((dir_ / "stage-live").c_str(), O_RDONLY | O_DIRECTORY);
+    ASSERT_GE(live, 0);
+    ASSERT_EQ(::flock(live, LOCK_EX), 0);
+
+    EXPECT_EQ(io::removeAbandoned(dir_, io::Leftover::Folder, leftover), 1);
+    EXPECT_EQ(entries(), (std::set<std::string>{"stage-live", "kept", "stage-file", "stage-fifo", "stage-link"}));
+    EXPECT_EQ(io::removeAbandoned(dir_, io::Leftover::File, leftover), 1);
+    EXPECT_EQ(entries(), (std::set<std::string>{"stage-live", "kept", "stage-fifo", "stage-link"}));
+    ::close(live);
+    EXPECT_EQ(io::removeAbandoned(dir_, io::Leftover::Folder, leftover), 1);
+    EXPECT_EQ(entries(), (std::set<std::string>{"kept", "stage-fifo", "stage-link"}));
+}

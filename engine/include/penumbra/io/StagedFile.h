@@ -12,6 +12,8 @@
 // writer's temporary file is never taken for a stale one.
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <string>
 #include <string_view>
 
 namespace penumbra::io {
@@ -61,6 +63,15 @@ bool isTemporaryNameOf(const std::filesystem::path& target, const std::filesyste
 // Removes the temporary files of `target` that no live writer holds (a killed run's);
 // returns how many. StagedFile calls it; exposed for tests.
 int removeStaleTemporaries(const std::filesystem::path& target);
+
+// What a killed writer can leave behind: a temporary file, or a staging folder.
+enum class Leftover { File, Folder };
+// Removes, in `folder`, each entry of the kind `kind` whose file name `isLeftover` accepts
+// and on which no live process holds an flock (its writer was killed: the lock died with
+// it; a live writer holds one until it is done). Never follows a link, and removes an
+// entry only while its name still names what was found unlocked. Returns how many.
+int removeAbandoned(const std::filesystem::path& folder, Leftover kind,
+                    const std::function<bool(const std::string& name)>& isLeftover);
 
 // Writes `text` to `path` through a StagedFile: the file appears complete or not at all.
 // Throws Error naming the path.
