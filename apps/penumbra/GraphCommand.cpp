@@ -9,6 +9,7 @@
 #include "penumbra/plugin/PluginRegistry.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
@@ -74,6 +75,9 @@ int runGraph(const GraphFlags& flags)
         text += fmt::format("device memory for transient resources: {} allocated, {} without aliasing ({:.1f}% saved)\n",
                             mebibytes(allocated), mebibytes(unaliased), saved);
         text += cullingSection(timings.culling, run.config.culling);
+        // Every image a pass writes, culled passes' too: requesting one keeps its passes.
+        text += fmt::format("debug images (penumbra render --debug-image NAME): {}\n",
+                            fmt::join(renderer.imageNames(), ", "));
     }
     if (flags.output.empty()) {
         std::fputs(text.c_str(), stdout);

@@ -37,6 +37,12 @@
 // with that sub-kernel's reference, rather than once over the pooled moments of all
 // normal sub-kernels (eq. 5): each bound holds on its own, and a pooled one would mix
 // sub-kernels compared with different references.
+//
+// With DEBUG_IMAGES (the debug_views pass, which the graph runs only when one of its
+// images is requested: vssm.cpp) the same work writes, instead of V, the pixel's penumbra
+// kernel half-width / max_filter_radius (kernelOut), its class (classificationOut: lit 1,
+// non-planar 0.75, penumbra 0.5, contact 0.25, umbra 0) and the sub-kernels it visited /
+// the most possible (subkernelsOut); 0 where there is no geometry.
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 
 #define GBUFFER_BINDING 8  // gDepth, gNormal, GBufferCamera: plugin::bindGBuffer
@@ -60,7 +66,15 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 1) uniform sampler2DShadow shadowCompare;  // nearest, GREATER_OR_EQUAL
+#ifdef DEBUG_IMAGES
+layout(binding = 11, r32f) uniform writeonly image2D kernelOut;
+layout(binding = 12, r32f) uniform writeonly image2D classificationOut;
+layout(binding = 13, r32f) uniform writeonly image2D subkernelsOut;
+#define OUTPUT_SIZE imageSize(kernelOut)
+#else
 layout(binding = 2, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
+#define OUTPUT_SIZE imageSize(visibilityOut)
+#endif
 layout(binding = 5) uniform sampler2D shadowDepth;  // the same map, raw depths
 
 #define SAT_BINDING 6
@@ -79,12 +93,6 @@ float hsmLevel0(ivec2 texel) { return shadowLinearDepth(shadowFaceOfTexel(texel)
 #define HSM_QUALIFIER readonly
 #include "hsm.glsl"
 
-// Parameter debug_view (vssm.cpp DebugView).
-#define DEBUG_OFF 0
-#define DEBUG_KERNEL 1
-#define DEBUG_CLASSIFICATION 2
-#define DEBUG_SUBKERNELS 3
-
 layout(push_constant) uniform Push {
     ivec2 atlasSize;        // the map's texels (all faces)
     float lightSize;        // render::softShadowLightSize
@@ -96,11 +104,10 @@ layout(push_constant) uniform Push {
     int blockerSubdivisions;  // m (uniform)
     int filterSubdivisions;   // n (uniform)
     int treeHeight;           // H (adaptive)
-    int debugView;
-    float debugScale;  // DEBUG_SUBKERNELS: 1 / the most sub-kernels a pixel can visit
+    float subkernelScale;     // 1 / the most sub-kernels a pixel can visit (DEBUG_IMAGES)
 } pc;
 
-// Per-pixel classification (debug_view classification; values are what it shows).
+// Per-pixel classification (DEBUG_IMAGES: classificationOut shows these values).
 const float kClassLit = 1.0;         // the HSM, or no blocker found
 const float kClassUmbra = 0.0;       // the HSM
 const float kClassPenumbra = 0.5;    // Chebyshev over every sub-kernel
@@ -482,12 +489,11 @@ Result vssmVisibility(ivec2 pixel)
 void main()
 {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    ivec2 size = imageSize(visibilityOut);
+    ivec2 size = OUTPUT_SIZE;
     bool inImage = all(lessThan(pixel, size));
     pixel = min(pixel, size - 1);
-    uint debugView = pc.debugView;
     float maxFilterTexels = pc.maxFilterTexels;
-    float debugScale = pc.debugScale;
+    float subkernelScale = pc.subkernelScale;
 
     vec4 position = gbufferPosition(pixel);
     gVisited = 0u;
@@ -498,13 +504,19 @@ void main()
                                           : vec2(0.0);
     Result res = vssmVisibility(pixel);
     res = inMap ? res : Result(VISIBILITY_NO_GEOMETRY, 0.0, kClassLit);
+#ifdef DEBUG_IMAGES
+    bool geometry = position.w != 0.0;
+    float kernel = geometry ? res.kernelTexels / max(maxFilterTexels, 0.5) : 0.0;
+    float classification = geometry ? res.classification : 0.0;
+    float subkernels = geometry && inMap ? float(gVisited) * subkernelScale : 0.0;  // outside the map: none looked at
+    if (inImage) {
+        imageStore(kernelOut, pixel, vec4(kernel));
+        imageStore(classificationOut, pixel, vec4(classification));
+        imageStore(subkernelsOut, pixel, vec4(subkernels));
+    }
+#else
     float v = shadowVisibilityAboveHorizon(res.v, position.xyz, gbufferNormal(pixel));
-    // The debug views replace V where there is geometry (the contract keeps 1 elsewhere).
-    float kernel = res.kernelTexels / max(maxFilterTexels, 0.5);
-    float subkernels = inMap ? float(gVisited) * debugScale : 0.0;  // outside the map: none looked at
-    v = debugView == DEBUG_KERNEL ? kernel : v;
-    v = debugView == DEBUG_CLASSIFICATION ? res.classification : v;
-    v = debugView == DEBUG_SUBKERNELS ? subkernels : v;
     v = position.w != 0.0 ? v : VISIBILITY_NO_GEOMETRY;
     if (inImage) imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
+#endif
 }

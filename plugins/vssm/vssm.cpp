@@ -12,6 +12,7 @@
 #include "penumbra/gpu/Pipeline.h"
 #include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
+#include "penumbra/plugin/GBuffer.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/ShadowMapParams.h"
 #include "penumbra/plugin/Technique.h"
@@ -23,6 +24,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <optional>
 #include <string>
 
 namespace penumbra::vssm {
@@ -40,9 +42,10 @@ enum class Scheme : uint32_t { None = 0, Uniform = 1, Adaptive = 2 };
 enum class BiasMode : uint32_t { ReceiverPlane, Slope };
 constexpr const char* kBiasModeNames[] = {"receiver_plane", "slope"};
 
-// Parameter `debug_view` (visibility.comp DEBUG_*).
-enum class DebugView : uint32_t { Off, Kernel, Classification, Subkernels };
-constexpr const char* kDebugViewNames[] = {"off", "kernel", "classification", "subkernels"};
+// The debug images the debug_views pass writes (visibility.comp DEBUG_IMAGES), each
+// io.local(name): requested by name (penumbra render --debug-image light0.vssm.kernel),
+// else the pass is culled and costs nothing.
+constexpr const char* kDebugImages[] = {"kernel", "classification", "subkernels"};
 
 constexpr int kMaxTreeHeight = 5;  // visibility.comp clamps to it (4^5 leaves)
 
@@ -72,10 +75,6 @@ const plugin::ParamSpec kParams[] = {
      kBiasModeNames, uint32_t(std::size(kBiasModeNames))},
     plugin::kShadowDepthBiasParam,  // in every bias_mode
     {"slope_bias", ParamType::Float, 2, 0, 1000, "", "slope-scaled rasterizer depth bias factor; bias_mode slope only"},
-    {"debug_view", ParamType::Enum, double(DebugView::Off), 0, 0, "",
-     "off: V; kernel: the penumbra kernel's half-width / max_filter_radius; classification: lit 1, non-planar "
-     "0.75, penumbra 0.5, contact 0.25, umbra 0; subkernels: sub-kernels visited / the most possible",
-     kDebugViewNames, uint32_t(std::size(kDebugViewNames))},
 };
 
 struct Settings {
@@ -92,7 +91,6 @@ struct Settings {
     BiasMode bias = BiasMode::ReceiverPlane;
     float depthBias = 4.0f;
     float slopeBias = 2.0f;
-    DebugView debugView = DebugView::Off;
 
     Scheme blockerScheme() const
     {
@@ -128,7 +126,6 @@ Settings readSettings(const plugin::ParamValues& params)
     s.bias = BiasMode(params.getEnumIndex("bias_mode"));
     s.depthBias = params.getFloat("depth_bias");
     s.slopeBias = params.getFloat("slope_bias");
-    s.debugView = DebugView(params.getEnumIndex("debug_view"));
     return s;
 }
 
@@ -154,10 +151,9 @@ struct VisibilityPush {
     int32_t blockerSubdivisions = 1;
     int32_t filterSubdivisions = 1;
     int32_t treeHeight = 0;
-    int32_t debugView = 0;
-    float debugScale = 0.0f;
+    float subkernelScale = 0.0f;
 };
-static_assert(sizeof(VisibilityPush) == 52);
+static_assert(sizeof(VisibilityPush) == 48);
 
 struct SatPush {
     glm::ivec2 size{0};
@@ -203,7 +199,9 @@ private:
     void recordSat(const graph::PassContext& pass, const std::string& map, const std::string& sat) const;
     void recordHsm(const graph::PassContext& pass, const std::string& map, const std::string& hsm) const;
     void bindVisibility(const graph::PassContext& pass, gpu::DescriptorPush& descriptors, const std::string& map,
-                        const std::string& sat, const std::string& hsm) const;
+                        const std::string& sat, const std::string& hsm, const gpu::Pipeline& pipeline) const;
+    void recordDebugViews(const graph::PassContext& pass, const plugin::LightPassIo& io, const std::string& map,
+                          const std::string& sat, const std::string& hsm);
     glm::ivec2 atlasSize() const { return {int(shadowMap_.atlasWidth()), int(shadowMap_.atlasHeight())}; }
 
     gpu::Context& context_;
@@ -212,6 +210,12 @@ private:
     gpu::Pipeline sat_;
     gpu::Pipeline hsm_;
     gpu::Pipeline visibility_;
+    // The visibility shader with DEBUG_IMAGES, built when the debug_views pass first runs
+    // (only when one of its images is requested).
+    const gpu::ShaderCompiler& shaders_;
+    gpu::ComputePipelineDesc debugViewsDesc_;
+    std::optional<gpu::Pipeline> debugViews_;
+    uint32_t width_ = 0, height_ = 0;  // V_l's
     gpu::Sampler compareSampler_;
     gpu::Sampler depthSampler_;
     float lightSize_ = 0.0f;
@@ -231,7 +235,10 @@ VssmShadow::VssmShadow(const plugin::TechniqueSetup& setup)
       // Kernels reach the limits past a cube edge: boxes there lie in the receiver's face.
       shadowMap_(setup, settings_.resolution, "vssm",
                  render::kernelGuardTexels(std::max(settings_.maxSearchTexels, settings_.maxFilterTexels),
-                                           settings_.resolution))
+                                           settings_.resolution)),
+      shaders_(setup.shaders),
+      width_(setup.width),
+      height_(setup.height)
 {
     checkDevice();
     const std::string name = fmt::format("light{}.vssm.", setup.lightIndex);
@@ -258,6 +265,9 @@ VssmShadow::VssmShadow(const plugin::TechniqueSetup& setup)
     std::ranges::copy(shadowMap_.shaderDefines(), std::back_inserter(c.defines));
     c.pushConstantBytes = sizeof(VisibilityPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
+    debugViewsDesc_ = c;
+    debugViewsDesc_.name = name + "debug_views";
+    debugViewsDesc_.defines.push_back({"DEBUG_IMAGES", "1"});
 
     compareSampler_ = render::createShadowCompareSampler(context_);
     depthSampler_ = render::createShadowDepthSampler(context_);
@@ -323,12 +333,39 @@ void VssmShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
         .execute([this, map, hsm](graph::PassContext& pass) { recordHsm(pass, map, hsm); });
 
     const auto bind = [this, map, sat, hsm](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
-        bindVisibility(pass, descriptors, map, sat, hsm);
+        bindVisibility(pass, descriptors, map, sat, hsm, visibility_);
     };
     plugin::addVisibilityPass(graph, io, visibility_, bind)
         .read(map, graph::Usage::Sampled)
         .read(sat, graph::Usage::Storage)
         .read(hsm, graph::Usage::Storage);
+
+    // The debug views: nothing reads their images, so the graph culls the pass unless one
+    // of them is requested (FrameRenderer::requestImage, render --debug-image).
+    graph::PassBuilder debug = graph.addPass(io.local("debug_views"), graph::QueueKind::Compute);
+    plugin::readGBuffer(debug, io.gbuffer);
+    debug.read(map, graph::Usage::Sampled).read(sat, graph::Usage::Storage).read(hsm, graph::Usage::Storage);
+    for (const char* image : kDebugImages) {
+        graph.declareImage({io.local(image), width_, height_, VK_FORMAT_R32_SFLOAT});
+        debug.write(io.local(image), graph::Usage::Storage);
+    }
+    debug.execute([this, io, map, sat, hsm](graph::PassContext& pass) { recordDebugViews(pass, io, map, sat, hsm); });
+}
+
+void VssmShadow::recordDebugViews(const graph::PassContext& pass, const plugin::LightPassIo& io, const std::string& map,
+                                  const std::string& sat, const std::string& hsm)
+{
+    if (!debugViews_) debugViews_.emplace(context_, shaders_, debugViewsDesc_);
+    const VkCommandBuffer cmd = pass.cmd();
+    debugViews_->bind(cmd);
+    gpu::DescriptorPush descriptors;
+    plugin::bindGBuffer(pass, io.gbuffer, descriptors);
+    descriptors.storageImage("kernelOut", pass.image(io.local("kernel")))
+        .storageImage("classificationOut", pass.image(io.local("classification")))
+        .storageImage("subkernelsOut", pass.image(io.local("subkernels")));
+    bindVisibility(pass, descriptors, map, sat, hsm, *debugViews_);
+    descriptors.push(context_, cmd, *debugViews_);
+    debugViews_->dispatchOver(cmd, pass.image(io.local("kernel")));
 }
 
 constexpr gpu::MemoryAccess kComputeWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
@@ -375,7 +412,8 @@ void VssmShadow::recordHsm(const graph::PassContext& pass, const std::string& ma
 }
 
 void VssmShadow::bindVisibility(const graph::PassContext& pass, gpu::DescriptorPush& descriptors,
-                                const std::string& map, const std::string& sat, const std::string& hsm) const
+                                const std::string& map, const std::string& sat, const std::string& hsm,
+                                const gpu::Pipeline& pipeline) const
 {
     descriptors.sampledImage("shadowCompare", pass.image(map), compareSampler_, pass.layout(map))
         .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
@@ -394,9 +432,8 @@ void VssmShadow::bindVisibility(const graph::PassContext& pass, gpu::DescriptorP
                               settings_.blockerSubdivisions,
                               settings_.filterSubdivisions,
                               settings_.treeHeight,
-                              int32_t(settings_.debugView),
-                              1.0f / float(most)};
-    visibility_.pushConstants(pass.cmd(), &push, sizeof(push));
+                              1.0f / float(std::max(most, 1))};
+    pipeline.pushConstants(pass.cmd(), &push, sizeof(push));
 }
 
 } // namespace

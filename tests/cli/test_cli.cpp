@@ -612,6 +612,12 @@ TEST_F(Cli, GraphPrintsPassesInOrderResourcesAndMemory)
     EXPECT_NE(r.out.find("barrier 'light0.visibility'"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("light0.visibility: image 160x90 R16Unorm"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("device memory for transient resources:"), std::string::npos) << r.out;
+    // The names `render --debug-image` takes, each light's maps among them.
+    const size_t debug = r.out.find("debug images (penumbra render --debug-image NAME): ");
+    ASSERT_NE(debug, std::string::npos) << r.out;
+    const std::string names = r.out.substr(debug, r.out.find('\n', debug) - debug);
+    for (const char* name : {"gbuffer.depth", "light0.hard.shadow_map", "light1.hard.shadow_map", "light1.visibility", "color"})
+        EXPECT_NE(names.find(name), std::string::npos) << name << "\n" << names;
 }
 
 TEST_F(Cli, GraphSaysCullingRunsOutsideTheGraph)

@@ -8,9 +8,10 @@
 namespace penumbra::test {
 
 RenderedFrame::RenderedFrame(gpu::Context& context, plugin::PluginRegistry& reg, const config::RenderConfig& cfg,
-                             scene::Scene s)
+                             scene::Scene s, const std::vector<std::string>& debugImages)
     : registry(reg), config(cfg), scene(std::move(s)), renderer(context, scene, config, reg)
 {
+    for (const std::string& image : debugImages) renderer.requestImage(image);
     renderer.renderFrame();
     positions = renderer.readPositions();
     normals = renderer.readNormals();
@@ -52,10 +53,10 @@ void PluginGpuTest::TearDown()
     GpuTest::TearDown();
 }
 
-void PluginGpuTest::render(const config::RenderConfig& cfg, scene::Scene scene)
+void PluginGpuTest::render(const config::RenderConfig& cfg, scene::Scene scene, const std::vector<std::string>& debugImages)
 {
     frame.reset();
-    frame = std::make_unique<RenderedFrame>(*context, *registry, cfg, std::move(scene));
+    frame = std::make_unique<RenderedFrame>(*context, *registry, cfg, std::move(scene), debugImages);
 }
 
 void PluginGpuTest::expectRayCastAgreement(const std::vector<float>& v, double bandTexels, float tolerance,

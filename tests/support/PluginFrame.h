@@ -21,8 +21,9 @@ namespace penumbra::test {
 // One frame rendered with plugins. Not movable: the renderer keeps references to the
 // scene and the config.
 struct RenderedFrame {
+    // `debugImages`: graph images to keep and read back (renderer.readImage).
     RenderedFrame(gpu::Context& context, plugin::PluginRegistry& registry, const config::RenderConfig& cfg,
-                  scene::Scene s);
+                  scene::Scene s, const std::vector<std::string>& debugImages = {});
     RenderedFrame(const RenderedFrame&) = delete;
     RenderedFrame& operator=(const RenderedFrame&) = delete;
 
@@ -61,8 +62,9 @@ class PluginGpuTest : public GpuTest {
 protected:
     void SetUp() override;
     void TearDown() override;
-    // Renders `cfg` over `scene` into `frame` (replacing the last one).
-    void render(const config::RenderConfig& cfg, scene::Scene scene);
+    // Renders `cfg` over `scene` into `frame` (replacing the last one), keeping the graph
+    // images `debugImages` for frame->renderer.readImage.
+    void render(const config::RenderConfig& cfg, scene::Scene scene, const std::vector<std::string>& debugImages = {});
 
     // Expects light 0's `v` to agree with rays from the light's centre within
     // `tolerance` away from edges (by `bandTexels`), with enough pixels surely shadowed

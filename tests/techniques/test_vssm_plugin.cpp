@@ -311,14 +311,12 @@ constexpr float kAgreementTolerance = 0.35f;
 
 struct VssmSettings : test::KernelSettings {
     std::string subdivision = "mixed";
-    std::string debugView = "off";
 };
 
 void applyVssm(config::LightConfig& light, const VssmSettings& s)
 {
     nlohmann::json params = s.params();
     params["subdivision"] = s.subdivision;
-    params["debug_view"] = s.debugView;
     test::setShadow(light, "vssm", params);
 }
 
@@ -629,25 +627,38 @@ INSTANTIATE_TEST_SUITE_P(Vssm, VssmScales,
 // ---------------------------------------------------------------------------------
 // Debug views.
 
-TEST_F(VssmTest, DebugViewsShowKernelClassificationAndSubKernels)
+TEST_F(VssmTest, DebugImagesShowKernelClassificationAndSubKernels)
 {
     config::RenderConfig cfg = test::defaultTestConfig();
     VssmSettings s;
     s.lightSize = 0.6;
-    const std::vector<float> v = renderWith(cfg, s);
+    applyVssm(cfg.lights[0], s);
+    render(cfg, config::buildScene(cfg.scene),
+           {"light0.vssm.kernel", "light0.vssm.classification", "light0.vssm.subkernels"});
+    const std::vector<float> v = frame->checkedVisibility();
+    const auto read = [&](const char* name) {
+        const metrics::DebugImageValues image = frame->renderer.readImage(name);
+        EXPECT_EQ(image.width, cfg.width);
+        EXPECT_EQ(image.height, cfg.height);
+        EXPECT_EQ(image.channels, 1u);
+        return image.values;
+    };
+    const std::vector<float> classes = read("light0.vssm.classification");
+    const std::vector<float> kernel = read("light0.vssm.kernel");
+    const std::vector<float> visited = read("light0.vssm.subkernels");
+    ASSERT_EQ(classes.size(), v.size());
 
-    // Classification: every pixel with geometry is one of the five classes, and the
-    // scene has lit, umbra and penumbra pixels; where V is 0 or 1 by the HSM the class
-    // says so.
-    s.debugView = "classification";
-    const std::vector<float> classes = renderWith(cfg, s);
+    // Classification: every pixel with geometry is one of the five classes (stored as
+    // floats: exactly), and the scene has lit, umbra and penumbra pixels; where V is 0 by
+    // the HSM the class says so. Without geometry every image is 0.
     std::map<float, size_t> count;
     for (size_t i = 0; i < classes.size(); ++i) {
-        if (!frame->hasGeometry(i)) continue;
-        // The class codes as V_l stores them (R16_UNORM: within half a step of 1/65535).
-        const float c = std::round(classes[i] * 4.0f) / 4.0f;
-        EXPECT_NEAR(classes[i], c, 0.5f / 65535.0f) << "pixel " << i;
-        EXPECT_TRUE(c >= 0.0f && c <= 1.0f) << "pixel " << i << ": " << c;
+        if (!frame->hasGeometry(i)) {
+            EXPECT_EQ(classes[i] + kernel[i] + visited[i], 0.0f) << "pixel " << i << " without geometry";
+            continue;
+        }
+        const float c = classes[i];
+        EXPECT_TRUE(c == 0.0f || c == 0.25f || c == 0.5f || c == 0.75f || c == 1.0f) << "pixel " << i << ": " << c;
         ++count[c];
         // V is weighted by the light above the receiver's horizon after the class.
         if (c == 0.0f) {
@@ -658,32 +669,45 @@ TEST_F(VssmTest, DebugViewsShowKernelClassificationAndSubKernels)
     EXPECT_GT(count[0.0f], 100u) << "umbra";
     EXPECT_GT(count[0.5f] + count[0.75f], 100u) << "penumbra";
 
-    // Kernel: 0 where the HSM decided, in (0, 1] in penumbrae.
-    s.debugView = "kernel";
-    const std::vector<float> kernel = renderWith(cfg, s);
-    size_t withKernel = 0;
+    // Kernel: 0 where the HSM decided, in (0, 1] in penumbrae. Sub-kernels: none where
+    // the HSM decided, some in every penumbra pixel, never more than the most possible.
+    size_t withKernel = 0, penumbraVisited = 0;
     for (size_t i = 0; i < kernel.size(); ++i) {
         if (!frame->hasGeometry(i)) continue;
+        EXPECT_TRUE(kernel[i] >= 0.0f && kernel[i] <= 1.0f) << "pixel " << i << ": " << kernel[i];
+        EXPECT_TRUE(visited[i] >= 0.0f && visited[i] <= 1.0f) << "pixel " << i << ": " << visited[i];
         if (classes[i] == 0.0f) {
             EXPECT_EQ(kernel[i], 0.0f) << "pixel " << i;
-        }
-        withKernel += kernel[i] > 0.0f;
-    }
-    EXPECT_GT(withKernel, 100u);
-
-    // Sub-kernels: none where the HSM decided, some in penumbrae.
-    s.debugView = "subkernels";
-    const std::vector<float> visited = renderWith(cfg, s);
-    size_t penumbraVisited = 0;
-    for (size_t i = 0; i < visited.size(); ++i) {
-        if (!frame->hasGeometry(i)) continue;
-        if (classes[i] == 0.0f) {
             EXPECT_EQ(visited[i], 0.0f) << "pixel " << i;
         }
-        const float c = std::round(classes[i] * 4.0f) / 4.0f;  // as stored (above)
-        if (c == 0.5f || c == 0.75f) penumbraVisited += visited[i] > 0.0f;
+        withKernel += kernel[i] > 0.0f;
+        if (classes[i] == 0.5f || classes[i] == 0.75f) penumbraVisited += visited[i] > 0.0f;
     }
+    EXPECT_GT(withKernel, 100u);
     EXPECT_EQ(penumbraVisited, count[0.5f] + count[0.75f]);
+
+    // The visibility is the same as without the debug pass.
+    render(cfg, config::buildScene(cfg.scene));
+    EXPECT_EQ(frame->checkedVisibility(), v);
+}
+
+TEST_F(VssmTest, DebugViewsPassRunsOnlyWhenOneOfItsImagesIsRequested)
+{
+    config::RenderConfig cfg = test::defaultTestConfig();
+    cfg.width = 64;
+    cfg.height = 48;
+    const VssmSettings defaults;
+    applyVssm(cfg.lights[0], defaults);
+    const auto runs = [&](const graph::CompiledGraph& compiled, const std::string& name) {
+        return std::ranges::any_of(compiled.passes, [&](const graph::CompiledPass& p) { return p.name == name; });
+    };
+    render(cfg, config::buildScene(cfg.scene));
+    const std::vector<std::string> names = frame->renderer.imageNames();
+    for (const char* image : {"light0.vssm.kernel", "light0.vssm.classification", "light0.vssm.subkernels"})
+        EXPECT_NE(std::ranges::find(names, image), names.end()) << image << " can be requested";
+    EXPECT_FALSE(runs(frame->renderer.compiledGraph(), "light0.vssm.debug_views")) << "culled: nobody reads it";
+    render(cfg, config::buildScene(cfg.scene), {"light0.vssm.subkernels"});
+    EXPECT_TRUE(runs(frame->renderer.compiledGraph(), "light0.vssm.debug_views"));
 }
 
 // ---------------------------------------------------------------------------------
@@ -701,7 +725,8 @@ TEST(VssmPluginEntry, ReflectsEveryParameterWithItsDefault)
     EXPECT_FLOAT_EQ(params.getFloat("contact_epsilon"), 0.01f);
     EXPECT_EQ(params.getFloat("max_search_radius"), 0.0625f);  // of the face's side
     EXPECT_EQ(params.getFloat("max_filter_radius"), 0.0625f);
-    EXPECT_EQ(params.getEnum("debug_view"), "off");
+    // The debug views are debug images (light0.vssm.kernel, ...), not a parameter.
+    EXPECT_TRUE(std::ranges::none_of(params.specs(), [](const plugin::ParamSpec& spec) { return spec.name == std::string("debug_view"); }));
     for (const plugin::ParamSpec& spec : params.specs()) EXPECT_NE(std::string(spec.doc), "") << spec.name;
 }
 
