@@ -8,8 +8,10 @@
 //   Sweep.h         parameter sweeps: one RenderConfig per variant
 //   Overrides.h     --set technique.param=value
 //   Run.h           preparing a run: the scene built, its lights, the overrides and sizes
+//   ConfigWriter.h  a RenderConfig written back as a config file (the viewer's Save)
 // config/schema/penumbra-config.schema.json describes the same format for editors.
 #include "penumbra/config/Animation.h"
+#include "penumbra/config/ConfigWriter.h"
 #include "penumbra/config/Document.h"
 #include "penumbra/config/Overrides.h"
 #include "penumbra/config/RenderConfig.h"
