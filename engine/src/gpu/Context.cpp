@@ -64,6 +64,17 @@ bool hasLayer(const char* name)
                        [&](const VkLayerProperties& l) { return std::strcmp(l.layerName, name) == 0; });
 }
 
+bool hasInstanceExtension(const char* name)
+{
+    uint32_t count = 0;
+    vkEnumerateInstanceExtensionProperties(nullptr, &count, nullptr);
+    std::vector<VkExtensionProperties> exts(count);
+    vkEnumerateInstanceExtensionProperties(nullptr, &count, exts.data());
+    return std::any_of(exts.begin(), exts.end(), [&](const VkExtensionProperties& e) {
+        return std::strcmp(e.extensionName, name) == 0;
+    });
+}
+
 bool hasDeviceExtension(VkPhysicalDevice device, const char* name)
 {
     uint32_t count = 0;
@@ -159,10 +170,11 @@ ContextOptions contextOptionsFromEnvironment(ContextOptions base)
 }
 
 Context::Context(const ContextOptions& options)
-    : submitTimeoutSeconds_(options.submitTimeoutSeconds), isolatePasses_(options.isolatePasses)
+    : submitTimeoutSeconds_(options.submitTimeoutSeconds), isolatePasses_(options.isolatePasses),
+      presentation_(options.presentation)
 {
     try {
-        createInstance(options.validation);
+        createInstance(options.validation, presentation_ ? presentation_->instanceExtensions : std::vector<std::string>{});
         selectPhysicalDevice(options.device);
         createDevice();
     } catch (...) {
@@ -194,7 +206,7 @@ void Context::destroy()
     }
 }
 
-void Context::createInstance(bool validation)
+void Context::createInstance(bool validation, const std::vector<std::string>& extraExtensions)
 {
     uint32_t loaderVersion = 0;
     if (vkEnumerateInstanceVersion(&loaderVersion) != VK_SUCCESS || loaderVersion < VK_API_VERSION_1_3) {
@@ -219,6 +231,14 @@ void Context::createInstance(bool validation)
     if (validation) {
         layers.push_back(kValidationLayer);
         extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+    }
+    for (const std::string& extension : extraExtensions) {
+        if (!hasInstanceExtension(extension.c_str())) {
+            throw GpuError(fmt::format("the Vulkan loader has no instance extension {}, which the window system needs "
+                                       "(install the Vulkan driver's window-system support, e.g. mesa-vulkan-drivers)",
+                                       extension));
+        }
+        extensions.push_back(extension.c_str());
     }
 
     // Synchronization validation catches missing barriers: the graph of a later issue
@@ -301,6 +321,15 @@ void Context::selectPhysicalDevice(const DeviceRequest& request)
             rejected.push_back(fmt::format("'{}' lacks {}", name, missing));
             continue;
         }
+        if (presentation_ && !hasDeviceExtension(device, VK_KHR_SWAPCHAIN_EXTENSION_NAME)) {
+            rejected.push_back(fmt::format("'{}' lacks {} (a window needs it)", name, VK_KHR_SWAPCHAIN_EXTENSION_NAME));
+            continue;
+        }
+        if (!queueFamilyOf(device)) {
+            rejected.push_back(fmt::format("'{}' has no queue family with graphics, compute and timestamps{}", name,
+                                           presentation_ ? " that can present to the window" : ""));
+            continue;
+        }
         if (typeRank(props.deviceType) > bestRank) {
             best = device;
             bestRank = typeRank(props.deviceType);
@@ -322,25 +351,25 @@ void Context::selectPhysicalDevice(const DeviceRequest& request)
     vkGetPhysicalDeviceMemoryProperties(best, &memoryProperties_);
 }
 
-void Context::createDevice()
+std::optional<uint32_t> Context::queueFamilyOf(VkPhysicalDevice device) const
 {
     uint32_t familyCount = 0;
-    vkGetPhysicalDeviceQueueFamilyProperties(physicalDevice_, &familyCount, nullptr);
+    vkGetPhysicalDeviceQueueFamilyProperties(device, &familyCount, nullptr);
     std::vector<VkQueueFamilyProperties> families(familyCount);
-    vkGetPhysicalDeviceQueueFamilyProperties(physicalDevice_, &familyCount, families.data());
-    bool found = false;
+    vkGetPhysicalDeviceQueueFamilyProperties(device, &familyCount, families.data());
     for (uint32_t i = 0; i < familyCount; ++i) {
         const VkQueueFlags need = VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT;
-        if ((families[i].queueFlags & need) == need && families[i].timestampValidBits > 0) {
-            queueFamily_ = i;
-            found = true;
-            break;
-        }
+        if ((families[i].queueFlags & need) != need || families[i].timestampValidBits == 0) continue;
+        // One queue does everything: the frame, its timings and the window's present.
+        if (presentation_ && !(presentation_->canPresent && presentation_->canPresent(instance_, device, i))) continue;
+        return i;
     }
-    if (!found) {
-        throw GpuError(fmt::format("device '{}' has no queue family with graphics, compute and timestamps",
-                                   info_.name));
-    }
+    return std::nullopt;
+}
+
+void Context::createDevice()
+{
+    queueFamily_ = *queueFamilyOf(physicalDevice_);  // selectPhysicalDevice took only a device that has one
 
     VkPhysicalDeviceVulkan13Features have13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
     VkPhysicalDeviceVulkan12Features have12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES, &have13};
@@ -377,14 +406,16 @@ void Context::createDevice()
     queueInfo.queueCount = 1;
     queueInfo.pQueuePriorities = &priority;
 
-    const char* extensions[] = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME};
+    std::vector<const char*> extensions = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME};
+    if (presentation_) extensions.push_back(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
     VkDeviceCreateInfo info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, &features};
     info.queueCreateInfoCount = 1;
     info.pQueueCreateInfos = &queueInfo;
-    info.enabledExtensionCount = 1;
-    info.ppEnabledExtensionNames = extensions;
+    info.enabledExtensionCount = uint32_t(extensions.size());
+    info.ppEnabledExtensionNames = extensions.data();
     check(vkCreateDevice(physicalDevice_, &info, nullptr, &device_), "vkCreateDevice");
     enabledFeatures_ = features.features;
+    presents_ = presentation_.has_value();
     pinLoadedLibrariesForLeakReports();
     vkGetDeviceQueue(device_, queueFamily_, 0, &queue_);
     cmdPushDescriptorSet_ = reinterpret_cast<PFN_vkCmdPushDescriptorSetKHR>(

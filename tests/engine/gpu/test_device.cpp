@@ -96,3 +96,52 @@ TEST(Device, EnvironmentPicksDevice)
     EXPECT_EQ(options.device.type, "cpu");
     EXPECT_TRUE(options.device.nameContains.empty());
 }
+
+// A window's context (the viewer): the window system's instance extensions, a queue that
+// presents, VK_KHR_swapchain. Without a display the window system's own test is replaced
+// by one that says which families present.
+TEST(Device, PresentationEnablesTheSurfaceExtensionsAndAQueueThatPresents)
+{
+    gpu::ContextOptions options;
+    options.device.nameContains = "llvmpipe";
+    options.validation = true;
+    uint32_t asked = 0;
+    options.presentation = gpu::Presentation{{"VK_KHR_surface"}, [&](VkInstance instance, VkPhysicalDevice, uint32_t) {
+                                                  EXPECT_NE(instance, VK_NULL_HANDLE);
+                                                  ++asked;
+                                                  return true;
+                                              }};
+    gpu::Context context(options);
+    EXPECT_TRUE(context.presents());
+    EXPECT_GE(asked, 1u);
+    // The swapchain's entry points exist only where the extension is enabled.
+    EXPECT_NE(vkGetDeviceProcAddr(context.device(), "vkCreateSwapchainKHR"), nullptr);
+    EXPECT_NE(vkGetInstanceProcAddr(context.instance(), "vkDestroySurfaceKHR"), nullptr);
+    test::expectNoValidationMessages(context);
+
+    gpu::ContextOptions headless;
+    headless.device.nameContains = "llvmpipe";
+    gpu::Context plain(headless);
+    EXPECT_FALSE(plain.presents());
+    EXPECT_EQ(vkGetDeviceProcAddr(plain.device(), "vkCreateSwapchainKHR"), nullptr);
+}
+
+TEST(Device, PresentationThatNoQueueOrLoaderCanGiveIsAClearError)
+{
+    gpu::ContextOptions options;
+    options.device.nameContains = "llvmpipe";
+    options.presentation = gpu::Presentation{{"VK_KHR_surface"}, [](VkInstance, VkPhysicalDevice, uint32_t) { return false; }};
+    try {
+        gpu::Context context(options);
+        FAIL() << "a device whose queues cannot present was taken";
+    } catch (const GpuError& e) {
+        EXPECT_NE(std::string(e.what()).find("that can present to the window"), std::string::npos) << e.what();
+    }
+    options.presentation = gpu::Presentation{{"VK_KHR_no_such_surface"}, [](VkInstance, VkPhysicalDevice, uint32_t) { return true; }};
+    try {
+        gpu::Context context(options);
+        FAIL() << "a missing instance extension was accepted";
+    } catch (const GpuError& e) {
+        EXPECT_NE(std::string(e.what()).find("VK_KHR_no_such_surface"), std::string::npos) << e.what();
+    }
+}

@@ -1,6 +1,7 @@
 #pragma once
 // The Vulkan 1.3 instance, the chosen physical device, the logical device and its one
-// queue. Headless: no surface extension is needed to render to a PNG.
+// queue. Headless by default: no surface extension is needed to render to a PNG; a window
+// (the viewer) asks for presentation (ContextOptions::presentation).
 #include <vulkan/vulkan.h>
 
 #include <atomic>
@@ -23,6 +24,15 @@ struct DeviceRequest {
 // True in Debug builds of the engine: validation is on by default there.
 bool validationByDefault();
 
+// What a window system needs of the context: its instance extensions (GLFW's
+// glfwGetRequiredInstanceExtensions) and a test of whether a queue family of a device can
+// present to it (glfwGetPhysicalDevicePresentationSupport). The engine then takes only a
+// device with VK_KHR_swapchain whose one queue can present, and enables the extension.
+struct Presentation {
+    std::vector<std::string> instanceExtensions;
+    std::function<bool(VkInstance, VkPhysicalDevice, uint32_t queueFamily)> canPresent;
+};
+
 struct ContextOptions {
     DeviceRequest device;
     // Loads VK_LAYER_KHRONOS_validation with synchronization validation and counts
@@ -36,6 +46,7 @@ struct ContextOptions {
     // Submit every render graph pass on its own and wait for it (PENUMBRA_ISOLATE_PASSES=1):
     // slow, but a lost device or a hang then names the one pass that caused it.
     bool isolatePasses = false;
+    std::optional<Presentation> presentation;  // none: headless
 };
 
 // Reads PENUMBRA_DEVICE ("name" or "type:cpu"), PENUMBRA_VALIDATION (0/1),
@@ -81,6 +92,8 @@ public:
     const VkPhysicalDeviceMemoryProperties& memoryProperties() const { return memoryProperties_; }
     bool validationEnabled() const { return validation_; }
     bool isolatePasses() const { return isolatePasses_; }
+    // Created with ContextOptions::presentation: VK_KHR_swapchain is enabled and the queue presents.
+    bool presents() const { return presents_; }
     // The core features the device was created with (the optional ones where it has them).
     const VkPhysicalDeviceFeatures& enabledFeatures() const { return enabledFeatures_; }
 
@@ -127,9 +140,12 @@ private:
         VkDebugUtilsMessageSeverityFlagBitsEXT severity, VkDebugUtilsMessageTypeFlagsEXT types,
         const VkDebugUtilsMessengerCallbackDataEXT* data, void* self);
 
-    void createInstance(bool validation);
+    void createInstance(bool validation, const std::vector<std::string>& extraExtensions);
     void selectPhysicalDevice(const DeviceRequest& request);
     void createDevice();
+    // The queue family with graphics, compute and timestamps (and presentation when asked
+    // for) of `device`; none when it has no such family.
+    std::optional<uint32_t> queueFamilyOf(VkPhysicalDevice device) const;
     void destroy();
 
     VkInstance instance_ = VK_NULL_HANDLE;
@@ -142,6 +158,8 @@ private:
     VkFence fence_ = VK_NULL_HANDLE;
     double submitTimeoutSeconds_ = 60.0;
     bool isolatePasses_ = false;
+    std::optional<Presentation> presentation_;
+    bool presents_ = false;
     DeviceInfo info_;
     VkPhysicalDeviceProperties properties_{};
     VkPhysicalDeviceMemoryProperties memoryProperties_{};
