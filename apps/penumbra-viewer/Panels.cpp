@@ -1,0 +1,531 @@
+// The viewer's panels (Dear ImGui). A technique's parameters are drawn from the plugin's
+// reflection (plugin::ParamSpec: type, range, unit, doc, choices) with no code for any one
+// plugin: a new plugin appears with its widgets. Widgets clamp to the spec's range, so an
+// invalid value cannot be entered; the session checks every value again (Session::setParam).
+#include "Viewer.h"
+
+#include "penumbra/core/Error.h"
+#include "penumbra/plugin/Params.h"
+
+#include <fmt/format.h>
+#include <imgui.h>
+#include <imgui_stdlib.h>
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+
+namespace fs = std::filesystem;
+
+namespace penumbra::viewer {
+namespace {
+
+void tooltip(const std::string& text)
+{
+    if (!text.empty() && ImGui::IsItemHovered()) ImGui::SetTooltip("%s", text.c_str());
+}
+
+std::string specTooltip(const plugin::ParamSpec& spec)
+{
+    std::string text = spec.doc;
+    if (spec.type == plugin::ParamType::Int || spec.type == plugin::ParamType::Float) {
+        text += fmt::format("\nrange [{}, {}]{}{}", spec.minValue, spec.maxValue, *spec.unit ? " " : "", spec.unit);
+    }
+    if (spec.type == plugin::ParamType::Enum) {
+        text += fmt::format("\ndefault: {}", spec.choices[size_t(spec.defaultValue)]);
+    } else if (spec.type == plugin::ParamType::Bool) {
+        text += fmt::format("\ndefault: {}", spec.defaultValue != 0.0 ? "true" : "false");
+    } else {
+        text += fmt::format("\ndefault: {}", spec.defaultValue);
+    }
+    return text;
+}
+
+// A drag speed for world lengths: a small fraction of the scene.
+float lengthSpeed(float radius) { return std::max(radius * 0.002f, 1e-6f); }
+
+bool dragVec3(const char* label, glm::vec3& v, float speed)
+{
+    return ImGui::DragFloat3(label, &v.x, speed, 0.0f, 0.0f, "%.4g");
+}
+
+} // namespace
+
+void Viewer::drawPanels()
+{
+    drawnParamWidgets_.clear();
+    const ImGuiIO& io = ImGui::GetIO();
+    ImGui::SetNextWindowPos(ImVec2(0, 0));
+    ImGui::SetNextWindowSize(ImVec2(panelWidth_ * uiScale_, io.DisplaySize.y));
+    ImGui::Begin("Penumbra", nullptr,
+                 ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
+                     ImGuiWindowFlags_NoBringToFrontOnFocus);
+    ImGui::PushItemWidth(-ImGui::GetFontSize() * 9.0f);
+    if (!message_.empty()) {
+        const bool error = !session_->lastError().empty() && message_ == session_->lastError();
+        ImGui::PushStyleColor(ImGuiCol_Text, error ? ImVec4(1.0f, 0.45f, 0.4f, 1.0f) : ImVec4(0.6f, 0.9f, 0.6f, 1.0f));
+        ImGui::TextWrapped("%s", message_.c_str());
+        ImGui::PopStyleColor();
+        if (ImGui::SmallButton("dismiss")) {
+            message_.clear();
+            session_->clearError();
+        }
+        ImGui::Separator();
+    }
+    drawFilePanel();
+    drawScenePanel();
+    drawCameraPanel();
+    drawRenderPanel();
+    drawLightsPanel();
+    drawDebugImagePanel();
+    drawTimingsPanel();
+    ImGui::PopItemWidth();
+    ImGui::End();
+    drawPixelInspector();
+}
+
+void Viewer::drawFilePanel()
+{
+    if (!ImGui::CollapsingHeader("File", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    ImGui::InputText("##open", &openPath_);
+    ImGui::SameLine();
+    if (ImGui::Button("Open")) {
+        try {
+            session_->open(openPath_);
+            homeCamera_ = session_->config().camera;
+            history_ = {};
+            message_ = fmt::format("opened {}", openPath_);
+        } catch (const std::exception& e) {
+            message_ = e.what();
+        }
+    }
+    tooltip("a scene config (.json) or a glTF file (.gltf, .glb)");
+    ImGui::InputText("##save", &savePath_);
+    ImGui::SameLine();
+    if (ImGui::Button("Save")) {
+        try {
+            session_->save(savePath_);
+            message_ = fmt::format("saved {}", savePath_);
+        } catch (const std::exception& e) {
+            message_ = e.what();
+        }
+    }
+    tooltip("writes the config as shown: `penumbra render` of it draws this frame");
+    if (ImGui::Button("Screenshot view")) {
+        try {
+            const std::string file = fs::path(savePath_).replace_extension(".png").string();
+            writeScreenshot(file, false);
+        } catch (const std::exception& e) {
+            message_ = e.what();
+        }
+    }
+    tooltip("the frame (or the debug image shown) at its own size, as PNG beside the config");
+}
+
+void Viewer::drawScenePanel()
+{
+    if (!ImGui::CollapsingHeader("Scene")) return;
+    const scene::Scene& scene = session_->scene();
+    const config::SceneSource& source = session_->config().scene;
+    ImGui::Text("%s", source.kind == config::SceneSource::Kind::Gltf ? source.gltf.filename().string().c_str()
+                                                                      : ("generator " + source.generator).c_str());
+    ImGui::Text("%zu instances, %zu meshes, %llu triangles", scene.instances.size(), scene.meshes.size(),
+                static_cast<unsigned long long>(scene.triangleCount()));
+    const scene::Aabb b = scene.bounds();
+    ImGui::Text("bounds (%.4g, %.4g, %.4g)", b.min.x, b.min.y, b.min.z);
+    ImGui::Text("    to (%.4g, %.4g, %.4g)", b.max.x, b.max.y, b.max.z);
+    ImGui::Text("radius %.4g", b.radius());
+}
+
+void Viewer::drawCameraPanel()
+{
+    if (!ImGui::CollapsingHeader("Camera", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    int mode = int(cameraMode_);
+    ImGui::RadioButton("orbit", &mode, int(CameraMode::Orbit));
+    ImGui::SameLine();
+    ImGui::RadioButton("fly", &mode, int(CameraMode::Fly));
+    ImGui::SameLine();
+    ImGui::RadioButton("first person", &mode, int(CameraMode::FirstPerson));
+    cameraMode_ = CameraMode(mode);
+    tooltip(cameraMode_ == CameraMode::Orbit
+                ? "left drag: orbit; middle or shift+left drag: pan; wheel: closer / farther; R: back to the file's camera"
+                : "left or right drag: look; W/S/A/D: forward, back, left, right; Q/E: down, up; wheel: speed");
+    scene::Camera camera = session_->config().camera;
+    const float speed = lengthSpeed(sceneRadius());
+    bool edited = dragVec3("position", camera.position, speed);
+    edited |= dragVec3("target", camera.target, speed);
+    edited |= ImGui::DragFloat("fov y (deg)", &camera.fovYDeg, 0.1f, 1.0f, 179.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
+    edited |= ImGui::DragFloat("near", &camera.nearWorld, speed * 0.01f, std::max(sceneRadius() * 1e-7f, 1e-30f),
+                               sceneRadius() * 10.0f, "%.4g", ImGuiSliderFlags_AlwaysClamp | ImGuiSliderFlags_Logarithmic);
+    if (cameraMode_ != CameraMode::Orbit) {
+        ImGui::SliderFloat("speed (log2)", &flySpeedExponent_, -10.0f, 10.0f, "%.2f");
+        tooltip(fmt::format("{:.4g} world units per second (a tenth of the scene's radius times 2^speed)",
+                            flySpeed(sceneRadius(), flySpeedExponent_)));
+    }
+    // A target on the eye, or an up along the view, has no view: not taken.
+    const glm::vec3 view = camera.target - camera.position;
+    if (edited && glm::length(view) > 0.0f &&
+        glm::length(glm::cross(glm::normalize(view), glm::normalize(camera.up))) > 1e-4f) {
+        session_->config().camera = camera;
+        session_->changed(Change::View);
+    }
+    if (ImGui::Button("Back to the file's camera")) {
+        session_->config().camera = homeCamera_;
+        session_->changed(Change::View);
+    }
+}
+
+void Viewer::drawRenderPanel()
+{
+    if (!ImGui::CollapsingHeader("Render", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    config::RenderConfig& c = session_->config();
+    static const char* modes[] = {"none", "frustum", "light-occlusion", "receiver-mask"};
+    int culling = int(c.culling);
+    if (ImGui::Combo("culling", &culling, modes, 4)) {
+        c.culling = config::CullingMode(culling);
+        if (c.culling != config::CullingMode::ReceiverMask && c.culling != config::CullingMode::LightOcclusion) {
+            c.shadowFocus = false;  // focusing needs what the camera sees (config's rule)
+        }
+        session_->changed(Change::Renderer);
+    }
+    tooltip("which shadow casters the light passes draw (docs/culling.md); every mode gives the same image");
+    const bool canFocus = c.culling == config::CullingMode::ReceiverMask || c.culling == config::CullingMode::LightOcclusion;
+    ImGui::BeginDisabled(!canFocus);
+    if (ImGui::Checkbox("shadow focus", &c.shadowFocus)) session_->changed(Change::Renderer);
+    ImGui::EndDisabled();
+    tooltip("fit directional and spot maps to what the camera sees (needs receiver-mask or light-occlusion)");
+    bool fixed = fixedSize_.has_value();
+    if (ImGui::Checkbox("fixed size", &fixed)) {
+        fixedSize_ = fixed ? std::optional(std::make_pair(c.width, c.height)) : std::nullopt;
+    }
+    tooltip("off: the frame is the view's size; on: this size, scaled into the view");
+    if (fixedSize_) {
+        int size[2] = {int(fixedSize_->first), int(fixedSize_->second)};
+        if (ImGui::InputInt2("size", size, ImGuiInputTextFlags_EnterReturnsTrue)) {
+            fixedSize_ = std::make_pair(uint32_t(std::clamp(size[0], 1, 16384)), uint32_t(std::clamp(size[1], 1, 16384)));
+        }
+    } else {
+        ImGui::Text("%u x %u", c.width, c.height);
+    }
+    ImGui::Checkbox("render every frame", &continuous_);
+    tooltip("off: a frame is rendered only when something changed; on: always (for timings)");
+    bool vsync = presenter_->vsync();
+    if (ImGui::Checkbox("vsync", &vsync)) presenter_->setVsync(vsync);
+}
+
+void Viewer::drawLightsPanel()
+{
+    if (!ImGui::CollapsingHeader("Lights", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    config::RenderConfig& c = session_->config();
+    const float speed = lengthSpeed(sceneRadius());
+    std::optional<size_t> remove;
+    for (size_t i = 0; i < c.lights.size(); ++i) {
+        config::LightConfig& lc = c.lights[i];
+        scene::Light& l = lc.light;
+        ImGui::PushID(int(i));
+        const std::string label = fmt::format("{} ({}, {})###light", lc.name, scene::lightTypeName(l.type), lc.shadow.technique);
+        if (ImGui::TreeNodeEx(label.c_str(), i == 0 ? ImGuiTreeNodeFlags_DefaultOpen : 0)) {
+            Change change = Change::None;
+            int type = int(l.type);
+            static const char* types[] = {"directional", "spot", "point", "rect", "disk"};
+            if (ImGui::Combo("type", &type, types, 5)) {
+                l.type = scene::LightType(type);
+                if (l.type == scene::LightType::Directional) lc.target.reset();
+                change = Change::Renderer;
+            }
+            if (l.type != scene::LightType::Directional && dragVec3("position", l.position, speed)) {
+                if (lc.target && glm::length(*lc.target - l.position) > 0.0f) l.direction = glm::normalize(*lc.target - l.position);
+                change = std::max(change, Change::View);
+            }
+            if (l.type != scene::LightType::Point) {
+                glm::vec3 d = l.direction;
+                if (ImGui::DragFloat3("direction", &d.x, 0.005f, -1.0f, 1.0f, "%.3f") && glm::length(d) > 1e-6f) {
+                    l.direction = glm::normalize(d);
+                    lc.target.reset();  // aimed by hand now
+                    change = std::max(change, Change::View);
+                }
+                tooltip(l.type == scene::LightType::Directional ? "the way the light travels" : "the axis it shines along");
+            }
+            if (ImGui::DragFloat("intensity", &l.intensity, std::max(l.intensity * 0.01f, 1e-3f), 0.0f, 1e12f, "%.4g",
+                                 ImGuiSliderFlags_AlwaysClamp)) {
+                change = std::max(change, Change::View);
+            }
+            tooltip(l.type == scene::LightType::Directional ? "irradiance on a surface facing it (W/m2)"
+                                                            : "radiant intensity along the axis (W/sr)");
+            if (ImGui::ColorEdit3("colour", &l.color.x, ImGuiColorEditFlags_Float)) change = std::max(change, Change::View);
+            switch (l.type) {
+            case scene::LightType::Directional:
+                if (ImGui::DragFloat("angular diameter", &l.angularDiameterDeg, 0.01f, 0.0f, 90.0f, "%.3f deg",
+                                     ImGuiSliderFlags_AlwaysClamp))
+                    change = Change::Renderer;
+                break;
+            case scene::LightType::Spot:
+                if (ImGui::DragFloat("outer cone", &l.outerConeDeg, 0.1f, 0.01f, 89.0f, "%.2f deg", ImGuiSliderFlags_AlwaysClamp)) {
+                    l.innerConeDeg = std::min(l.innerConeDeg, l.outerConeDeg);
+                    change = Change::Renderer;
+                }
+                if (ImGui::DragFloat("inner cone", &l.innerConeDeg, 0.1f, 0.0f, l.outerConeDeg, "%.2f deg", ImGuiSliderFlags_AlwaysClamp))
+                    change = Change::Renderer;
+                break;
+            case scene::LightType::Point:
+                if (ImGui::DragFloat("radius", &l.radiusWorld, speed, 0.0f, 1e9f, "%.4g", ImGuiSliderFlags_AlwaysClamp))
+                    change = Change::Renderer;
+                break;
+            case scene::LightType::Rect:
+                if (ImGui::DragFloat2("size", &l.sizeWorld.x, speed, 0.0f, 1e9f, "%.4g", ImGuiSliderFlags_AlwaysClamp))
+                    change = Change::Renderer;
+                break;
+            case scene::LightType::Disk:
+                if (ImGui::DragFloat("radius", &l.radiusWorld, speed, 0.0f, 1e9f, "%.4g", ImGuiSliderFlags_AlwaysClamp))
+                    change = Change::Renderer;
+                break;
+            }
+            session_->changed(change);
+            drawTechniquePanel(i);
+            ImGui::BeginDisabled(c.lights.size() <= 1);
+            if (ImGui::SmallButton("remove light")) remove = i;
+            ImGui::EndDisabled();
+            ImGui::TreePop();
+        }
+        ImGui::PopID();
+    }
+    if (remove) {
+        try {
+            session_->removeLight(*remove);
+        } catch (const std::exception& e) {
+            message_ = e.what();
+        }
+    }
+    ImGui::BeginDisabled(c.lights.size() >= config::kMaxLights);
+    if (ImGui::Button("Add a spot light")) {
+        const scene::Aabb b = session_->scene().bounds();
+        config::LightConfig lc;
+        lc.light.type = scene::LightType::Spot;
+        lc.light.position = b.center() + glm::vec3(0.3f, 1.5f, 0.2f) * sceneRadius();
+        lc.light.direction = glm::normalize(b.center() - lc.light.position);
+        lc.light.outerConeDeg = 40.0f;
+        lc.light.innerConeDeg = 32.0f;
+        // As bright at the scene as the default 300 W/sr light is at 10 units.
+        const float distance = glm::length(b.center() - lc.light.position);
+        lc.light.intensity = 3.0f * distance * distance;
+        try {
+            session_->addLight(lc);
+        } catch (const std::exception& e) {
+            message_ = e.what();
+        }
+    }
+    ImGui::EndDisabled();
+}
+
+void Viewer::drawTechniquePanel(size_t light)
+{
+    config::ShadowSettings& shadow = session_->config().lights[light].shadow;
+    if (ImGui::BeginCombo("technique", shadow.technique.c_str())) {
+        for (const std::string& name : session_->techniqueNames()) {
+            if (ImGui::Selectable(name.c_str(), name == shadow.technique)) {
+                try {
+                    session_->setTechnique(light, name);
+                } catch (const std::exception& e) {
+                    message_ = e.what();
+                }
+            }
+        }
+        ImGui::EndCombo();
+    }
+    const std::optional<plugin::ParamValues> values = session_->params(light);
+    if (!values) return;
+    const std::string where = fmt::format("viewer: {}.", session_->config().lights[light].name);
+    auto apply = [&](const plugin::ParamSpec& spec, const nlohmann::json& value) {
+        try {
+            session_->setParam(light, spec.name, value, where + spec.name);
+        } catch (const std::exception& e) {
+            message_ = e.what();
+        }
+    };
+    for (const plugin::ParamSpec& spec : values->specs()) {
+        drawnParamWidgets_.push_back(
+            fmt::format("{} {} {} {}", session_->config().lights[light].name, shadow.technique, spec.name, plugin::paramTypeName(spec.type)));
+        const std::string label = *spec.unit ? fmt::format("{} ({})", spec.name, spec.unit) : std::string(spec.name);
+        switch (spec.type) {
+        case plugin::ParamType::Bool: {
+            bool v = values->getBool(spec.name);
+            if (ImGui::Checkbox(label.c_str(), &v)) apply(spec, v);
+            break;
+        }
+        case plugin::ParamType::Int:
+        case plugin::ParamType::Float: {
+            // A whole new renderer per step of a drag would stall it: the value being
+            // dragged is kept here and taken when the widget lets go.
+            const std::string key = fmt::format("{}/{}/{}", light, shadow.technique, spec.name);
+            const auto editing = editing_.find(key);
+            const double lo = spec.minValue, hi = spec.maxValue;
+            bool changed = false;
+            double value = 0.0;
+            if (spec.type == plugin::ParamType::Int) {
+                int v = editing != editing_.end() ? int(editing->second) : values->getInt(spec.name);
+                changed = hi - lo <= 64 ? ImGui::SliderInt(label.c_str(), &v, int(lo), int(hi), "%d", ImGuiSliderFlags_AlwaysClamp)
+                                        : ImGui::DragInt(label.c_str(), &v, float(std::max(1.0, (hi - lo) / 2000.0)), int(lo),
+                                                         int(hi), "%d", ImGuiSliderFlags_AlwaysClamp);
+                value = std::clamp(double(v), lo, hi);
+            } else {
+                float v = editing != editing_.end() ? float(editing->second) : values->getFloat(spec.name);
+                // Wide positive ranges (biases, radii) are dragged on a log scale.
+                const bool logarithmic = lo > 0.0 && hi / lo > 1000.0;
+                changed = ImGui::DragFloat(label.c_str(), &v, float(std::max((hi - lo) / 2000.0, 1e-6)), float(lo), float(hi),
+                                           "%.5g", ImGuiSliderFlags_AlwaysClamp | (logarithmic ? ImGuiSliderFlags_Logarithmic : 0));
+                value = std::clamp(double(v), lo, hi);
+            }
+            if (changed) editing_[key] = value;
+            if (!ImGui::IsItemActive() && editing_.count(key)) {
+                const double taken = editing_[key];
+                editing_.erase(key);
+                if (spec.type == plugin::ParamType::Int) {
+                    apply(spec, int(taken));
+                } else {
+                    apply(spec, taken);
+                }
+            }
+            break;
+        }
+        case plugin::ParamType::Enum: {
+            const uint32_t current = values->getEnumIndex(spec.name);
+            if (ImGui::BeginCombo(label.c_str(), spec.choices[current])) {
+                for (uint32_t k = 0; k < spec.choiceCount; ++k) {
+                    if (ImGui::Selectable(spec.choices[k], k == current)) apply(spec, spec.choices[k]);
+                }
+                ImGui::EndCombo();
+            }
+            break;
+        }
+        }
+        tooltip(specTooltip(spec));
+    }
+}
+
+void Viewer::drawDebugImagePanel()
+{
+    if (!ImGui::CollapsingHeader("Debug images")) return;
+    const std::string shown = session_->shownImage().empty() ? "color" : session_->shownImage();
+    if (ImGui::BeginCombo("image", shown.c_str())) {
+        if (ImGui::Selectable("color", session_->shownImage().empty())) session_->showImage("");
+        for (const std::string& name : session_->renderer().imageNames()) {
+            if (name == "color") continue;
+            if (ImGui::Selectable(name.c_str(), name == session_->shownImage())) {
+                try {
+                    session_->showImage(name);
+                } catch (const std::exception& e) {
+                    message_ = e.what();
+                }
+            }
+        }
+        ImGui::EndCombo();
+    }
+    tooltip("any image a pass of the frame writes; its passes run only while it is shown");
+    static const char* mappings[] = {"linear", "log", "false-color"};
+    int mapping = int(mapping_);
+    bool remap = ImGui::Combo("mapping", &mapping, mappings, 3);
+    mapping_ = metrics::DebugMapping(mapping);
+    remap |= ImGui::Checkbox("automatic range", &autoRange_);
+    ImGui::BeginDisabled(autoRange_);
+    remap |= ImGui::InputDouble("min", &range_.min, 0.0, 0.0, "%.6g");
+    remap |= ImGui::InputDouble("max", &range_.max, 0.0, 0.0, "%.6g");
+    ImGui::EndDisabled();
+    if (!std::isfinite(range_.min) || !std::isfinite(range_.max) || range_.min > range_.max) range_ = {0.0, 1.0};
+    if (remap && shownValues_) {
+        if (autoRange_) range_ = metrics::finiteRange(*shownValues_, mapping_);
+        debugUpload_->set(shownValues_->width, shownValues_->height, metrics::debugImageRgba(*shownValues_, mapping_, range_));
+    }
+    if (shownValues_) {
+        ImGui::Text("%u x %u, %u channel(s)", shownValues_->width, shownValues_->height, shownValues_->channels);
+        if (range_.nonFinite) ImGui::Text("%llu non-finite values (magenta)", static_cast<unsigned long long>(range_.nonFinite));
+    }
+}
+
+void Viewer::drawTimingsPanel()
+{
+    if (!ImGui::CollapsingHeader("Timings", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    ImGui::Text("frame %.2f ms (sum of passes %.2f ms GPU)", TimingHistory::median(history_.frameMs),
+                TimingHistory::median(history_.sumGpuMs));
+    ImGui::Text("viewer: panels + present %.2f ms", TimingHistory::median(history_.viewerMs));
+    tooltip("the viewer's own cost per shown frame, beside the frame's");
+    const frame::FrameRenderer& r = session_->renderer();
+    ImGui::Text("transient memory %.1f MiB (%.1f MiB without aliasing)",
+                double(r.executor().transientBytesAllocated()) / 1048576.0,
+                double(r.executor().transientBytesWithoutAliasing()) / 1048576.0);
+    const visibility::CullingStats& s = session_->lastTimings().culling;
+    if (session_->config().culling != config::CullingMode::None) {
+        ImGui::Text("casters drawn %llu (%llu triangles), receivers %llu", static_cast<unsigned long long>(s.castersDrawn),
+                    static_cast<unsigned long long>(s.trianglesDrawn), static_cast<unsigned long long>(s.receivers));
+        ImGui::Text("culling: camera %.2f, masks %.2f, casters %.2f ms; %llu queries", s.cameraMs, s.maskMs, s.casterCullMs,
+                    static_cast<unsigned long long>(s.queriesIssued));
+    }
+    if (ImGui::BeginTable("passes", 3, ImGuiTableFlags_RowBg | ImGuiTableFlags_SizingStretchProp)) {
+        ImGui::TableSetupColumn("pass");
+        ImGui::TableSetupColumn("GPU ms");
+        ImGui::TableSetupColumn("last frames");
+        ImGui::TableHeadersRow();
+        for (const std::string& pass : history_.order) {
+            const std::deque<float>& gpu = history_.gpuMs[pass];
+            ImGui::TableNextRow();
+            ImGui::TableNextColumn();
+            ImGui::TextUnformatted(pass.c_str());
+            ImGui::TableNextColumn();
+            ImGui::Text("%.2f", TimingHistory::median(gpu));
+            tooltip(fmt::format("median of the last {} frames; CPU {:.3f} ms", gpu.size(),
+                                TimingHistory::median(history_.cpuMs[pass])));
+            ImGui::TableNextColumn();
+            std::vector<float> values(gpu.begin(), gpu.end());
+            ImGui::PushID(pass.c_str());
+            ImGui::PlotLines("##plot", values.data(), int(values.size()), 0, nullptr, 0.0f, FLT_MAX,
+                             ImVec2(-1.0f, ImGui::GetTextLineHeight()));
+            ImGui::PopID();
+        }
+        ImGui::EndTable();
+    }
+    if (ImGui::TreeNode("compiled graph")) {
+        const graph::CompiledGraph& g = session_->renderer().compiledGraph();
+        for (const auto& pass : g.passes) ImGui::BulletText("%s", pass.name.c_str());
+        ImGui::TreePop();
+    }
+}
+
+// The value under the cursor: the colour and every light's V, or the debug image's values.
+void Viewer::drawPixelInspector()
+{
+    const ImGuiIO& io = ImGui::GetIO();
+    if (io.WantCaptureMouse || viewRect_.extent.width == 0 || session_->framesRendered() == 0) return;
+    const float fbScale = io.DisplayFramebufferScale.x > 0.0f ? io.DisplayFramebufferScale.x : 1.0f;
+    const float fx = (io.MousePos.x * fbScale - float(viewRect_.offset.x)) / float(viewRect_.extent.width);
+    const float fy = (io.MousePos.y * fbScale - float(viewRect_.offset.y)) / float(viewRect_.extent.height);
+    if (!(fx >= 0.0f && fx < 1.0f && fy >= 0.0f && fy < 1.0f)) return;
+    if (ImGui::IsMouseDown(ImGuiMouseButton_Left) || ImGui::IsMouseDown(ImGuiMouseButton_Right)) return;
+    if (shownValues_ && !session_->shownImage().empty()) {
+        const uint32_t x = std::min(uint32_t(fx * float(shownValues_->width)), shownValues_->width - 1);
+        const uint32_t y = std::min(uint32_t(fy * float(shownValues_->height)), shownValues_->height - 1);
+        std::string values;
+        for (uint32_t ch = 0; ch < shownValues_->channels; ++ch) {
+            values += fmt::format("{}{:.6g}", ch ? ", " : "",
+                                  shownValues_->values[(size_t(y) * shownValues_->width + x) * shownValues_->channels + ch]);
+        }
+        ImGui::SetTooltip("%s (%u, %u)\n%s", session_->shownImage().c_str(), x, y, values.c_str());
+        return;
+    }
+    frame::FrameRenderer& r = session_->renderer();
+    if (inspectedFrame_ != session_->framesRendered()) {
+        inspectedFrame_ = session_->framesRendered();
+        inspectedColor_ = r.readColor();
+        inspectedVisibility_.clear();
+        for (size_t l = 0; l < r.lightCount(); ++l) inspectedVisibility_.push_back(r.readVisibility(l));
+    }
+    const uint32_t x = std::min(uint32_t(fx * float(r.width())), r.width() - 1);
+    const uint32_t y = std::min(uint32_t(fy * float(r.height())), r.height() - 1);
+    const size_t i = size_t(y) * r.width() + x;
+    std::string text = fmt::format("pixel ({}, {})\ncolour {} {} {}", x, y, inspectedColor_[i * 4], inspectedColor_[i * 4 + 1],
+                                   inspectedColor_[i * 4 + 2]);
+    for (size_t l = 0; l < inspectedVisibility_.size(); ++l) {
+        text += fmt::format("\nV {} = {:.5f}", session_->config().lights[l].name, inspectedVisibility_[l][i]);
+    }
+    ImGui::SetTooltip("%s", text.c_str());
+}
+
+} // namespace penumbra::viewer

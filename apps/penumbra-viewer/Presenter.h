@@ -1,0 +1,101 @@
+#pragma once
+// The viewer's window on the screen: a GLFW window's Vulkan surface and swapchain, and the
+// one command buffer a shown frame takes — the frame's images blitted into the view's
+// rectangles, then the Dear ImGui panels drawn over them in a render pass, then present.
+// It owns no renderer: the images it shows are the render graph's (the colour image after
+// FrameRenderer::renderFrame) or ones it uploads (a mapped debug image, a difference).
+#include "penumbra/gpu/Context.h"
+#include "penumbra/gpu/Resources.h"
+
+#include <vulkan/vulkan.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <vector>
+
+struct GLFWwindow;
+struct ImDrawData;
+
+namespace penumbra::viewer {
+
+// One image shown in a rectangle of the window (scaled, aspect kept by the caller).
+struct ViewBlit {
+    const gpu::Image* image = nullptr;
+    VkImageLayout layout = VK_IMAGE_LAYOUT_UNDEFINED;  // the layout it is in, and is left in
+    VkRect2D target{};                                 // window pixels
+};
+
+// RGBA8 pixels the presenter uploads and shows: a debug image mapped to colour, a
+// difference image. Re-uploaded only when set again.
+class UploadedImage {
+public:
+    UploadedImage(gpu::Context& context, const char* name) : context_(context), name_(name) {}
+    // Copies `rgba` (rows top first) to the image through a staging copy, and waits.
+    void set(uint32_t width, uint32_t height, const std::vector<uint8_t>& rgba);
+    bool empty() const { return image_.handle() == VK_NULL_HANDLE; }
+    const gpu::Image& image() const { return image_; }
+    static constexpr VkImageLayout kLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+
+private:
+    gpu::Context& context_;
+    const char* name_;
+    gpu::Image image_;
+    gpu::Buffer staging_;
+};
+
+class Presenter {
+public:
+    // Creates the surface and the swapchain (and initialises ImGui's Vulkan backend, whose
+    // ImGui context and GLFW backend the caller set up). Throws GpuError naming what the
+    // window system or the device lacks.
+    Presenter(gpu::Context& context, GLFWwindow* window, bool vsync);
+    ~Presenter();
+    Presenter(const Presenter&) = delete;
+    Presenter& operator=(const Presenter&) = delete;
+
+    // Shows one frame: clears to `background`, blits `views`, draws `ui` (may be null) and
+    // presents. Recreates the swapchain when the window's size changed (a frame of size 0,
+    // a minimised window, is skipped). With `screenshot`, the composed window image is read
+    // back to RGBA8 rows (top first) before it is presented.
+    void present(const std::vector<ViewBlit>& views, ImDrawData* ui, const float background[3],
+                 std::vector<uint8_t>* screenshot = nullptr);
+
+    void setVsync(bool vsync);
+    bool vsync() const { return vsync_; }
+    VkExtent2D extent() const { return extent_; }
+    VkFormat format() const { return format_; }
+    VkPresentModeKHR presentMode() const { return presentMode_; }
+
+private:
+    void release();
+    std::vector<VkRect2D> uncoveredRects(const std::vector<ViewBlit>& views) const;
+    void createSwapchain();
+    void destroySwapchain();
+    void initImGui();
+
+    gpu::Context& context_;
+    GLFWwindow* window_;
+    bool vsync_;
+    bool swapchainStale_ = false;
+    VkSurfaceKHR surface_ = VK_NULL_HANDLE;
+    VkSwapchainKHR swapchain_ = VK_NULL_HANDLE;
+    VkFormat format_ = VK_FORMAT_UNDEFINED;
+    VkPresentModeKHR presentMode_ = VK_PRESENT_MODE_FIFO_KHR;
+    VkExtent2D extent_{};
+    bool canReadBack_ = false;  // the swapchain images allow TRANSFER_SRC (screenshots)
+    std::vector<VkImage> images_;
+    std::vector<VkImageView> views_;
+    std::vector<VkFramebuffer> framebuffers_;
+    std::vector<VkSemaphore> renderDone_;  // one per swapchain image: present waits on it
+    VkRenderPass renderPass_ = VK_NULL_HANDLE;
+    VkCommandPool pool_ = VK_NULL_HANDLE;
+    VkCommandBuffer cmd_ = VK_NULL_HANDLE;
+    VkSemaphore acquired_ = VK_NULL_HANDLE;
+    VkFence done_ = VK_NULL_HANDLE;
+    VkDescriptorPool imguiPool_ = VK_NULL_HANDLE;
+    bool imguiReady_ = false;
+    gpu::Buffer readBack_;
+};
+
+} // namespace penumbra::viewer

@@ -1,0 +1,249 @@
+#include "Session.h"
+
+#include "penumbra/core/Error.h"
+#include "penumbra/plugin/Params.h"
+#include "penumbra/scene/GltfLoader.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace fs = std::filesystem;
+
+namespace penumbra::viewer {
+namespace {
+
+bool isGltf(const fs::path& file)
+{
+    std::string ext = file.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return ext == ".gltf" || ext == ".glb";
+}
+
+} // namespace
+
+config::RenderConfig configForGltf(const fs::path& file, const scene::Scene& scene,
+                                   const std::vector<scene::GltfLight>& fileLights)
+{
+    config::RenderConfig c;
+    c.file = file;
+    c.scene.kind = config::SceneSource::Kind::Gltf;
+    c.scene.gltf = fs::absolute(file);
+    const scene::Aabb bounds = scene.bounds();
+    // A scene of one point (or none) still gets a camera: a unit radius around it.
+    const float radius = bounds.radius() > 0.0f && std::isfinite(bounds.radius()) ? bounds.radius() : 1.0f;
+    const glm::vec3 center = bounds.empty() ? glm::vec3(0.0f) : bounds.center();
+    c.camera.target = center;
+    c.camera.position = center + glm::normalize(glm::vec3(1.0f, 0.7f, 1.3f)) * (radius * 2.4f);
+    c.camera.fovYDeg = 45.0f;
+    // The depth buffer's precision is relative: a near plane at 1e-3 of the scene's size.
+    c.camera.nearWorld = radius * 1e-3f;
+    if (!fileLights.empty()) {
+        c.lightsFromScene = true;
+        for (size_t i = 0; i < fileLights.size() && i < config::kMaxLights; ++i) {
+            config::LightConfig lc;
+            lc.name = fileLights[i].name.empty() ? fmt::format("light{}", i) : fileLights[i].name;
+            lc.light = fileLights[i].light;
+            c.lights.push_back(lc);
+        }
+    } else {
+        config::LightConfig sun;
+        sun.name = "sun";
+        sun.light.type = scene::LightType::Directional;
+        sun.light.direction = glm::normalize(glm::vec3(-0.45f, -1.0f, -0.3f));
+        sun.light.angularDiameterDeg = 0.53f;
+        sun.light.intensity = 3.0f;
+        c.lights.push_back(sun);
+    }
+    return c;
+}
+
+Session::Session(gpu::Context& context, plugin::PluginRegistry& plugins) : context_(context), plugins_(plugins) {}
+
+Session::~Session() = default;
+
+void Session::open(const fs::path& file)
+{
+    auto run = std::make_unique<config::PreparedRun>();
+    config::RenderConfig c;
+    if (isGltf(file)) {
+        config::SceneSource source;
+        source.kind = config::SceneSource::Kind::Gltf;
+        source.gltf = file;
+        std::vector<scene::GltfLight> lights;
+        run->scene = config::buildScene(source, &lights);
+        c = configForGltf(file, run->scene, lights);
+    } else {
+        c = config::loadConfig(file);
+        run->scene = config::buildScene(c);  // with "lights": "scene", fills the lights
+    }
+    run->rest = c;
+    run->config = c;
+    // The new scene's renderer first: a failure leaves what was shown.
+    auto renderer = std::make_unique<frame::FrameRenderer>(context_, run->scene, c, plugins_);
+    renderer_.reset();  // it refers to the old scene
+    renderer_ = std::move(renderer);
+    run_ = std::move(run);
+    file_ = file;
+    config_ = c;
+    shown_ = c;
+    shownImage_.clear();
+    paramsByTechnique_.assign(c.lights.size(), {});
+    for (const std::string& warning : renderer_->warnings()) spdlog::warn("{}", warning);
+    pending_ = Change::View;  // the new renderer has not drawn yet
+    lastError_.clear();
+}
+
+void Session::changed(Change change) { pending_ = std::max(pending_, change); }
+
+void Session::setParam(size_t light, const std::string& name, const nlohmann::json& value, const std::string& where)
+{
+    config::ShadowSettings& shadow = config_.lights.at(light).shadow;
+    if (shadow.unshadowed()) throw ConfigError(fmt::format("{}: light {} is unshadowed (technique \"none\")", where, light));
+    config::ShadowSettings trial = shadow;
+    trial.setParam(name, value, where);
+    plugin::resolveParams(plugins_.load(trial.technique), trial);  // throws naming `where`
+    shadow = std::move(trial);
+    changed(Change::Renderer);
+}
+
+void Session::setTechnique(size_t light, const std::string& technique)
+{
+    config::ShadowSettings& shadow = config_.lights.at(light).shadow;
+    if (shadow.technique == technique) return;
+    if (technique != config::kNoShadowTechnique) plugins_.load(technique);  // throws PluginError naming it
+    paramsByTechnique_.resize(config_.lights.size());
+    auto& saved = paramsByTechnique_[light];
+    saved[shadow.technique] = shadow.params;
+    shadow.technique = technique;
+    shadow.params = saved.count(technique) ? saved[technique] : std::vector<config::ShadowParam>{};
+    changed(Change::Renderer);
+}
+
+void Session::addLight(config::LightConfig light)
+{
+    if (config_.lights.size() >= config::kMaxLights) {
+        throw ConfigError(fmt::format("a frame shades at most {} lights", config::kMaxLights));
+    }
+    std::string name = light.name;
+    auto taken = [&](const std::string& n) {
+        return std::any_of(config_.lights.begin(), config_.lights.end(), [&](const auto& l) { return l.name == n; });
+    };
+    for (size_t i = config_.lights.size(); name.empty() || taken(name); ++i) name = fmt::format("light{}", i);
+    light.name = name;
+    config_.lights.push_back(std::move(light));
+    paramsByTechnique_.resize(config_.lights.size());
+    changed(Change::Renderer);
+}
+
+void Session::removeLight(size_t light)
+{
+    if (config_.lights.size() <= 1) throw ConfigError("the last light cannot be removed: a config has at least one");
+    config_.lights.erase(config_.lights.begin() + long(light));
+    if (light < paramsByTechnique_.size()) paramsByTechnique_.erase(paramsByTechnique_.begin() + long(light));
+    // "/lights/<i>/..." tracks: the removed light's go, later lights' move down by one.
+    std::vector<config::AnimationTrack> kept;
+    for (config::AnimationTrack& track : config_.animation.tracks) {
+        if (track.target.rfind("/lights/", 0) == 0) {
+            const size_t end = track.target.find('/', 8);
+            const size_t index = std::stoul(track.target.substr(8, end - 8));
+            if (index == light) continue;
+            if (index > light) track.target = fmt::format("/lights/{}{}", index - 1, track.target.substr(end));
+        }
+        kept.push_back(std::move(track));
+    }
+    config_.animation.tracks = std::move(kept);
+    changed(Change::Renderer);
+}
+
+std::optional<plugin::ParamValues> Session::params(size_t light)
+{
+    const config::ShadowSettings& shadow = config_.lights.at(light).shadow;
+    if (shadow.unshadowed()) return std::nullopt;
+    try {
+        return plugin::resolveParams(plugins_.load(shadow.technique), shadow);
+    } catch (const Error& e) {
+        lastError_ = e.what();
+        return std::nullopt;
+    }
+}
+
+void Session::showImage(const std::string& name)
+{
+    if (name == shownImage_) return;
+    if (!name.empty()) {
+        const std::vector<std::string> names = renderer_->imageNames();
+        if (std::find(names.begin(), names.end(), name) == names.end()) {
+            renderer_->requestImage(name);  // throws ConfigError listing the frame's images
+        }
+    }
+    shownImage_ = name;
+    changed(Change::Renderer);  // a request keeps passes alive; a renderer without it drops them again
+}
+
+std::vector<std::string> Session::techniqueNames()
+{
+    if (!techniques_) {
+        std::vector<std::string> names;
+        for (const plugin::LoadedPlugin* p : plugins_.discoverAll().plugins) {
+            names.emplace_back(p->name());
+        }
+        std::sort(names.begin(), names.end());
+        names.insert(names.begin(), std::string(config::kNoShadowTechnique));
+        techniques_ = names;
+    }
+    return *techniques_;
+}
+
+void Session::rebuild()
+{
+    auto renderer = std::make_unique<frame::FrameRenderer>(context_, run_->scene, config_, plugins_);
+    if (!shownImage_.empty()) {
+        const std::vector<std::string> names = renderer->imageNames();
+        if (std::find(names.begin(), names.end(), shownImage_) != names.end()) {
+            renderer->requestImage(shownImage_);
+        } else {
+            shownImage_.clear();  // the new techniques write no such image: back to the colour
+        }
+    }
+    for (const std::string& warning : renderer->warnings()) spdlog::warn("{}", warning);
+    renderer_ = std::move(renderer);
+}
+
+bool Session::renderIfChanged(bool always)
+{
+    if (!renderer_) return false;
+    if (pending_ == Change::None && !always) return false;
+    try {
+        if (pending_ == Change::Renderer) {
+            rebuild();
+        } else if (pending_ == Change::View) {
+            renderer_->update(config_, run_->scene, {});
+        }
+        timings_ = renderer_->renderFrame();
+        shown_ = config_;
+        lastError_.clear();
+    } catch (const Error& e) {
+        // Back to what drew last: the renderer is rebuilt for it (the failed one may have
+        // been half made), and the message stays for the panel.
+        lastError_ = e.what();
+        spdlog::error("{}", lastError_);
+        config_ = shown_;
+        pending_ = Change::None;
+        rebuild();
+        timings_ = renderer_->renderFrame();
+    }
+    pending_ = Change::None;
+    ++framesRendered_;
+    return true;
+}
+
+void Session::save(const fs::path& file)
+{
+    config::saveConfig(shown_, file);
+    spdlog::info("saved {}", file.string());
+}
+
+} // namespace penumbra::viewer

@@ -1,0 +1,110 @@
+#pragma once
+// What the viewer shows: one config, edited in place, its scene, and the FrameRenderer
+// that draws it — the same renderer and render graph `penumbra render` uses. Edits are
+// classed by what they invalidate: a camera or light that moved is an update of the
+// renderer; a technique, parameter, culling mode, size or debug image builds a new one
+// (and keeps the old one, and the config it drew, when that fails); another scene builds
+// everything. Nothing is rendered while nothing changed.
+#include "penumbra/config/Config.h"
+#include "penumbra/frame/FrameRenderer.h"
+#include "penumbra/gpu/Context.h"
+#include "penumbra/plugin/PluginRegistry.h"
+
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace penumbra::viewer {
+
+enum class Change {
+    None,
+    View,      // the camera, or a light's placement, intensity or colour: FrameRenderer::update
+    Renderer,  // techniques, parameters, culling, size, light types, debug images: a new FrameRenderer
+};
+
+// A config that frames a glTF file: the camera looks at its bounds from above and aside,
+// near plane relative to their size; its own lights (KHR_lights_punctual) when it has
+// some, else a sun (directional, 0.53 degrees, hard shadows).
+config::RenderConfig configForGltf(const std::filesystem::path& file, const scene::Scene& scene,
+                                   const std::vector<scene::GltfLight>& fileLights);
+
+class Session {
+public:
+    Session(gpu::Context& context, plugin::PluginRegistry& plugins);
+    ~Session();
+
+    // Opens a scene config (.json) or a glTF file (.gltf, .glb). Throws Error naming the
+    // file; the session keeps what it showed before.
+    void open(const std::filesystem::path& file);
+    bool isOpen() const { return renderer_ != nullptr; }
+    const std::filesystem::path& file() const { return file_; }
+
+    // The config to edit. After an edit, say what changed (the larger change wins until
+    // the next frame).
+    config::RenderConfig& config() { return config_; }
+    const config::RenderConfig& config() const { return config_; }
+    const scene::Scene& scene() const { return run_->scene; }
+    void changed(Change change);
+
+    // One technique parameter of light `light`, checked against the plugin's reflection
+    // (plugin::ParamValues::set): throws ConfigError naming `where` for a bad value and
+    // leaves the config as it was.
+    void setParam(size_t light, const std::string& name, const nlohmann::json& value, const std::string& where);
+    // Switches light `light` to another technique ("none" for unshadowed); the parameters
+    // it had for each technique come back when it returns to it.
+    void setTechnique(size_t light, const std::string& technique);
+    // Adds a light (at most config::kMaxLights) / removes one (not the last): animation
+    // tracks of a removed light go with it, and those of later lights are renumbered.
+    void addLight(config::LightConfig light);
+    void removeLight(size_t light);
+
+    // The light's current parameter values (defaults filled in), or none for "none" or a
+    // plugin that does not load (lastError() says why).
+    std::optional<plugin::ParamValues> params(size_t light);
+
+    // The graph image shown instead of the colour ("" for the colour image).
+    void showImage(const std::string& name);
+    const std::string& shownImage() const { return shownImage_; }
+
+    // Renders a frame when something changed since the last one (or `always`). A failed
+    // rebuild (a technique that refuses a light, a plugin that does not load) goes back to
+    // the config and renderer of the last good frame and keeps the message in lastError().
+    // Returns whether a frame was rendered.
+    bool renderIfChanged(bool always);
+
+    frame::FrameRenderer& renderer() { return *renderer_; }
+    const frame::FrameTimings& lastTimings() const { return timings_; }
+    uint64_t framesRendered() const { return framesRendered_; }
+    const std::string& lastError() const { return lastError_; }
+    void clearError() { lastError_.clear(); }
+
+    // Every plugin that loads, for the technique menus (and "none").
+    std::vector<std::string> techniqueNames();
+
+    // Saves the config as shown (config::saveConfig: replaced complete or not at all).
+    void save(const std::filesystem::path& file);
+
+private:
+    void rebuild();
+
+    gpu::Context& context_;
+    plugin::PluginRegistry& plugins_;
+    std::filesystem::path file_;
+    std::unique_ptr<config::PreparedRun> run_;  // the scene (and the config as it was read)
+    config::RenderConfig config_;               // as edited
+    config::RenderConfig shown_;                // as the renderer last drew it (a failed edit returns to it)
+    std::unique_ptr<frame::FrameRenderer> renderer_;
+    Change pending_ = Change::None;
+    std::string shownImage_;
+    frame::FrameTimings timings_;
+    uint64_t framesRendered_ = 0;
+    std::string lastError_;
+    // Per light, the parameters each technique had when the light left it.
+    std::vector<std::map<std::string, std::vector<config::ShadowParam>>> paramsByTechnique_;
+    std::optional<std::vector<std::string>> techniques_;
+};
+
+} // namespace penumbra::viewer

@@ -1,0 +1,571 @@
+#include "Viewer.h"
+
+#include "VisibilityExr.h"  // apps/penumbra: the CLI's float V output
+
+#include "penumbra/config/Overrides.h"
+#include "penumbra/core/Error.h"
+#include "penumbra/io/Png.h"
+
+#define GLFW_INCLUDE_NONE
+#define GLFW_INCLUDE_VULKAN
+#include <GLFW/glfw3.h>
+#include <fmt/format.h>
+#include <imgui.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_vulkan.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+
+namespace fs = std::filesystem;
+
+namespace penumbra::viewer {
+namespace {
+
+std::string glfwErrorText;
+
+void onGlfwError(int code, const char* description)
+{
+    glfwErrorText = fmt::format("{} (GLFW error {:#x})", description ? description : "unknown", code);
+}
+
+// The window system's part of the device: GLFW's instance extensions and its test of
+// which queue family can present.
+gpu::Presentation glfwPresentation()
+{
+    uint32_t count = 0;
+    const char** names = glfwGetRequiredInstanceExtensions(&count);
+    if (!names) {
+        throw GpuError(fmt::format("the window system offers no Vulkan surface: {}",
+                                   glfwErrorText.empty() ? "GLFW found no Vulkan loader" : glfwErrorText));
+    }
+    gpu::Presentation presentation;
+    presentation.instanceExtensions.assign(names, names + count);
+    presentation.canPresent = [](VkInstance instance, VkPhysicalDevice device, uint32_t family) {
+        return glfwGetPhysicalDevicePresentationSupport(instance, device, family) == GLFW_TRUE;
+    };
+    return presentation;
+}
+
+float parseFloat(const std::string& text, const ScriptCommand& command)
+{
+    float value = 0.0f;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+    if (ec != std::errc() || end != text.data() + text.size() || !std::isfinite(value)) {
+        throw Error(fmt::format("{}: {}: expected a finite number, got \"{}\"", command.where, command.words[0], text));
+    }
+    return value;
+}
+
+int parseInt(const std::string& text, const ScriptCommand& command, int lo, int hi)
+{
+    int value = 0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+    if (ec != std::errc() || end != text.data() + text.size() || value < lo || value > hi) {
+        throw Error(fmt::format("{}: {}: expected a whole number in [{}, {}], got \"{}\"", command.where, command.words[0],
+                                lo, hi, text));
+    }
+    return value;
+}
+
+void expectWords(const ScriptCommand& command, size_t count, const char* usage)
+{
+    if (command.words.size() != count) {
+        throw Error(fmt::format("{}: {}: expected `{}`", command.where, command.words[0], usage));
+    }
+}
+
+glm::vec3 parseVec3(const ScriptCommand& command, size_t first)
+{
+    return {parseFloat(command.words[first], command), parseFloat(command.words[first + 1], command),
+            parseFloat(command.words[first + 2], command)};
+}
+
+} // namespace
+
+void TimingHistory::add(const frame::FrameTimings& timings)
+{
+    auto push = [](std::deque<float>& d, float v) {
+        d.push_back(v);
+        if (d.size() > kHistory) d.pop_front();
+    };
+    order.clear();
+    float sum = 0.0f;
+    for (const frame::PassTiming& pass : timings.passes) {
+        order.push_back(pass.name);
+        push(gpuMs[pass.name], float(pass.gpuMs));
+        push(cpuMs[pass.name], float(pass.cpuMs));
+        sum += float(pass.gpuMs);
+    }
+    push(sumGpuMs, sum);
+    push(frameMs, float(timings.frameCpuMs));
+}
+
+float TimingHistory::median(const std::deque<float>& values)
+{
+    if (values.empty()) return 0.0f;
+    std::vector<float> v(values.begin(), values.end());
+    std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+    return v[v.size() / 2];
+}
+
+Viewer::Viewer(const ViewerOptions& options) : options_(options)
+{
+    gpu::ContextOptions contextOptions = options.context;
+    contextOptions.presentation = glfwPresentation();
+    context_ = std::make_unique<gpu::Context>(contextOptions);
+    spdlog::info("device: {} ({})", context_->deviceInfo().name, context_->deviceInfo().type);
+    plugins_ = std::make_unique<plugin::PluginRegistry>();
+    session_ = std::make_unique<Session>(*context_, *plugins_);
+    session_->open(options.file);
+    homeCamera_ = session_->config().camera;
+    savePath_ = options.file.extension() == ".json" ? options.file.string() : options.file.stem().string() + ".json";
+    openPath_ = options.file.string();
+
+    glfwWindowHint(GLFW_CLIENT_API, GLFW_NO_API);
+    glfwWindowHint(GLFW_RESIZABLE, GLFW_TRUE);
+    glfwWindowHint(GLFW_SCALE_TO_MONITOR, GLFW_TRUE);  // HiDPI: the window's size in screen points
+    const uint32_t width = options.windowWidth ? options.windowWidth : session_->config().width + uint32_t(panelWidth_);
+    const uint32_t height = options.windowHeight ? options.windowHeight : session_->config().height;
+    window_ = glfwCreateWindow(int(width), int(height), fmt::format("Penumbra — {}", options.file.filename().string()).c_str(),
+                               nullptr, nullptr);
+    if (!window_) throw GpuError(fmt::format("cannot open a window: {}", glfwErrorText));
+    float xs = 1.0f, ys = 1.0f;
+    glfwGetWindowContentScale(window_, &xs, &ys);
+    uiScale_ = std::clamp(std::max(xs, ys), 1.0f, 4.0f);
+
+    IMGUI_CHECKVERSION();
+    ImGui::CreateContext();
+    ImGuiIO& io = ImGui::GetIO();
+    io.IniFilename = nullptr;  // the layout is the program's; no file is written beside the user's
+    io.FontGlobalScale = uiScale_;
+    ImGui::StyleColorsDark();
+    ImGui::GetStyle().ScaleAllSizes(uiScale_);
+    ImGui_ImplGlfw_InitForVulkan(window_, true);
+    presenter_ = std::make_unique<Presenter>(*context_, window_, options.vsync);
+    debugUpload_ = std::make_unique<UploadedImage>(*context_, "viewer debug image");
+    lastTime_ = glfwGetTime();
+}
+
+Viewer::~Viewer()
+{
+    if (context_ && context_->device()) vkDeviceWaitIdle(context_->device());
+    debugUpload_.reset();
+    presenter_.reset();  // shuts ImGui's Vulkan backend down
+    if (ImGui::GetCurrentContext()) {
+        ImGui_ImplGlfw_Shutdown();
+        ImGui::DestroyContext();
+    }
+    session_.reset();
+    if (window_) glfwDestroyWindow(window_);
+}
+
+float Viewer::sceneRadius() const
+{
+    const float r = session_->scene().bounds().radius();
+    return std::isfinite(r) && r > 0.0f ? r : 1.0f;
+}
+
+int Viewer::run()
+{
+    while (!quit_ && !glfwWindowShouldClose(window_)) {
+        const bool scripted = scriptNext_ < options_.script.size() || framesToRun_ > 0;
+        // Idle without a script and nothing moving: wait for input instead of spinning.
+        if (scripted || continuous_) {
+            glfwPollEvents();
+        } else {
+            glfwWaitEventsTimeout(0.1);
+        }
+        if (!runScriptUntilFrame()) break;
+        frame();
+    }
+    vkDeviceWaitIdle(context_->device());
+    if (context_->validationEnabled() && context_->validationMessageCount() > 0) {
+        spdlog::error("the Vulkan validation layer reported {} message(s)", context_->validationMessageCount());
+        for (const std::string& m : context_->validationMessages()) spdlog::error("  {}", m);
+        if (exitCode_ == 0) exitCode_ = 3;
+    }
+    return exitCode_;
+}
+
+void Viewer::frame()
+{
+    const double now = glfwGetTime();
+    const float dt = float(std::clamp(now - lastTime_, 0.0, 0.25));
+    lastTime_ = now;
+    ImGui_ImplVulkan_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+    const auto uiStart = std::chrono::steady_clock::now();
+    if (showUi_) drawPanels();
+    fitRenderSize();
+    handleInput();
+    (void)dt;
+    double uiMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - uiStart).count();
+
+    if (session_->renderIfChanged(continuous_)) afterRender();
+    if (!session_->lastError().empty()) message_ = session_->lastError();
+
+    const auto presentStart = std::chrono::steady_clock::now();
+    ImGui::Render();
+    const float background[3] = {0.09f, 0.09f, 0.1f};
+    presenter_->present(viewBlits(), ImGui::GetDrawData(), background);
+    uiMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - presentStart).count();
+    history_.viewerMs.push_back(float(uiMs));
+    if (history_.viewerMs.size() > TimingHistory::kHistory) history_.viewerMs.pop_front();
+    if (framesToRun_ > 0) --framesToRun_;
+}
+
+void Viewer::afterRender()
+{
+    history_.add(session_->lastTimings());
+    shownValues_.reset();
+    if (!session_->shownImage().empty()) {
+        shownValues_ = session_->renderer().readImage(session_->shownImage());
+        if (autoRange_) range_ = metrics::finiteRange(*shownValues_, mapping_);
+        debugUpload_->set(shownValues_->width, shownValues_->height, metrics::debugImageRgba(*shownValues_, mapping_, range_));
+    }
+}
+
+// The render size follows the view (the window less the panel) unless fixed; a change
+// builds a renderer of the new size.
+void Viewer::fitRenderSize()
+{
+    int fbw = 0, fbh = 0, ww = 0, wh = 0;
+    glfwGetFramebufferSize(window_, &fbw, &fbh);
+    glfwGetWindowSize(window_, &ww, &wh);
+    if (fbw <= 0 || fbh <= 0 || ww <= 0) {
+        viewRect_ = {};
+        return;
+    }
+    const float fbScale = float(fbw) / float(ww);
+    const int panel = showUi_ ? int(std::lround(panelWidth_ * uiScale_ * fbScale)) : 0;
+    const uint32_t viewW = uint32_t(std::max(fbw - panel, 1)), viewH = uint32_t(fbh);
+    config::RenderConfig& c = session_->config();
+    uint32_t w = viewW, h = viewH;
+    if (fixedSize_) std::tie(w, h) = *fixedSize_;
+    if (w != c.width || h != c.height) {
+        c.width = w;
+        c.height = h;
+        session_->changed(Change::Renderer);
+    }
+    // The frame fitted into the view, aspect kept, centred.
+    const float scale = std::min(float(viewW) / float(w), float(viewH) / float(h));
+    const uint32_t shownW = std::max(1u, uint32_t(std::lround(float(w) * scale)));
+    const uint32_t shownH = std::max(1u, uint32_t(std::lround(float(h) * scale)));
+    viewRect_.offset = {panel + int32_t(viewW - shownW) / 2, int32_t(viewH - shownH) / 2};
+    viewRect_.extent = {shownW, shownH};
+}
+
+std::vector<ViewBlit> Viewer::viewBlits() const
+{
+    if (!session_->isOpen() || session_->framesRendered() == 0 || viewRect_.extent.width == 0) return {};
+    if (!session_->shownImage().empty() && !debugUpload_->empty()) {
+        return {{&debugUpload_->image(), UploadedImage::kLayout, viewRect_}};
+    }
+    const frame::FrameRenderer& r = session_->renderer();
+    return {{&r.executor().image("color"), r.executor().finalLayout("color"), viewRect_}};
+}
+
+// Keys are GLFW key codes: Dear ImGui 1.86 (Debian 12) indexes io.KeysDown by the backend's codes.
+void Viewer::handleInput()
+{
+    const ImGuiIO& io = ImGui::GetIO();
+    if (!io.WantCaptureKeyboard) {
+        if (ImGui::IsKeyPressed(GLFW_KEY_F1)) showUi_ = !showUi_;
+        if (ImGui::IsKeyPressed(GLFW_KEY_R) && !ImGui::IsMouseDown(ImGuiMouseButton_Right)) {
+            session_->config().camera = homeCamera_;
+            session_->changed(Change::View);
+        }
+    }
+    if (io.WantCaptureMouse && !ImGui::IsMouseDown(ImGuiMouseButton_Right)) return;
+    const ImVec2 mouse = io.MousePos;
+    const float fbScale = io.DisplayFramebufferScale.x > 0.0f ? io.DisplayFramebufferScale.x : 1.0f;
+    const bool inView = mouse.x * fbScale >= float(viewRect_.offset.x) &&
+                        mouse.x * fbScale < float(viewRect_.offset.x + int32_t(viewRect_.extent.width)) &&
+                        mouse.y * fbScale >= float(viewRect_.offset.y) &&
+                        mouse.y * fbScale < float(viewRect_.offset.y + int32_t(viewRect_.extent.height));
+    scene::Camera& camera = session_->config().camera;
+    const scene::Camera before = camera;
+    const ImVec2 d = io.MouseDelta;
+    const float radius = sceneRadius();
+    if (cameraMode_ == CameraMode::Orbit) {
+        const bool panning = ImGui::IsMouseDown(ImGuiMouseButton_Middle) ||
+                             (ImGui::IsMouseDown(ImGuiMouseButton_Left) && io.KeyShift);
+        if (panning && (d.x != 0.0f || d.y != 0.0f)) {
+            const float perPixel = 1.0f / float(std::max(viewRect_.extent.height, 1u));
+            camera = pan(camera, -d.x * perPixel * fbScale, d.y * perPixel * fbScale);
+        } else if (ImGui::IsMouseDown(ImGuiMouseButton_Left) && (d.x != 0.0f || d.y != 0.0f)) {
+            camera = orbit(camera, -d.x * 0.3f, d.y * 0.3f);
+        }
+        if (inView && io.MouseWheel != 0.0f) camera = dolly(camera, std::pow(0.88f, io.MouseWheel), radius);
+    } else {
+        const bool looking = ImGui::IsMouseDown(ImGuiMouseButton_Left) || ImGui::IsMouseDown(ImGuiMouseButton_Right);
+        float yaw = 0.0f, pitch = 0.0f;
+        if (looking) {
+            yaw = -d.x * 0.2f;
+            pitch = -d.y * 0.2f;
+        }
+        glm::vec3 move(0.0f);
+        if (!io.WantCaptureKeyboard) {
+            move.z += float(ImGui::IsKeyDown(GLFW_KEY_W)) - float(ImGui::IsKeyDown(GLFW_KEY_S));
+            move.x += float(ImGui::IsKeyDown(GLFW_KEY_D)) - float(ImGui::IsKeyDown(GLFW_KEY_A));
+            move.y += float(ImGui::IsKeyDown(GLFW_KEY_E)) - float(ImGui::IsKeyDown(GLFW_KEY_Q));
+        }
+        if (inView && io.MouseWheel != 0.0f) flySpeedExponent_ = std::clamp(flySpeedExponent_ + io.MouseWheel * 0.25f, -20.0f, 20.0f);
+        move *= flySpeed(radius, flySpeedExponent_) * io.DeltaTime;
+        if (yaw != 0.0f || pitch != 0.0f || move != glm::vec3(0.0f)) {
+            camera = fly(camera, yaw, pitch, move, cameraMode_ == CameraMode::FirstPerson);
+        }
+    }
+    if (camera.position != before.position || camera.target != before.target) session_->changed(Change::View);
+}
+
+size_t Viewer::lightIndex(const std::string& nameOrIndex, const ScriptCommand& command) const
+{
+    const auto& lights = session_->config().lights;
+    for (size_t i = 0; i < lights.size(); ++i) {
+        if (lights[i].name == nameOrIndex || std::to_string(i) == nameOrIndex) return i;
+    }
+    std::string names;
+    for (const auto& l : lights) names += (names.empty() ? "" : ", ") + l.name;
+    throw Error(fmt::format("{}: {}: no light \"{}\"; the lights are {} (or their index)", command.where, command.words[0],
+                            nameOrIndex, names));
+}
+
+std::vector<uint8_t> Viewer::viewPixels()
+{
+    if (!session_->shownImage().empty() && shownValues_) return metrics::debugImageRgba(*shownValues_, mapping_, range_);
+    return session_->renderer().readColor();
+}
+
+void Viewer::writeScreenshot(const fs::path& file, bool window)
+{
+    session_->renderIfChanged(false);
+    if (window) {
+        // The window as composed, panels included: one more shown frame, read back.
+        ImGui_ImplVulkan_NewFrame();
+        ImGui_ImplGlfw_NewFrame();
+        ImGui::NewFrame();
+        if (showUi_) drawPanels();
+        fitRenderSize();
+        if (session_->renderIfChanged(false)) afterRender();
+        ImGui::Render();
+        std::vector<uint8_t> pixels;
+        const float background[3] = {0.09f, 0.09f, 0.1f};
+        presenter_->present(viewBlits(), ImGui::GetDrawData(), background, &pixels);
+        if (pixels.empty()) throw Error(fmt::format("{}: the window's images cannot be read back on this device", file.string()));
+        io::writePng(file, presenter_->extent().width, presenter_->extent().height, pixels);
+    } else {
+        const config::RenderConfig& c = session_->config();
+        const uint32_t w = shownValues_ && !session_->shownImage().empty() ? shownValues_->width : c.width;
+        const uint32_t h = shownValues_ && !session_->shownImage().empty() ? shownValues_->height : c.height;
+        io::writePng(file, w, h, viewPixels());
+    }
+    message_ = fmt::format("wrote {}", file.string());
+    spdlog::info("{}", message_);
+}
+
+// Runs script commands until one asks for frames (`frames N`, or the loop's own frame
+// after each command). Returns false after `quit`.
+bool Viewer::runScriptUntilFrame()
+{
+    if (framesToRun_ > 0) return true;
+    while (scriptNext_ < options_.script.size()) {
+        const ScriptCommand& command = options_.script[scriptNext_++];
+        try {
+            runCommand(command);
+        } catch (const std::exception& e) {
+            // A script is a test or a batch job: the first failure ends it, with where.
+            const std::string what = e.what();
+            spdlog::error("{}", what.rfind(command.where, 0) == 0 ? what : fmt::format("{}: {}: {}", command.where, command.words[0], what));
+            exitCode_ = 1;
+            quit_ = true;
+            return false;
+        }
+        if (quit_) return false;
+        if (framesToRun_ > 0) return true;
+    }
+    return true;
+}
+
+void Viewer::runCommand(const ScriptCommand& command)
+{
+    const std::string& verb = command.words[0];
+    config::RenderConfig& c = session_->config();
+    if (verb == "quit") {
+        expectWords(command, 1, "quit");
+        quit_ = true;
+    } else if (verb == "frames") {
+        expectWords(command, 2, "frames N");
+        framesToRun_ = parseInt(command.words[1], command, 1, 100000);
+    } else if (verb == "open") {
+        expectWords(command, 2, "open FILE");
+        session_->open(command.words[1]);
+        homeCamera_ = session_->config().camera;
+        history_ = {};
+    } else if (verb == "size") {
+        expectWords(command, 3, "size WIDTH HEIGHT");
+        fixedSize_ = std::make_pair(uint32_t(parseInt(command.words[1], command, 1, 16384)),
+                                    uint32_t(parseInt(command.words[2], command, 1, 16384)));
+        fitRenderSize();
+    } else if (verb == "window") {
+        expectWords(command, 3, "window WIDTH HEIGHT");
+        glfwSetWindowSize(window_, parseInt(command.words[1], command, 64, 16384), parseInt(command.words[2], command, 64, 16384));
+    } else if (verb == "camera") {
+        expectWords(command, 7, "camera PX PY PZ TX TY TZ");
+        scene::Camera camera = c.camera;
+        camera.position = parseVec3(command, 1);
+        camera.target = parseVec3(command, 4);
+        if (!(glm::length(camera.target - camera.position) > 0.0f)) {
+            throw Error(fmt::format("{}: camera: the target must differ from the position", command.where));
+        }
+        c.camera = camera;
+        session_->changed(Change::View);
+    } else if (verb == "orbit") {
+        expectWords(command, 3, "orbit YAW_DEG PITCH_DEG");
+        c.camera = orbit(c.camera, parseFloat(command.words[1], command), parseFloat(command.words[2], command));
+        session_->changed(Change::View);
+    } else if (verb == "dolly") {
+        expectWords(command, 2, "dolly FACTOR");
+        const float factor = parseFloat(command.words[1], command);
+        if (!(factor > 0.0f)) throw Error(fmt::format("{}: dolly: the factor must be > 0", command.where));
+        c.camera = dolly(c.camera, factor, sceneRadius());
+        session_->changed(Change::View);
+    } else if (verb == "set") {
+        // As `penumbra render --set`: every light that uses the technique.
+        expectWords(command, 2, "set TECHNIQUE.PARAM=VALUE");
+        const config::ParamOverride o = config::parseParamOverride(command.words[1]);
+        bool used = false;
+        for (size_t i = 0; i < c.lights.size(); ++i) {
+            if (c.lights[i].shadow.technique != o.technique) continue;
+            session_->setParam(i, o.param, o.value, fmt::format("{}: set {}.{}", command.where, o.technique, o.param));
+            used = true;
+        }
+        if (!used) throw Error(fmt::format("{}: set: no light uses the technique \"{}\"", command.where, o.technique));
+    } else if (verb == "param") {
+        expectWords(command, 4, "param LIGHT NAME VALUE");
+        const size_t light = lightIndex(command.words[1], command);
+        nlohmann::json value = nlohmann::json::parse(command.words[3], nullptr, false);
+        if (value.is_discarded()) value = command.words[3];
+        session_->setParam(light, command.words[2], value, fmt::format("{}: param {}", command.where, command.words[2]));
+    } else if (verb == "technique") {
+        expectWords(command, 3, "technique LIGHT NAME");
+        session_->setTechnique(lightIndex(command.words[1], command), command.words[2]);
+    } else if (verb == "culling") {
+        expectWords(command, 2, "culling MODE");
+        c.culling = config::parseCullingMode(command.words[1]);
+        session_->changed(Change::Renderer);
+    } else if (verb == "light") {
+        // light LIGHT position|direction|target X Y Z, light LIGHT intensity V
+        if (command.words.size() < 4) throw Error(fmt::format("{}: light: expected `light LIGHT FIELD VALUE...`", command.where));
+        config::LightConfig& l = c.lights.at(lightIndex(command.words[1], command));
+        const std::string& field = command.words[2];
+        if (field == "intensity") {
+            expectWords(command, 4, "light LIGHT intensity VALUE");
+            const float v = parseFloat(command.words[3], command);
+            if (v < 0.0f) throw Error(fmt::format("{}: light: the intensity must be >= 0", command.where));
+            l.light.intensity = v;
+        } else if (field == "position" || field == "direction" || field == "target") {
+            expectWords(command, 6, "light LIGHT position|direction|target X Y Z");
+            const glm::vec3 v = parseVec3(command, 3);
+            if (field == "position") {
+                l.light.position = v;
+                if (l.target && glm::length(*l.target - v) > 0.0f) l.light.direction = glm::normalize(*l.target - v);
+            } else {
+                const glm::vec3 axis = field == "target" ? v - l.light.position : v;
+                if (!(glm::length(axis) > 0.0f)) throw Error(fmt::format("{}: light: the {} gives no direction", command.where, field));
+                l.light.direction = glm::normalize(axis);
+                l.target = field == "target" ? std::optional<glm::vec3>(v) : std::nullopt;
+            }
+        } else {
+            throw Error(fmt::format("{}: light: unknown field \"{}\"; expected position, direction, target or intensity",
+                                    command.where, field));
+        }
+        session_->changed(Change::View);
+    } else if (verb == "show") {
+        if (command.words.size() < 2 || command.words.size() > 3) throw Error(fmt::format("{}: show: expected `show IMAGE [linear|log|false-color]` or `show color`", command.where));
+        if (command.words.size() == 3) mapping_ = metrics::parseDebugMapping(command.words[2]);
+        session_->showImage(command.words[1] == "color" ? std::string() : command.words[1]);
+    } else if (verb == "continuous") {
+        expectWords(command, 2, "continuous on|off");
+        continuous_ = command.words[1] == "on";
+    } else if (verb == "vsync") {
+        expectWords(command, 2, "vsync on|off");
+        presenter_->setVsync(command.words[1] == "on");
+    } else if (verb == "ui") {
+        expectWords(command, 2, "ui on|off");
+        showUi_ = command.words[1] == "on";
+    } else if (verb == "screenshot") {
+        expectWords(command, 2, "screenshot FILE.png");
+        writeScreenshot(command.words[1], false);
+    } else if (verb == "screenshot-window") {
+        expectWords(command, 2, "screenshot-window FILE.png");
+        writeScreenshot(command.words[1], true);
+    } else if (verb == "save") {
+        expectWords(command, 2, "save FILE.json");
+        session_->renderIfChanged(false);
+        session_->save(command.words[1]);
+    } else if (verb == "expect-no-error") {
+        expectWords(command, 1, "expect-no-error");
+        session_->renderIfChanged(false);
+        if (!session_->lastError().empty()) throw Error(fmt::format("{}: the viewer shows an error: {}", command.where, session_->lastError()));
+    } else if (verb == "save-visibility") {
+        expectWords(command, 2, "save-visibility FILE.exr");
+        session_->renderIfChanged(false);
+        frame::FrameRenderer& r = session_->renderer();
+        std::vector<std::vector<float>> visibility;
+        for (size_t l = 0; l < r.lightCount(); ++l) visibility.push_back(r.readVisibility(l));
+        app::writeVisibilityExr(command.words[1], r.width(), r.height(), session_->config().lights, visibility);
+        spdlog::info("wrote {} (V of {} light(s))", command.words[1], visibility.size());
+    } else if (verb == "widgets") {
+        // The technique parameter widgets of the panels last drawn, one per line on stdout.
+        expectWords(command, 1, "widgets");
+        for (const std::string& w : drawnParamWidgets_) fmt::print("widget {}\n", w);
+        std::fflush(stdout);
+    } else if (verb == "timings") {
+        // Prints the rolling medians, as the panel shows them.
+        expectWords(command, 1, "timings");
+        for (const std::string& pass : history_.order) {
+            spdlog::info("timing {} gpu {:.3f} ms cpu {:.3f} ms", pass, TimingHistory::median(history_.gpuMs[pass]),
+                         TimingHistory::median(history_.cpuMs[pass]));
+        }
+        spdlog::info("timing frame {:.3f} ms, sum of passes {:.3f} ms, viewer (panels + present) {:.3f} ms",
+                     TimingHistory::median(history_.frameMs), TimingHistory::median(history_.sumGpuMs),
+                     TimingHistory::median(history_.viewerMs));
+    } else {
+        throw Error(fmt::format("{}: unknown command \"{}\"; expected open, size, window, camera, orbit, dolly, set, param, "
+                                "technique, culling, light, show, continuous, vsync, ui, frames, screenshot, "
+                                "screenshot-window, save, save-visibility, expect-no-error, widgets, timings or quit",
+                                command.where, verb));
+    }
+}
+
+int runViewer(const ViewerOptions& options)
+{
+    glfwSetErrorCallback(onGlfwError);
+    if (!glfwInit()) {
+        spdlog::error("cannot open a window: {}{}", glfwErrorText.empty() ? "GLFW failed to initialise" : glfwErrorText,
+                      std::getenv("DISPLAY") ? "" : " (no DISPLAY: run under a desktop session or xvfb-run)");
+        return 1;
+    }
+    int code = 1;
+    try {
+        if (!glfwVulkanSupported()) {
+            throw GpuError(fmt::format("no Vulkan loader with window-system support was found{}",
+                                       glfwErrorText.empty() ? "" : ": " + glfwErrorText));
+        }
+        Viewer viewer(options);
+        code = viewer.run();
+    } catch (const std::exception& e) {
+        spdlog::error("{}", e.what());
+        code = 1;
+    }
+    glfwTerminate();
+    return code;
+}
+
+} // namespace penumbra::viewer

@@ -1,0 +1,129 @@
+#pragma once
+// penumbra-viewer: a window (GLFW, Vulkan swapchain: Presenter.h) showing one Session
+// (Session.h: a config, its scene, the FrameRenderer) with Dear ImGui panels to edit it,
+// driven by the mouse and keys or by a script (Script.h). Viewer.cpp has the loop, the
+// input and the script commands; Panels.cpp the panels.
+#include "CameraControl.h"
+#include "Presenter.h"
+#include "Script.h"
+#include "Session.h"
+
+#include "penumbra/gpu/Context.h"
+#include "penumbra/metrics/DebugImage.h"
+#include "penumbra/plugin/PluginRegistry.h"
+
+#include <deque>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+struct GLFWwindow;
+
+namespace penumbra::viewer {
+
+struct ViewerOptions {
+    std::filesystem::path file;  // a scene config or a glTF file
+    std::vector<ScriptCommand> script;
+    bool vsync = true;
+    uint32_t windowWidth = 0, windowHeight = 0;  // 0: the frame's size plus the panel
+    gpu::ContextOptions context;
+};
+
+// Opens the window and runs until it is closed or the script says `quit` (a script that
+// ends without `quit` leaves the window open). Returns the process's exit code: 0, 1 for
+// an error (no display, a script command that failed: logged with where), 3 when the
+// validation layer reported anything.
+int runViewer(const ViewerOptions& options);
+
+// Rolling per-pass timings for the panel: the last kHistory frames of each pass.
+struct TimingHistory {
+    static constexpr size_t kHistory = 120;
+    std::map<std::string, std::deque<float>> gpuMs, cpuMs;
+    std::deque<float> frameMs, sumGpuMs, viewerMs;
+    std::vector<std::string> order;  // passes in execution order, as last seen
+    void add(const frame::FrameTimings& timings);
+    static float median(const std::deque<float>& values);
+};
+
+class Viewer {
+public:
+    // Creates the device (with presentation), opens the file and the window. Throws Error.
+    explicit Viewer(const ViewerOptions& options);
+    ~Viewer();
+    int run();
+
+private:
+    // Viewer.cpp
+    void frame();
+    void handleInput();
+    bool runScriptUntilFrame();  // false when the script quit
+    void runCommand(const ScriptCommand& command);
+    void fitRenderSize();
+    void afterRender();
+    std::vector<ViewBlit> viewBlits() const;
+    std::vector<uint8_t> viewPixels();  // the view as shown (the colour or the mapped debug image), RGBA8
+    void writeScreenshot(const std::filesystem::path& file, bool window);
+    size_t lightIndex(const std::string& nameOrIndex, const ScriptCommand& command) const;
+    float sceneRadius() const;
+
+    // Panels.cpp
+    void drawPanels();
+    void drawFilePanel();
+    void drawScenePanel();
+    void drawCameraPanel();
+    void drawRenderPanel();
+    void drawLightsPanel();
+    void drawTechniquePanel(size_t light);
+    void drawDebugImagePanel();
+    void drawTimingsPanel();
+    void drawPixelInspector();
+
+    ViewerOptions options_;
+    GLFWwindow* window_ = nullptr;
+    std::unique_ptr<gpu::Context> context_;
+    std::unique_ptr<plugin::PluginRegistry> plugins_;
+    std::unique_ptr<Session> session_;
+    std::unique_ptr<Presenter> presenter_;
+    std::unique_ptr<UploadedImage> debugUpload_;
+
+    // The view: where in the window the frame is shown, and the render size.
+    VkRect2D viewRect_{};
+    float panelWidth_ = 440.0f;
+    std::optional<std::pair<uint32_t, uint32_t>> fixedSize_;  // `size W H` / the panel: the frame does not follow the window
+    float uiScale_ = 1.0f;
+
+    // Debug image display.
+    metrics::DebugMapping mapping_ = metrics::DebugMapping::Linear;
+    bool autoRange_ = true;
+    metrics::DebugRange range_{};
+    std::optional<metrics::DebugImageValues> shownValues_;  // of the last frame, when a debug image is shown
+
+    // Pixel inspector: read back lazily, per rendered frame.
+    uint64_t inspectedFrame_ = ~0ull;
+    std::vector<uint8_t> inspectedColor_;
+    std::vector<std::vector<float>> inspectedVisibility_;
+
+    CameraMode cameraMode_ = CameraMode::Orbit;
+    scene::Camera homeCamera_;  // as the file gave it: R goes back to it
+    double lastTime_ = 0.0;
+    float flySpeedExponent_ = 0.0f;
+    bool continuous_ = false;
+    bool showUi_ = true;
+    bool quit_ = false;
+    int exitCode_ = 0;
+    std::string savePath_;
+    std::string openPath_;
+    std::string message_;  // the last save / screenshot / error, for the status line
+    TimingHistory history_;
+    std::map<std::string, double> editing_;
+    // The technique parameter widgets the last panels drew: "light param type" (`widgets`).
+    std::vector<std::string> drawnParamWidgets_;  // technique parameters being dragged, by light/technique/name
+
+    size_t scriptNext_ = 0;
+    int framesToRun_ = 0;  // `frames N`: loop iterations before the next command
+};
+
+} // namespace penumbra::viewer
