@@ -47,7 +47,7 @@ scene::Camera orbit(const scene::Camera& camera, float yawDeg, float pitchDeg)
 {
     scene::Camera c = camera;
     // The eye moves on the sphere about the target: turn the target-to-eye vector.
-    c.position = camera.target + turn(camera.position - camera.target, upAxis(camera), yawDeg, -pitchDeg);
+    c.position = camera.target + turn(camera.position - camera.target, upAxis(camera), yawDeg, pitchDeg);
     return c;
 }
 

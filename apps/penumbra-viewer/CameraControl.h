@@ -12,7 +12,7 @@ namespace penumbra::viewer {
 enum class CameraMode { Orbit, Fly, FirstPerson };
 const char* cameraModeName(CameraMode mode);
 
-// Turns the camera about its target: yaw about the up axis, pitch towards it (degrees).
+// Turns the camera about its target: yaw about the up axis, pitch raises the eye (degrees).
 // The pitch stops 1 degree short of the poles, where the view would flip.
 scene::Camera orbit(const scene::Camera& camera, float yawDeg, float pitchDeg);
 // Moves position and target together in the view plane, by fractions of the target distance.

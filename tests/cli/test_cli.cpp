@@ -1,13 +1,10 @@
 // The `penumbra` command as a user runs it: exit codes, messages that say what and where,
 // and no partial or clobbered output file on failure.
+#include "ExrFile.h"    // support/
 #include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/plugin/Plugin.h"
 
-#include <OpenEXR/ImfChannelList.h>
-#include <OpenEXR/ImfFrameBuffer.h>
-#include <OpenEXR/ImfHeader.h>
-#include <OpenEXR/ImfInputFile.h>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -49,32 +46,8 @@ std::string slurp(const fs::path& p)
     return ss.str();
 }
 
-// A float OpenEXR file as the CLI writes V (apps/penumbra/VisibilityExr.h): its size and
-// every FLOAT channel by name, rows top first.
-struct Exr {
-    int width = 0, height = 0;
-    std::map<std::string, std::vector<float>> channels;
-};
-
-Exr readExr(const fs::path& path)
-{
-    Imf::InputFile file(path.c_str());
-    const Imath::Box2i window = file.header().dataWindow();
-    Exr exr;
-    exr.width = window.max.x - window.min.x + 1;
-    exr.height = window.max.y - window.min.y + 1;
-    Imf::FrameBuffer frame;
-    for (auto c = file.header().channels().begin(); c != file.header().channels().end(); ++c) {
-        EXPECT_EQ(c.channel().type, Imf::FLOAT) << c.name();
-        std::vector<float>& values = exr.channels[c.name()];
-        values.resize(size_t(exr.width) * exr.height);
-        frame.insert(c.name(), Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(values.data()), sizeof(float),
-                                          sizeof(float) * size_t(exr.width)));
-    }
-    file.setFrameBuffer(frame);
-    file.readPixels(window.min.y, window.max.y);
-    return exr;
-}
+using penumbra::test::Exr;
+using penumbra::test::readExr;
 
 class Cli : public ::testing::Test {
 protected:

@@ -24,6 +24,12 @@ const std::filesystem::path& penumbraExecutable()
     return path;
 }
 
+const std::filesystem::path& viewerExecutable()
+{
+    static const std::filesystem::path path = PENUMBRA_VIEWER_EXE;
+    return path;
+}
+
 const std::filesystem::path& engineLibraryDir()
 {
     static const std::filesystem::path path = PENUMBRA_ENGINE_LIBRARY_DIR;

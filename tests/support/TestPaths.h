@@ -13,6 +13,8 @@ const std::filesystem::path& sourceDir();
 const std::filesystem::path& testDataDir();
 // The build tree's `penumbra` command.
 const std::filesystem::path& penumbraExecutable();
+// The build tree's `penumbra-viewer`.
+const std::filesystem::path& viewerExecutable();
 // The folder of the build tree's engine library.
 const std::filesystem::path& engineLibraryDir();
 // The build tree's technique plugins (what the build tree's engine searches).

@@ -150,6 +150,22 @@ std::string describe(const ImageDesc& desc)
     return fmt::format("image '{}' ({} x {} {})", desc.name, desc.width, desc.height, formatName(desc.format));
 }
 
+namespace {
+
+// An image used only for copies (a transfer source or destination) may have no view:
+// Vulkan forbids one (VUID-VkImageViewCreateInfo-image-04441).
+bool hasViewUsage(VkImageUsageFlags usage)
+{
+    constexpr VkImageUsageFlags kViewUsages = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
+                                              VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT |
+                                              VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT |
+                                              VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT |
+                                              VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT;
+    return (usage & kViewUsages) != 0;
+}
+
+} // namespace
+
 Image::Image(Context& context, const ImageDesc& desc) : device_(context.device()), desc_(desc)
 {
     createHandle(context);
@@ -161,7 +177,7 @@ Image::Image(Context& context, const ImageDesc& desc) : device_(context.device()
         memory_ = context.allocateMemory(alloc, describe(desc), "lower the resolution or output size that sets its size");
         memorySize_ = req.size;
         check(vkBindImageMemory(device_, image_, memory_, 0), "vkBindImageMemory " + desc.name);
-        createView();
+        if (hasViewUsage(desc_.usage)) createView();
     } catch (...) {
         release();
         throw;
@@ -225,12 +241,7 @@ void Image::bindMemory(VkDeviceMemory memory, VkDeviceSize offset)
     memorySize_ = memoryRequirements().size;
     // A view needs a usage that views serve (VUID-VkImageViewCreateInfo-image-04441): a
     // render graph transient used only by copies and clears has none, and no view.
-    constexpr VkImageUsageFlags kViewUsages = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_STORAGE_BIT |
-                                              VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT |
-                                              VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT |
-                                              VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT |
-                                              VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT;
-    if (desc_.usage & kViewUsages) createView();
+    if (hasViewUsage(desc_.usage)) createView();
 }
 
 Image::~Image() { release(); }

@@ -2,6 +2,7 @@
 
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Context.h"
+#include "penumbra/gpu/Resources.h"
 
 #include <gtest/gtest.h>
 
@@ -144,4 +145,27 @@ TEST(Device, PresentationThatNoQueueOrLoaderCanGiveIsAClearError)
     } catch (const GpuError& e) {
         EXPECT_NE(std::string(e.what()).find("VK_KHR_no_such_surface"), std::string::npos) << e.what();
     }
+}
+
+// An image only copied to and from (the viewer's uploaded debug image) has no view: Vulkan
+// forbids one (VUID-VkImageViewCreateInfo-image-04441), so the validation layer stays quiet.
+TEST(Device, ATransferOnlyImageHasNoViewAndOthersHaveOne)
+{
+    gpu::ContextOptions options;
+    options.device.nameContains = "llvmpipe";
+    options.validation = true;
+    gpu::Context context(options);
+    gpu::ImageDesc desc;
+    desc.width = 4;
+    desc.height = 2;
+    desc.usage = VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+    desc.name = "copies only";
+    const gpu::Image copies(context, desc);
+    EXPECT_NE(copies.handle(), VK_NULL_HANDLE);
+    EXPECT_EQ(copies.view(), VK_NULL_HANDLE);
+    desc.usage |= VK_IMAGE_USAGE_SAMPLED_BIT;
+    desc.name = "sampled";
+    const gpu::Image sampled(context, desc);
+    EXPECT_NE(sampled.view(), VK_NULL_HANDLE);
+    test::expectNoValidationMessages(context);
 }

@@ -71,7 +71,8 @@ public:
     // bindMemory() before use. The memory stays its caller's, as for Buffer.
     static Image createUnbound(Context& context, const ImageDesc& desc);
     VkMemoryRequirements memoryRequirements() const;
-    // Binds and creates the view (none when the usage allows no view: transfer only).
+    // Binds and creates the view (none when the usage allows no view: transfer only, as
+    // for an image made with memory by the constructor).
     void bindMemory(VkDeviceMemory memory, VkDeviceSize offset);
 
     VkImage handle() const { return image_; }

@@ -1,0 +1,295 @@
+// `penumbra-viewer` as a script drives it under Xvfb (xvfb-run): what it shows, what it
+// saves, and how it fails. The frame must be `penumbra render`'s frame of the saved config.
+#include "ExrFile.h"    // support/
+#include "TestPaths.h"  // support/: the build tree's paths
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#define STB_IMAGE_IMPLEMENTATION
+#include <stb/stb_image.h>
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <thread>
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+struct RunResult {
+    int exitCode = -1;
+    std::string out, err;
+};
+
+std::string slurp(const fs::path& p)
+{
+    std::ifstream in(p, std::ios::binary);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+struct Png {
+    int width = 0, height = 0;
+    std::vector<uint8_t> rgba;
+};
+
+Png readPng(const fs::path& path)
+{
+    Png png;
+    int channels = 0;
+    stbi_uc* data = stbi_load(path.c_str(), &png.width, &png.height, &channels, 4);
+    if (!data) {
+        ADD_FAILURE() << "cannot read " << path;
+        return png;
+    }
+    png.rgba.assign(data, data + size_t(png.width) * png.height * 4);
+    stbi_image_free(data);
+    return png;
+}
+
+// xvfb-run's own screen: large enough for the default window (a 1280 x 720 frame and the panel).
+constexpr const char* kXvfb = "xvfb-run -a -s '-screen 0 1920x1080x24'";
+
+class ViewerTest : public ::testing::Test {
+protected:
+    void SetUp() override
+    {
+        dir = fs::temp_directory_path() /
+              fmt::format("penumbra_viewer_{}_{}", ::getpid(), ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::create_directories(dir);
+    }
+    void TearDown() override { fs::remove_all(dir); }
+
+    // Runs `prefix penumbra-viewer FILE --validation --no-vsync --exec SCRIPT` (the
+    // script's commands separated by ';').
+    RunResult viewer(const std::string& file, const std::string& script, const std::string& prefix = kXvfb) const
+    {
+        const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+        const std::string cmd = fmt::format("{} '{}' '{}' --validation --no-vsync --exec '{}' > '{}' 2> '{}' < /dev/null", prefix,
+                                            penumbra::test::viewerExecutable().string(), file, script, out.string(), err.string());
+        const int status = std::system(cmd.c_str());
+        RunResult r;
+        r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+        r.out = slurp(out);
+        r.err = slurp(err);
+        return r;
+    }
+
+    RunResult render(const std::string& args) const
+    {
+        const fs::path out = dir / "render-stdout.txt", err = dir / "render-stderr.txt";
+        const std::string cmd = fmt::format("'{}' render {} > '{}' 2> '{}' < /dev/null", penumbra::test::penumbraExecutable().string(),
+                                            args, out.string(), err.string());
+        const int status = std::system(cmd.c_str());
+        RunResult r;
+        r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+        r.out = slurp(out);
+        r.err = slurp(err);
+        return r;
+    }
+
+    std::string config(const std::string& name) const { return (penumbra::test::sourceDir() / "config" / name).string(); }
+
+    fs::path dir;
+};
+
+// A session's edits, then the screenshot, V and the saved config; `penumbra render` of the
+// saved config must draw the same frame.
+struct EditCase {
+    std::string name;
+    std::string file;   // relative to the source tree
+    std::string edits;  // viewer commands
+};
+
+class ViewerEdits : public ViewerTest, public ::testing::WithParamInterface<EditCase> {};
+
+} // namespace
+
+TEST_P(ViewerEdits, TheSavedConfigRendersTheFrameTheViewerShowed)
+{
+    const EditCase& c = GetParam();
+    const fs::path shot = dir / "viewer.png", exr = dir / "viewer.exr", saved = dir / "saved.json";
+    const std::string script = fmt::format("size 200 120; {}; frames 2; screenshot {}; save-visibility {}; save {}; quit", c.edits,
+                                           shot.string(), exr.string(), saved.string());
+    const RunResult v = viewer((penumbra::test::sourceDir() / c.file).string(), script);
+    ASSERT_EQ(v.exitCode, 0) << v.err;
+
+    const fs::path cliShot = dir / "cli.png", cliExr = dir / "cli.exr";
+    const RunResult r = render(fmt::format("'{}' -o '{}' --visibility-exr '{}'", saved.string(), cliShot.string(), cliExr.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+
+    const Png a = readPng(shot), b = readPng(cliShot);
+    ASSERT_EQ(a.width, 200);
+    ASSERT_EQ(a.height, 120);
+    ASSERT_EQ(b.width, a.width);
+    ASSERT_EQ(b.height, a.height);
+    // The same renderer on the same config: the same bytes (one step of 8 bits allowed
+    // where a technique's map was drawn from a moved camera's culling history).
+    int differing = 0, worst = 0;
+    for (size_t i = 0; i < a.rgba.size(); ++i) {
+        const int d = std::abs(int(a.rgba[i]) - int(b.rgba[i]));
+        worst = std::max(worst, d);
+        differing += d > 0;
+    }
+    EXPECT_LE(worst, 1) << differing << " bytes differ";
+
+    const penumbra::test::Exr va = penumbra::test::readExr(exr), vb = penumbra::test::readExr(cliExr);
+    ASSERT_EQ(va.channels.size(), vb.channels.size());
+    for (const auto& [channel, values] : va.channels) {
+        ASSERT_TRUE(vb.channels.count(channel)) << channel;
+        const std::vector<float>& other = vb.channels.at(channel);
+        ASSERT_EQ(values.size(), other.size());
+        float maxDiff = 0.0f;
+        for (size_t i = 0; i < values.size(); ++i) maxDiff = std::max(maxDiff, std::abs(values[i] - other[i]));
+        EXPECT_LE(maxDiff, 1e-3f) << channel;
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Configs, ViewerEdits,
+    ::testing::Values(
+        EditCase{"DefaultOrbitedWithPcss", "config/default.json",
+                 "technique 0 pcss; set pcss.light_size=1.25; orbit 25 8; dolly 0.8"},
+        EditCase{"TwoSpotsCulledAndMoved", "config/two-spots.json",
+                 "culling frustum; light 1 intensity 450; light 0 position -6 14 5; param 1 pcf_kernel 5"},
+        EditCase{"VsmFromAbove", "config/vsm.json", "orbit -40 30; camera 0 30 0.5 0 0 0"},
+        EditCase{"GltfWithItsDefaultSun", "tests/data/gltf/quad.glb", "orbit 15 5; technique sun pcss"}),
+    [](const ::testing::TestParamInfo<EditCase>& info) { return info.param.name; });
+
+TEST_F(ViewerTest, EveryReflectedParameterOfEveryPluginGetsAWidget)
+{
+    // The plugins as `penumbra plugins --json` lists them, with their parameters.
+    const fs::path list = dir / "plugins.json";
+    ASSERT_EQ(std::system(fmt::format("'{}' plugins --json > '{}' 2> /dev/null", penumbra::test::penumbraExecutable().string(),
+                                      list.string())
+                              .c_str()),
+              0);
+    const json plugins = json::parse(slurp(list))["plugins"];
+    ASSERT_GE(plugins.size(), 5u);
+    std::string script = "size 64 36";
+    std::set<std::string> expected;
+    for (const json& p : plugins) {
+        const std::string name = p["name"];
+        // The reference traces rays: at its cheapest, so that the frame stays small.
+        script += fmt::format("; technique 0 {}; {}frames 1; widgets", name,
+                              name == "reference" ? "set reference.samples=1; " : "");
+        for (const json& param : p["params"]) {
+            expected.insert(fmt::format("light0 {} {} {}", name, param["name"].get<std::string>(), param["type"].get<std::string>()));
+        }
+    }
+    const RunResult v = viewer(config("default.json"), script + "; quit");
+    ASSERT_EQ(v.exitCode, 0) << v.err;
+    std::set<std::string> drawn;
+    std::istringstream lines(v.out);
+    for (std::string line; std::getline(lines, line);) {
+        if (line.rfind("widget ", 0) == 0) drawn.insert(line.substr(7));
+    }
+    EXPECT_EQ(drawn, expected);
+}
+
+TEST_F(ViewerTest, ADebugImageIsShownAtItsOwnSizeAndItsPassesRunOnlyWhileShown)
+{
+    const fs::path map = dir / "map.png", color = dir / "color.png";
+    const RunResult v = viewer(config("default.json"),
+                               fmt::format("size 160 90; set hard.resolution=256; show light0.hard.shadow_map false-color; frames 1; "
+                                           "screenshot {}; show color; frames 1; screenshot {}; quit",
+                                           map.string(), color.string()));
+    ASSERT_EQ(v.exitCode, 0) << v.err;
+    const Png m = readPng(map), c = readPng(color);
+    EXPECT_EQ(m.width, 256);
+    EXPECT_EQ(m.height, 256);
+    EXPECT_EQ(c.width, 160);
+    EXPECT_EQ(c.height, 90);
+    // False colour: the map is not one flat colour.
+    std::set<uint32_t> colours;
+    for (size_t i = 0; i < m.rgba.size(); i += 4) colours.insert(m.rgba[i] | m.rgba[i + 1] << 8 | m.rgba[i + 2] << 16);
+    EXPECT_GT(colours.size(), 10u);
+}
+
+TEST_F(ViewerTest, ScriptErrorsNameTheCommandAndEndTheRunWithExit1)
+{
+    struct Bad {
+        std::string script, expected;
+    };
+    const Bad cases[] = {
+        {"frames 1; set hard.pcf_kernel=999", "--exec 2"},
+        {"frames 1; set hard.pcf_kernel=999", "pcf_kernel"},
+        {"frames 1; set hard.no_such_param=1", "no_such_param"},
+        {"technique 0 no-such-technique", "no-such-technique"},
+        {"light lamp intensity 5", "no light \"lamp\""},
+        {"orbit ten 5", "expected a finite number, got \"ten\""},
+        {"size 0 10", "expected a whole number in [1, 16384]"},
+        {"fly away", "unknown command \"fly\""},
+        {"show no.such.image", "no.such.image"},
+        {"save /no/such/folder/x.json", "/no/such/folder"},
+    };
+    for (const Bad& bad : cases) {
+        SCOPED_TRACE(bad.script);
+        const RunResult v = viewer(config("default.json"), bad.script + "; quit");
+        EXPECT_EQ(v.exitCode, 1) << v.err;
+        EXPECT_NE(v.err.find(bad.expected), std::string::npos) << v.err;
+    }
+}
+
+TEST_F(ViewerTest, WithoutADisplayItSaysSoAndExits1)
+{
+    const RunResult v = viewer(config("default.json"), "quit", "env -u DISPLAY -u WAYLAND_DISPLAY");
+    EXPECT_EQ(v.exitCode, 1) << v.err;
+    EXPECT_NE(v.err.find("cannot open a window"), std::string::npos) << v.err;
+    EXPECT_EQ(v.err.find("Segmentation"), std::string::npos) << v.err;
+}
+
+TEST_F(ViewerTest, AFileThatDoesNotOpenIsNamed)
+{
+    const RunResult v = viewer("/no/such/scene.json", "quit");
+    EXPECT_EQ(v.exitCode, 1) << v.err;
+    EXPECT_NE(v.err.find("/no/such/scene.json"), std::string::npos) << v.err;
+}
+
+// Saving is all or nothing: a viewer killed (SIGKILL) at any moment while it saves over a
+// config leaves the old file or the new one, whole.
+TEST_F(ViewerTest, KilledWhileSavingLeavesAWholeConfig)
+{
+    const fs::path saved = dir / "saved.json";
+    std::ofstream(saved) << slurp(config("default.json"));
+    std::string script = "size 64 36; frames 1";
+    for (int i = 0; i < 400; ++i) script += fmt::format("; orbit 1 0; save {}", saved.string());
+    for (int round = 0; round < 4; ++round) {
+        SCOPED_TRACE(round);
+        const pid_t pid = fork();
+        ASSERT_GE(pid, 0);
+        if (pid == 0) {
+            setpgid(0, 0);  // xvfb-run, Xvfb and the viewer: killed together below
+            const std::string cmd = fmt::format("exec {} '{}' '{}' --no-vsync --exec '{}; quit' > /dev/null 2>&1", kXvfb,
+                                                penumbra::test::viewerExecutable().string(), config("default.json"), script);
+            execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+            _exit(127);
+        }
+        setpgid(pid, pid);
+        // Once it is saving (the file changed), kill it at a moment that moves every round.
+        const auto start = std::chrono::steady_clock::now();
+        const std::string before = slurp(saved);
+        while (slurp(saved) == before && std::chrono::steady_clock::now() - start < std::chrono::seconds(60)) {
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(7 * round + 1));
+        kill(-pid, SIGKILL);
+        int status = 0;
+        waitpid(pid, &status, 0);
+        const json parsed = json::parse(slurp(saved), nullptr, false);
+        ASSERT_FALSE(parsed.is_discarded()) << "a broken config after a kill";
+        EXPECT_TRUE(parsed.contains("camera"));
+    }
+}
