@@ -60,7 +60,7 @@ void Viewer::drawPanels()
     ImGui::Begin("Penumbra", nullptr,
                  ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
                      ImGuiWindowFlags_NoBringToFrontOnFocus);
-    ImGui::PushItemWidth(-ImGui::GetFontSize() * 9.0f);
+    ImGui::PushItemWidth(-ImGui::GetFontSize() * 11.0f);  // room for the labels on the right
     if (!message_.empty()) {
         const bool error = !session_->lastError().empty() && message_ == session_->lastError();
         ImGui::PushStyleColor(ImGuiCol_Text, error ? ImVec4(1.0f, 0.45f, 0.4f, 1.0f) : ImVec4(0.6f, 0.9f, 0.6f, 1.0f));
@@ -177,7 +177,7 @@ void Viewer::drawCameraPanel()
 
 void Viewer::drawRenderPanel()
 {
-    if (!ImGui::CollapsingHeader("Render", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    if (!ImGui::CollapsingHeader("Render")) return;
     config::RenderConfig& c = session_->config();
     static const char* modes[] = {"none", "frustum", "light-occlusion", "receiver-mask"};
     int culling = int(c.culling);

@@ -1,6 +1,7 @@
 #include "Session.h"
 
 #include "penumbra/core/Error.h"
+#include "penumbra/gpu/ShaderCompiler.h"
 #include "penumbra/plugin/Params.h"
 #include "penumbra/scene/GltfLoader.h"
 
@@ -93,6 +94,7 @@ void Session::open(const fs::path& file)
     paramsByTechnique_.assign(c.lights.size(), {});
     for (const std::string& warning : renderer_->warnings()) spdlog::warn("{}", warning);
     pending_ = Change::View;  // the new renderer has not drawn yet
+    framesRendered_ = 0;
     lastError_.clear();
 }
 
@@ -197,47 +199,82 @@ std::vector<std::string> Session::techniqueNames()
     return *techniques_;
 }
 
-void Session::rebuild()
+std::unique_ptr<frame::FrameRenderer> Session::build() const
 {
-    auto renderer = std::make_unique<frame::FrameRenderer>(context_, run_->scene, config_, plugins_);
+    // A technique that drew, or that the user just chose, must build: its failure (a
+    // shader that does not compile, a light it refuses) is an error that keeps the last
+    // frame, not a silent fall-back to unshadowed. A light already falling back stays so.
+    config::RenderConfig strict = config_;
+    for (size_t i = 0; i < strict.lights.size(); ++i) {
+        const bool drew = renderer_ && i < renderer_->lightCount() && !renderer_->techniqueName(i).empty();
+        const bool chosen = i >= shown_.lights.size() || shown_.lights[i].shadow.technique != strict.lights[i].shadow.technique;
+        strict.lights[i].shadow.required = strict.lights[i].shadow.required || drew || chosen;
+    }
+    auto renderer = std::make_unique<frame::FrameRenderer>(context_, run_->scene, strict, plugins_);
     if (!shownImage_.empty()) {
         const std::vector<std::string> names = renderer->imageNames();
-        if (std::find(names.begin(), names.end(), shownImage_) != names.end()) {
-            renderer->requestImage(shownImage_);
-        } else {
-            shownImage_.clear();  // the new techniques write no such image: back to the colour
-        }
+        if (std::find(names.begin(), names.end(), shownImage_) != names.end()) renderer->requestImage(shownImage_);
     }
     for (const std::string& warning : renderer->warnings()) spdlog::warn("{}", warning);
-    renderer_ = std::move(renderer);
+    return renderer;
 }
 
 bool Session::renderIfChanged(bool always)
 {
     if (!renderer_) return false;
     if (pending_ == Change::None && !always) return false;
+    const Change change = pending_;
+    pending_ = Change::None;
     try {
-        if (pending_ == Change::Renderer) {
-            rebuild();
-        } else if (pending_ == Change::View) {
-            renderer_->update(config_, run_->scene, {});
+        if (change == Change::Renderer) {
+            // The new renderer draws its first frame before it replaces the old one: a
+            // failure anywhere leaves the old one, untouched, with what it drew.
+            std::unique_ptr<frame::FrameRenderer> fresh = build();
+            frame::FrameTimings timings = fresh->renderFrame();
+            renderer_ = std::move(fresh);
+            timings_ = std::move(timings);
+            const std::vector<std::string> names = renderer_->imageNames();
+            if (std::find(names.begin(), names.end(), shownImage_) == names.end()) shownImage_.clear();
+        } else {
+            if (change == Change::View) renderer_->update(config_, run_->scene, {});
+            timings_ = renderer_->renderFrame();
         }
-        timings_ = renderer_->renderFrame();
         shown_ = config_;
-        lastError_.clear();
+        // A build's error stays until a build succeeds (the shader is still broken while
+        // the camera moves); an update's until the next update or build.
+        if (change == Change::Renderer || (change == Change::View && !errorFromBuild_)) lastError_.clear();
     } catch (const Error& e) {
-        // Back to what drew last: the renderer is rebuilt for it (the failed one may have
-        // been half made), and the message stays for the panel.
         lastError_ = e.what();
+        errorFromBuild_ = change == Change::Renderer;
         spdlog::error("{}", lastError_);
         config_ = shown_;
-        pending_ = Change::None;
-        rebuild();
-        timings_ = renderer_->renderFrame();
+        if (change == Change::View) {
+            // A failed update: the renderer goes back to the camera and lights it drew.
+            try {
+                renderer_->update(shown_, run_->scene, {});
+                timings_ = renderer_->renderFrame();
+            } catch (const Error& again) {
+                spdlog::error("{}", again.what());
+            }
+        }
+        return false;
     }
-    pending_ = Change::None;
     ++framesRendered_;
     return true;
+}
+
+std::vector<fs::path> Session::shaderFolders()
+{
+    std::vector<fs::path> folders = {gpu::engineShaderDir()};
+    for (const config::LightConfig& light : config_.lights) {
+        if (light.shadow.unshadowed()) continue;
+        try {
+            folders.push_back(plugins_.load(light.shadow.technique).shaderDir);
+        } catch (const Error&) {
+            // A plugin that does not load has no shaders to watch; the renderer says why.
+        }
+    }
+    return folders;
 }
 
 void Session::save(const fs::path& file)

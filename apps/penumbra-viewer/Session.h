@@ -70,10 +70,15 @@ public:
     const std::string& shownImage() const { return shownImage_; }
 
     // Renders a frame when something changed since the last one (or `always`). A failed
-    // rebuild (a technique that refuses a light, a plugin that does not load) goes back to
-    // the config and renderer of the last good frame and keeps the message in lastError().
-    // Returns whether a frame was rendered.
+    // rebuild (a shader that does not compile, a technique that refuses a light, a plugin
+    // that does not load) keeps the renderer and config of the last good frame, with the
+    // message in lastError() ("path:line: error: ..." for a shader). Returns whether a new
+    // frame was rendered.
     bool renderIfChanged(bool always);
+    // Builds the renderer again from disk: its shaders (hot reload) and the techniques.
+    void reload() { changed(Change::Renderer); }
+    // The folders the frame's shaders come from: the engine's and each technique plugin's.
+    std::vector<std::filesystem::path> shaderFolders();
 
     frame::FrameRenderer& renderer() { return *renderer_; }
     const frame::FrameTimings& lastTimings() const { return timings_; }
@@ -88,7 +93,7 @@ public:
     void save(const std::filesystem::path& file);
 
 private:
-    void rebuild();
+    std::unique_ptr<frame::FrameRenderer> build() const;
 
     gpu::Context& context_;
     plugin::PluginRegistry& plugins_;
@@ -102,6 +107,7 @@ private:
     frame::FrameTimings timings_;
     uint64_t framesRendered_ = 0;
     std::string lastError_;
+    bool errorFromBuild_ = false;
     // Per light, the parameters each technique had when the light left it.
     std::vector<std::map<std::string, std::vector<config::ShadowParam>>> paramsByTechnique_;
     std::optional<std::vector<std::string>> techniques_;

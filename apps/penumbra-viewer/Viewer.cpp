@@ -10,6 +10,7 @@
 #define GLFW_INCLUDE_VULKAN
 #include <GLFW/glfw3.h>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <imgui.h>
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_vulkan.h>
@@ -206,8 +207,17 @@ void Viewer::frame()
     (void)dt;
     double uiMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - uiStart).count();
 
+    // Hot reload: an edited shader builds the frame again; a compile error keeps the last
+    // good frame and shows "path:line: error: ..." (Session::renderIfChanged).
+    if (shaderWatcher_.changed()) {
+        spdlog::info("shader changed: {}; building the frame again", fmt::join(shaderWatcher_.lastChanged(), ", "));
+        session_->reload();
+    }
     if (session_->renderIfChanged(continuous_)) afterRender();
     if (!session_->lastError().empty()) message_ = session_->lastError();
+    if (const std::vector<fs::path> folders = session_->shaderFolders(); folders != shaderWatcher_.folders()) {
+        shaderWatcher_.watch(folders);  // techniques changed: their plugins' folders
+    }
 
     const auto presentStart = std::chrono::steady_clock::now();
     ImGui::Render();
@@ -374,6 +384,17 @@ void Viewer::writeScreenshot(const fs::path& file, bool window)
 bool Viewer::runScriptUntilFrame()
 {
     if (framesToRun_ > 0) return true;
+    if (!waitFor_.empty()) {
+        std::error_code ec;
+        if (!fs::exists(waitFor_, ec)) {
+            if (std::chrono::steady_clock::now() < waitDeadline_) return true;
+            spdlog::error("wait-for {}: the file did not appear within 120 s", waitFor_.string());
+            exitCode_ = 1;
+            quit_ = true;
+            return false;
+        }
+        waitFor_.clear();
+    }
     while (scriptNext_ < options_.script.size()) {
         const ScriptCommand& command = options_.script[scriptNext_++];
         try {
@@ -387,7 +408,7 @@ bool Viewer::runScriptUntilFrame()
             return false;
         }
         if (quit_) return false;
-        if (framesToRun_ > 0) return true;
+        if (framesToRun_ > 0 || !waitFor_.empty()) return true;
     }
     return true;
 }
@@ -509,6 +530,18 @@ void Viewer::runCommand(const ScriptCommand& command)
         expectWords(command, 2, "save FILE.json");
         session_->renderIfChanged(false);
         session_->save(command.words[1]);
+    } else if (verb == "wait-for") {
+        // For tests that edit files while the viewer runs: frames go on until FILE exists.
+        expectWords(command, 2, "wait-for FILE");
+        waitFor_ = command.words[1];
+        waitDeadline_ = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+    } else if (verb == "expect-error") {
+        expectWords(command, 2, "expect-error TEXT");
+        session_->renderIfChanged(false);
+        if (session_->lastError().find(command.words[1]) == std::string::npos) {
+            throw Error(fmt::format("{}: expected an error with \"{}\", the viewer shows {}", command.where, command.words[1],
+                                    session_->lastError().empty() ? "none" : "\"" + session_->lastError() + "\""));
+        }
     } else if (verb == "expect-no-error") {
         expectWords(command, 1, "expect-no-error");
         session_->renderIfChanged(false);
@@ -539,7 +572,7 @@ void Viewer::runCommand(const ScriptCommand& command)
     } else {
         throw Error(fmt::format("{}: unknown command \"{}\"; expected open, size, window, camera, orbit, dolly, set, param, "
                                 "technique, culling, light, show, continuous, vsync, ui, frames, screenshot, "
-                                "screenshot-window, save, save-visibility, expect-no-error, widgets, timings or quit",
+                                "screenshot-window, save, save-visibility, wait-for, expect-error, expect-no-error, widgets, timings or quit",
                                 command.where, verb));
     }
 }

@@ -7,11 +7,13 @@
 #include "Presenter.h"
 #include "Script.h"
 #include "Session.h"
+#include "ShaderWatcher.h"
 
 #include "penumbra/gpu/Context.h"
 #include "penumbra/metrics/DebugImage.h"
 #include "penumbra/plugin/PluginRegistry.h"
 
+#include <chrono>
 #include <deque>
 #include <filesystem>
 #include <map>
@@ -122,7 +124,11 @@ private:
     // The technique parameter widgets the last panels drew: "light param type" (`widgets`).
     std::vector<std::string> drawnParamWidgets_;  // technique parameters being dragged, by light/technique/name
 
+    ShaderWatcher shaderWatcher_;
+
     size_t scriptNext_ = 0;
+    std::filesystem::path waitFor_;  // `wait-for FILE`: frames run until it exists
+    std::chrono::steady_clock::time_point waitDeadline_{};
     int framesToRun_ = 0;  // `frames N`: loop iterations before the next command
 };
 

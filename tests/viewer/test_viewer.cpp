@@ -293,3 +293,101 @@ TEST_F(ViewerTest, KilledWhileSavingLeavesAWholeConfig)
         EXPECT_TRUE(parsed.contains("camera"));
     }
 }
+
+namespace {
+
+// Starts the viewer in the background (its own process group, under xvfb-run) with
+// `env` before it; returns its pid.
+pid_t startViewer(const std::string& env, const std::string& file, const std::string& script, const fs::path& log)
+{
+    const pid_t pid = fork();
+    if (pid == 0) {
+        setpgid(0, 0);
+        const std::string cmd = fmt::format("exec env {} {} '{}' '{}' --validation --no-vsync --exec '{}' > '{}' 2>&1", env, kXvfb,
+                                            penumbra::test::viewerExecutable().string(), file, script, log.string());
+        execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+        _exit(127);
+    }
+    if (pid > 0) setpgid(pid, pid);
+    return pid;
+}
+
+bool waitForFile(const fs::path& file, pid_t viewer)
+{
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+    while (std::chrono::steady_clock::now() < deadline) {
+        if (fs::exists(file)) {
+            std::this_thread::sleep_for(std::chrono::milliseconds(100));  // written whole (PNG through a staged file)
+            return true;
+        }
+        int status = 0;
+        if (waitpid(viewer, &status, WNOHANG) == viewer) return false;  // it ended first
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return false;
+}
+
+void replaceInFile(const fs::path& file, const std::string& from, const std::string& to)
+{
+    std::string text = slurp(file);
+    const size_t at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from << " not in " << file;
+    text.replace(at, from.size(), to);
+    std::ofstream(file, std::ios::trunc) << text;
+}
+
+} // namespace
+
+// Hot reload: an edited shader takes effect without a restart; a broken one shows
+// "path:line: error" and the last good frame stays on screen.
+TEST_F(ViewerTest, AnEditedShaderIsReloadedAndABrokenOneKeepsTheLastFrame)
+{
+    const fs::path shaders = dir / "shaders";
+    fs::copy(penumbra::test::sourceDir() / "shaders", shaders, fs::copy_options::recursive);
+    const fs::path shading = shaders / "engine" / "shading.comp";
+    const std::string original = slurp(shading);
+    const std::string store = "imageStore(outColor, pixel, vec4(display, 1.0));";
+    ASSERT_NE(original.find(store), std::string::npos) << "shading.comp no longer stores `display`: update this test";
+
+    const fs::path a = dir / "a.png", b = dir / "b.png", c = dir / "c.png", log = dir / "viewer.log";
+    const std::string script = fmt::format(
+        "size 96 54; frames 2; screenshot {}; wait-for {}; frames 6; expect-error shading.comp:; screenshot {}; "
+        "wait-for {}; frames 6; expect-no-error; screenshot {}; quit",
+        a.string(), (dir / "go1").string(), b.string(), (dir / "go2").string(), c.string());
+    const pid_t pid = startViewer(fmt::format("PENUMBRA_SHADER_DIR='{}'", shaders.string()), config("default.json"), script, log);
+    ASSERT_GT(pid, 0);
+    struct Reap {
+        pid_t pid;
+        ~Reap()
+        {
+            if (pid > 0) kill(-pid, SIGKILL);  // kill(0, ...) would be this process group
+        }
+    } reap{pid};
+
+    ASSERT_TRUE(waitForFile(a, pid)) << slurp(log);
+    replaceInFile(shading, store, "this is not GLSL;\n    " + store);
+    std::ofstream(dir / "go1") << "";
+    ASSERT_TRUE(waitForFile(b, pid)) << slurp(log);
+    // Fixed, and changed: the colour inverted.
+    std::ofstream(shading, std::ios::trunc) << original;
+    replaceInFile(shading, store, "imageStore(outColor, pixel, vec4(1.0 - display, 1.0));");
+    std::ofstream(dir / "go2") << "";
+    int status = 0;
+    ASSERT_EQ(waitpid(pid, &status, 0), pid);
+    reap.pid = 0;
+    ASSERT_TRUE(WIFEXITED(status)) << slurp(log);
+    ASSERT_EQ(WEXITSTATUS(status), 0) << slurp(log);
+
+    const std::string out = slurp(log);
+    EXPECT_NE(out.find("shading.comp:"), std::string::npos) << out;
+    const Png first = readPng(a), broken = readPng(b), fixed = readPng(c);
+    ASSERT_EQ(first.rgba.size(), size_t(96 * 54 * 4));
+    EXPECT_EQ(broken.rgba, first.rgba) << "the last good frame stays while the shader is broken";
+    ASSERT_EQ(fixed.rgba.size(), first.rgba.size());
+    int worst = 0;
+    for (size_t i = 0; i < first.rgba.size(); ++i) {
+        if (i % 4 == 3) continue;  // alpha stays 1
+        worst = std::max(worst, std::abs(int(fixed.rgba[i]) - (255 - int(first.rgba[i]))));
+    }
+    EXPECT_LE(worst, 1) << "the edited shader's inverted colour";
+}

@@ -1,13 +1,19 @@
-// The viewer's parts that need no window: camera moves (apps/penumbra-viewer/CameraControl.h)
-// and script parsing (Script.h), at scene scales from 1e-3 to 1e5.
+// The viewer's parts that need no window (apps/penumbra-viewer/): camera moves
+// (CameraControl.h) at scene scales from 1e-3 to 1e5, script parsing (Script.h) and shader
+// watching (ShaderWatcher.h).
 #include "CameraControl.h"
 #include "Script.h"
+#include "ShaderWatcher.h"
 
 #include "penumbra/core/Error.h"
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
 
 using namespace penumbra;
 using namespace penumbra::viewer;
@@ -113,4 +119,32 @@ TEST(ViewerScript, WordsQuotesCommentsAndWhereEachCommandCameFrom)
         EXPECT_NE(std::string(err.what()).find("s.txt:2"), std::string::npos) << err.what();
     }
     EXPECT_THROW(readScript("/no/such/script.txt"), Error);
+}
+
+TEST(ShaderWatcher, SeesEditsAdditionsAndRemovalsOfShadersOnlyOnce)
+{
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::temp_directory_path() / ("penumbra_watch_" + std::to_string(::getpid()));
+    fs::create_directories(dir / "sub");
+    std::ofstream(dir / "a.comp") << "void main() {}";
+    std::ofstream(dir / "notes.txt") << "not a shader";
+    ShaderWatcher watcher;
+    watcher.watch({dir, dir / "missing-folder"});
+    const auto now = std::chrono::milliseconds(0);
+    EXPECT_FALSE(watcher.changed(now));
+    std::ofstream(dir / "notes.txt") << "edited, but not a shader";
+    EXPECT_FALSE(watcher.changed(now));
+    std::ofstream(dir / "sub" / "b.glsl") << "float f();";
+    EXPECT_TRUE(watcher.changed(now));
+    EXPECT_EQ(watcher.lastChanged(), (std::vector<std::string>{(dir / "sub" / "b.glsl").string()}));
+    EXPECT_FALSE(watcher.changed(now));  // once per change
+    std::ofstream(dir / "a.comp", std::ios::app) << "\n// longer";
+    EXPECT_TRUE(watcher.changed(now));
+    fs::remove(dir / "sub" / "b.glsl");
+    EXPECT_TRUE(watcher.changed(now));
+    EXPECT_EQ(watcher.lastChanged(), (std::vector<std::string>{(dir / "sub" / "b.glsl").string()}));
+    // Polled at most every interval.
+    std::ofstream(dir / "c.frag") << "void main() {}";
+    EXPECT_FALSE(watcher.changed(std::chrono::hours(1)));
+    fs::remove_all(dir);
 }

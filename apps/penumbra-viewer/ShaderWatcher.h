@@ -1,0 +1,39 @@
+#pragma once
+// Hot reload: notices that a shader file under the watched folders was edited, added or
+// removed (modification times and sizes, polled), so that the viewer builds the frame's
+// pipelines again from disk (FrameRenderer compiles its shaders at construction).
+#include <chrono>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace penumbra::viewer {
+
+class ShaderWatcher {
+public:
+    // Folders to watch (recursively), e.g. the engine's shaders/ and each plugin's folder.
+    // Missing folders are skipped; the current state is the baseline.
+    void watch(std::vector<std::filesystem::path> folders);
+    // True once per change since the last call that returned true (or since watch()).
+    // Looks at the disk at most every `interval`.
+    bool changed(std::chrono::milliseconds interval = std::chrono::milliseconds(250));
+    const std::vector<std::filesystem::path>& folders() const { return folders_; }
+    // The files that changed in the last change seen, for the message.
+    const std::vector<std::string>& lastChanged() const { return lastChanged_; }
+
+private:
+    using Stamp = std::pair<std::filesystem::file_time_type, std::uintmax_t>;
+    std::map<std::string, Stamp> scan() const;
+
+    std::vector<std::filesystem::path> folders_;
+    std::map<std::string, Stamp> stamps_;
+    std::chrono::steady_clock::time_point lastScan_{};
+    std::vector<std::string> lastChanged_;
+};
+
+// Whether `file` is GLSL the engine compiles or includes (.glsl .comp .vert .frag .geom .tesc .tese).
+bool isShaderFile(const std::filesystem::path& file);
+
+} // namespace penumbra::viewer
