@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <functional>
 
 namespace fs = std::filesystem;
 
@@ -77,11 +78,23 @@ void Viewer::drawPanels()
     drawCameraPanel();
     drawRenderPanel();
     drawLightsPanel();
+    drawComparePanel();
     drawDebugImagePanel();
     drawTimingsPanel();
     ImGui::PopItemWidth();
     ImGui::End();
     drawPixelInspector();
+    // Split view: where A ends and B begins, and which is which.
+    if (compareOn_ && bCurrent() && viewMode_ == ViewMode::Split && viewRect_.extent.width > 0) {
+        const float s = io.DisplayFramebufferScale.x > 0.0f ? 1.0f / io.DisplayFramebufferScale.x : 1.0f;
+        const float x = (float(viewRect_.offset.x) + splitAt_ * float(viewRect_.extent.width)) * s;
+        const float y0 = float(viewRect_.offset.y) * s, y1 = float(viewRect_.offset.y + int32_t(viewRect_.extent.height)) * s;
+        ImDrawList* draw = ImGui::GetForegroundDrawList();
+        draw->AddLine(ImVec2(x, y0), ImVec2(x, y1), IM_COL32(255, 255, 255, 200), 2.0f * uiScale_);
+        const float pad = 6.0f * uiScale_;
+        draw->AddText(ImVec2(x - pad - ImGui::CalcTextSize("A").x, y0 + pad), IM_COL32(255, 255, 255, 230), "A");
+        draw->AddText(ImVec2(x + pad, y0 + pad), IM_COL32(255, 255, 255, 230), "B");
+    }
 }
 
 void Viewer::drawFilePanel()
@@ -334,21 +347,29 @@ void Viewer::drawTechniquePanel(size_t light)
     }
     const std::optional<plugin::ParamValues> values = session_->params(light);
     if (!values) return;
-    const std::string where = fmt::format("viewer: {}.", session_->config().lights[light].name);
-    auto apply = [&](const plugin::ParamSpec& spec, const nlohmann::json& value) {
-        try {
-            session_->setParam(light, spec.name, value, where + spec.name);
-        } catch (const std::exception& e) {
-            message_ = e.what();
-        }
-    };
-    for (const plugin::ParamSpec& spec : values->specs()) {
-        drawnParamWidgets_.push_back(
-            fmt::format("{} {} {} {}", session_->config().lights[light].name, shadow.technique, spec.name, plugin::paramTypeName(spec.type)));
+    const std::string& lightName = session_->config().lights[light].name;
+    const std::string where = fmt::format("viewer: {}.", lightName);
+    drawParamWidgets(fmt::format("{}/{}", light, shadow.technique), lightName, *values,
+                     [&](const plugin::ParamSpec& spec, const nlohmann::json& value) {
+                         try {
+                             session_->setParam(light, spec.name, value, where + spec.name);
+                         } catch (const std::exception& e) {
+                             message_ = e.what();
+                         }
+                     });
+}
+
+// One widget per reflected parameter (see the file comment); `apply` takes a new value.
+void Viewer::drawParamWidgets(const std::string& key, const std::string& lightName, const plugin::ParamValues& values,
+                              const std::function<void(const plugin::ParamSpec&, const nlohmann::json&)>& apply)
+{
+    const std::string& technique = values.pluginName();
+    for (const plugin::ParamSpec& spec : values.specs()) {
+        drawnParamWidgets_.push_back(fmt::format("{} {} {} {}", lightName, technique, spec.name, plugin::paramTypeName(spec.type)));
         const std::string label = *spec.unit ? fmt::format("{} ({})", spec.name, spec.unit) : std::string(spec.name);
         switch (spec.type) {
         case plugin::ParamType::Bool: {
-            bool v = values->getBool(spec.name);
+            bool v = values.getBool(spec.name);
             if (ImGui::Checkbox(label.c_str(), &v)) apply(spec, v);
             break;
         }
@@ -356,29 +377,29 @@ void Viewer::drawTechniquePanel(size_t light)
         case plugin::ParamType::Float: {
             // A whole new renderer per step of a drag would stall it: the value being
             // dragged is kept here and taken when the widget lets go.
-            const std::string key = fmt::format("{}/{}/{}", light, shadow.technique, spec.name);
-            const auto editing = editing_.find(key);
+            const std::string editKey = fmt::format("{}/{}", key, spec.name);
+            const auto editing = editing_.find(editKey);
             const double lo = spec.minValue, hi = spec.maxValue;
             bool changed = false;
             double value = 0.0;
             if (spec.type == plugin::ParamType::Int) {
-                int v = editing != editing_.end() ? int(editing->second) : values->getInt(spec.name);
+                int v = editing != editing_.end() ? int(editing->second) : values.getInt(spec.name);
                 changed = hi - lo <= 64 ? ImGui::SliderInt(label.c_str(), &v, int(lo), int(hi), "%d", ImGuiSliderFlags_AlwaysClamp)
                                         : ImGui::DragInt(label.c_str(), &v, float(std::max(1.0, (hi - lo) / 2000.0)), int(lo),
                                                          int(hi), "%d", ImGuiSliderFlags_AlwaysClamp);
                 value = std::clamp(double(v), lo, hi);
             } else {
-                float v = editing != editing_.end() ? float(editing->second) : values->getFloat(spec.name);
+                float v = editing != editing_.end() ? float(editing->second) : values.getFloat(spec.name);
                 // Wide positive ranges (biases, radii) are dragged on a log scale.
                 const bool logarithmic = lo > 0.0 && hi / lo > 1000.0;
                 changed = ImGui::DragFloat(label.c_str(), &v, float(std::max((hi - lo) / 2000.0, 1e-6)), float(lo), float(hi),
                                            "%.5g", ImGuiSliderFlags_AlwaysClamp | (logarithmic ? ImGuiSliderFlags_Logarithmic : 0));
                 value = std::clamp(double(v), lo, hi);
             }
-            if (changed) editing_[key] = value;
-            if (!ImGui::IsItemActive() && editing_.count(key)) {
-                const double taken = editing_[key];
-                editing_.erase(key);
+            if (changed) editing_[editKey] = value;
+            if (!ImGui::IsItemActive() && editing_.count(editKey)) {
+                const double taken = editing_[editKey];
+                editing_.erase(editKey);
                 if (spec.type == plugin::ParamType::Int) {
                     apply(spec, int(taken));
                 } else {
@@ -388,7 +409,7 @@ void Viewer::drawTechniquePanel(size_t light)
             break;
         }
         case plugin::ParamType::Enum: {
-            const uint32_t current = values->getEnumIndex(spec.name);
+            const uint32_t current = values.getEnumIndex(spec.name);
             if (ImGui::BeginCombo(label.c_str(), spec.choices[current])) {
                 for (uint32_t k = 0; k < spec.choiceCount; ++k) {
                     if (ImGui::Selectable(spec.choices[k], k == current)) apply(spec, spec.choices[k]);
@@ -399,6 +420,131 @@ void Viewer::drawTechniquePanel(size_t light)
         }
         }
         tooltip(specTooltip(spec));
+    }
+}
+
+void Viewer::drawComparePanel()
+{
+    if (!ImGui::CollapsingHeader("Compare")) return;
+    bool on = compareOn_;
+    if (ImGui::Checkbox("compare with a second stack (B)", &on)) {
+        try {
+            if (on) {
+                startComparison("reference");
+            } else {
+                compareOn_ = false;
+                if (comparison_) comparison_->cancel();
+            }
+        } catch (const std::exception& e) {
+            message_ = e.what();
+        }
+    }
+    tooltip("B draws the same view with other techniques (the ray-traced reference by default) on a worker thread, "
+            "once the view has rested; the table gives the shown stack's error against it");
+    if (!compareOn_) return;
+    const auto& lights = session_->config().lights;
+    for (size_t i = 0; i < bShadows_.size() && i < lights.size(); ++i) {
+        ImGui::PushID(int(1000 + i));
+        config::ShadowSettings& b = bShadows_[i];
+        const std::string label = fmt::format("B for {}", lights[i].name);
+        bool changed = false;
+        if (ImGui::BeginCombo(label.c_str(), b.technique.c_str())) {
+            for (const std::string& name : session_->techniqueNames()) {
+                if (ImGui::Selectable(name.c_str(), name == b.technique) && name != b.technique) {
+                    b.technique = name;
+                    b.params.clear();
+                    changed = true;
+                }
+            }
+            ImGui::EndCombo();
+        }
+        if (!b.unshadowed() && ImGui::TreeNode("B's parameters")) {
+            try {
+                const plugin::ParamValues values = plugin::resolveParams(plugins_->load(b.technique), b);
+                drawParamWidgets(fmt::format("B/{}/{}", i, b.technique), "B/" + lights[i].name, values,
+                                 [&](const plugin::ParamSpec& spec, const nlohmann::json& value) {
+                                     config::ShadowSettings trial = b;
+                                     trial.setParam(spec.name, value, fmt::format("viewer: B {}.{}", lights[i].name, spec.name));
+                                     try {
+                                         plugin::resolveParams(plugins_->load(trial.technique), trial);
+                                         b = std::move(trial);
+                                         changed = true;
+                                     } catch (const std::exception& e) {
+                                         message_ = e.what();
+                                     }
+                                 });
+            } catch (const std::exception& e) {
+                message_ = e.what();
+            }
+            ImGui::TreePop();
+        }
+        if (changed) {
+            bResult_.reset();
+            requestedKey_.clear();
+            comparison_->cancel();
+        }
+        ImGui::PopID();
+    }
+    if (comparison_->busy()) {
+        const double seconds = comparison_->busySeconds();
+        // The frame cannot report its progress: the bar runs while it is drawn.
+        ImGui::ProgressBar(float(std::fmod(seconds, 2.0) / 2.0), ImVec2(-ImGui::GetFontSize() * 5.0f, 0.0f),
+                           fmt::format("B: drawing, {:.1f} s", seconds).c_str());
+        ImGui::SameLine();
+        if (ImGui::Button("Cancel")) {
+            comparison_->cancel();
+            requestedKey_ = lastViewKey_;  // not asked again until the view or B changes
+        }
+    } else if (bCurrent()) {
+        ImGui::Text("B: drawn in %.2f s for this view", bResult_->seconds);
+    } else if (!bError_.empty()) {
+        ImGui::TextWrapped("B failed: %s", bError_.c_str());
+    } else {
+        ImGui::TextUnformatted("B: waiting for the view to rest");
+    }
+    int mode = int(viewMode_);
+    ImGui::RadioButton("A", &mode, int(ViewMode::A));
+    ImGui::SameLine();
+    ImGui::RadioButton("B", &mode, int(ViewMode::B));
+    ImGui::SameLine();
+    ImGui::RadioButton("split", &mode, int(ViewMode::Split));
+    ImGui::SameLine();
+    ImGui::RadioButton("difference", &mode, int(ViewMode::Difference));
+    viewMode_ = ViewMode(mode);
+    if (viewMode_ == ViewMode::Split) ImGui::SliderFloat("split at", &splitAt_, 0.05f, 0.95f, "%.2f");
+    if (viewMode_ == ViewMode::Difference) {
+        bool redraw = ImGui::SliderInt("light", &differenceLight_, 0, std::max(int(lights.size()) - 1, 0));
+        redraw |= ImGui::SliderFloat("saturates at |dV|", &differenceScale_, 0.01f, 1.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
+        if (redraw) updateDifferenceImage();
+    }
+    if (bCurrent() && !stackErrors_.empty() &&
+        ImGui::BeginTable("errors", 6, ImGuiTableFlags_RowBg | ImGuiTableFlags_SizingStretchProp)) {
+        ImGui::TableSetupColumn("light");
+        ImGui::TableSetupColumn("RMSE");
+        ImGui::TableSetupColumn("max");
+        ImGui::TableSetupColumn("umbra");
+        ImGui::TableSetupColumn("penumbra");
+        ImGui::TableSetupColumn("lit");
+        ImGui::TableHeadersRow();
+        for (size_t l = 0; l < stackErrors_.size() && l < lights.size(); ++l) {
+            const metrics::VisibilityComparison& e = stackErrors_[l];
+            ImGui::TableNextRow();
+            ImGui::TableNextColumn();
+            ImGui::TextUnformatted(lights[l].name.c_str());
+            ImGui::TableNextColumn();
+            ImGui::Text("%.4f", e.all.rmse);
+            tooltip(fmt::format("RMSE of V over {} pixels with geometry; MAE {:.4f}; {:.2f} % wrong by more than 0.05; SSIM {:.4f}",
+                                e.all.pixels, e.all.mae, e.all.percentAbove(0), e.ssim));
+            ImGui::TableNextColumn();
+            ImGui::Text("%.3f", e.all.maxAbsError);
+            tooltip(fmt::format("at ({}, {}): A {:.4f}, B {:.4f}", e.all.maxX, e.all.maxY, e.all.testAtMax, e.all.referenceAtMax));
+            for (const metrics::Region r : {metrics::Region::Umbra, metrics::Region::Penumbra, metrics::Region::Lit}) {
+                ImGui::TableNextColumn();
+                ImGui::Text("%.4f", e.region(r).rmse);
+                tooltip(fmt::format("RMSE where B is {} ({} pixels)", metrics::regionName(r), e.region(r).pixels));
+            }
+        }
+        ImGui::EndTable();
     }
 }
 

@@ -400,13 +400,16 @@ void Presenter::present(const std::vector<ViewBlit>& views, ImDrawData* ui, cons
         if (view.layout != VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL) gpu::transition(cmd_, *view.image, before, source);
         VkImageBlit blit{};
         blit.srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-        blit.srcOffsets[1] = {int32_t(view.image->desc().width), int32_t(view.image->desc().height), 1};
+        const VkRect2D whole{{0, 0}, {view.image->desc().width, view.image->desc().height}};
+        const VkRect2D& src = view.source.extent.width && view.source.extent.height ? view.source : whole;
+        blit.srcOffsets[0] = {src.offset.x, src.offset.y, 0};
+        blit.srcOffsets[1] = {src.offset.x + int32_t(src.extent.width), src.offset.y + int32_t(src.extent.height), 1};
         blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
         const VkRect2D& r = view.target;
         blit.dstOffsets[0] = {r.offset.x, r.offset.y, 0};
         blit.dstOffsets[1] = {r.offset.x + int32_t(r.extent.width), r.offset.y + int32_t(r.extent.height), 1};
         // One image texel per window pixel is copied exactly; a scaled view is filtered.
-        const bool exact = r.extent.width == view.image->desc().width && r.extent.height == view.image->desc().height;
+        const bool exact = r.extent.width == src.extent.width && r.extent.height == src.extent.height;
         vkCmdBlitImage(cmd_, view.image->handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target,
                        VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit, exact ? VK_FILTER_NEAREST : VK_FILTER_LINEAR);
         if (view.layout != VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL) gpu::transition(cmd_, *view.image, source, after);

@@ -24,6 +24,7 @@ struct ViewBlit {
     const gpu::Image* image = nullptr;
     VkImageLayout layout = VK_IMAGE_LAYOUT_UNDEFINED;  // the layout it is in, and is left in
     VkRect2D target{};                                 // window pixels
+    VkRect2D source{};                                 // image pixels; an empty one: the whole image
 };
 
 // RGBA8 pixels the presenter uploads and shows: a debug image mapped to colour, a

@@ -47,6 +47,8 @@ public:
     config::RenderConfig& config() { return config_; }
     const config::RenderConfig& config() const { return config_; }
     const scene::Scene& scene() const { return run_->scene; }
+    // The config as the renderer last drew it.
+    const config::RenderConfig& shownConfig() const { return shown_; }
     void changed(Change change);
 
     // One technique parameter of light `light`, checked against the plugin's reflection

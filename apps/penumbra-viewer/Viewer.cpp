@@ -5,6 +5,8 @@
 #include "penumbra/config/Overrides.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/io/Png.h"
+#include "penumbra/metrics/Images.h"
+#include "penumbra/plugin/Params.h"
 
 #define GLFW_INCLUDE_NONE
 #define GLFW_INCLUDE_VULKAN
@@ -148,13 +150,18 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options)
     ImGui_ImplGlfw_InitForVulkan(window_, true);
     presenter_ = std::make_unique<Presenter>(*context_, window_, options.vsync);
     debugUpload_ = std::make_unique<UploadedImage>(*context_, "viewer debug image");
+    bUpload_ = std::make_unique<UploadedImage>(*context_, "viewer B image");
+    differenceUpload_ = std::make_unique<UploadedImage>(*context_, "viewer difference image");
     lastTime_ = glfwGetTime();
 }
 
 Viewer::~Viewer()
 {
+    comparison_.reset();  // joins its thread (after the frame in flight)
     if (context_ && context_->device()) vkDeviceWaitIdle(context_->device());
     debugUpload_.reset();
+    bUpload_.reset();
+    differenceUpload_.reset();
     presenter_.reset();  // shuts ImGui's Vulkan backend down
     if (ImGui::GetCurrentContext()) {
         ImGui_ImplGlfw_Shutdown();
@@ -184,6 +191,11 @@ int Viewer::run()
         frame();
     }
     vkDeviceWaitIdle(context_->device());
+    if (comparison_ && comparison_->validationMessages() > 0) {
+        spdlog::error("the Vulkan validation layer reported {} message(s) on the comparison's device",
+                      comparison_->validationMessages());
+        if (exitCode_ == 0) exitCode_ = 3;
+    }
     if (context_->validationEnabled() && context_->validationMessageCount() > 0) {
         spdlog::error("the Vulkan validation layer reported {} message(s)", context_->validationMessageCount());
         for (const std::string& m : context_->validationMessages()) spdlog::error("  {}", m);
@@ -215,6 +227,7 @@ void Viewer::frame()
     }
     if (session_->renderIfChanged(continuous_)) afterRender();
     if (!session_->lastError().empty()) message_ = session_->lastError();
+    updateComparison();
     if (const std::vector<fs::path> folders = session_->shaderFolders(); folders != shaderWatcher_.folders()) {
         shaderWatcher_.watch(folders);  // techniques changed: their plugins' folders
     }
@@ -231,6 +244,7 @@ void Viewer::frame()
 
 void Viewer::afterRender()
 {
+    errorsDirty_ = true;  // A changed: its error against B is computed again
     history_.add(session_->lastTimings());
     shownValues_.reset();
     if (!session_->shownImage().empty()) {
@@ -273,11 +287,111 @@ void Viewer::fitRenderSize()
 std::vector<ViewBlit> Viewer::viewBlits() const
 {
     if (!session_->isOpen() || session_->framesRendered() == 0 || viewRect_.extent.width == 0) return {};
+    const frame::FrameRenderer& r = session_->renderer();
+    const ViewBlit a{&r.executor().image("color"), r.executor().finalLayout("color"), viewRect_};
+    // B's modes show B only when it is of the view A shows; until then, A.
+    if (compareOn_ && bCurrent() && viewMode_ != ViewMode::A) {
+        if (viewMode_ == ViewMode::B) return {{&bUpload_->image(), UploadedImage::kLayout, viewRect_}};
+        if (viewMode_ == ViewMode::Difference && !differenceUpload_->empty()) {
+            return {{&differenceUpload_->image(), UploadedImage::kLayout, viewRect_}};
+        }
+        if (viewMode_ == ViewMode::Split) {
+            // A left of the split, B right of it, each the matching part of its image.
+            const uint32_t w = r.width(), h = r.height();
+            const uint32_t cut = std::clamp(uint32_t(std::lround(splitAt_ * float(w))), 1u, w - 1);
+            const uint32_t cutTarget = uint32_t(std::lround(float(cut) / float(w) * float(viewRect_.extent.width)));
+            ViewBlit left = a, right{&bUpload_->image(), UploadedImage::kLayout, viewRect_};
+            left.source = {{0, 0}, {cut, h}};
+            left.target.extent.width = cutTarget;
+            right.source = {{int32_t(cut), 0}, {w - cut, h}};
+            right.target.offset.x += int32_t(cutTarget);
+            right.target.extent.width = viewRect_.extent.width - cutTarget;
+            return {left, right};
+        }
+    }
     if (!session_->shownImage().empty() && !debugUpload_->empty()) {
         return {{&debugUpload_->image(), UploadedImage::kLayout, viewRect_}};
     }
-    const frame::FrameRenderer& r = session_->renderer();
-    return {{&r.executor().image("color"), r.executor().finalLayout("color"), viewRect_}};
+    return {a};
+}
+
+bool Viewer::bCurrent() const { return bResult_ && bResult_->viewKey == lastViewKey_ && !lastViewKey_.empty(); }
+
+void Viewer::startComparison(const std::string& technique)
+{
+    if (technique != config::kNoShadowTechnique) plugins_->load(technique);  // throws PluginError naming it
+    compareOn_ = true;
+    bShadows_.assign(session_->config().lights.size(), {});
+    for (config::ShadowSettings& b : bShadows_) {
+        b.technique = technique;
+        b.required = true;
+        // The reference's 256 rays a pixel take a minute at 1280 x 720 on a CPU: 16 for a
+        // first look (raise it in the panel).
+        if (technique == "reference") b.setParam("samples", 16, "viewer: B reference.samples");
+    }
+    if (!comparison_) comparison_ = std::make_unique<ComparisonWorker>(options_.context);
+    comparison_->cancel();
+    bResult_.reset();
+    bError_.clear();
+    requestedKey_.clear();
+    lastViewKey_.clear();
+}
+
+void Viewer::updateComparison()
+{
+    if (!compareOn_ || !comparison_ || session_->framesRendered() == 0) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (bShadows_.size() != session_->shownConfig().lights.size()) {
+        startComparison(bShadows_.empty() ? "reference" : bShadows_.front().technique);  // lights added or removed
+    }
+    const std::string key = viewKey(session_->shownConfig());
+    if (key != lastViewKey_) {
+        lastViewKey_ = key;
+        stillSince_ = now;
+        bError_.clear();
+    }
+    if (std::optional<ComparisonResult> r = comparison_->take()) {
+        if (!r->error.empty()) {
+            if (r->viewKey == key) bError_ = r->error;
+            message_ = "B: " + r->error;
+        } else {
+            bResult_ = std::move(*r);
+            bUpload_->set(bResult_->images.width, bResult_->images.height, bResult_->images.color);
+            errorsDirty_ = true;
+            spdlog::info("B drawn in {:.2f} s", bResult_->seconds);
+        }
+    }
+    // Asked for once the view has rested: not for every step of a drag.
+    if (!bCurrent() && requestedKey_ != key && now - stillSince_ >= std::chrono::milliseconds(400)) {
+        comparison_->request({withShadows(session_->shownConfig(), bShadows_), key});
+        requestedKey_ = key;
+    }
+    if (errorsDirty_ && bCurrent()) {
+        const frame::FrameRenderer& r = session_->renderer();
+        aVisibility_.clear();
+        for (size_t l = 0; l < r.lightCount(); ++l) aVisibility_.push_back(r.readVisibility(l));
+        stackErrors_ = compareStacks(aVisibility_, bResult_->images, session_->shownConfig().lights);
+        updateDifferenceImage();
+        errorsDirty_ = false;
+    }
+}
+
+// |V_A - V_B| of one light, in false colour over [0, scale]; pixels not compared 0.
+void Viewer::updateDifferenceImage()
+{
+    if (!bCurrent() || aVisibility_.empty()) return;
+    const app::FrameImages& b = bResult_->images;
+    const size_t l = size_t(std::clamp(differenceLight_, 0, int(aVisibility_.size()) - 1));
+    const metrics::PixelMask mask = app::reachMask(session_->shownConfig().lights.at(l).light, b.width, b.height, b.positions);
+    metrics::DebugImageValues diff;
+    diff.width = b.width;
+    diff.height = b.height;
+    diff.values.resize(size_t(diff.width) * diff.height);
+    for (size_t i = 0; i < diff.values.size(); ++i) {
+        diff.values[i] = mask.covered[i] ? std::abs(aVisibility_[l][i] - b.visibility[l][i]) : 0.0f;
+    }
+    differenceRgba_ = metrics::debugImageRgba(diff, metrics::DebugMapping::FalseColor, {0.0, double(differenceScale_)});
+    differenceUpload_->set(diff.width, diff.height, differenceRgba_);
 }
 
 // Keys are GLFW key codes: Dear ImGui 1.86 (Debian 12) indexes io.KeysDown by the backend's codes.
@@ -346,9 +460,27 @@ size_t Viewer::lightIndex(const std::string& nameOrIndex, const ScriptCommand& c
                             nameOrIndex, names));
 }
 
-std::vector<uint8_t> Viewer::viewPixels()
+std::vector<uint8_t> Viewer::viewPixels(uint32_t& width, uint32_t& height)
 {
-    if (!session_->shownImage().empty() && shownValues_) return metrics::debugImageRgba(*shownValues_, mapping_, range_);
+    // What the view shows: B or the difference in those compare modes, else the debug
+    // image shown, else the frame.
+    if (compareOn_ && bCurrent() && viewMode_ == ViewMode::B) {
+        width = bResult_->images.width;
+        height = bResult_->images.height;
+        return bResult_->images.color;
+    }
+    if (compareOn_ && bCurrent() && viewMode_ == ViewMode::Difference && !differenceRgba_.empty()) {
+        width = bResult_->images.width;
+        height = bResult_->images.height;
+        return differenceRgba_;
+    }
+    if (!session_->shownImage().empty() && shownValues_) {
+        width = shownValues_->width;
+        height = shownValues_->height;
+        return metrics::debugImageRgba(*shownValues_, mapping_, range_);
+    }
+    width = session_->renderer().width();
+    height = session_->renderer().height();
     return session_->renderer().readColor();
 }
 
@@ -370,10 +502,9 @@ void Viewer::writeScreenshot(const fs::path& file, bool window)
         if (pixels.empty()) throw Error(fmt::format("{}: the window's images cannot be read back on this device", file.string()));
         io::writePng(file, presenter_->extent().width, presenter_->extent().height, pixels);
     } else {
-        const config::RenderConfig& c = session_->config();
-        const uint32_t w = shownValues_ && !session_->shownImage().empty() ? shownValues_->width : c.width;
-        const uint32_t h = shownValues_ && !session_->shownImage().empty() ? shownValues_->height : c.height;
-        io::writePng(file, w, h, viewPixels());
+        uint32_t w = 0, h = 0;
+        const std::vector<uint8_t> pixels = viewPixels(w, h);
+        io::writePng(file, w, h, pixels);
     }
     message_ = fmt::format("wrote {}", file.string());
     spdlog::info("{}", message_);
@@ -395,6 +526,22 @@ bool Viewer::runScriptUntilFrame()
         }
         waitFor_.clear();
     }
+    if (waitCompare_) {
+        if (!bError_.empty()) {
+            spdlog::error("wait-compare: B could not be drawn: {}", bError_);
+            exitCode_ = 1;
+            quit_ = true;
+            return false;
+        }
+        if (!(bCurrent() && !errorsDirty_)) {
+            if (std::chrono::steady_clock::now() < waitCompareDeadline_) return true;
+            spdlog::error("wait-compare: B was not drawn within 600 s");
+            exitCode_ = 1;
+            quit_ = true;
+            return false;
+        }
+        waitCompare_ = false;
+    }
     while (scriptNext_ < options_.script.size()) {
         const ScriptCommand& command = options_.script[scriptNext_++];
         try {
@@ -408,7 +555,7 @@ bool Viewer::runScriptUntilFrame()
             return false;
         }
         if (quit_) return false;
-        if (framesToRun_ > 0 || !waitFor_.empty()) return true;
+        if (framesToRun_ > 0 || !waitFor_.empty() || waitCompare_) return true;
     }
     return true;
 }
@@ -530,6 +677,57 @@ void Viewer::runCommand(const ScriptCommand& command)
         expectWords(command, 2, "save FILE.json");
         session_->renderIfChanged(false);
         session_->save(command.words[1]);
+    } else if (verb == "compare") {
+        expectWords(command, 2, "compare TECHNIQUE|off");
+        if (command.words[1] == "off") {
+            compareOn_ = false;
+            if (comparison_) comparison_->cancel();
+        } else {
+            startComparison(command.words[1]);
+        }
+    } else if (verb == "compare-set") {
+        expectWords(command, 2, "compare-set TECHNIQUE.PARAM=VALUE");
+        const config::ParamOverride o = config::parseParamOverride(command.words[1]);
+        bool used = false;
+        for (config::ShadowSettings& b : bShadows_) {
+            if (b.technique != o.technique) continue;
+            config::ShadowSettings trial = b;
+            trial.setParam(o.param, o.value, fmt::format("{}: compare-set {}.{}", command.where, o.technique, o.param));
+            plugin::resolveParams(plugins_->load(trial.technique), trial);  // throws naming where
+            b = std::move(trial);
+            used = true;
+        }
+        if (!used) throw Error(fmt::format("{}: compare-set: B uses no \"{}\" (compare TECHNIQUE first)", command.where, o.technique));
+        bResult_.reset();
+        requestedKey_.clear();
+        if (comparison_) comparison_->cancel();
+    } else if (verb == "compare-view") {
+        expectWords(command, 2, "compare-view a|b|split|difference");
+        const std::string& m = command.words[1];
+        if (m == "a") viewMode_ = ViewMode::A;
+        else if (m == "b") viewMode_ = ViewMode::B;
+        else if (m == "split") viewMode_ = ViewMode::Split;
+        else if (m == "difference") viewMode_ = ViewMode::Difference;
+        else throw Error(fmt::format("{}: compare-view: \"{}\" is not a, b, split or difference", command.where, m));
+    } else if (verb == "wait-compare") {
+        expectWords(command, 1, "wait-compare");
+        if (!compareOn_) throw Error(fmt::format("{}: wait-compare: no comparison (compare TECHNIQUE first)", command.where));
+        waitCompare_ = true;
+        waitCompareDeadline_ = std::chrono::steady_clock::now() + std::chrono::seconds(600);
+    } else if (verb == "errors") {
+        // The shown stack's error against B, per light, as the Compare panel shows it.
+        expectWords(command, 1, "errors");
+        if (!bCurrent()) throw Error(fmt::format("{}: errors: B is not drawn for this view (wait-compare first)", command.where));
+        const auto& lights = session_->shownConfig().lights;
+        for (size_t l = 0; l < stackErrors_.size(); ++l) {
+            const metrics::VisibilityComparison& e = stackErrors_[l];
+            fmt::print("error {} pixels {} rmse {:.6g} mae {:.6g} max {:.6g} above_0.05 {:.6g} umbra {:.6g} penumbra {:.6g} lit {:.6g} "
+                       "ssim {:.6g}\n",
+                       lights[l].name, e.all.pixels, e.all.rmse, e.all.mae, e.all.maxAbsError, e.all.percentAbove(0),
+                       e.region(metrics::Region::Umbra).rmse, e.region(metrics::Region::Penumbra).rmse,
+                       e.region(metrics::Region::Lit).rmse, e.ssim);
+        }
+        std::fflush(stdout);
     } else if (verb == "wait-for") {
         // For tests that edit files while the viewer runs: frames go on until FILE exists.
         expectWords(command, 2, "wait-for FILE");
@@ -572,7 +770,8 @@ void Viewer::runCommand(const ScriptCommand& command)
     } else {
         throw Error(fmt::format("{}: unknown command \"{}\"; expected open, size, window, camera, orbit, dolly, set, param, "
                                 "technique, culling, light, show, continuous, vsync, ui, frames, screenshot, "
-                                "screenshot-window, save, save-visibility, wait-for, expect-error, expect-no-error, widgets, timings or quit",
+                                "screenshot-window, save, save-visibility, compare, compare-set, compare-view, wait-compare, errors, wait-for, "
+                                "expect-error, expect-no-error, widgets, timings or quit",
                                 command.where, verb));
     }
 }

@@ -4,6 +4,7 @@
 // driven by the mouse and keys or by a script (Script.h). Viewer.cpp has the loop, the
 // input and the script commands; Panels.cpp the panels.
 #include "CameraControl.h"
+#include "Comparison.h"
 #include "Presenter.h"
 #include "Script.h"
 #include "Session.h"
@@ -15,6 +16,7 @@
 
 #include <chrono>
 #include <deque>
+#include <functional>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -66,7 +68,8 @@ private:
     void fitRenderSize();
     void afterRender();
     std::vector<ViewBlit> viewBlits() const;
-    std::vector<uint8_t> viewPixels();  // the view as shown (the colour or the mapped debug image), RGBA8
+    // The view as shown (the frame, the mapped debug image, B or the difference), RGBA8.
+    std::vector<uint8_t> viewPixels(uint32_t& width, uint32_t& height);
     void writeScreenshot(const std::filesystem::path& file, bool window);
     size_t lightIndex(const std::string& nameOrIndex, const ScriptCommand& command) const;
     float sceneRadius() const;
@@ -79,6 +82,9 @@ private:
     void drawRenderPanel();
     void drawLightsPanel();
     void drawTechniquePanel(size_t light);
+    void drawParamWidgets(const std::string& key, const std::string& lightName, const plugin::ParamValues& values,
+                          const std::function<void(const plugin::ParamSpec&, const nlohmann::json&)>& apply);
+    void drawComparePanel();
     void drawDebugImagePanel();
     void drawTimingsPanel();
     void drawPixelInspector();
@@ -125,6 +131,32 @@ private:
     std::vector<std::string> drawnParamWidgets_;  // technique parameters being dragged, by light/technique/name
 
     ShaderWatcher shaderWatcher_;
+
+    // The second stack, B (Comparison.h): what it draws per light, its latest image for
+    // the current view, and the shown stack's (A's) error against it.
+    enum class ViewMode { A, B, Split, Difference };
+    bool compareOn_ = false;
+    std::vector<config::ShadowSettings> bShadows_;
+    std::unique_ptr<ComparisonWorker> comparison_;
+    std::optional<ComparisonResult> bResult_;
+    std::vector<metrics::VisibilityComparison> stackErrors_;
+    bool errorsDirty_ = false;
+    std::string lastViewKey_, requestedKey_;
+    std::chrono::steady_clock::time_point stillSince_{};
+    ViewMode viewMode_ = ViewMode::A;
+    float splitAt_ = 0.5f;
+    int differenceLight_ = 0;
+    float differenceScale_ = 0.5f;
+    std::unique_ptr<UploadedImage> bUpload_, differenceUpload_;
+    std::vector<std::vector<float>> aVisibility_;  // A's V when the errors were computed
+    std::vector<uint8_t> differenceRgba_;
+    std::string bError_;                           // B failed for the current view: why
+    bool waitCompare_ = false;  // `wait-compare`: frames run until B of the current view is in
+    std::chrono::steady_clock::time_point waitCompareDeadline_{};
+    void startComparison(const std::string& technique);
+    void updateComparison();
+    void updateDifferenceImage();
+    bool bCurrent() const;  // B is of the view A shows
 
     size_t scriptNext_ = 0;
     std::filesystem::path waitFor_;  // `wait-for FILE`: frames run until it exists

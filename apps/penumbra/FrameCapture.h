@@ -1,5 +1,6 @@
 #pragma once
-// What `compare` and `bench` read back from the renderer for the metrics.
+// What `compare`, `bench` and the viewer's comparison read back from the renderer for the
+// metrics.
 #include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/metrics/Images.h"
 #include "penumbra/scene/Scene.h"

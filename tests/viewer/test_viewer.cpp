@@ -18,6 +18,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -390,4 +391,53 @@ TEST_F(ViewerTest, AnEditedShaderIsReloadedAndABrokenOneKeepsTheLastFrame)
         worst = std::max(worst, std::abs(int(fixed.rgba[i]) - (255 - int(first.rgba[i]))));
     }
     EXPECT_LE(worst, 1) << "the edited shader's inverted colour";
+}
+
+// The Compare panel's figures are `penumbra compare`'s: the same stacks, the same pixels
+// (geometry the light reaches), the same reference.
+TEST_F(ViewerTest, ComparisonFiguresAreThoseOfPenumbraCompare)
+{
+    for (const std::string name : {"pcss.json", "two-spots.json"}) {
+        SCOPED_TRACE(name);
+        const fs::path saved = dir / "saved.json", split = dir / "split.png", difference = dir / "difference.png";
+        const RunResult v = viewer(config(name), fmt::format("size 96 54; orbit 10 5; compare reference; compare-set reference.samples=8; "
+                                                             "wait-compare; errors; compare-view split; frames 1; screenshot-window {}; "
+                                                             "compare-view difference; frames 1; screenshot {}; save {}; quit",
+                                                             split.string(), difference.string(), saved.string()));
+        ASSERT_EQ(v.exitCode, 0) << v.err;
+        const fs::path json = dir / "compare.json";
+        ASSERT_EQ(std::system(fmt::format("'{}' compare '{}' --reference-set samples=8 --json > '{}' 2> /dev/null",
+                                          penumbra::test::penumbraExecutable().string(), saved.string(), json.string())
+                                  .c_str()),
+                  0);
+        const nlohmann::json cli = nlohmann::json::parse(slurp(json));
+        std::istringstream lines(v.out);
+        size_t light = 0;
+        for (std::string line; std::getline(lines, line);) {
+            if (line.rfind("error ", 0) != 0) continue;
+            std::istringstream words(line.substr(6));
+            std::string lightName, key;
+            words >> lightName;
+            std::map<std::string, double> figures;
+            for (double value = 0.0; words >> key >> value;) figures[key] = value;
+            ASSERT_LT(light, cli["lights"].size());
+            const nlohmann::json& c = cli["lights"][light]["visibility"];
+            EXPECT_EQ(lightName, cli["lights"][light]["name"]);
+            EXPECT_EQ(figures["pixels"], c["all"]["pixels"].get<double>());
+            // Printed to 6 significant digits.
+            EXPECT_NEAR(figures["rmse"], c["all"]["rmse"].get<double>(), 1e-5 * c["all"]["rmse"].get<double>() + 1e-9);
+            EXPECT_NEAR(figures["max"], c["all"]["max_abs_error"].get<double>(), 1e-5);
+            EXPECT_NEAR(figures["umbra"], c["regions"]["umbra"]["rmse"].get<double>(), 1e-5 * figures["umbra"] + 1e-9);
+            EXPECT_NEAR(figures["penumbra"], c["regions"]["penumbra"]["rmse"].get<double>(), 1e-5 * figures["penumbra"] + 1e-9);
+            EXPECT_NEAR(figures["lit"], c["regions"]["lit"]["rmse"].get<double>(), 1e-5 * figures["lit"] + 1e-9);
+            EXPECT_NEAR(figures["ssim"], c["ssim"].get<double>(), 1e-5);
+            ++light;
+        }
+        EXPECT_EQ(light, cli["lights"].size()) << v.out;
+        // The difference image: the frame's size, dark where A and B agree.
+        const Png d = readPng(difference);
+        EXPECT_EQ(d.width, 96);
+        EXPECT_EQ(d.height, 54);
+        EXPECT_GT(readPng(split).width, 96);  // the window, panels and both halves
+    }
 }

@@ -1,0 +1,145 @@
+#include "Comparison.h"
+
+#include "penumbra/core/Error.h"
+#include "penumbra/frame/FrameRenderer.h"
+#include "penumbra/metrics/Images.h"
+#include "penumbra/plugin/PluginRegistry.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <memory>
+
+namespace penumbra::viewer {
+
+std::string viewKey(const config::RenderConfig& config)
+{
+    config::RenderConfig view = config;
+    for (config::LightConfig& light : view.lights) light.shadow = {};
+    view.culling = config::CullingMode::None;
+    view.shadowFocus = false;
+    view.frames = 1;
+    view.animation = {};
+    view.notes.clear();
+    return config::configJson(view, "/").dump();
+}
+
+config::RenderConfig withShadows(config::RenderConfig config, const std::vector<config::ShadowSettings>& b)
+{
+    for (size_t i = 0; i < config.lights.size() && i < b.size(); ++i) {
+        config.lights[i].shadow = b[i];
+        config.lights[i].shadow.required = true;
+    }
+    return config;
+}
+
+std::vector<metrics::VisibilityComparison> compareStacks(const std::vector<std::vector<float>>& a, const app::FrameImages& b,
+                                                         const std::vector<config::LightConfig>& lights)
+{
+    std::vector<metrics::VisibilityComparison> out;
+    for (size_t l = 0; l < a.size() && l < b.visibility.size() && l < lights.size(); ++l) {
+        const metrics::PixelMask reaches = app::reachMask(lights[l].light, b.width, b.height, b.positions);
+        out.push_back(metrics::compareVisibility({b.width, b.height, a[l]}, {b.width, b.height, b.visibility[l]}, &reaches));
+    }
+    return out;
+}
+
+ComparisonWorker::ComparisonWorker(gpu::ContextOptions options) : options_(std::move(options))
+{
+    options_.presentation.reset();  // B is read back, never shown through a swapchain of its own
+    thread_ = std::thread([this] { run(); });
+}
+
+ComparisonWorker::~ComparisonWorker()
+{
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        stop_ = true;
+        waiting_.reset();
+    }
+    wake_.notify_all();
+    thread_.join();
+}
+
+void ComparisonWorker::request(ComparisonRequest request)
+{
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        waiting_ = std::move(request);
+        busy_ = true;
+    }
+    wake_.notify_all();
+}
+
+void ComparisonWorker::cancel()
+{
+    std::lock_guard<std::mutex> lock(mutex_);
+    waiting_.reset();
+    done_.reset();
+    ++generation_;
+}
+
+double ComparisonWorker::busySeconds() const
+{
+    if (!busy_) return 0.0;
+    const int64_t now = std::chrono::steady_clock::now().time_since_epoch().count();
+    return double(now - startedNs_.load()) * 1e-9;
+}
+
+std::optional<ComparisonResult> ComparisonWorker::take()
+{
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::optional<ComparisonResult> out = std::move(done_);
+    done_.reset();
+    return out;
+}
+
+void ComparisonWorker::run()
+{
+    // The worker's own device, registry and scene: nothing of the window's is touched
+    // from this thread.
+    std::unique_ptr<gpu::Context> context;
+    std::unique_ptr<plugin::PluginRegistry> plugins;
+    std::unique_ptr<scene::Scene> scene;
+    std::string sceneKey;
+    for (;;) {
+        ComparisonRequest request;
+        uint64_t generation = 0;
+        {
+            std::unique_lock<std::mutex> lock(mutex_);
+            wake_.wait(lock, [&] { return stop_ || waiting_.has_value(); });
+            if (stop_) break;
+            request = std::move(*waiting_);
+            waiting_.reset();
+            generation = generation_;
+            startedNs_ = std::chrono::steady_clock::now().time_since_epoch().count();
+        }
+        ComparisonResult result;
+        result.viewKey = request.viewKey;
+        const auto start = std::chrono::steady_clock::now();
+        try {
+            if (!context) context = std::make_unique<gpu::Context>(options_);
+            if (!plugins) plugins = std::make_unique<plugin::PluginRegistry>();
+            // The scene is built again only when its source changed.
+            const std::string key = config::configJson(request.config, "/")["scene"].dump();
+            if (!scene || key != sceneKey) {
+                scene.reset();
+                config::RenderConfig c = request.config;
+                scene = std::make_unique<scene::Scene>(config::buildScene(c.scene));
+                sceneKey = key;
+            }
+            frame::FrameRenderer renderer(*context, *scene, request.config, *plugins);
+            renderer.renderFrame();
+            result.images = app::captureFrame(renderer);
+        } catch (const std::exception& e) {
+            result.error = e.what();
+        }
+        if (context) validationMessages_ = context->validationMessageCount();
+        result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (generation == generation_) done_ = std::move(result);
+        busy_ = waiting_.has_value();
+    }
+}
+
+} // namespace penumbra::viewer

@@ -1,0 +1,89 @@
+#pragma once
+// The viewer's second stack ("B"): the view the user looks at, drawn by other techniques
+// — by default the ray-traced reference — on a worker thread with its own device, so that
+// a reference that takes seconds never stalls the window. The window asks for B once the
+// view has been still for a moment; a request replaces the one waiting, and a result for a
+// view that has moved on (or was cancelled) is dropped. The error of the shown stack
+// against B is metrics::compareVisibility per light, as `penumbra compare` computes it.
+#include "FrameCapture.h"  // apps/penumbra: what compare reads back
+
+#include "penumbra/config/Config.h"
+#include "penumbra/gpu/Context.h"
+#include "penumbra/metrics/ImageComparison.h"
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace penumbra::viewer {
+
+// What B draws, and for which view.
+struct ComparisonRequest {
+    config::RenderConfig config;  // the view's config with B's shadow settings on every light
+    std::string viewKey;          // viewKey() of the view it was asked for
+};
+
+struct ComparisonResult {
+    std::string viewKey;
+    app::FrameImages images;  // B's frame as the metrics read it
+    double seconds = 0.0;
+    std::string error;  // non-empty: B could not be drawn (the message)
+};
+
+// What B depends on: the scene, camera, lights and size, not the shown stack's techniques
+// or culling. Two configs with the same key show the same B.
+std::string viewKey(const config::RenderConfig& config);
+
+// `config` with every light shadowed as `b` says (required: a B that cannot run is an
+// error, never an unshadowed image to compare with).
+config::RenderConfig withShadows(config::RenderConfig config, const std::vector<config::ShadowSettings>& b);
+
+// Per light of the shown stack (A) against B, over the pixels `penumbra compare` takes
+// (app::reachMask: geometry the light reaches), so that the figures are compare's.
+std::vector<metrics::VisibilityComparison> compareStacks(const std::vector<std::vector<float>>& a, const app::FrameImages& b,
+                                                         const std::vector<config::LightConfig>& lights);
+
+class ComparisonWorker {
+public:
+    // The worker's device is made on its thread, at the first request, as `options` says
+    // (headless; the viewer's device request and validation).
+    explicit ComparisonWorker(gpu::ContextOptions options);
+    // Waits for a frame in flight (it cannot be interrupted) and joins the thread.
+    ~ComparisonWorker();
+    ComparisonWorker(const ComparisonWorker&) = delete;
+    ComparisonWorker& operator=(const ComparisonWorker&) = delete;
+
+    void request(ComparisonRequest request);
+    // Drops the waiting request and the result of the one in flight.
+    void cancel();
+    // A request is waiting or being drawn; for how long the current one has run.
+    bool busy() const { return busy_.load(); }
+    double busySeconds() const;
+    // The latest finished result, once.
+    std::optional<ComparisonResult> take();
+    // Validation messages of the worker's device (0 before it exists).
+    uint32_t validationMessages() const { return validationMessages_.load(); }
+
+private:
+    void run();
+
+    gpu::ContextOptions options_;
+    std::thread thread_;
+    mutable std::mutex mutex_;
+    std::condition_variable wake_;
+    std::optional<ComparisonRequest> waiting_;
+    std::optional<ComparisonResult> done_;
+    bool stop_ = false;
+    uint64_t generation_ = 0;  // cancel() moves it on: a result of an older one is dropped
+    std::atomic<bool> busy_{false};
+    std::atomic<int64_t> startedNs_{0};
+    std::atomic<uint32_t> validationMessages_{0};
+};
+
+} // namespace penumbra::viewer
