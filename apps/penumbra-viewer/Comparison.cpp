@@ -12,16 +12,15 @@
 
 namespace penumbra::viewer {
 
-std::string viewKey(const config::RenderConfig& config)
+std::string viewKey(const config::RenderConfig& config, float timeS)
 {
     config::RenderConfig view = config;
     for (config::LightConfig& light : view.lights) light.shadow = {};
     view.culling = config::CullingMode::None;
     view.shadowFocus = false;
     view.frames = 1;
-    view.animation = {};
     view.notes.clear();
-    return config::configJson(view, "/").dump();
+    return fmt::format("{} at {}", config::configJson(view, "/").dump(), view.animation.empty() ? 0.0f : timeS);
 }
 
 config::RenderConfig withShadows(config::RenderConfig config, const std::vector<config::ShadowSettings>& b)
@@ -128,7 +127,13 @@ void ComparisonWorker::run()
                 scene = std::make_unique<scene::Scene>(config::buildScene(c.scene));
                 sceneKey = key;
             }
-            frame::FrameRenderer renderer(*context, *scene, request.config, *plugins);
+            // Posed as A is (the animation starts from the rest pose at every request).
+            config::RenderConfig posed = request.config;
+            if (!posed.animation.empty()) {
+                config::applyAnimation(request.config.animation, request.timeS, posed, *scene);
+                scene->updateTransforms();
+            }
+            frame::FrameRenderer renderer(*context, *scene, posed, *plugins);
             renderer.renderFrame();
             result.images = app::captureFrame(renderer);
         } catch (const std::exception& e) {

@@ -25,7 +25,8 @@ namespace penumbra::viewer {
 
 // What B draws, and for which view.
 struct ComparisonRequest {
-    config::RenderConfig config;  // the view's config with B's shadow settings on every light
+    config::RenderConfig config;  // the view's config (rest pose) with B's shadow settings on every light
+    float timeS = 0.0f;           // the animation time A shows: B is posed the same
     std::string viewKey;          // viewKey() of the view it was asked for
 };
 
@@ -36,9 +37,9 @@ struct ComparisonResult {
     std::string error;  // non-empty: B could not be drawn (the message)
 };
 
-// What B depends on: the scene, camera, lights and size, not the shown stack's techniques
-// or culling. Two configs with the same key show the same B.
-std::string viewKey(const config::RenderConfig& config);
+// What B depends on: the scene, camera, lights, size, animation and its time, not the
+// shown stack's techniques or culling. Two views with the same key show the same B.
+std::string viewKey(const config::RenderConfig& config, float timeS);
 
 // `config` with every light shadowed as `b` says (required: a B that cannot run is an
 // error, never an unshadowed image to compare with).

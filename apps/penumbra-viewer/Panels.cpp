@@ -78,6 +78,7 @@ void Viewer::drawPanels()
     drawCameraPanel();
     drawRenderPanel();
     drawLightsPanel();
+    drawAnimationPanel();
     drawComparePanel();
     drawDebugImagePanel();
     drawTimingsPanel();
@@ -420,6 +421,33 @@ void Viewer::drawParamWidgets(const std::string& key, const std::string& lightNa
         }
         }
         tooltip(specTooltip(spec));
+    }
+}
+
+void Viewer::drawAnimationPanel()
+{
+    if (!ImGui::CollapsingHeader("Animation")) return;
+    const float end = session_->duration();
+    ImGui::BeginDisabled(end <= 0.0f || recording_);
+    if (ImGui::Button(playing_ ? "Pause" : "Play")) playing_ = !playing_;
+    ImGui::SameLine();
+    float t = session_->time();
+    if (ImGui::SliderFloat("time (s)", &t, 0.0f, std::max(end, 1e-3f), "%.3f")) {
+        playing_ = false;
+        session_->setTime(t);
+    }
+    ImGui::EndDisabled();
+    const config::Animation& a = session_->config().animation;
+    ImGui::Text("%zu track(s), %.3f s at %.4g fps; `penumbra render` draws %u frame(s)", a.tracks.size(), end, a.fps,
+                session_->config().frames);
+    if (!recording_) {
+        if (ImGui::Button("Record the camera")) startRecording();
+        tooltip("every frame the camera moves becomes a key of /camera/position and /camera/target (replacing the "
+                "config's camera tracks); Save writes them with the config");
+    } else {
+        if (ImGui::Button("Stop recording")) stopRecording();
+        ImGui::SameLine();
+        ImGui::Text("%zu keys", recordedPosition_.keys.size());
     }
 }
 

@@ -92,6 +92,7 @@ void Session::open(const fs::path& file)
     shown_ = c;
     shownImage_.clear();
     paramsByTechnique_.assign(c.lights.size(), {});
+    time_ = 0.0f;
     for (const std::string& warning : renderer_->warnings()) spdlog::warn("{}", warning);
     pending_ = Change::View;  // the new renderer has not drawn yet
     framesRendered_ = 0;
@@ -199,12 +200,40 @@ std::vector<std::string> Session::techniqueNames()
     return *techniques_;
 }
 
+const config::RenderConfig& Session::pose(std::vector<uint32_t>& moved) const
+{
+    moved.clear();
+    if (config_.animation.empty()) return config_;
+    // The edited config is the rest pose: the animation starts from it, as in `penumbra render`.
+    run_->rest = config_;
+    moved = run_->poseAt(time_);
+    return run_->config;
+}
+
+float Session::duration() const
+{
+    float end = 0.0f;
+    for (const config::AnimationTrack& track : config_.animation.tracks) {
+        if (!track.keys.empty()) end = std::max(end, track.keys.back().timeS);
+    }
+    return end;
+}
+
+void Session::setTime(float seconds)
+{
+    const float t = std::clamp(std::isfinite(seconds) ? seconds : 0.0f, 0.0f, duration());
+    if (t == time_) return;
+    time_ = t;
+    changed(Change::View);
+}
+
 std::unique_ptr<frame::FrameRenderer> Session::build() const
 {
     // A technique that drew, or that the user just chose, must build: its failure (a
     // shader that does not compile, a light it refuses) is an error that keeps the last
     // frame, not a silent fall-back to unshadowed. A light already falling back stays so.
-    config::RenderConfig strict = config_;
+    std::vector<uint32_t> moved;
+    config::RenderConfig strict = pose(moved);
     for (size_t i = 0; i < strict.lights.size(); ++i) {
         const bool drew = renderer_ && i < renderer_->lightCount() && !renderer_->techniqueName(i).empty();
         const bool chosen = i >= shown_.lights.size() || shown_.lights[i].shadow.technique != strict.lights[i].shadow.technique;
@@ -236,7 +265,11 @@ bool Session::renderIfChanged(bool always)
             const std::vector<std::string> names = renderer_->imageNames();
             if (std::find(names.begin(), names.end(), shownImage_) == names.end()) shownImage_.clear();
         } else {
-            if (change == Change::View) renderer_->update(config_, run_->scene, {});
+            if (change == Change::View) {
+                std::vector<uint32_t> moved;
+                const config::RenderConfig& posed = pose(moved);
+                renderer_->update(posed, run_->scene, moved);
+            }
             timings_ = renderer_->renderFrame();
         }
         shown_ = config_;
@@ -251,7 +284,8 @@ bool Session::renderIfChanged(bool always)
         if (change == Change::View) {
             // A failed update: the renderer goes back to the camera and lights it drew.
             try {
-                renderer_->update(shown_, run_->scene, {});
+                std::vector<uint32_t> moved;
+                renderer_->update(pose(moved), run_->scene, moved);
                 timings_ = renderer_->renderFrame();
             } catch (const Error& again) {
                 spdlog::error("{}", again.what());

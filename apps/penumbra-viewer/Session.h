@@ -47,6 +47,12 @@ public:
     config::RenderConfig& config() { return config_; }
     const config::RenderConfig& config() const { return config_; }
     const scene::Scene& scene() const { return run_->scene; }
+    // Animation (the config's tracks, config/Animation.h): the edited config is the rest
+    // pose, and a frame shows it posed at time() (0 .. duration(), the last key).
+    float time() const { return time_; }
+    void setTime(float seconds);
+    float duration() const;
+
     // The config as the renderer last drew it.
     const config::RenderConfig& shownConfig() const { return shown_; }
     void changed(Change change);
@@ -96,6 +102,9 @@ public:
 
 private:
     std::unique_ptr<frame::FrameRenderer> build() const;
+    // The config a frame draws: config() posed at time() (the scene's nodes too); `moved`
+    // gets the instances that moved, for FrameRenderer::update.
+    const config::RenderConfig& pose(std::vector<uint32_t>& moved) const;
 
     gpu::Context& context_;
     plugin::PluginRegistry& plugins_;
@@ -110,6 +119,7 @@ private:
     uint64_t framesRendered_ = 0;
     std::string lastError_;
     bool errorFromBuild_ = false;
+    float time_ = 0.0f;
     // Per light, the parameters each technique had when the light left it.
     std::vector<std::map<std::string, std::vector<config::ShadowParam>>> paramsByTechnique_;
     std::optional<std::vector<std::string>> techniques_;

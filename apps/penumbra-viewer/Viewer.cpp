@@ -216,7 +216,14 @@ void Viewer::frame()
     if (showUi_) drawPanels();
     fitRenderSize();
     handleInput();
-    (void)dt;
+    if (playing_) {
+        // Plays at wall-clock speed and loops.
+        const float end = session_->duration();
+        float t = session_->time() + dt;
+        if (t > end) t = end > 0.0f ? std::fmod(t, end) : 0.0f;
+        session_->setTime(t);
+    }
+    if (recording_) recordCameraKey();
     double uiMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - uiStart).count();
 
     // Hot reload: an edited shader builds the frame again; a compile error keeps the last
@@ -240,6 +247,65 @@ void Viewer::frame()
     history_.viewerMs.push_back(float(uiMs));
     if (history_.viewerMs.size() > TimingHistory::kHistory) history_.viewerMs.pop_front();
     if (framesToRun_ > 0) --framesToRun_;
+}
+
+void Viewer::startRecording()
+{
+    // The recorded path replaces the config's camera tracks: they would move the camera
+    // away from the one being flown.
+    auto& tracks = session_->config().animation.tracks;
+    tracks.erase(std::remove_if(tracks.begin(), tracks.end(),
+                                [](const config::AnimationTrack& t) {
+                                    return t.target == "/camera/position" || t.target == "/camera/target";
+                                }),
+                 tracks.end());
+    recordedPosition_ = {"/camera/position", config::Interpolation::Linear, {}};
+    recordedTarget_ = {"/camera/target", config::Interpolation::Linear, {}};
+    recording_ = true;
+    playing_ = false;
+    recordStart_ = std::chrono::steady_clock::now();
+    recordCameraKey();
+    message_ = "recording the camera";
+}
+
+// A key per frame in which the camera moved (and the first), at the wall-clock time since
+// the recording started; times strictly increase, as the config requires.
+void Viewer::recordCameraKey()
+{
+    const scene::Camera& c = session_->config().camera;
+    const float t = std::chrono::duration<float>(std::chrono::steady_clock::now() - recordStart_).count();
+    if (!recordedPosition_.keys.empty()) {
+        const config::Keyframe& last = recordedPosition_.keys.back();
+        const bool moved = last.value != std::vector<float>{c.position.x, c.position.y, c.position.z} ||
+                           recordedTarget_.keys.back().value != std::vector<float>{c.target.x, c.target.y, c.target.z};
+        if (!moved || !(t > last.timeS + 1e-3f)) return;
+    }
+    recordedPosition_.keys.push_back({t, {c.position.x, c.position.y, c.position.z}});
+    recordedTarget_.keys.push_back({t, {c.target.x, c.target.y, c.target.z}});
+}
+
+void Viewer::stopRecording()
+{
+    if (!recording_) return;
+    recording_ = false;
+    // The camera where it stopped, held to the end.
+    const float end = std::chrono::duration<float>(std::chrono::steady_clock::now() - recordStart_).count();
+    const scene::Camera& c = session_->config().camera;
+    if (end > recordedPosition_.keys.back().timeS + 1e-3f) {
+        recordedPosition_.keys.push_back({end, {c.position.x, c.position.y, c.position.z}});
+        recordedTarget_.keys.push_back({end, {c.target.x, c.target.y, c.target.z}});
+    }
+    config::RenderConfig& config = session_->config();
+    config.animation.tracks.push_back(recordedPosition_);
+    config.animation.tracks.push_back(recordedTarget_);
+    // `penumbra render` of the saved config plays the whole path.
+    const float duration = session_->duration();
+    config.frames = std::max(config.frames, uint32_t(std::ceil(duration * config.animation.fps)) + 1);
+    message_ = fmt::format("recorded {} camera keys over {:.2f} s ({} frames at {} fps)", recordedPosition_.keys.size(), end,
+                           config.frames, config.animation.fps);
+    spdlog::info("{}", message_);
+    session_->setTime(0.0f);
+    session_->changed(Change::View);
 }
 
 void Viewer::afterRender()
@@ -344,7 +410,7 @@ void Viewer::updateComparison()
     if (bShadows_.size() != session_->shownConfig().lights.size()) {
         startComparison(bShadows_.empty() ? "reference" : bShadows_.front().technique);  // lights added or removed
     }
-    const std::string key = viewKey(session_->shownConfig());
+    const std::string key = viewKey(session_->shownConfig(), session_->time());
     if (key != lastViewKey_) {
         lastViewKey_ = key;
         stillSince_ = now;
@@ -363,7 +429,7 @@ void Viewer::updateComparison()
     }
     // Asked for once the view has rested: not for every step of a drag.
     if (!bCurrent() && requestedKey_ != key && now - stillSince_ >= std::chrono::milliseconds(400)) {
-        comparison_->request({withShadows(session_->shownConfig(), bShadows_), key});
+        comparison_->request({withShadows(session_->shownConfig(), bShadows_), session_->time(), key});
         requestedKey_ = key;
     }
     if (errorsDirty_ && bCurrent()) {
@@ -728,6 +794,26 @@ void Viewer::runCommand(const ScriptCommand& command)
                        e.region(metrics::Region::Lit).rmse, e.ssim);
         }
         std::fflush(stdout);
+    } else if (verb == "record") {
+        expectWords(command, 2, "record start|stop");
+        if (command.words[1] == "start") {
+            startRecording();
+        } else if (command.words[1] == "stop") {
+            if (!recording_) throw Error(fmt::format("{}: record stop: not recording", command.where));
+            stopRecording();
+        } else {
+            throw Error(fmt::format("{}: record: expected start or stop, got \"{}\"", command.where, command.words[1]));
+        }
+    } else if (verb == "time") {
+        expectWords(command, 2, "time SECONDS");
+        const float t = parseFloat(command.words[1], command);
+        if (t < 0.0f || t > session_->duration()) {
+            throw Error(fmt::format("{}: time: {} is outside the animation's [0, {}] s", command.where, t, session_->duration()));
+        }
+        session_->setTime(t);
+    } else if (verb == "play") {
+        expectWords(command, 2, "play on|off");
+        playing_ = command.words[1] == "on";
     } else if (verb == "wait-for") {
         // For tests that edit files while the viewer runs: frames go on until FILE exists.
         expectWords(command, 2, "wait-for FILE");
@@ -771,7 +857,7 @@ void Viewer::runCommand(const ScriptCommand& command)
         throw Error(fmt::format("{}: unknown command \"{}\"; expected open, size, window, camera, orbit, dolly, set, param, "
                                 "technique, culling, light, show, continuous, vsync, ui, frames, screenshot, "
                                 "screenshot-window, save, save-visibility, compare, compare-set, compare-view, wait-compare, errors, wait-for, "
-                                "expect-error, expect-no-error, widgets, timings or quit",
+                                "expect-error, expect-no-error, record, time, play, widgets, timings or quit",
                                 command.where, verb));
     }
 }

@@ -85,6 +85,12 @@ private:
     void drawParamWidgets(const std::string& key, const std::string& lightName, const plugin::ParamValues& values,
                           const std::function<void(const plugin::ParamSpec&, const nlohmann::json&)>& apply);
     void drawComparePanel();
+    void drawAnimationPanel();
+
+    // Animation playback and camera recording (item: a camera path saved as tracks).
+    void startRecording();
+    void stopRecording();
+    void recordCameraKey();
     void drawDebugImagePanel();
     void drawTimingsPanel();
     void drawPixelInspector();
@@ -131,6 +137,11 @@ private:
     std::vector<std::string> drawnParamWidgets_;  // technique parameters being dragged, by light/technique/name
 
     ShaderWatcher shaderWatcher_;
+
+    bool playing_ = false;
+    bool recording_ = false;
+    std::chrono::steady_clock::time_point recordStart_{};
+    config::AnimationTrack recordedPosition_, recordedTarget_;
 
     // The second stack, B (Comparison.h): what it draws per light, its latest image for
     // the current view, and the shown stack's (A's) error against it.

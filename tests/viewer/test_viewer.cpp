@@ -441,3 +441,40 @@ TEST_F(ViewerTest, ComparisonFiguresAreThoseOfPenumbraCompare)
         EXPECT_GT(readPng(split).width, 96);  // the window, panels and both halves
     }
 }
+
+// A flown camera path becomes /camera/position and /camera/target tracks; the viewer at a
+// time of it shows what `penumbra render` of the saved config draws at that frame.
+TEST_F(ViewerTest, ARecordedCameraPathIsSavedAsTracksThatRenderPlays)
+{
+    const fs::path saved = dir / "path.json", atTime = dir / "at.png";
+    const RunResult v = viewer(config("default.json"),
+                               fmt::format("size 64 36; record start; orbit 20 0; frames 2; orbit 20 5; frames 2; dolly 0.8; "
+                                           "frames 2; record stop; save {}; quit",
+                                           saved.string()));
+    ASSERT_EQ(v.exitCode, 0) << v.err;
+    const json doc = json::parse(slurp(saved));
+    ASSERT_TRUE(doc.contains("animation")) << doc.dump();
+    const json& tracks = doc["animation"]["tracks"];
+    ASSERT_EQ(tracks.size(), 2u);
+    for (const json& track : tracks) {
+        ASSERT_GE(track["keys"].size(), 4u) << track.dump();  // the start, three moves (and the end)
+        for (size_t k = 1; k < track["keys"].size(); ++k) EXPECT_GT(track["keys"][k]["t"], track["keys"][k - 1]["t"]);
+    }
+    const double fps = doc["animation"]["fps"];
+    const uint32_t frames = doc["frames"];
+    const double end = tracks[0]["keys"].back()["t"];
+    EXPECT_GE(frames, uint32_t(std::ceil(end * fps)) + 1);
+
+    // Playback: frame `f` of the render is time f / fps in the viewer.
+    const uint32_t f = frames / 2;
+    const RunResult w = viewer(saved.string(), fmt::format("size 64 36; time {}; frames 1; screenshot {}; quit", double(f) / fps, atTime.string()));
+    ASSERT_EQ(w.exitCode, 0) << w.err;
+    const RunResult r = render(fmt::format("'{}' -o '{}/f{{frame}}.png'", saved.string(), dir.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const Png viewed = readPng(atTime), rendered = readPng(dir / fmt::format("f{}.png", f)), first = readPng(dir / "f0.png");
+    ASSERT_EQ(viewed.rgba.size(), rendered.rgba.size());
+    int worst = 0;
+    for (size_t i = 0; i < viewed.rgba.size(); ++i) worst = std::max(worst, std::abs(int(viewed.rgba[i]) - int(rendered.rgba[i])));
+    EXPECT_LE(worst, 1);
+    EXPECT_NE(first.rgba, rendered.rgba) << "the camera moved along the path";
+}
