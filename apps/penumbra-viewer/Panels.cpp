@@ -622,10 +622,30 @@ void Viewer::drawTimingsPanel()
                 TimingHistory::median(history_.sumGpuMs));
     ImGui::Text("viewer: panels + present %.2f ms", TimingHistory::median(history_.viewerMs));
     tooltip("the viewer's own cost per shown frame, beside the frame's");
+    ImGui::Text("last edit to its image: %.1f ms", session_->lastRebuildMs());
+    tooltip("a technique, parameter, culling or size change builds a new renderer (its shaders and pipelines) and draws "
+            "its first frame");
     const frame::FrameRenderer& r = session_->renderer();
     ImGui::Text("transient memory %.1f MiB (%.1f MiB without aliasing)",
                 double(r.executor().transientBytesAllocated()) / 1048576.0,
                 double(r.executor().transientBytesWithoutAliasing()) / 1048576.0);
+    // Per technique: the transient resources its passes use (named by its prefix, "light0.pcss.").
+    if (ImGui::TreeNode("memory per technique")) {
+        const std::vector<graph::TransientMemory> memory = r.executor().transientMemory();
+        VkDeviceSize total = 0, techniques = 0;
+        for (const graph::TransientMemory& m : memory) total += m.bytes;
+        for (size_t l = 0; l < r.lightCount(); ++l) {
+            const std::string prefix = r.shadowPassPrefix(l);
+            VkDeviceSize bytes = 0;
+            for (const graph::TransientMemory& m : memory) bytes += m.name.rfind(prefix, 0) == 0 ? m.bytes : 0;
+            techniques += bytes;
+            ImGui::BulletText("%s (%s): %.2f MiB", session_->shownConfig().lights[l].name.c_str(),
+                              r.techniqueName(l).empty() ? "unshadowed" : r.techniqueName(l).c_str(), double(bytes) / 1048576.0);
+        }
+        ImGui::BulletText("engine (G-buffer, colour, visibility images): %.2f MiB", double(total - techniques) / 1048576.0);
+        ImGui::TextDisabled("before aliasing; the total above is after");
+        ImGui::TreePop();
+    }
     const visibility::CullingStats& s = session_->lastTimings().culling;
     if (session_->config().culling != config::CullingMode::None) {
         ImGui::Text("casters drawn %llu (%llu triangles), receivers %llu", static_cast<unsigned long long>(s.castersDrawn),

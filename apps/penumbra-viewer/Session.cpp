@@ -9,6 +9,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 namespace fs = std::filesystem;
@@ -258,8 +259,10 @@ bool Session::renderIfChanged(bool always)
         if (change == Change::Renderer) {
             // The new renderer draws its first frame before it replaces the old one: a
             // failure anywhere leaves the old one, untouched, with what it drew.
+            const auto start = std::chrono::steady_clock::now();
             std::unique_ptr<frame::FrameRenderer> fresh = build();
             frame::FrameTimings timings = fresh->renderFrame();
+            lastRebuildMs_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
             renderer_ = std::move(fresh);
             timings_ = std::move(timings);
             const std::vector<std::string> names = renderer_->imageNames();

@@ -91,6 +91,9 @@ public:
     frame::FrameRenderer& renderer() { return *renderer_; }
     const frame::FrameTimings& lastTimings() const { return timings_; }
     uint64_t framesRendered() const { return framesRendered_; }
+    // From an edit that needs a new renderer to its first frame drawn (ms): what a
+    // parameter change costs before the image shows it.
+    double lastRebuildMs() const { return lastRebuildMs_; }
     const std::string& lastError() const { return lastError_; }
     void clearError() { lastError_.clear(); }
 
@@ -120,6 +123,7 @@ private:
     std::string lastError_;
     bool errorFromBuild_ = false;
     float time_ = 0.0f;
+    double lastRebuildMs_ = 0.0;
     // Per light, the parameters each technique had when the light left it.
     std::vector<std::map<std::string, std::vector<config::ShadowParam>>> paramsByTechnique_;
     std::optional<std::vector<std::string>> techniques_;

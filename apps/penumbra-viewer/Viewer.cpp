@@ -850,9 +850,10 @@ void Viewer::runCommand(const ScriptCommand& command)
             spdlog::info("timing {} gpu {:.3f} ms cpu {:.3f} ms", pass, TimingHistory::median(history_.gpuMs[pass]),
                          TimingHistory::median(history_.cpuMs[pass]));
         }
-        spdlog::info("timing frame {:.3f} ms, sum of passes {:.3f} ms, viewer (panels + present) {:.3f} ms",
+        spdlog::info("timing frame {:.3f} ms, sum of passes {:.3f} ms, viewer (panels + present) {:.3f} ms, last rebuild "
+                     "(an edit to its first frame) {:.3f} ms",
                      TimingHistory::median(history_.frameMs), TimingHistory::median(history_.sumGpuMs),
-                     TimingHistory::median(history_.viewerMs));
+                     TimingHistory::median(history_.viewerMs), session_->lastRebuildMs());
     } else {
         throw Error(fmt::format("{}: unknown command \"{}\"; expected open, size, window, camera, orbit, dolly, set, param, "
                                 "technique, culling, light, show, continuous, vsync, ui, frames, screenshot, "
