@@ -12,6 +12,7 @@
 #include <imgui_stdlib.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cfloat>
 #include <cmath>
 #include <functional>
@@ -705,8 +706,13 @@ void Viewer::drawPixelInspector()
         return;
     }
     frame::FrameRenderer& r = session_->renderer();
-    if (inspectedFrame_ != session_->framesRendered()) {
+    // Two read-backs of frame-sized images: taken again for a new frame at most every
+    // 0.25 s, so that the inspector costs nothing measurable while frames run continuously.
+    const auto now = std::chrono::steady_clock::now();
+    if (inspectedFrame_ != session_->framesRendered() &&
+        (inspectedColor_.empty() || now - inspectedAt_ >= std::chrono::milliseconds(250))) {
         inspectedFrame_ = session_->framesRendered();
+        inspectedAt_ = now;
         inspectedColor_ = r.readColor();
         inspectedVisibility_.clear();
         for (size_t l = 0; l < r.lightCount(); ++l) inspectedVisibility_.push_back(r.readVisibility(l));

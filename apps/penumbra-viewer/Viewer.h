@@ -117,6 +117,7 @@ private:
 
     // Pixel inspector: read back lazily, per rendered frame.
     uint64_t inspectedFrame_ = ~0ull;
+    std::chrono::steady_clock::time_point inspectedAt_{};
     std::vector<uint8_t> inspectedColor_;
     std::vector<std::vector<float>> inspectedVisibility_;
 

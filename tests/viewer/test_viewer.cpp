@@ -77,23 +77,20 @@ protected:
     // script's commands separated by ';').
     RunResult viewer(const std::string& file, const std::string& script, const std::string& prefix = kXvfb) const
     {
-        const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-        const std::string cmd = fmt::format("{} '{}' '{}' --validation --no-vsync --exec '{}' > '{}' 2> '{}' < /dev/null", prefix,
-                                            penumbra::test::viewerExecutable().string(), file, script, out.string(), err.string());
-        const int status = std::system(cmd.c_str());
-        RunResult r;
-        r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-        r.out = slurp(out);
-        r.err = slurp(err);
-        return r;
+        return run(fmt::format("{} '{}' '{}' --validation --no-vsync --exec '{}'", prefix, penumbra::test::viewerExecutable().string(),
+                               file, script));
     }
 
     RunResult render(const std::string& args) const
     {
-        const fs::path out = dir / "render-stdout.txt", err = dir / "render-stderr.txt";
-        const std::string cmd = fmt::format("'{}' render {} > '{}' 2> '{}' < /dev/null", penumbra::test::penumbraExecutable().string(),
-                                            args, out.string(), err.string());
-        const int status = std::system(cmd.c_str());
+        return run(fmt::format("'{}' render {}", penumbra::test::penumbraExecutable().string(), args));
+    }
+
+    // A shell command with its output captured.
+    RunResult run(const std::string& command) const
+    {
+        const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+        const int status = std::system(fmt::format("{} > '{}' 2> '{}' < /dev/null", command, out.string(), err.string()).c_str());
         RunResult r;
         r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
         r.out = slurp(out);
