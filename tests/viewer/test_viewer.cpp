@@ -475,3 +475,24 @@ TEST_F(ViewerTest, ARecordedCameraPathIsSavedAsTracksThatRenderPlays)
     EXPECT_LE(worst, 1);
     EXPECT_NE(first.rgba, rendered.rgba) << "the camera moved along the path";
 }
+
+// The frame is as large as the window less the panel, and follows a resize; `size` fixes it.
+TEST_F(ViewerTest, TheRenderSizeFollowsTheWindowUnlessFixed)
+{
+    const fs::path window = dir / "window.png", view = dir / "view.png", fixed = dir / "fixed.png", save = dir / "s.json";
+    const RunResult v = viewer(config("default.json"),
+                               fmt::format("window 900 500; frames 3; screenshot-window {}; screenshot {}; ui off; frames 2; "
+                                           "size 200 100; frames 2; screenshot {}; save {}; quit",
+                                           window.string(), view.string(), fixed.string(), save.string()));
+    ASSERT_EQ(v.exitCode, 0) << v.err;
+    const Png w = readPng(window), f = readPng(view), s = readPng(fixed);
+    EXPECT_EQ(w.width, 900);
+    EXPECT_EQ(w.height, 500);
+    EXPECT_EQ(f.width, 900 - 440);  // the panel is 440 points wide at scale 1
+    EXPECT_EQ(f.height, 500);
+    EXPECT_EQ(s.width, 200);
+    EXPECT_EQ(s.height, 100);
+    const json saved = json::parse(slurp(save));
+    EXPECT_EQ(saved["output"]["width"], 200);
+    EXPECT_EQ(saved["output"]["height"], 100);
+}
