@@ -311,6 +311,9 @@ std::vector<fs::path> Session::shaderFolders()
             // A plugin that does not load has no shaders to watch; the renderer says why.
         }
     }
+    // As ShaderWatcher::folders() keeps them, so that an unchanged set compares equal.
+    std::sort(folders.begin(), folders.end());
+    folders.erase(std::unique(folders.begin(), folders.end()), folders.end());
     return folders;
 }
 

@@ -85,7 +85,8 @@ public:
     bool renderIfChanged(bool always);
     // Builds the renderer again from disk: its shaders (hot reload) and the techniques.
     void reload() { changed(Change::Renderer); }
-    // The folders the frame's shaders come from: the engine's and each technique plugin's.
+    // The folders the frame's shaders come from: the engine's and each technique plugin's,
+    // sorted, each once.
     std::vector<std::filesystem::path> shaderFolders();
 
     frame::FrameRenderer& renderer() { return *renderer_; }

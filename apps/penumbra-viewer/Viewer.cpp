@@ -234,7 +234,12 @@ void Viewer::frame()
     }
     if (session_->renderIfChanged(continuous_)) afterRender();
     if (!session_->lastError().empty()) message_ = session_->lastError();
-    updateComparison();
+    try {
+        updateComparison();
+    } catch (const std::exception& e) {
+        message_ = fmt::format("B: {}", e.what());  // the window goes on with A alone
+        compareOn_ = false;
+    }
     if (const std::vector<fs::path> folders = session_->shaderFolders(); folders != shaderWatcher_.folders()) {
         shaderWatcher_.watch(folders);  // techniques changed: their plugins' folders
     }
