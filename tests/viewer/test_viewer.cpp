@@ -60,8 +60,14 @@ Png readPng(const fs::path& path)
     return png;
 }
 
-// xvfb-run's own screen: large enough for the default window (a 1280 x 720 frame and the panel).
-constexpr const char* kXvfb = "xvfb-run -a -s '-screen 0 1920x1080x24'";
+// xvfb-run with a screen large enough for the default window (a 1280 x 720 frame and the
+// panel). `-a` takes the first free display from `-n` on; each test process starts its
+// search at its own number, so that two tests run side by side (ctest -j) do not race for
+// the same display.
+std::string xvfb()
+{
+    return fmt::format("xvfb-run -a -n {} -s '-screen 0 1920x1080x24'", 100 + ::getpid() % 5000 * 4);
+}
 
 class ViewerTest : public ::testing::Test {
 protected:
@@ -75,7 +81,7 @@ protected:
 
     // Runs `prefix penumbra-viewer FILE --validation --no-vsync --exec SCRIPT` (the
     // script's commands separated by ';').
-    RunResult viewer(const std::string& file, const std::string& script, const std::string& prefix = kXvfb) const
+    RunResult viewer(const std::string& file, const std::string& script, const std::string& prefix = xvfb()) const
     {
         return run(fmt::format("{} '{}' '{}' --validation --no-vsync --exec '{}'", prefix, penumbra::test::viewerExecutable().string(),
                                file, script));
@@ -270,7 +276,7 @@ TEST_F(ViewerTest, KilledWhileSavingLeavesAWholeConfig)
         ASSERT_GE(pid, 0);
         if (pid == 0) {
             setpgid(0, 0);  // xvfb-run, Xvfb and the viewer: killed together below
-            const std::string cmd = fmt::format("exec {} '{}' '{}' --no-vsync --exec '{}; quit' > /dev/null 2>&1", kXvfb,
+            const std::string cmd = fmt::format("exec {} '{}' '{}' --no-vsync --exec '{}; quit' > /dev/null 2>&1", xvfb(),
                                                 penumbra::test::viewerExecutable().string(), config("default.json"), script);
             execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
             _exit(127);
@@ -301,7 +307,7 @@ pid_t startViewer(const std::string& env, const std::string& file, const std::st
     const pid_t pid = fork();
     if (pid == 0) {
         setpgid(0, 0);
-        const std::string cmd = fmt::format("exec env {} {} '{}' '{}' --validation --no-vsync --exec '{}' > '{}' 2>&1", env, kXvfb,
+        const std::string cmd = fmt::format("exec env {} {} '{}' '{}' --validation --no-vsync --exec '{}' > '{}' 2>&1", env, xvfb(),
                                             penumbra::test::viewerExecutable().string(), file, script, log.string());
         execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
         _exit(127);
