@@ -489,13 +489,13 @@ void Viewer::drawComparePanel()
         }
         if (!b.unshadowed() && ImGui::TreeNode("B's parameters")) {
             try {
-                const plugin::ParamValues values = plugin::resolveParams(plugins_->load(b.technique), b);
+                const plugin::ParamValues values = plugin::resolveParams(session_->plugins().load(b.technique), b);
                 drawParamWidgets(fmt::format("B/{}/{}", i, b.technique), "B/" + lights[i].name, values,
                                  [&](const plugin::ParamSpec& spec, const nlohmann::json& value) {
                                      config::ShadowSettings trial = b;
                                      trial.setParam(spec.name, value, fmt::format("viewer: B {}.{}", lights[i].name, spec.name));
                                      try {
-                                         plugin::resolveParams(plugins_->load(trial.technique), trial);
+                                         plugin::resolveParams(session_->plugins().load(trial.technique), trial);
                                          b = std::move(trial);
                                          changed = true;
                                      } catch (const std::exception& e) {

@@ -62,7 +62,7 @@ config::RenderConfig configForGltf(const fs::path& file, const scene::Scene& sce
     return c;
 }
 
-Session::Session(gpu::Context& context, plugin::PluginRegistry& plugins) : context_(context), plugins_(plugins) {}
+Session::Session(gpu::Context& context, plugin::PluginRegistry& plugins) : context_(context), plugins_(&plugins) {}
 
 Session::~Session() = default;
 
@@ -84,7 +84,7 @@ void Session::open(const fs::path& file)
     run->rest = c;
     run->config = c;
     // The new scene's renderer first: a failure leaves what was shown.
-    auto renderer = std::make_unique<frame::FrameRenderer>(context_, run->scene, c, plugins_);
+    auto renderer = std::make_unique<frame::FrameRenderer>(context_, run->scene, c, *plugins_);
     renderer_.reset();  // it refers to the old scene
     renderer_ = std::move(renderer);
     run_ = std::move(run);
@@ -108,7 +108,7 @@ void Session::setParam(size_t light, const std::string& name, const nlohmann::js
     if (shadow.unshadowed()) throw ConfigError(fmt::format("{}: light {} is unshadowed (technique \"none\")", where, light));
     config::ShadowSettings trial = shadow;
     trial.setParam(name, value, where);
-    plugin::resolveParams(plugins_.load(trial.technique), trial);  // throws naming `where`
+    plugin::resolveParams(plugins_->load(trial.technique), trial);  // throws naming `where`
     shadow = std::move(trial);
     changed(Change::Renderer);
 }
@@ -117,7 +117,7 @@ void Session::setTechnique(size_t light, const std::string& technique)
 {
     config::ShadowSettings& shadow = config_.lights.at(light).shadow;
     if (shadow.technique == technique) return;
-    if (technique != config::kNoShadowTechnique) plugins_.load(technique);  // throws PluginError naming it
+    if (technique != config::kNoShadowTechnique) plugins_->load(technique);  // throws PluginError naming it
     paramsByTechnique_.resize(config_.lights.size());
     auto& saved = paramsByTechnique_[light];
     saved[shadow.technique] = shadow.params;
@@ -167,7 +167,7 @@ std::optional<plugin::ParamValues> Session::params(size_t light)
     const config::ShadowSettings& shadow = config_.lights.at(light).shadow;
     if (shadow.unshadowed()) return std::nullopt;
     try {
-        return plugin::resolveParams(plugins_.load(shadow.technique), shadow);
+        return plugin::resolveParams(plugins_->load(shadow.technique), shadow);
     } catch (const Error& e) {
         lastError_ = e.what();
         return std::nullopt;
@@ -191,7 +191,7 @@ std::vector<std::string> Session::techniqueNames()
 {
     if (!techniques_) {
         std::vector<std::string> names;
-        for (const plugin::LoadedPlugin* p : plugins_.discoverAll().plugins) {
+        for (const plugin::LoadedPlugin* p : plugins_->discoverAll().plugins) {
             names.emplace_back(p->name());
         }
         std::sort(names.begin(), names.end());
@@ -199,6 +199,12 @@ std::vector<std::string> Session::techniqueNames()
         techniques_ = names;
     }
     return *techniques_;
+}
+
+void Session::usePlugins(plugin::PluginRegistry& plugins)
+{
+    newPlugins_ = &plugins;
+    changed(Change::Renderer);
 }
 
 const config::RenderConfig& Session::pose(std::vector<uint32_t>& moved) const
@@ -240,7 +246,7 @@ std::unique_ptr<frame::FrameRenderer> Session::build() const
         const bool chosen = i >= shown_.lights.size() || shown_.lights[i].shadow.technique != strict.lights[i].shadow.technique;
         strict.lights[i].shadow.required = strict.lights[i].shadow.required || drew || chosen;
     }
-    auto renderer = std::make_unique<frame::FrameRenderer>(context_, run_->scene, strict, plugins_);
+    auto renderer = std::make_unique<frame::FrameRenderer>(context_, run_->scene, strict, newPlugins_ ? *newPlugins_ : *plugins_);
     if (!shownImage_.empty()) {
         const std::vector<std::string> names = renderer->imageNames();
         if (std::find(names.begin(), names.end(), shownImage_) != names.end()) renderer->requestImage(shownImage_);
@@ -265,6 +271,13 @@ bool Session::renderIfChanged(bool always)
             lastRebuildMs_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
             renderer_ = std::move(fresh);
             timings_ = std::move(timings);
+            if (newPlugins_) {
+                // The reloaded plugins drew: they are the session's from now on.
+                plugins_ = newPlugins_;
+                newPlugins_ = nullptr;
+                techniques_.reset();
+                spdlog::info("reloaded the plugins");
+            }
             const std::vector<std::string> names = renderer_->imageNames();
             if (std::find(names.begin(), names.end(), shownImage_) == names.end()) shownImage_.clear();
         } else {
@@ -282,6 +295,7 @@ bool Session::renderIfChanged(bool always)
     } catch (const Error& e) {
         lastError_ = e.what();
         errorFromBuild_ = change == Change::Renderer;
+        newPlugins_ = nullptr;  // reloaded plugins that do not build are not taken
         spdlog::error("{}", lastError_);
         config_ = shown_;
         if (change == Change::View) {
@@ -306,7 +320,7 @@ std::vector<fs::path> Session::shaderFolders()
     for (const config::LightConfig& light : config_.lights) {
         if (light.shadow.unshadowed()) continue;
         try {
-            folders.push_back(plugins_.load(light.shadow.technique).shaderDir);
+            folders.push_back(plugins_->load(light.shadow.technique).shaderDir);
         } catch (const Error&) {
             // A plugin that does not load has no shaders to watch; the renderer says why.
         }

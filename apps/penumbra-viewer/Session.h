@@ -85,6 +85,11 @@ public:
     bool renderIfChanged(bool always);
     // Builds the renderer again from disk: its shaders (hot reload) and the techniques.
     void reload() { changed(Change::Renderer); }
+    // Builds the renderer with another registry (reloaded plugin libraries: PluginReloader),
+    // which must outlive the session; taken only if that renderer draws, else the current
+    // one stays, with the error. The config, and so every light's parameters, stays.
+    void usePlugins(plugin::PluginRegistry& plugins);
+    plugin::PluginRegistry& plugins() { return *plugins_; }
     // The folders the frame's shaders come from: the engine's and each technique plugin's,
     // sorted, each once.
     std::vector<std::filesystem::path> shaderFolders();
@@ -111,7 +116,8 @@ private:
     const config::RenderConfig& pose(std::vector<uint32_t>& moved) const;
 
     gpu::Context& context_;
-    plugin::PluginRegistry& plugins_;
+    plugin::PluginRegistry* plugins_;              // the one the renderer was built with
+    plugin::PluginRegistry* newPlugins_ = nullptr;  // usePlugins(): taken once a renderer built with it draws
     std::filesystem::path file_;
     std::unique_ptr<config::PreparedRun> run_;  // the scene (and the config as it was read)
     config::RenderConfig config_;               // as edited

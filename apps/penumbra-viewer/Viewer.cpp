@@ -122,6 +122,7 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options)
     context_ = std::make_unique<gpu::Context>(contextOptions);
     spdlog::info("device: {} ({})", context_->deviceInfo().name, context_->deviceInfo().type);
     plugins_ = std::make_unique<plugin::PluginRegistry>();
+    pluginReloader_ = std::make_unique<PluginReloader>(plugin::defaultPluginSearchPath());
     session_ = std::make_unique<Session>(*context_, *plugins_);
     session_->open(options.file);
     homeCamera_ = session_->config().camera;
@@ -231,6 +232,19 @@ void Viewer::frame()
     if (shaderWatcher_.changed()) {
         spdlog::info("shader changed: {}; building the frame again", fmt::join(shaderWatcher_.lastChanged(), ", "));
         session_->reload();
+    }
+    // Rebuilt plugin libraries: loaded from private copies into a new registry.
+    if (const auto now = std::chrono::steady_clock::now(); now - pluginsCheckedAt_ >= std::chrono::milliseconds(500)) {
+        pluginsCheckedAt_ = now;
+        if (pluginReloader_->changed()) {
+            spdlog::info("plugin changed: {}; loading the plugins again", fmt::join(pluginReloader_->lastChanged(), ", "));
+            try {
+                reloadedPlugins_.push_back(pluginReloader_->freshRegistry());
+                session_->usePlugins(*reloadedPlugins_.back());
+            } catch (const std::exception& e) {
+                message_ = e.what();
+            }
+        }
     }
     if (session_->renderIfChanged(continuous_)) afterRender();
     if (!session_->lastError().empty()) message_ = session_->lastError();
@@ -390,7 +404,7 @@ bool Viewer::bCurrent() const { return bResult_ && bResult_->viewKey == lastView
 
 void Viewer::startComparison(const std::string& technique)
 {
-    if (technique != config::kNoShadowTechnique) plugins_->load(technique);  // throws PluginError naming it
+    if (technique != config::kNoShadowTechnique) session_->plugins().load(technique);  // throws PluginError naming it
     compareOn_ = true;
     bShadows_.assign(session_->config().lights.size(), {});
     for (config::ShadowSettings& b : bShadows_) {
@@ -586,16 +600,16 @@ void Viewer::writeScreenshot(const fs::path& file, bool window)
 bool Viewer::runScriptUntilFrame()
 {
     if (framesToRun_ > 0) return true;
-    if (!waitFor_.empty()) {
-        std::error_code ec;
-        if (!fs::exists(waitFor_, ec)) {
+    if (waitUntil_) {
+        if (!waitUntil_()) {
             if (std::chrono::steady_clock::now() < waitDeadline_) return true;
-            spdlog::error("wait-for {}: the file did not appear within 120 s", waitFor_.string());
+            spdlog::error("{}: not so within 120 s{}", waitWhat_,
+                          session_->lastError().empty() ? "" : fmt::format(" (the viewer shows: {})", session_->lastError()));
             exitCode_ = 1;
             quit_ = true;
             return false;
         }
-        waitFor_.clear();
+        waitUntil_ = nullptr;
     }
     if (waitCompare_) {
         if (!bError_.empty()) {
@@ -626,7 +640,7 @@ bool Viewer::runScriptUntilFrame()
             return false;
         }
         if (quit_) return false;
-        if (framesToRun_ > 0 || !waitFor_.empty() || waitCompare_) return true;
+        if (framesToRun_ > 0 || waitUntil_ || waitCompare_) return true;
     }
     return true;
 }
@@ -764,7 +778,7 @@ void Viewer::runCommand(const ScriptCommand& command)
             if (b.technique != o.technique) continue;
             config::ShadowSettings trial = b;
             trial.setParam(o.param, o.value, fmt::format("{}: compare-set {}.{}", command.where, o.technique, o.param));
-            plugin::resolveParams(plugins_->load(trial.technique), trial);  // throws naming where
+            plugin::resolveParams(session_->plugins().load(trial.technique), trial);  // throws naming where
             b = std::move(trial);
             used = true;
         }
@@ -819,10 +833,25 @@ void Viewer::runCommand(const ScriptCommand& command)
     } else if (verb == "play") {
         expectWords(command, 2, "play on|off");
         playing_ = command.words[1] == "on";
-    } else if (verb == "wait-for") {
-        // For tests that edit files while the viewer runs: frames go on until FILE exists.
-        expectWords(command, 2, "wait-for FILE");
-        waitFor_ = command.words[1];
+    } else if (verb == "wait-for" || verb == "wait-error" || verb == "wait-no-error") {
+        // For tests that edit files while the viewer runs: frames go on until FILE exists,
+        // or the viewer shows an error with TEXT, or none (hot reload polls the disk).
+        if (verb == "wait-no-error") {
+            expectWords(command, 1, "wait-no-error");
+            waitUntil_ = [this] { return session_->lastError().empty(); };
+        } else {
+            expectWords(command, 2, verb == "wait-for" ? "wait-for FILE" : "wait-error TEXT");
+            const std::string arg = command.words[1];
+            if (verb == "wait-for") {
+                waitUntil_ = [arg] {
+                    std::error_code ec;
+                    return fs::exists(arg, ec);
+                };
+            } else {
+                waitUntil_ = [this, arg] { return session_->lastError().find(arg) != std::string::npos; };
+            }
+        }
+        waitWhat_ = fmt::format("{}: {}", command.where, fmt::join(command.words, " "));
         waitDeadline_ = std::chrono::steady_clock::now() + std::chrono::seconds(120);
     } else if (verb == "expect-error") {
         expectWords(command, 2, "expect-error TEXT");
@@ -863,7 +892,7 @@ void Viewer::runCommand(const ScriptCommand& command)
         throw Error(fmt::format("{}: unknown command \"{}\"; expected open, size, window, camera, orbit, dolly, set, param, "
                                 "technique, culling, light, show, continuous, vsync, ui, frames, screenshot, "
                                 "screenshot-window, save, save-visibility, compare, compare-set, compare-view, wait-compare, errors, wait-for, "
-                                "expect-error, expect-no-error, record, time, play, widgets, timings or quit",
+                                "wait-error, wait-no-error, expect-error, expect-no-error, record, time, play, widgets, timings or quit",
                                 command.where, verb));
     }
 }

@@ -5,6 +5,7 @@
 // input and the script commands; Panels.cpp the panels.
 #include "CameraControl.h"
 #include "Comparison.h"
+#include "PluginReloader.h"
 #include "Presenter.h"
 #include "Script.h"
 #include "Session.h"
@@ -99,6 +100,10 @@ private:
     GLFWwindow* window_ = nullptr;
     std::unique_ptr<gpu::Context> context_;
     std::unique_ptr<plugin::PluginRegistry> plugins_;
+    // Hot reload of plugin libraries: every registry made stays (libraries stay loaded).
+    std::unique_ptr<PluginReloader> pluginReloader_;
+    std::vector<std::unique_ptr<plugin::PluginRegistry>> reloadedPlugins_;
+    std::chrono::steady_clock::time_point pluginsCheckedAt_{};
     std::unique_ptr<Session> session_;
     std::unique_ptr<Presenter> presenter_;
     std::unique_ptr<UploadedImage> debugUpload_;
@@ -171,7 +176,9 @@ private:
     bool bCurrent() const;  // B is of the view A shows
 
     size_t scriptNext_ = 0;
-    std::filesystem::path waitFor_;  // `wait-for FILE`: frames run until it exists
+    // `wait-for FILE`, `wait-error TEXT`, `wait-no-error`: frames run until it holds.
+    std::function<bool()> waitUntil_;
+    std::string waitWhat_;
     std::chrono::steady_clock::time_point waitDeadline_{};
     int framesToRun_ = 0;  // `frames N`: loop iterations before the next command
 };
