@@ -20,7 +20,7 @@ std::string viewKey(const config::RenderConfig& config, float timeS)
     view.shadowFocus = false;
     view.frames = 1;
     view.notes.clear();
-    return fmt::format("{} at {}", config::configJson(view, "/").dump(), view.animation.empty() ? 0.0f : timeS);
+    return fmt::format("{} at {}", config::configJson(view, "/").dump(), config::animated(view) ? timeS : 0.0f);
 }
 
 config::RenderConfig withShadows(config::RenderConfig config, const std::vector<config::ShadowSettings>& b)
@@ -129,10 +129,7 @@ void ComparisonWorker::run()
             }
             // Posed as A is (the animation starts from the rest pose at every request).
             config::RenderConfig posed = request.config;
-            if (!posed.animation.empty()) {
-                config::applyAnimation(request.config.animation, request.timeS, posed, *scene);
-                scene->updateTransforms();
-            }
+            if (config::animated(request.config)) config::poseScene(request.config, request.timeS, posed, *scene);
             frame::FrameRenderer renderer(*context, *scene, posed, *plugins);
             renderer.renderFrame();
             result.images = app::captureFrame(renderer);

@@ -439,6 +439,9 @@ void Viewer::drawAnimationPanel()
     }
     ImGui::EndDisabled();
     const config::Animation& a = session_->config().animation;
+    if (!session_->config().scene.animation.empty()) {
+        ImGui::Text("glTF animation \"%s\"", session_->config().scene.animation.c_str());
+    }
     ImGui::Text("%zu track(s), %.3f s at %.4g fps; `penumbra render` draws %u frame(s)", a.tracks.size(), end, a.fps,
                 session_->config().frames);
     if (!recording_) {

@@ -42,6 +42,12 @@ config::RenderConfig configForGltf(const fs::path& file, const scene::Scene& sce
     c.camera.fovYDeg = 45.0f;
     // The depth buffer's precision is relative: a near plane at 1e-3 of the scene's size.
     c.camera.nearWorld = radius * 1e-3f;
+    // The file's first animation plays (the viewer's timeline; Save writes which one, and
+    // frames enough for `penumbra render` to play it through).
+    if (!scene.animations.empty()) {
+        c.scene.animation = scene.animations.front().name;
+        c.frames = uint32_t(std::ceil(scene.animations.front().duration() * c.animation.fps)) + 1;
+    }
     if (!fileLights.empty()) {
         c.lightsFromScene = true;
         for (size_t i = 0; i < fileLights.size() && i < config::kMaxLights; ++i) {
@@ -210,21 +216,14 @@ void Session::usePlugins(plugin::PluginRegistry& plugins)
 const config::RenderConfig& Session::pose(std::vector<uint32_t>& moved) const
 {
     moved.clear();
-    if (config_.animation.empty()) return config_;
+    if (!config::animated(config_)) return config_;
     // The edited config is the rest pose: the animation starts from it, as in `penumbra render`.
     run_->rest = config_;
     moved = run_->poseAt(time_);
     return run_->config;
 }
 
-float Session::duration() const
-{
-    float end = 0.0f;
-    for (const config::AnimationTrack& track : config_.animation.tracks) {
-        if (!track.keys.empty()) end = std::max(end, track.keys.back().timeS);
-    }
-    return end;
-}
+float Session::duration() const { return config::animationDuration(config_, run_->scene); }
 
 void Session::setTime(float seconds)
 {

@@ -673,8 +673,14 @@ void Viewer::runCommand(const ScriptCommand& command)
         scene::Camera camera = c.camera;
         camera.position = parseVec3(command, 1);
         camera.target = parseVec3(command, 4);
-        if (!(glm::length(camera.target - camera.position) > 0.0f)) {
+        const glm::vec3 view = camera.target - camera.position;
+        if (!(glm::length(view) > 0.0f)) {
             throw Error(fmt::format("{}: camera: the target must differ from the position", command.where));
+        }
+        // As the config reader requires: a view along the up axis has no image orientation.
+        if (glm::length(glm::cross(glm::normalize(view), glm::normalize(camera.up))) < 1e-4f) {
+            throw Error(fmt::format("{}: camera: the view must not be parallel to the up axis ({}, {}, {})", command.where,
+                                    camera.up.x, camera.up.y, camera.up.z));
         }
         c.camera = camera;
         session_->changed(Change::View);

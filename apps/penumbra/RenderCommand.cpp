@@ -124,7 +124,7 @@ int runRender(const RenderFlags& flags)
     std::vector<frame::FrameTimings> measured, floorMeasured;
     for (uint32_t i = 0; i < warmup + run.config.frames; ++i) {
         const uint32_t frame = i < warmup ? 0 : i - warmup;
-        if (!run.config.animation.empty()) {
+        if (config::animated(run.config)) {
             const std::vector<uint32_t> moved = run.poseAtFrame(frame);
             renderer.update(run.config, run.scene, moved);
             if (floor) floor->update(run.config, run.scene, moved);

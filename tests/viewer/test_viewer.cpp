@@ -234,6 +234,7 @@ TEST_F(ViewerTest, ScriptErrorsNameTheCommandAndEndTheRunWithExit1)
         {"technique 0 no-such-technique", "no-such-technique"},
         {"light lamp intensity 5", "no light \"lamp\""},
         {"orbit ten 5", "expected a finite number, got \"ten\""},
+        {"camera 0 10 0 0 0 0", "parallel to the up axis"},
         {"size 0 10", "expected a whole number in [1, 16384]"},
         {"fly away", "unknown command \"fly\""},
         {"show no.such.image", "no.such.image"},
@@ -548,4 +549,25 @@ TEST_F(ViewerTest, ARebuiltPluginIsReloadedKeepingTheParameters)
     EXPECT_EQ(broken.rgba, first.rgba) << "the last good frame stays while the plugin does not load";
     EXPECT_EQ(reloaded.rgba, first.rgba) << "the same plugin with the same parameters draws the same frame";
     EXPECT_EQ(json::parse(slurp(saved))["lights"][0]["shadow"]["pcf_kernel"], 5);
+}
+
+// A glTF file's own animation: opened directly it plays its first clip, and the saved
+// config plays it in `penumbra render` as the viewer showed it.
+TEST_F(ViewerTest, AGltfAnimationPlaysAsRenderDrawsIt)
+{
+    const fs::path shot = dir / "at.png", saved = dir / "anim.json";
+    const RunResult v = viewer((penumbra::test::testDataDir() / "gltf" / "animated.gltf").string(),
+                               fmt::format("size 64 36; time 1; frames 1; screenshot {}; save {}; quit", shot.string(), saved.string()));
+    ASSERT_EQ(v.exitCode, 0) << v.err;
+    const json doc = json::parse(slurp(saved));
+    EXPECT_EQ(doc["scene"]["animation"], "wave");
+    EXPECT_EQ(doc["frames"], 61);  // 2 s at 30 fps, both ends
+    const RunResult r = render(fmt::format("'{}' -o '{}/f{{frame}}.png'", saved.string(), dir.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const Png viewed = readPng(shot), rendered = readPng(dir / "f30.png"), rest = readPng(dir / "f0.png");
+    ASSERT_EQ(viewed.rgba.size(), rendered.rgba.size());
+    int worst = 0;
+    for (size_t i = 0; i < viewed.rgba.size(); ++i) worst = std::max(worst, std::abs(int(viewed.rgba[i]) - int(rendered.rgba[i])));
+    EXPECT_LE(worst, 1);
+    EXPECT_NE(rest.rgba, rendered.rgba) << "the quad moved";
 }

@@ -51,6 +51,7 @@ json sceneJson(const SceneSource& source, const fs::path& savedAs)
     json scene = json::object();
     if (source.kind == SceneSource::Kind::Gltf) {
         scene["gltf"] = scenePath(source.gltf, savedAs);
+        if (!source.animation.empty()) scene["animation"] = source.animation;
     } else {
         scene["generator"] = source.generator;
         json params = json::object();
@@ -87,9 +88,10 @@ json lightJson(const LightConfig& lc)
                 {"color", vec3(l.color)}};
     if (l.type != scene::LightType::Directional) out["position"] = vec3(l.position);
     // The axis as the config gave it: a target is kept (an animation may move the light
-    // and keep it aimed), a direction otherwise. Point lights have none.
+    // and keep it aimed), a direction otherwise, and where the light was moved onto its
+    // target (which gives no axis). Point lights have none.
     if (l.type != scene::LightType::Point) {
-        if (lc.target && l.type != scene::LightType::Directional) {
+        if (lc.target && l.type != scene::LightType::Directional && *lc.target != l.position) {
             out["target"] = vec3(*lc.target);
         } else {
             out["direction"] = vec3(l.direction);

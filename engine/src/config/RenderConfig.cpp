@@ -32,6 +32,17 @@ SceneSource readScene(ObjectReader& parent, const fs::path& configFile)
         if (source.gltf.is_relative()) source.gltf = configFile.parent_path() / source.gltf;
         std::error_code ec;
         if (!fs::is_regular_file(source.gltf, ec)) r.fail("/scene/gltf", fmt::format("file not found: {}", source.gltf.string()));
+        if (const json* animation = r.find("animation")) {
+            // A name, or an index into the file's animations; buildScene checks it exists.
+            if (animation->is_string() && !animation->get<std::string>().empty()) {
+                source.animation = animation->get<std::string>();
+            } else if (animation->is_number_integer() && animation->get<int64_t>() >= 0) {
+                source.animation = std::to_string(animation->get<int64_t>());
+            } else {
+                r.fail("/scene/animation", fmt::format("must be the name or index of an animation of the glTF file, got {}",
+                                                       animation->dump()));
+            }
+        }
         r.finish();
         return source;
     }

@@ -5,7 +5,9 @@
 #include "penumbra/scene/GltfLoader.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
+#include <algorithm>
 #include <set>
 
 namespace penumbra::config {
@@ -66,6 +68,7 @@ scene::Scene buildScene(RenderConfig& config)
             config.lights.push_back(lc);
         }
     }
+    sceneAnimationIndex(config, scene);  // the animation it plays exists
     std::set<std::string> nodeNames;
     for (uint32_t n = 0; n < scene.graph.size(); ++n) nodeNames.insert(scene.graph.node(n).name);
     for (size_t i = 0; i < config.animation.tracks.size(); ++i) {
@@ -100,11 +103,47 @@ PreparedRun prepareRun(const std::filesystem::path& file, const RunOptions& opti
     return prepareRun(loadConfig(file), options);
 }
 
-std::vector<uint32_t> PreparedRun::poseAt(float timeS)
+bool animated(const RenderConfig& config) { return !config.animation.empty() || !config.scene.animation.empty(); }
+
+int sceneAnimationIndex(const RenderConfig& config, const scene::Scene& scene)
 {
-    config = rest;
-    applyAnimation(rest.animation, timeS, config, scene);
+    const std::string& wanted = config.scene.animation;
+    if (wanted.empty()) return -1;
+    for (size_t i = 0; i < scene.animations.size(); ++i) {
+        if (scene.animations[i].name == wanted) return int(i);
+    }
+    if (std::all_of(wanted.begin(), wanted.end(), [](char c) { return c >= '0' && c <= '9'; }) && wanted.size() < 9) {
+        const size_t index = std::stoul(wanted);
+        if (index < scene.animations.size()) return int(index);
+    }
+    std::vector<std::string> names;
+    for (const scene::NodeAnimation& a : scene.animations) names.push_back("\"" + a.name + "\"");
+    throw ConfigError(fmt::format("{}: /scene/animation: {} has no animation \"{}\"; {}", config.file.string(),
+                                  config.scene.gltf.string(), wanted,
+                                  names.empty() ? std::string("it has none that can play")
+                                                : fmt::format("its animations: {} (or their index)", fmt::join(names, ", "))));
+}
+
+std::vector<uint32_t> poseScene(const RenderConfig& rest, float timeS, RenderConfig& posed, scene::Scene& scene)
+{
+    posed = rest;
+    if (const int clip = sceneAnimationIndex(rest, scene); clip >= 0) {
+        scene::applyNodeAnimation(scene.animations[size_t(clip)], timeS, scene.graph);
+    }
+    applyAnimation(rest.animation, timeS, posed, scene);
     return scene.updateTransforms();
 }
+
+float animationDuration(const RenderConfig& config, const scene::Scene& scene)
+{
+    float end = 0.0f;
+    for (const AnimationTrack& track : config.animation.tracks) {
+        if (!track.keys.empty()) end = std::max(end, track.keys.back().timeS);
+    }
+    if (const int clip = sceneAnimationIndex(config, scene); clip >= 0) end = std::max(end, scene.animations[size_t(clip)].duration());
+    return end;
+}
+
+std::vector<uint32_t> PreparedRun::poseAt(float timeS) { return poseScene(rest, timeS, config, scene); }
 
 } // namespace penumbra::config

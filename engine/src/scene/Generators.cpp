@@ -939,6 +939,21 @@ Scene& scaleScene(Scene& scene, float factor)
     for (uint32_t n = 0; n < scene.graph.size(); ++n) {
         if (scene.graph.node(n).parent == kNoParent) scene.graph.setLocal(n, scale * scene.graph.local(n));
     }
+    // An animated root node is posed from its parts (T · R · S): a uniform scale s of it is
+    // (s T) · R · (s S), so its rest pose and its translation and scale keys (tangents too)
+    // take the factor.
+    auto isRoot = [&](uint32_t node) { return scene.graph.node(node).parent == kNoParent; };
+    for (NodeAnimation& animation : scene.animations) {
+        for (NodeRestPose& rest : animation.rest) {
+            if (!isRoot(rest.node)) continue;
+            rest.translation *= factor;
+            rest.scale *= factor;
+        }
+        for (NodeChannel& channel : animation.channels) {
+            if (!isRoot(channel.node) || channel.path == ChannelPath::Rotation) continue;
+            for (float& v : channel.values) v *= factor;
+        }
+    }
     scene.updateTransforms();
     return scene;
 }

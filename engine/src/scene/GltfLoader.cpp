@@ -1,6 +1,7 @@
 #include "penumbra/scene/GltfLoader.h"
 
 #include "penumbra/core/Error.h"
+#include "scene/gltf/Animations.h"
 #include "scene/gltf/Document.h"
 #include "scene/gltf/Geometry.h"
 #include "scene/gltf/Images.h"
@@ -253,9 +254,6 @@ void noteIgnoredFeatures(const Document& doc)
     if (!model.cameras.empty()) {
         doc.note("/cameras", fmt::format("{} camera(s) ignored: the camera comes from the render config", model.cameras.size()));
     }
-    if (!model.animations.empty()) {
-        doc.note("/animations", fmt::format("{} animation(s) ignored: the scene is loaded at rest", model.animations.size()));
-    }
     if (!model.skins.empty()) {
         doc.note("/skins", fmt::format("{} skin(s) ignored: skinned meshes stay unposed under their node", model.skins.size()));
     }
@@ -308,6 +306,7 @@ Scene loadGltf(const fs::path& file, GltfLoadReport& report, const GltfLoadOptio
 
     Scene scene;
     const gltf::NodeMap nodes = gltf::buildSceneGraph(doc, scene.graph);
+    scene.animations = gltf::loadAnimations(doc, nodes);
     gltf::MaterialTable materials(doc, images, file.parent_path(), scene);
     gltf::GeometryBudget budget{options.maxVertices, options.maxTriangles};
     std::vector<std::optional<std::vector<uint32_t>>> meshesOf(model.meshes.size());

@@ -227,3 +227,41 @@ def interleaved(doc):
         {"attributes": {"POSITION": 4, "TEXCOORD_0": 2}, "indices": 3}]}]
     del doc["materials"]
 write('interleaved_sparse.gltf', quad_doc(uri(IL_BIN), interleaved))
+
+# The quad moved by two animations: "wave" (translation LINEAR, rotation STEP, scale
+# CUBICSPLINE with zero tangents) and "spin" (rotation LINEAR, a quarter turn about +Y).
+S45 = math.sin(math.pi / 4)
+ANIM = (f32(0, 2) +                                   # 140: times 0, 2
+        f32(0, 1) +                                   # 148: times 0, 1
+        f32(0, 0, 0, 4, 2, 0) +                       # 156: translations
+        f32(0, 0, 0, 1, 0, S45, 0, S45) +             # 180: rotations (x, y, z, w)
+        f32(0, 0, 0, 1, 1, 1, 0, 0, 0,                # 212: scale key 0: in-tangent, value, out-tangent
+            0, 0, 0, 3, 3, 3, 0, 0, 0))               #      scale key 1
+ANIM_BIN = QUAD_BIN + ANIM
+
+def animated(doc):
+    doc["nodes"] = [{"name": "quad", "mesh": 0, "translation": [0, 0, 0]}]
+    doc["buffers"][0]["byteLength"] = len(ANIM_BIN)
+    doc["bufferViews"].append({"buffer": 0, "byteOffset": len(QUAD_BIN), "byteLength": len(ANIM)})
+    base = len(doc["accessors"])
+    doc["accessors"] += [
+        {"bufferView": 2, "byteOffset": 0, "componentType": 5126, "count": 2, "type": "SCALAR", "min": [0], "max": [2]},
+        {"bufferView": 2, "byteOffset": 8, "componentType": 5126, "count": 2, "type": "SCALAR", "min": [0], "max": [1]},
+        {"bufferView": 2, "byteOffset": 16, "componentType": 5126, "count": 2, "type": "VEC3"},
+        {"bufferView": 2, "byteOffset": 40, "componentType": 5126, "count": 2, "type": "VEC4"},
+        {"bufferView": 2, "byteOffset": 72, "componentType": 5126, "count": 6, "type": "VEC3"},
+    ]
+    t2, t1, trans, rot, scale = range(base, base + 5)
+    doc["animations"] = [
+        {"name": "wave",
+         "samplers": [{"input": t2, "output": trans, "interpolation": "LINEAR"},
+                      {"input": t1, "output": rot, "interpolation": "STEP"},
+                      {"input": t2, "output": scale, "interpolation": "CUBICSPLINE"}],
+         "channels": [{"sampler": 0, "target": {"node": 0, "path": "translation"}},
+                      {"sampler": 1, "target": {"node": 0, "path": "rotation"}},
+                      {"sampler": 2, "target": {"node": 0, "path": "scale"}}]},
+        {"name": "spin",
+         "samplers": [{"input": t1, "output": rot}],
+         "channels": [{"sampler": 0, "target": {"node": 0, "path": "rotation"}}]},
+    ]
+write('animated.gltf', quad_doc(uri(ANIM_BIN), animated))

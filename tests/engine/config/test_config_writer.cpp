@@ -151,6 +151,13 @@ TEST(ConfigWriter, EveryLightTypeAndAnimationFormReadsBack)
     EXPECT_TRUE(back.lights[1].target.has_value());  // aimed at a target as given, not turned into a direction
     EXPECT_FALSE(back.lights[3].target.has_value());
 
+    // A light moved onto its target (the viewer's fields allow it) keeps its direction:
+    // the reader refuses a target at the position.
+    config::RenderConfig moved = config;
+    moved.lights[1].light.position = *moved.lights[1].target;
+    const config::RenderConfig movedBack = roundTrip(moved, temp.path / "moved.json");
+    EXPECT_FALSE(movedBack.lights[1].target.has_value());
+
     // Shortest decimals: what a person wrote, not the float's binary expansion.
     const std::string text = config::configJson(config, temp.path / "all.json").dump();
     EXPECT_NE(text.find("[1.0,0.96,0.9]"), std::string::npos) << text;

@@ -71,6 +71,10 @@ struct SceneSource {
     // generator parses and validates them: scene/Generators.h).
     std::vector<std::pair<std::string, std::string>> params;
     float scale = 1.0f;               // every length times this (1e-3 ... 1e5 are tested)
+    // Kind::Gltf: the file's animation that plays (its name, or its index as text), empty
+    // for none: the scene at rest. Posed by poseScene (config/Run.h) with the config's own
+    // tracks.
+    std::string animation;
 };
 
 struct RenderConfig {

@@ -44,6 +44,19 @@ struct PreparedRun {
 
 // Throws ConfigError naming the file and JSON path (or the flag).
 PreparedRun prepareRun(RenderConfig config, const RunOptions& options);
+
+// Whether frames of the config differ: it has tracks, or plays a glTF file's animation.
+bool animated(const RenderConfig& config);
+// The index in scene.animations of the glTF animation the config plays (SceneSource::
+// animation: a name, else an index), -1 for none. Throws ConfigError naming
+// /scene/animation and listing the file's animations when there is no such one.
+int sceneAnimationIndex(const RenderConfig& config, const scene::Scene& scene);
+// Poses `posed` (starting from `rest`) and the scene's nodes at `timeS`: first the glTF
+// animation the config plays, then the config's own tracks (a node track overrides the
+// file's channel of that node). Returns the instances that moved (Scene::updateTransforms).
+std::vector<uint32_t> poseScene(const RenderConfig& rest, float timeS, RenderConfig& posed, scene::Scene& scene);
+// The last key of the config's tracks and of the glTF animation it plays (0: at rest).
+float animationDuration(const RenderConfig& config, const scene::Scene& scene);
 PreparedRun prepareRun(const std::filesystem::path& file, const RunOptions& options);
 
 // Builds the scene that the config's scene source describes (at its scale), and checks

@@ -11,7 +11,8 @@
 // buffer view 1 (288 bytes)"). Sizes are checked against the buffers before anything
 // is allocated, and the limits below bound what a file can make the loader allocate.
 // What is dropped or ignored (points and lines, unknown optional extensions, cameras,
-// animations, skins) is a warning or note in the report, never a silent omission.
+// skins, morph targets, animation channels that cannot play) is a warning or note in the
+// report, never a silent omission. Animations are read into Scene::animations.
 #include "penumbra/scene/MeshRepair.h"
 #include "penumbra/scene/Scene.h"
 
@@ -71,7 +72,7 @@ struct GltfLoadReport {
     std::vector<GltfMeshReport> meshes;
     // Dropped or suspicious content ("file: element: what"), also logged as warnings.
     std::vector<std::string> warnings;
-    // Features ignored on purpose (cameras, animations, skins, morph targets), also logged.
+    // Features ignored on purpose (cameras, skins, morph targets), also logged.
     std::vector<std::string> notes;
 };
 

@@ -3,6 +3,7 @@
 // material), materials and textures, a node hierarchy (SceneGraph), and instances (a
 // mesh under a node, so one mesh under many nodes is instancing). Cameras and lights
 // with the config; glTF files and the procedural generators fill this same structure.
+#include "penumbra/scene/NodeAnimation.h"
 #include "penumbra/scene/SceneGraph.h"
 
 #include <glm/glm.hpp>
@@ -117,6 +118,8 @@ public:
     std::vector<Texture> textures;
     SceneGraph graph;
     std::vector<Instance> instances;
+    // A glTF file's animations (clips of node channels), at rest until one is played.
+    std::vector<NodeAnimation> animations;
 
     // Adds `mesh` under `node`; the mesh's bounds must be computed.
     uint32_t addInstance(uint32_t mesh, uint32_t node);

@@ -225,6 +225,9 @@ const char* kindName(AttributeKind kind)
     switch (kind) {
     case AttributeKind::Position: return "POSITION";
     case AttributeKind::Normal: return "NORMAL";
+    case AttributeKind::KeyTimes: return "an animation sampler's input";
+    case AttributeKind::KeyVec3: return "a translation or scale output";
+    case AttributeKind::KeyRotation: return "a rotation output";
     default: return "TEXCOORD_0";
     }
 }
@@ -234,15 +237,27 @@ void checkAttributeType(const Document& doc, const tinygltf::Accessor& acc, int 
                         AttributeKind kind)
 {
     const int ct = acc.componentType;
-    const bool ok = kind == AttributeKind::TexCoord
-                        ? acc.type == TINYGLTF_TYPE_VEC2 &&
-                              (ct == TINYGLTF_COMPONENT_TYPE_FLOAT ||
-                               (acc.normalized && (ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
-                                                   ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT)))
-                        : acc.type == TINYGLTF_TYPE_VEC3 && ct == TINYGLTF_COMPONENT_TYPE_FLOAT;
+    const bool isFloat = ct == TINYGLTF_COMPONENT_TYPE_FLOAT;
+    bool ok = false;
+    const char* allowed = "VEC3 of FLOAT";
+    switch (kind) {
+    case AttributeKind::TexCoord:
+        ok = acc.type == TINYGLTF_TYPE_VEC2 &&
+             (isFloat || (acc.normalized && (ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                                             ct == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT)));
+        allowed = "VEC2 of FLOAT or normalized UNSIGNED_BYTE / UNSIGNED_SHORT";
+        break;
+    case AttributeKind::KeyTimes:
+        ok = acc.type == TINYGLTF_TYPE_SCALAR && isFloat;
+        allowed = "SCALAR of FLOAT";
+        break;
+    case AttributeKind::KeyRotation:
+        ok = acc.type == TINYGLTF_TYPE_VEC4 && (isFloat || (acc.normalized && ct != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT));
+        allowed = "VEC4 of FLOAT or normalized BYTE / UNSIGNED_BYTE / SHORT / UNSIGNED_SHORT";
+        break;
+    default: ok = acc.type == TINYGLTF_TYPE_VEC3 && isFloat; break;
+    }
     if (ok) return;
-    const char* allowed = kind == AttributeKind::TexCoord ? "VEC2 of FLOAT or normalized UNSIGNED_BYTE / UNSIGNED_SHORT"
-                                                          : "VEC3 of FLOAT";
     doc.fail(element, fmt::format("accessor {} is {} of {}{}; {} must be {}", index, typeName(acc.type), componentName(ct),
                                   acc.normalized ? " (normalized)" : "", kindName(kind), allowed));
 }

@@ -15,6 +15,9 @@ enum class AttributeKind {
     Position,  // VEC3 FLOAT
     Normal,    // VEC3 FLOAT
     TexCoord,  // VEC2 FLOAT, or normalized UNSIGNED_BYTE / UNSIGNED_SHORT
+    KeyTimes,  // animation sampler input: SCALAR FLOAT
+    KeyVec3,   // animation output of translation or scale: VEC3 FLOAT
+    KeyRotation,  // animation output of rotation: VEC4 FLOAT, or normalized BYTE / UNSIGNED_BYTE / SHORT / UNSIGNED_SHORT
 };
 
 // How many elements a read may allocate, and what that bound is, for the message.
@@ -30,7 +33,7 @@ size_t componentBytes(int componentType);
 // The accessor's element count (checks only that the accessor exists).
 size_t accessorCount(const Document& doc, int accessor, std::string_view element);
 
-// count × components floats (3 or 2), sparse substitutions applied. Throws if the
+// count × components floats (1 to 4), sparse substitutions applied. Throws if the
 // count exceeds `limit` before allocating.
 std::vector<float> readAttribute(const Document& doc, int accessor, std::string_view element, AttributeKind kind,
                                  const CountLimit& limit);
