@@ -10,15 +10,11 @@
 namespace fs = std::filesystem;
 
 namespace penumbra::viewer {
-namespace {
-
-bool isPluginFile(const fs::path& file)
+bool PluginReloader::isPluginFile(const fs::path& file)
 {
     const std::string name = file.filename().string();
     return name.size() > 12 && name.rfind("penumbra-", 0) == 0 && file.extension() == ".so";
 }
-
-} // namespace
 
 PluginReloader::PluginReloader(std::vector<fs::path> searchPath) : searchPath_(std::move(searchPath))
 {
@@ -32,34 +28,11 @@ PluginReloader::~PluginReloader()
     fs::remove_all(root_, ec);
 }
 
-std::map<std::string, PluginReloader::Stamp> PluginReloader::scan() const
-{
-    std::map<std::string, Stamp> stamps;
-    for (const fs::path& folder : searchPath_) {
-        std::error_code ec;
-        for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
-            std::error_code fileError;
-            if (!isPluginFile(it->path()) || !it->is_regular_file(fileError)) continue;
-            const auto time = fs::last_write_time(it->path(), fileError);
-            const auto size = fs::file_size(it->path(), fileError);
-            if (!fileError) stamps[it->path().string()] = {time, size};
-        }
-    }
-    return stamps;
-}
-
 bool PluginReloader::changed()
 {
-    std::map<std::string, Stamp> current = scan();
+    FileStamps current = scan();
     if (current == stamps_) return false;
-    lastChanged_.clear();
-    for (const auto& [file, stamp] : current) {
-        const auto old = stamps_.find(file);
-        if (old == stamps_.end() || old->second != stamp) lastChanged_.push_back(file);
-    }
-    for (const auto& [file, stamp] : stamps_) {
-        if (!current.count(file)) lastChanged_.push_back(file);
-    }
+    lastChanged_ = changedFiles(stamps_, current);
     stamps_ = std::move(current);
     return true;
 }

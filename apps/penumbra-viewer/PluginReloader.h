@@ -7,6 +7,8 @@
 // own folder, so that each copy is a file no earlier registry opened); the viewer builds
 // the frame with it and keeps the old registry alive for what still refers to it. The
 // light's config, and so its parameters, stay as they were.
+#include "ShaderWatcher.h"  // FileStamps
+
 #include "penumbra/plugin/PluginRegistry.h"
 
 #include <filesystem>
@@ -37,11 +39,11 @@ public:
     std::unique_ptr<plugin::PluginRegistry> freshRegistry();
 
 private:
-    using Stamp = std::pair<std::filesystem::file_time_type, std::uintmax_t>;
-    std::map<std::string, Stamp> scan() const;
+    FileStamps scan() const { return stampFiles(searchPath_, false, isPluginFile); }
+    static bool isPluginFile(const std::filesystem::path& file);
 
     std::vector<std::filesystem::path> searchPath_;
-    std::map<std::string, Stamp> stamps_;
+    FileStamps stamps_;
     std::vector<std::string> lastChanged_;
     std::filesystem::path root_;  // this process's folder of generations
     int generation_ = 0;

@@ -24,22 +24,41 @@ void ShaderWatcher::watch(std::vector<fs::path> folders)
     lastChanged_.clear();
 }
 
-std::map<std::string, ShaderWatcher::Stamp> ShaderWatcher::scan() const
+FileStamps stampFiles(const std::vector<fs::path>& folders, bool recursive, const std::function<bool(const fs::path&)>& accept)
 {
-    std::map<std::string, Stamp> stamps;
-    for (const fs::path& folder : folders_) {
+    FileStamps stamps;
+    auto stamp = [&](const fs::directory_entry& entry) {
+        std::error_code fileError;
+        if (!entry.is_regular_file(fileError) || !accept(entry.path())) return;
+        const auto time = fs::last_write_time(entry.path(), fileError);
+        const auto size = fs::file_size(entry.path(), fileError);
+        if (!fileError) stamps[entry.path().string()] = {time, size};
+    };
+    for (const fs::path& folder : folders) {
         std::error_code ec;
-        // A file removed while the folder is read is skipped, not an error: the next scan sees it gone.
-        for (fs::recursive_directory_iterator it(folder, fs::directory_options::skip_permission_denied, ec), end;
-             !ec && it != end; it.increment(ec)) {
-            std::error_code fileError;
-            if (!it->is_regular_file(fileError) || !isShaderFile(it->path())) continue;
-            const auto time = fs::last_write_time(it->path(), fileError);
-            const auto size = fs::file_size(it->path(), fileError);
-            if (!fileError) stamps[it->path().string()] = {time, size};
+        if (recursive) {
+            for (fs::recursive_directory_iterator it(folder, fs::directory_options::skip_permission_denied, ec), end;
+                 !ec && it != end; it.increment(ec)) {
+                stamp(*it);
+            }
+        } else {
+            for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) stamp(*it);
         }
     }
     return stamps;
+}
+
+std::vector<std::string> changedFiles(const FileStamps& before, const FileStamps& after)
+{
+    std::vector<std::string> changed;
+    for (const auto& [file, stamp] : after) {
+        const auto old = before.find(file);
+        if (old == before.end() || old->second != stamp) changed.push_back(file);
+    }
+    for (const auto& [file, stamp] : before) {
+        if (!after.count(file)) changed.push_back(file);
+    }
+    return changed;
 }
 
 bool ShaderWatcher::changed(std::chrono::milliseconds interval)
@@ -47,16 +66,9 @@ bool ShaderWatcher::changed(std::chrono::milliseconds interval)
     const auto now = std::chrono::steady_clock::now();
     if (folders_.empty() || now - lastScan_ < interval) return false;
     lastScan_ = now;
-    std::map<std::string, Stamp> current = scan();
+    FileStamps current = scan();
     if (current == stamps_) return false;
-    lastChanged_.clear();
-    for (const auto& [file, stamp] : current) {
-        const auto old = stamps_.find(file);
-        if (old == stamps_.end() || old->second != stamp) lastChanged_.push_back(file);
-    }
-    for (const auto& [file, stamp] : stamps_) {
-        if (!current.count(file)) lastChanged_.push_back(file);
-    }
+    lastChanged_ = changedFiles(stamps_, current);
     stamps_ = std::move(current);
     return true;
 }

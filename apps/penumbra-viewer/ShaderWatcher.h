@@ -3,13 +3,29 @@
 // removed (modification times and sizes, polled), so that the viewer builds the frame's
 // pipelines again from disk (FrameRenderer compiles its shaders at construction).
 #include <chrono>
+#include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <string>
 #include <utility>
 #include <vector>
 
 namespace penumbra::viewer {
+
+// Modification time and size of each file, by path: what the watchers compare.
+using FileStamp = std::pair<std::filesystem::file_time_type, std::uintmax_t>;
+using FileStamps = std::map<std::string, FileStamp>;
+
+// The regular files in `folders` (and below them when `recursive`) that `accept` takes. A
+// missing folder, or a file removed while it is read, is skipped: the next scan sees it.
+FileStamps stampFiles(const std::vector<std::filesystem::path>& folders, bool recursive,
+                      const std::function<bool(const std::filesystem::path&)>& accept);
+// The files added, changed or removed from `before` to `after`.
+std::vector<std::string> changedFiles(const FileStamps& before, const FileStamps& after);
+
+// Whether `file` is GLSL the engine compiles or includes (.glsl .comp .vert .frag .geom .tesc .tese).
+bool isShaderFile(const std::filesystem::path& file);
 
 class ShaderWatcher {
 public:
@@ -24,16 +40,13 @@ public:
     const std::vector<std::string>& lastChanged() const { return lastChanged_; }
 
 private:
-    using Stamp = std::pair<std::filesystem::file_time_type, std::uintmax_t>;
-    std::map<std::string, Stamp> scan() const;
+    FileStamps scan() const { return stampFiles(folders_, true, isShaderFile); }
 
     std::vector<std::filesystem::path> folders_;
-    std::map<std::string, Stamp> stamps_;
+    FileStamps stamps_;
     std::chrono::steady_clock::time_point lastScan_{};
     std::vector<std::string> lastChanged_;
 };
 
-// Whether `file` is GLSL the engine compiles or includes (.glsl .comp .vert .frag .geom .tesc .tese).
-bool isShaderFile(const std::filesystem::path& file);
 
 } // namespace penumbra::viewer

@@ -317,6 +317,16 @@ pid_t startViewer(const std::string& env, const std::string& file, const std::st
     return pid;
 }
 
+// A background viewer's process group (xvfb-run, Xvfb, the viewer), killed when the test
+// leaves early; set pid to 0 once it was waited for.
+struct ViewerGroup {
+    pid_t pid;
+    ~ViewerGroup()
+    {
+        if (pid > 0) kill(-pid, SIGKILL);  // kill(0, ...) would be this process group
+    }
+};
+
 bool waitForFile(const fs::path& file, pid_t viewer)
 {
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
@@ -361,13 +371,7 @@ TEST_F(ViewerTest, AnEditedShaderIsReloadedAndABrokenOneKeepsTheLastFrame)
         a.string(), (dir / "go1").string(), b.string(), (dir / "go2").string(), c.string());
     const pid_t pid = startViewer(fmt::format("PENUMBRA_SHADER_DIR='{}'", shaders.string()), config("default.json"), script, log);
     ASSERT_GT(pid, 0);
-    struct Reap {
-        pid_t pid;
-        ~Reap()
-        {
-            if (pid > 0) kill(-pid, SIGKILL);  // kill(0, ...) would be this process group
-        }
-    } reap{pid};
+    ViewerGroup reap{pid};
 
     ASSERT_TRUE(waitForFile(a, pid)) << slurp(log);
     replaceInFile(shading, store, "this is not GLSL;\n    " + store);
@@ -519,13 +523,7 @@ TEST_F(ViewerTest, ARebuiltPluginIsReloadedKeepingTheParameters)
         a.string(), (dir / "go1").string(), b.string(), (dir / "go2").string(), c.string(), saved.string());
     const pid_t pid = startViewer(fmt::format("PENUMBRA_PLUGIN_PATH='{}'", plugins.string()), config("default.json"), script, log);
     ASSERT_GT(pid, 0);
-    struct Reap {
-        pid_t pid;
-        ~Reap()
-        {
-            if (pid > 0) kill(-pid, SIGKILL);  // kill(0, ...) would be this process group
-        }
-    } reap{pid};
+    ViewerGroup reap{pid};
 
     ASSERT_TRUE(waitForFile(a, pid)) << slurp(log);
     // "Rebuilt" into a file that is no library (a build that failed half-way).
