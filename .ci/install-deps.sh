@@ -10,7 +10,7 @@ packages=(
   libglfw3-dev libglm-dev libtinygltf-dev libopenmesh-dev libstb-dev
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  libembree-dev libxxhash-dev libimgui-dev libopenexr-dev xvfb xauth python3-jsonschema
+  libembree-dev libtbb-dev libxxhash-dev libimgui-dev libopenexr-dev xvfb xauth python3-jsonschema
   assimp-testmodels
 )
 

@@ -9,6 +9,7 @@
 #include "TestContext.h"
 
 #include "penumbra/config/Config.h"
+#include "penumbra/core/LeakCheck.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/plugin/PluginRegistry.h"
@@ -23,11 +24,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <memory>
 #include <numbers>
 #include <tuple>
@@ -634,6 +637,38 @@ bool atShadowEdge(const std::vector<float>& v, size_t i, size_t width)
             if (v[size_t(ny) * width + size_t(nx)] != v[i]) return true;
         }
     return false;
+}
+
+// LeakSanitizer's check walks every live thread's dynamic TLS and could crash on one of
+// TBB's workers, which Embree's BVH builds start (core/LeakCheck.h): in AddressSanitizer
+// builds the check first stops them. In a child process: a hard-shadowed frame first (the
+// driver's threads start), then a traced one (TBB's pool starts); after the check the
+// threads are those before the trace.
+TEST_F(ReferencePlugin, TheLeakCheckStopsTheWorkerThreadsEmbreeStarted)
+{
+#if !defined(__SANITIZE_ADDRESS__)
+    GTEST_SKIP() << "the leak check, and with it the stop, runs in AddressSanitizer builds";
+#else
+    const auto threadCount = [] {
+        return std::distance(fs::directory_iterator("/proc/self/task"), fs::directory_iterator{});
+    };
+    GTEST_FLAG_SET(death_test_style, "threadsafe");
+    EXPECT_EXIT(
+        {
+            const config::RenderConfig cfg = smallRectConfig({{"samples", 4}});
+            render(hardConfig(cfg, 256), scene::generatePenumbra({}));
+            const auto before = threadCount();
+            render(cfg, scene::generatePenumbra({}));
+            const auto tracing = threadCount();
+            frames.clear();
+            penumbra::checkLeaksBeforeExit();
+            const auto after = threadCount();
+            std::fprintf(stderr, "threads: %td before the trace, %td after it, %td after the check\n", before,
+                         tracing, after);
+            std::exit(tracing > before && after == before ? 0 : 1);
+        },
+        testing::ExitedWithCode(0), "");
+#endif
 }
 
 // A point light has one sample, so brute_force is one hard shadow map: exactly the hard
