@@ -53,15 +53,31 @@ bool dragVec3(const char* label, glm::vec3& v, float speed)
 
 } // namespace
 
+bool Viewer::panelHeader(const char* name, bool openAtFirst)
+{
+    // A script's `panel NAME open|closed`, applied once.
+    std::string key = name;
+    std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if (const auto it = panelOpen_.find(key); it != panelOpen_.end()) {
+        ImGui::SetNextItemOpen(it->second, ImGuiCond_Always);
+        panelOpen_.erase(it);
+    }
+    return ImGui::CollapsingHeader(name, openAtFirst ? ImGuiTreeNodeFlags_DefaultOpen : ImGuiTreeNodeFlags_None);
+}
+
 void Viewer::drawPanels()
 {
     drawnParamWidgets_.clear();
     const ImGuiIO& io = ImGui::GetIO();
     ImGui::SetNextWindowPos(ImVec2(0, 0));
     ImGui::SetNextWindowSize(ImVec2(panelWidth_ * uiScale_, io.DisplaySize.y));
+    // No border: it would reach a pixel into the view, and the panels are drawn into a
+    // layer of their own only while nothing of them does (Presenter::present).
+    ImGui::PushStyleVar(ImGuiStyleVar_WindowBorderSize, 0.0f);
     ImGui::Begin("Penumbra", nullptr,
                  ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
                      ImGuiWindowFlags_NoBringToFrontOnFocus);
+    ImGui::PopStyleVar();
     ImGui::PushItemWidth(-ImGui::GetFontSize() * 11.0f);  // room for the labels on the right
     if (!message_.empty()) {
         const bool error = !session_->lastError().empty() && message_ == session_->lastError();
@@ -101,7 +117,7 @@ void Viewer::drawPanels()
 
 void Viewer::drawFilePanel()
 {
-    if (!ImGui::CollapsingHeader("File", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    if (!panelHeader("File", true)) return;
     ImGui::InputText("##open", &openPath_);
     ImGui::SameLine();
     if (ImGui::Button("Open")) {
@@ -139,7 +155,7 @@ void Viewer::drawFilePanel()
 
 void Viewer::drawScenePanel()
 {
-    if (!ImGui::CollapsingHeader("Scene")) return;
+    if (!panelHeader("Scene", false)) return;
     const scene::Scene& scene = session_->scene();
     const config::SceneSource& source = session_->config().scene;
     ImGui::Text("%s", source.kind == config::SceneSource::Kind::Gltf ? source.gltf.filename().string().c_str()
@@ -154,7 +170,7 @@ void Viewer::drawScenePanel()
 
 void Viewer::drawCameraPanel()
 {
-    if (!ImGui::CollapsingHeader("Camera", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    if (!panelHeader("Camera", true)) return;
     int mode = int(cameraMode_);
     ImGui::RadioButton("orbit", &mode, int(CameraMode::Orbit));
     ImGui::SameLine();
@@ -192,7 +208,7 @@ void Viewer::drawCameraPanel()
 
 void Viewer::drawRenderPanel()
 {
-    if (!ImGui::CollapsingHeader("Render")) return;
+    if (!panelHeader("Render", false)) return;
     config::RenderConfig& c = session_->config();
     static const char* modes[] = {"none", "frustum", "light-occlusion", "receiver-mask"};
     int culling = int(c.culling);
@@ -230,7 +246,7 @@ void Viewer::drawRenderPanel()
 
 void Viewer::drawLightsPanel()
 {
-    if (!ImGui::CollapsingHeader("Lights", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    if (!panelHeader("Lights", true)) return;
     config::RenderConfig& c = session_->config();
     const float speed = lengthSpeed(sceneRadius());
     std::optional<size_t> remove;
@@ -427,7 +443,7 @@ void Viewer::drawParamWidgets(const std::string& key, const std::string& lightNa
 
 void Viewer::drawAnimationPanel()
 {
-    if (!ImGui::CollapsingHeader("Animation")) return;
+    if (!panelHeader("Animation", false)) return;
     const float end = session_->duration();
     ImGui::BeginDisabled(end <= 0.0f || recording_);
     if (ImGui::Button(playing_ ? "Pause" : "Play")) playing_ = !playing_;
@@ -457,7 +473,7 @@ void Viewer::drawAnimationPanel()
 
 void Viewer::drawComparePanel()
 {
-    if (!ImGui::CollapsingHeader("Compare")) return;
+    if (!panelHeader("Compare", false)) return;
     bool on = compareOn_;
     if (ImGui::Checkbox("compare with a second stack (B)", &on)) {
         try {
@@ -582,7 +598,7 @@ void Viewer::drawComparePanel()
 
 void Viewer::drawDebugImagePanel()
 {
-    if (!ImGui::CollapsingHeader("Debug images")) return;
+    if (!panelHeader("Debug images", false)) return;
     const std::string shown = session_->shownImage().empty() ? "color" : session_->shownImage();
     if (ImGui::BeginCombo("image", shown.c_str())) {
         if (ImGui::Selectable("color", session_->shownImage().empty())) session_->showImage("");
@@ -621,11 +637,15 @@ void Viewer::drawDebugImagePanel()
 
 void Viewer::drawTimingsPanel()
 {
-    if (!ImGui::CollapsingHeader("Timings", ImGuiTreeNodeFlags_DefaultOpen)) return;
+    if (!panelHeader("Timings", true)) return;
     ImGui::Text("frame %.2f ms (sum of passes %.2f ms GPU)", TimingHistory::median(history_.frameMs),
                 TimingHistory::median(history_.sumGpuMs));
     ImGui::Text("viewer: panels + present %.2f ms", TimingHistory::median(history_.viewerMs));
     tooltip("the viewer's own cost per shown frame, beside the frame's");
+    ImGui::Text("panels: %.2f ms CPU + %.2f ms GPU (%.1f %% of the frame)", TimingHistory::mean(history_.panelsCpuMs),
+                TimingHistory::mean(history_.panelsGpuMs), history_.panelsShare());
+    tooltip("building the panels (only after input or a change, and 4 times a second) and drawing them (into a layer "
+            "of their own, copied into the window between changes); means per shown frame");
     ImGui::Text("last edit to its image: %.1f ms", session_->lastRebuildMs());
     tooltip("a technique, parameter, culling or size change builds a new renderer (its shaders and pipelines) and draws "
             "its first frame");
@@ -709,24 +729,18 @@ void Viewer::drawPixelInspector()
         return;
     }
     frame::FrameRenderer& r = session_->renderer();
-    // Two read-backs of frame-sized images: taken again for a new frame at most every
-    // 0.25 s, so that the inspector costs nothing measurable while frames run continuously.
-    const auto now = std::chrono::steady_clock::now();
-    if (inspectedFrame_ != session_->framesRendered() &&
-        (inspectedColor_.empty() || now - inspectedAt_ >= std::chrono::milliseconds(250))) {
-        inspectedFrame_ = session_->framesRendered();
-        inspectedAt_ = now;
-        inspectedColor_ = r.readColor();
-        inspectedVisibility_.clear();
-        for (size_t l = 0; l < r.lightCount(); ++l) inspectedVisibility_.push_back(r.readVisibility(l));
-    }
     const uint32_t x = std::min(uint32_t(fx * float(r.width())), r.width() - 1);
     const uint32_t y = std::min(uint32_t(fy * float(r.height())), r.height() - 1);
-    const size_t i = size_t(y) * r.width() + x;
-    std::string text = fmt::format("pixel ({}, {})\ncolour {} {} {}", x, y, inspectedColor_[i * 4], inspectedColor_[i * 4 + 1],
-                                   inspectedColor_[i * 4 + 2]);
-    for (size_t l = 0; l < inspectedVisibility_.size(); ++l) {
-        text += fmt::format("\nV {} = {:.5f}", session_->config().lights[l].name, inspectedVisibility_[l][i]);
+    // One texel of the colour and of each V, read again for a new frame or pixel only.
+    if (!inspected_ || inspectedFrame_ != session_->framesRendered() || inspectedAt_ != std::pair{x, y}) {
+        inspected_ = r.readPixel(x, y);
+        inspectedFrame_ = session_->framesRendered();
+        inspectedAt_ = {x, y};
+    }
+    std::string text = fmt::format("pixel ({}, {})\ncolour {} {} {}", x, y, inspected_->color[0], inspected_->color[1],
+                                   inspected_->color[2]);
+    for (size_t l = 0; l < inspected_->visibility.size() && l < session_->config().lights.size(); ++l) {
+        text += fmt::format("\nV {} = {:.5f}", session_->config().lights[l].name, inspected_->visibility[l]);
     }
     ImGui::SetTooltip("%s", text.c_str());
 }

@@ -1,5 +1,7 @@
 #include "Presenter.h"
 
+#include "PanelLayer.h"
+
 #include "penumbra/gpu/Barrier.h"
 #include "penumbra/gpu/Check.h"
 
@@ -13,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <optional>
 
 namespace penumbra::viewer {
 namespace {
@@ -66,31 +69,6 @@ std::vector<VkRect2D> Presenter::uncoveredRects(const std::vector<ViewBlit>& vie
     return out;
 }
 
-namespace {
-
-// The window pixels Dear ImGui draws into this frame: the union of its clip rectangles.
-VkRect2D drawnArea(const ImDrawData* ui, VkExtent2D extent)
-{
-    float x0 = 1e30f, y0 = 1e30f, x1 = -1e30f, y1 = -1e30f;
-    const ImVec2 scale = ui->FramebufferScale, origin = ui->DisplayPos;
-    for (int l = 0; l < ui->CmdListsCount; ++l) {
-        for (const ImDrawCmd& c : ui->CmdLists[l]->CmdBuffer) {
-            if (c.ElemCount == 0) continue;
-            x0 = std::min(x0, (c.ClipRect.x - origin.x) * scale.x);
-            y0 = std::min(y0, (c.ClipRect.y - origin.y) * scale.y);
-            x1 = std::max(x1, (c.ClipRect.z - origin.x) * scale.x);
-            y1 = std::max(y1, (c.ClipRect.w - origin.y) * scale.y);
-        }
-    }
-    const int32_t ax = std::clamp(int32_t(std::floor(x0)), 0, int32_t(extent.width));
-    const int32_t ay = std::clamp(int32_t(std::floor(y0)), 0, int32_t(extent.height));
-    const int32_t bx = std::clamp(int32_t(std::ceil(x1)), 0, int32_t(extent.width));
-    const int32_t by = std::clamp(int32_t(std::ceil(y1)), 0, int32_t(extent.height));
-    if (bx <= ax || by <= ay) return {};
-    return {{ax, ay}, {uint32_t(bx - ax), uint32_t(by - ay)}};
-}
-
-} // namespace
 
 void UploadedImage::set(uint32_t width, uint32_t height, const std::vector<uint8_t>& rgba)
 {
@@ -167,6 +145,7 @@ void Presenter::release()
         imguiReady_ = false;
     }
     destroySwapchain();
+    timer_.reset();
     if (renderPass_) vkDestroyRenderPass(device, renderPass_, nullptr);
     if (imguiPool_) vkDestroyDescriptorPool(device, imguiPool_, nullptr);
     if (done_) vkDestroyFence(device, done_, nullptr);
@@ -316,6 +295,11 @@ void Presenter::destroySwapchain()
     images_.clear();
     if (swapchain_) vkDestroySwapchainKHR(device, swapchain_, nullptr);
     swapchain_ = VK_NULL_HANDLE;
+    // The panels' layer has the swapchain's size and format.
+    if (uiFramebuffer_) vkDestroyFramebuffer(device, uiFramebuffer_, nullptr);
+    uiFramebuffer_ = VK_NULL_HANDLE;
+    uiLayer_ = {};
+    uiLayerRects_.clear();
 }
 
 void Presenter::initImGui()
@@ -353,11 +337,84 @@ void Presenter::setVsync(bool vsync)
     swapchainStale_ = true;
 }
 
-void Presenter::present(const std::vector<ViewBlit>& views, ImDrawData* ui, const float background[3],
+// The render pass that clears `uncovered` to the background and draws the panels, over
+// the part of `framebuffer` those cover (the window's image, or the panels' layer).
+void Presenter::recordUi(VkFramebuffer framebuffer, const std::vector<VkRect2D>& uncovered, ImDrawData* ui,
+                         const float background[3])
+{
+    VkRect2D area{};
+    bool any = false;
+    auto include = [&](const VkRect2D& r) {
+        if (r.extent.width == 0 || r.extent.height == 0) return;
+        area = any ? boundingRect(area, r) : r;
+        any = true;
+    };
+    for (const VkRect2D& r : uncovered) include(r);
+    if (ui) include(drawnArea(*ui, extent_));
+    if (!any) return;
+    VkRenderPassBeginInfo rp{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
+    rp.renderPass = renderPass_;
+    rp.framebuffer = framebuffer;
+    rp.renderArea = area;
+    vkCmdBeginRenderPass(cmd_, &rp, VK_SUBPASS_CONTENTS_INLINE);
+    if (!uncovered.empty()) {
+        VkClearAttachment clear{VK_IMAGE_ASPECT_COLOR_BIT, 0, {}};
+        clear.clearValue.color = {{background[0], background[1], background[2], 1.0f}};
+        std::vector<VkClearRect> rects;
+        for (const VkRect2D& r : uncovered) rects.push_back({r, 0, 1});
+        vkCmdClearAttachments(cmd_, 1, &clear, uint32_t(rects.size()), rects.data());
+    }
+    if (ui) ImGui_ImplVulkan_RenderDrawData(ui, cmd_);
+    vkCmdEndRenderPass(cmd_);
+}
+
+// Draws the background and the panels into the panels' layer (made at the window's size
+// on first use), and leaves it as a copy source.
+void Presenter::drawUiLayer(const std::vector<VkRect2D>& uncovered, ImDrawData* ui, const float background[3])
+{
+    if (!uiLayer_.handle()) {
+        gpu::ImageDesc desc;
+        desc.width = extent_.width;
+        desc.height = extent_.height;
+        desc.format = format_;
+        desc.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+        desc.name = "viewer panels";
+        uiLayer_ = gpu::Image(context_, desc);
+        VkImageView view = uiLayer_.view();
+        VkFramebufferCreateInfo fb{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+        fb.renderPass = renderPass_;
+        fb.attachmentCount = 1;
+        fb.pAttachments = &view;
+        fb.width = extent_.width;
+        fb.height = extent_.height;
+        fb.layers = 1;
+        gpu::check(vkCreateFramebuffer(context_.device(), &fb, nullptr, &uiFramebuffer_), "vkCreateFramebuffer");
+    }
+    // Everything the copies take is drawn again: nothing of the last contents is kept.
+    barrier(cmd_, uiLayer_.handle(), VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+            VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+            VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
+    recordUi(uiFramebuffer_, uncovered, ui, background);
+    barrier(cmd_, uiLayer_.handle(), VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+            VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+            VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
+    uiLayerRects_ = uncovered;
+    ++uiLayerDraws_;
+}
+
+void Presenter::present(const std::vector<ViewBlit>& views, ImDrawData* ui, bool uiChanged, const float background[3],
                         std::vector<uint8_t>* screenshot)
 {
     VkDevice device = context_.device();
     gpu::check(vkWaitForFences(device, 1, &done_, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+    if (timed_) {
+        timed_ = false;
+        lastTimes_ = {};
+        for (const gpu::ScopeTime& scope : timer_->collect()) {
+            (scope.name == "views" ? lastTimes_.viewsMs : lastTimes_.panelsMs) = scope.gpuMs;
+            lastTimes_.valid = true;
+        }
+    }
     int width = 0, height = 0;
     glfwGetFramebufferSize(window_, &width, &height);
     if (swapchainStale_ || !swapchain_ || uint32_t(width) != extent_.width || uint32_t(height) != extent_.height) {
@@ -382,6 +439,9 @@ void Presenter::present(const std::vector<ViewBlit>& views, ImDrawData* ui, cons
     VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     gpu::check(vkBeginCommandBuffer(cmd_, &begin), "vkBeginCommandBuffer");
+    if (!timer_) timer_ = std::make_unique<gpu::GpuTimer>(context_, 2);
+    timer_->beginFrame(cmd_);
+    const uint32_t viewsScope = timer_->beginScope(cmd_, "views");
     // Nothing of the last image is kept: the views are copied in, the rest is cleared in
     // the render pass below (only there: a full clear of a large window costs more on a
     // CPU rasterizer than the panels).
@@ -414,44 +474,55 @@ void Presenter::present(const std::vector<ViewBlit>& views, ImDrawData* ui, cons
                        VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit, exact ? VK_FILTER_NEAREST : VK_FILTER_LINEAR);
         if (view.layout != VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL) gpu::transition(cmd_, *view.image, source, after);
     }
+    timer_->endScope(cmd_, viewsScope);
+    // What is not a view: the background and the panels. They are drawn into the panels'
+    // layer when they change and copied from there every frame (a copy costs a fraction
+    // of drawing the panels' blended triangles on a CPU rasterizer). What Dear ImGui
+    // draws over a view (the pixel inspector's tooltip, the split line, a popup) is drawn
+    // over the copied frame, every frame: its draw lists from the first that reaches into
+    // a view on, so that their order is kept.
+    const uint32_t panelsScope = timer_->beginScope(cmd_, "panels");
+    const std::vector<VkRect2D> uncovered = uncoveredRects(views);
+    std::optional<VkRect2D> viewBox;  // what uncoveredRects leaves out
+    for (const ViewBlit& view : views) {
+        if (view.image && view.target.extent.width > 0 && view.target.extent.height > 0)
+            viewBox = viewBox ? boundingRect(*viewBox, view.target) : view.target;
+    }
+    std::vector<ImDrawList*> lists = ui ? std::vector<ImDrawList*>(ui->CmdLists, ui->CmdLists + ui->CmdListsCount)
+                                        : std::vector<ImDrawList*>{};
+    const bool layered = panelLayer_ && !uncovered.empty();
+    const size_t layerLists = layered && ui ? listsInLayer(*ui, viewBox, extent_) : 0;
+    if (layered) {
+        if (uiChanged || !sameRects(uncovered, uiLayerRects_) || !uiLayer_.handle()) {
+            const std::vector<ImDrawList*> inLayer(lists.begin(), lists.begin() + ptrdiff_t(layerLists));
+            ImDrawData layer = ui ? subset(*ui, inLayer) : ImDrawData{};
+            drawUiLayer(uncovered, ui ? &layer : nullptr, background);
+        }
+        std::vector<VkImageCopy> copies;
+        for (const VkRect2D& r : uncovered) {
+            VkImageCopy c{};
+            c.srcSubresource = c.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+            c.srcOffset = c.dstOffset = {r.offset.x, r.offset.y, 0};
+            c.extent = {r.extent.width, r.extent.height, 1};
+            copies.push_back(c);
+        }
+        vkCmdCopyImage(cmd_, uiLayer_.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target,
+                       VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, uint32_t(copies.size()), copies.data());
+    }
     barrier(cmd_, target, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
             VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
             VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
             VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT);
-    // What is not a view is cleared; the render pass covers only that and the panels' draws.
-    const std::vector<VkRect2D> uncovered = uncoveredRects(views);
-    VkRect2D area{};
-    bool any = false;
-    auto include = [&](const VkRect2D& r) {
-        if (r.extent.width == 0 || r.extent.height == 0) return;
-        if (!any) {
-            area = r;
-            any = true;
-            return;
+    if (layered) {
+        if (layerLists < lists.size()) {
+            const std::vector<ImDrawList*> overViews(lists.begin() + ptrdiff_t(layerLists), lists.end());
+            ImDrawData over = subset(*ui, overViews);
+            recordUi(framebuffers_[index], {}, &over, background);
         }
-        const int32_t x0 = std::min(area.offset.x, r.offset.x), y0 = std::min(area.offset.y, r.offset.y);
-        const int32_t x1 = std::max(area.offset.x + int32_t(area.extent.width), r.offset.x + int32_t(r.extent.width));
-        const int32_t y1 = std::max(area.offset.y + int32_t(area.extent.height), r.offset.y + int32_t(r.extent.height));
-        area = {{x0, y0}, {uint32_t(x1 - x0), uint32_t(y1 - y0)}};
-    };
-    for (const VkRect2D& r : uncovered) include(r);
-    if (ui) include(drawnArea(ui, extent_));
-    if (any) {
-        VkRenderPassBeginInfo rp{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
-        rp.renderPass = renderPass_;
-        rp.framebuffer = framebuffers_[index];
-        rp.renderArea = area;
-        vkCmdBeginRenderPass(cmd_, &rp, VK_SUBPASS_CONTENTS_INLINE);
-        if (!uncovered.empty()) {
-            VkClearAttachment clear{VK_IMAGE_ASPECT_COLOR_BIT, 0, {}};
-            clear.clearValue.color = {{background[0], background[1], background[2], 1.0f}};
-            std::vector<VkClearRect> rects;
-            for (const VkRect2D& r : uncovered) rects.push_back({r, 0, 1});
-            vkCmdClearAttachments(cmd_, 1, &clear, uint32_t(rects.size()), rects.data());
-        }
-        if (ui) ImGui_ImplVulkan_RenderDrawData(ui, cmd_);
-        vkCmdEndRenderPass(cmd_);
+    } else {
+        recordUi(framebuffers_[index], uncovered, ui, background);  // no layer: as it was before there was one
     }
+    timer_->endScope(cmd_, panelsScope);
 
     const bool readBack = screenshot && canReadBack_;
     if (readBack) {
@@ -493,6 +564,7 @@ void Presenter::present(const std::vector<ViewBlit>& views, ImDrawData* ui, cons
     submit.signalSemaphoreInfoCount = 1;
     submit.pSignalSemaphoreInfos = &signal;
     gpu::check(vkQueueSubmit2(context_.queue(), 1, &submit, done_), "vkQueueSubmit2 (viewer)");
+    timed_ = true;
 
     if (readBack) {
         gpu::check(vkWaitForFences(device, 1, &done_, VK_TRUE, UINT64_MAX), "vkWaitForFences");

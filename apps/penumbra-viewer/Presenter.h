@@ -5,12 +5,14 @@
 // It owns no renderer: the images it shows are the render graph's (the colour image after
 // FrameRenderer::renderFrame) or ones it uploads (a mapped debug image, a difference).
 #include "penumbra/gpu/Context.h"
+#include "penumbra/gpu/GpuTimer.h"
 #include "penumbra/gpu/Resources.h"
 
 #include <vulkan/vulkan.h>
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -45,6 +47,13 @@ private:
     gpu::Buffer staging_;
 };
 
+// The GPU time of the last shown frame's parts (timestamps around them).
+struct PresentTimes {
+    bool valid = false;
+    double viewsMs = 0.0;   // the views blitted into the window
+    double panelsMs = 0.0;  // the background and the panels: drawn, or copied from their layer
+};
+
 class Presenter {
 public:
     // Creates the surface and the swapchain (and initialises ImGui's Vulkan backend, whose
@@ -59,8 +68,19 @@ public:
     // presents. Recreates the swapchain when the window's size changed (a frame of size 0,
     // a minimised window, is skipped). With `screenshot`, the composed window image is read
     // back to RGBA8 rows (top first) before it is presented.
-    void present(const std::vector<ViewBlit>& views, ImDrawData* ui, const float background[3],
+    // `uiChanged`: `ui` is not the draw data of the last call. Panels drawn outside every
+    // view are kept in a layer of their own and drawn again only when they changed or the
+    // views moved; between, the layer is copied into the window.
+    void present(const std::vector<ViewBlit>& views, ImDrawData* ui, bool uiChanged, const float background[3],
                  std::vector<uint8_t>* screenshot = nullptr);
+    // How many times the panels' layer was drawn (tests: unchanged panels are not drawn again).
+    uint64_t uiLayerDraws() const { return uiLayerDraws_; }
+    // Off: the panels are drawn into the window every frame, as without a layer (to measure
+    // what the layer saves).
+    void setPanelLayer(bool on) { panelLayer_ = on; }
+    bool panelLayer() const { return panelLayer_; }
+    // The last frame whose commands finished (read at the next present()).
+    const PresentTimes& lastTimes() const { return lastTimes_; }
 
     void setVsync(bool vsync);
     bool vsync() const { return vsync_; }
@@ -74,6 +94,9 @@ private:
     void createSwapchain();
     void destroySwapchain();
     void initImGui();
+    void recordUi(VkFramebuffer framebuffer, const std::vector<VkRect2D>& uncovered, ImDrawData* ui,
+                  const float background[3]);
+    void drawUiLayer(const std::vector<VkRect2D>& uncovered, ImDrawData* ui, const float background[3]);
 
     gpu::Context& context_;
     GLFWwindow* window_;
@@ -97,6 +120,15 @@ private:
     VkDescriptorPool imguiPool_ = VK_NULL_HANDLE;
     bool imguiReady_ = false;
     gpu::Buffer readBack_;
+    // The background and the panels outside the views, as last drawn (present()).
+    gpu::Image uiLayer_;
+    VkFramebuffer uiFramebuffer_ = VK_NULL_HANDLE;
+    std::vector<VkRect2D> uiLayerRects_;  // the window's pixels it holds; empty: none
+    uint64_t uiLayerDraws_ = 0;
+    bool panelLayer_ = true;
+    std::unique_ptr<gpu::GpuTimer> timer_;
+    bool timed_ = false;  // a submitted frame's timestamps wait to be read
+    PresentTimes lastTimes_;
 };
 
 } // namespace penumbra::viewer

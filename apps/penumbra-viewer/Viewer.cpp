@@ -19,6 +19,8 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cctype>
+#include <set>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -81,6 +83,16 @@ void expectWords(const ScriptCommand& command, size_t count, const char* usage)
     }
 }
 
+// `VERB on|off`: anything else is an error, not "off".
+bool parseOnOff(const ScriptCommand& command, const char* usage)
+{
+    expectWords(command, 2, usage);
+    if (command.words[1] != "on" && command.words[1] != "off") {
+        throw Error(fmt::format("{}: {}: expected `{}`, got \"{}\"", command.where, command.words[0], usage, command.words[1]));
+    }
+    return command.words[1] == "on";
+}
+
 glm::vec3 parseVec3(const ScriptCommand& command, size_t first)
 {
     return {parseFloat(command.words[first], command), parseFloat(command.words[first + 1], command),
@@ -91,10 +103,6 @@ glm::vec3 parseVec3(const ScriptCommand& command, size_t first)
 
 void TimingHistory::add(const frame::FrameTimings& timings)
 {
-    auto push = [](std::deque<float>& d, float v) {
-        d.push_back(v);
-        if (d.size() > kHistory) d.pop_front();
-    };
     order.clear();
     float sum = 0.0f;
     for (const frame::PassTiming& pass : timings.passes) {
@@ -105,6 +113,26 @@ void TimingHistory::add(const frame::FrameTimings& timings)
     }
     push(sumGpuMs, sum);
     push(frameMs, float(timings.frameCpuMs));
+}
+
+void TimingHistory::push(std::deque<float>& values, float value)
+{
+    values.push_back(value);
+    if (values.size() > kHistory) values.pop_front();
+}
+
+float TimingHistory::mean(const std::deque<float>& values)
+{
+    if (values.empty()) return 0.0f;
+    double sum = 0.0;
+    for (float v : values) sum += v;
+    return float(sum / double(values.size()));
+}
+
+float TimingHistory::panelsShare() const
+{
+    const float frame = median(frameMs);
+    return frame > 0.0f ? 100.0f * (mean(panelsCpuMs) + mean(panelsGpuMs)) / frame : 0.0f;
 }
 
 float TimingHistory::median(const std::deque<float>& values)
@@ -148,6 +176,17 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options)
     io.FontGlobalScale = uiScale_;
     ImGui::StyleColorsDark();
     ImGui::GetStyle().ScaleAllSizes(uiScale_);
+    // Every input event wakes the panels (panelsDue); Dear ImGui's backend installs its own
+    // callbacks over these and calls them on.
+    glfwSetWindowUserPointer(window_, this);
+    glfwSetMouseButtonCallback(window_, [](GLFWwindow* w, int, int, int) { countInput(w); });
+    glfwSetScrollCallback(window_, [](GLFWwindow* w, double, double) { countInput(w); });
+    glfwSetKeyCallback(window_, [](GLFWwindow* w, int, int, int, int) { countInput(w); });
+    glfwSetCharCallback(window_, [](GLFWwindow* w, unsigned int) { countInput(w); });
+    glfwSetWindowFocusCallback(window_, [](GLFWwindow* w, int) { countInput(w); });
+    glfwSetCursorEnterCallback(window_, [](GLFWwindow* w, int) { countInput(w); });
+    glfwSetCursorPosCallback(window_, [](GLFWwindow* w, double, double) { countInput(w); });
+    glfwSetFramebufferSizeCallback(window_, [](GLFWwindow* w, int, int) { countInput(w); });
     ImGui_ImplGlfw_InitForVulkan(window_, true);
     presenter_ = std::make_unique<Presenter>(*context_, window_, options.vsync);
     debugUpload_ = std::make_unique<UploadedImage>(*context_, "viewer debug image");
@@ -205,18 +244,44 @@ int Viewer::run()
     return exitCode_;
 }
 
+void Viewer::countInput(GLFWwindow* window) { ++static_cast<Viewer*>(glfwGetWindowUserPointer(window))->inputEvents_; }
+
+bool Viewer::panelsDue(double now) const
+{
+    if (!presenter_->panelLayer() || panelsDirty_ || inputEvents_ != inputEventsSeen_ ||
+        now - panelsBuiltAt_ >= kPanelRefreshS) {
+        return true;
+    }
+    // Held: a drag, or a fly key, moves something every frame without new events.
+    const ImGuiIO& io = ImGui::GetIO();
+    return std::any_of(std::begin(io.MouseDown), std::end(io.MouseDown), [](bool d) { return d; }) ||
+           std::any_of(std::begin(io.KeysDown), std::end(io.KeysDown), [](bool d) { return d; });
+}
+
 void Viewer::frame()
 {
     const double now = glfwGetTime();
     const float dt = float(std::clamp(now - lastTime_, 0.0, 0.25));
+    TimingHistory::push(history_.shownMs, float((now - lastTime_) * 1000.0));
     lastTime_ = now;
-    ImGui_ImplVulkan_NewFrame();
-    ImGui_ImplGlfw_NewFrame();
-    ImGui::NewFrame();
-    const auto uiStart = std::chrono::steady_clock::now();
-    if (showUi_) drawPanels();
+    const std::string messageBefore = message_;
+    // The panels, and the input that reaches the camera through Dear ImGui, only when due.
+    const bool panels = panelsDue(now);
+    // First: its window-system queries wait for the server to finish the last present,
+    // a wait that is the present's, not the panels'.
     fitRenderSize();
-    handleInput();
+    const auto uiStart = std::chrono::steady_clock::now();
+    if (panels) {
+        inputEventsSeen_ = inputEvents_;
+        panelsDirty_ = false;
+        panelsBuiltAt_ = now;
+        ImGui_ImplVulkan_NewFrame();
+        ImGui_ImplGlfw_NewFrame();
+        ImGui::NewFrame();
+        if (showUi_) drawPanels();
+    }
+    double panelsCpuMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - uiStart).count();
+    if (panels) handleInput();
     if (playing_) {
         // Plays at wall-clock speed and loops.
         const float end = session_->duration();
@@ -246,7 +311,12 @@ void Viewer::frame()
             }
         }
     }
-    if (session_->renderIfChanged(continuous_)) afterRender();
+    // A frame drawn for a change (not the next frame of a continuous run): the panels show
+    // what changed (the camera's fields, the technique's figures) on the next frame.
+    if (session_->renderIfChanged(continuous_)) {
+        afterRender();
+        if (!continuous_) panelsDirty_ = true;
+    }
     if (!session_->lastError().empty()) message_ = session_->lastError();
     try {
         updateComparison();
@@ -254,17 +324,22 @@ void Viewer::frame()
         message_ = fmt::format("B: {}", e.what());  // the window goes on with A alone
         compareOn_ = false;
     }
+    if (message_ != messageBefore) panelsDirty_ = true;
     if (const std::vector<fs::path> folders = session_->shaderFolders(); folders != shaderWatcher_.folders()) {
         shaderWatcher_.watch(folders);  // techniques changed: their plugins' folders
     }
 
     const auto presentStart = std::chrono::steady_clock::now();
-    ImGui::Render();
+    if (panels) {
+        ImGui::Render();
+        panelsCpuMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - presentStart).count();
+    }
     const float background[3] = {0.09f, 0.09f, 0.1f};
-    presenter_->present(viewBlits(), ImGui::GetDrawData(), background);
+    presenter_->present(viewBlits(), ImGui::GetDrawData(), panels, background);
     uiMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - presentStart).count();
-    history_.viewerMs.push_back(float(uiMs));
-    if (history_.viewerMs.size() > TimingHistory::kHistory) history_.viewerMs.pop_front();
+    TimingHistory::push(history_.viewerMs, float(uiMs));
+    TimingHistory::push(history_.panelsCpuMs, panels ? float(panelsCpuMs) : 0.0f);
+    if (presenter_->lastTimes().valid) TimingHistory::push(history_.panelsGpuMs, float(presenter_->lastTimes().panelsMs));
     if (framesToRun_ > 0) --framesToRun_;
 }
 
@@ -583,7 +658,7 @@ void Viewer::writeScreenshot(const fs::path& file, bool window)
         ImGui::Render();
         std::vector<uint8_t> pixels;
         const float background[3] = {0.09f, 0.09f, 0.1f};
-        presenter_->present(viewBlits(), ImGui::GetDrawData(), background, &pixels);
+        presenter_->present(viewBlits(), ImGui::GetDrawData(), true, background, &pixels);
         if (pixels.empty()) throw Error(fmt::format("{}: the window's images cannot be read back on this device", file.string()));
         io::writePng(file, presenter_->extent().width, presenter_->extent().height, pixels);
     } else {
@@ -629,6 +704,7 @@ bool Viewer::runScriptUntilFrame()
     }
     while (scriptNext_ < options_.script.size()) {
         const ScriptCommand& command = options_.script[scriptNext_++];
+        panelsDirty_ = true;  // the panels show what the command changed
         try {
             runCommand(command);
         } catch (const std::exception& e) {
@@ -750,14 +826,28 @@ void Viewer::runCommand(const ScriptCommand& command)
         if (command.words.size() == 3) mapping_ = metrics::parseDebugMapping(command.words[2]);
         session_->showImage(command.words[1] == "color" ? std::string() : command.words[1]);
     } else if (verb == "continuous") {
-        expectWords(command, 2, "continuous on|off");
-        continuous_ = command.words[1] == "on";
+        continuous_ = parseOnOff(command, "continuous on|off");
     } else if (verb == "vsync") {
-        expectWords(command, 2, "vsync on|off");
-        presenter_->setVsync(command.words[1] == "on");
+        presenter_->setVsync(parseOnOff(command, "vsync on|off"));
     } else if (verb == "ui") {
-        expectWords(command, 2, "ui on|off");
-        showUi_ = command.words[1] == "on";
+        showUi_ = parseOnOff(command, "ui on|off");
+    } else if (verb == "panel") {
+        expectWords(command, 3, "panel NAME open|closed");
+        static const std::set<std::string> names{"file",      "scene",   "camera",       "render", "lights",
+                                                 "animation", "compare", "debug images", "timings"};
+        std::string name = command.words[1];
+        std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+        if (!names.contains(name)) {
+            throw Error(fmt::format("{}: panel \"{}\": expected one of file, scene, camera, render, lights, animation, "
+                                    "compare, \"debug images\" or timings",
+                                    command.where, command.words[1]));
+        }
+        if (command.words[2] != "open" && command.words[2] != "closed") {
+            throw Error(fmt::format("{}: panel {} \"{}\": expected open or closed", command.where, name, command.words[2]));
+        }
+        panelOpen_[name] = command.words[2] == "open";
+    } else if (verb == "panel-layer") {
+        presenter_->setPanelLayer(parseOnOff(command, "panel-layer on|off"));
     } else if (verb == "screenshot") {
         expectWords(command, 2, "screenshot FILE.png");
         writeScreenshot(command.words[1], false);
@@ -837,8 +927,7 @@ void Viewer::runCommand(const ScriptCommand& command)
         }
         session_->setTime(t);
     } else if (verb == "play") {
-        expectWords(command, 2, "play on|off");
-        playing_ = command.words[1] == "on";
+        playing_ = parseOnOff(command, "play on|off");
     } else if (verb == "wait-for" || verb == "wait-error" || verb == "wait-no-error") {
         // For tests that edit files while the viewer runs: frames go on until FILE exists,
         // or the viewer shows an error with TEXT, or none (hot reload polls the disk).
@@ -894,11 +983,19 @@ void Viewer::runCommand(const ScriptCommand& command)
                      "(an edit to its first frame) {:.3f} ms",
                      TimingHistory::median(history_.frameMs), TimingHistory::median(history_.sumGpuMs),
                      TimingHistory::median(history_.viewerMs), session_->lastRebuildMs());
+        const size_t built = size_t(std::count_if(history_.panelsCpuMs.begin(), history_.panelsCpuMs.end(),
+                                                  [](float ms) { return ms > 0.0f; }));
+        spdlog::info("timing shown frame {:.3f} ms (the loop's wall clock, median)", TimingHistory::median(history_.shownMs));
+        spdlog::info("timing panels {:.3f} ms CPU + {:.3f} ms GPU a shown frame (means; built in {} of the last {} "
+                     "frames, panel layer {}), {:.2f} % of the frame",
+                     TimingHistory::mean(history_.panelsCpuMs), TimingHistory::mean(history_.panelsGpuMs), built,
+                     history_.panelsCpuMs.size(), presenter_->panelLayer() ? "on" : "off", history_.panelsShare());
     } else {
         throw Error(fmt::format("{}: unknown command \"{}\"; expected open, size, window, camera, orbit, dolly, set, param, "
                                 "technique, culling, light, show, continuous, vsync, ui, frames, screenshot, "
                                 "screenshot-window, save, save-visibility, compare, compare-set, compare-view, wait-compare, errors, wait-for, "
-                                "wait-error, wait-no-error, expect-error, expect-no-error, record, time, play, widgets, timings or quit",
+                                "wait-error, wait-no-error, expect-error, expect-no-error, record, time, play, widgets, timings, "
+                                "panel, panel-layer or quit",
                                 command.where, verb));
     }
 }

@@ -48,9 +48,17 @@ struct TimingHistory {
     static constexpr size_t kHistory = 120;
     std::map<std::string, std::deque<float>> gpuMs, cpuMs;
     std::deque<float> frameMs, sumGpuMs, viewerMs;
+    // Per shown frame, the panels' own cost: building them (Dear ImGui's frame, 0 when
+    // they were not due) and their GPU time (drawn, or copied from their layer).
+    std::deque<float> panelsCpuMs, panelsGpuMs;
+    std::deque<float> shownMs;  // wall clock from one shown frame to the next
     std::vector<std::string> order;  // passes in execution order, as last seen
     void add(const frame::FrameTimings& timings);
+    static void push(std::deque<float>& values, float value);
     static float median(const std::deque<float>& values);
+    static float mean(const std::deque<float>& values);
+    // The panels' mean cost per shown frame over the median frame, in percent.
+    float panelsShare() const;
 };
 
 class Viewer {
@@ -63,6 +71,13 @@ public:
 private:
     // Viewer.cpp
     void frame();
+    // Whether this frame builds the panels again (Dear ImGui's frame: widgets, input):
+    // after input, while a button or key is held, after a change the panels show, and at
+    // least every kPanelRefreshS; between, the presenter shows the panels as last drawn.
+    bool panelsDue(double now) const;
+    static void countInput(GLFWwindow* window);  // a GLFW input callback's count
+    // Panels.cpp: a panel's collapsing header; a script can open or close it (`panel`).
+    bool panelHeader(const char* name, bool openAtFirst);
     void handleInput();
     bool runScriptUntilFrame();  // false when the script quit
     void runCommand(const ScriptCommand& command);
@@ -122,9 +137,8 @@ private:
 
     // Pixel inspector: read back lazily, per rendered frame.
     uint64_t inspectedFrame_ = ~0ull;
-    std::chrono::steady_clock::time_point inspectedAt_{};
-    std::vector<uint8_t> inspectedColor_;
-    std::vector<std::vector<float>> inspectedVisibility_;
+    std::optional<frame::FrameRenderer::Pixel> inspected_;  // the pixel inspector's last read
+    std::pair<uint32_t, uint32_t> inspectedAt_{};
 
     CameraMode cameraMode_ = CameraMode::Orbit;
     scene::Camera homeCamera_;  // as the file gave it: R goes back to it
@@ -132,6 +146,15 @@ private:
     float flySpeedExponent_ = 0.0f;
     bool continuous_ = false;
     bool showUi_ = true;
+    // Input events since start (GLFW's callbacks count them) and the count the last
+    // panels saw; a change the panels show that no input made (a script command, a new
+    // frame after an edit, a message) sets panelsDirty_.
+    std::map<std::string, bool> panelOpen_;  // `panel NAME open|closed` to apply, by lower-case name
+    uint64_t inputEvents_ = 0;
+    uint64_t inputEventsSeen_ = 0;
+    bool panelsDirty_ = true;
+    double panelsBuiltAt_ = -1.0;
+    static constexpr double kPanelRefreshS = 0.25;  // live figures (timings, time) refresh 4x a second
     bool quit_ = false;
     int exitCode_ = 0;
     std::string savePath_;

@@ -20,6 +20,7 @@
 #include <fstream>
 #include <map>
 #include <set>
+#include <regex>
 #include <sstream>
 #include <thread>
 
@@ -239,6 +240,10 @@ TEST_F(ViewerTest, ScriptErrorsNameTheCommandAndEndTheRunWithExit1)
         {"fly away", "unknown command \"fly\""},
         {"show no.such.image", "no.such.image"},
         {"save /no/such/folder/x.json", "/no/such/folder"},
+        {"ui of", "expected `ui on|off`, got \"of\""},
+        {"panel-layer yes", "expected `panel-layer on|off`"},
+        {"panel shadows open", "panel \"shadows\": expected one of"},
+        {"panel timings shut", "expected open or closed"},
     };
     for (const Bad& bad : cases) {
         SCOPED_TRACE(bad.script);
@@ -506,6 +511,45 @@ TEST_F(ViewerTest, TheRenderSizeFollowsTheWindowUnlessFixed)
     const json saved = json::parse(slurp(save));
     EXPECT_EQ(saved["output"]["width"], 200);
     EXPECT_EQ(saved["output"]["height"], 100);
+}
+
+// The panels are drawn into a layer of their own and copied into the window: the window
+// shows what drawing them into it showed (the pixel inspector's tooltip over the view
+// included, drawn over the copy), and panels nobody touches are not built again every
+// frame. The two screenshots differ only in the status line ("wrote <file>"), the Timings
+// panel (live figures) is closed.
+TEST_F(ViewerTest, ThePanelLayerShowsWhatDrawingThePanelsShowsAndIsNotRebuiltEveryFrame)
+{
+    for (const char* d : {"a", "b", "c"}) fs::create_directories(dir / d);
+    // c first: both screenshots then show a status line of the same length (and Dear
+    // ImGui, which sizes the scroll bar from the frame before, has had a frame with it).
+    const fs::path first = dir / "c" / "w.png", layered = dir / "a" / "w.png", drawn = dir / "b" / "w.png";
+    const RunResult v = viewer(config("default.json"),
+                               fmt::format("window 1100 560; panel timings closed; frames 3; screenshot-window {}; frames 2; "
+                                           "screenshot-window {}; panel-layer off; frames 2; screenshot-window {}; "
+                                           "panel-layer on; frames 40; timings; quit",
+                                           first.string(), layered.string(), drawn.string()));
+    ASSERT_EQ(v.exitCode, 0) << v.err;
+    const Png a = readPng(layered), b = readPng(drawn);
+    ASSERT_EQ(a.width, 1100);
+    ASSERT_EQ(b.width, 1100);
+    ASSERT_EQ(a.height, b.height);
+    const int statusRows = 100;  // the status line (two lines for this test folder) and its dismiss button
+    size_t differ = 0, compared = 0;
+    for (int y = 0; y < a.height; ++y) {
+        for (int x = 0; x < a.width; ++x) {
+            if (x < 440 && y < statusRows) continue;
+            const size_t i = (size_t(y) * a.width + x) * 4;
+            ++compared;
+            differ += !std::equal(a.rgba.begin() + ptrdiff_t(i), a.rgba.begin() + ptrdiff_t(i) + 3, b.rgba.begin() + ptrdiff_t(i));
+        }
+    }
+    EXPECT_EQ(differ, 0u) << "of " << compared << " pixels";
+    // 40 frames without input: built at most 4 times a second, and after each command.
+    const std::regex built(R"(built in (\d+) of the last (\d+) frames, panel layer on)");
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(v.err, m, built)) << v.err;
+    EXPECT_LE(std::stoi(m[1]), std::stoi(m[2]) / 2) << m[0];
 }
 
 // A rebuilt plugin library is loaded again without a restart, keeping the light's

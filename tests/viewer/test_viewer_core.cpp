@@ -1,7 +1,9 @@
 // The viewer's parts that need no window (apps/penumbra-viewer/): camera moves
-// (CameraControl.h) at scene scales from 1e-3 to 1e5, script parsing (Script.h) and shader
-// watching (ShaderWatcher.h).
+// (CameraControl.h) at scene scales from 1e-3 to 1e5, script parsing (Script.h), shader
+// watching (ShaderWatcher.h) and the panels' layer geometry (PanelLayer.h) on Dear ImGui's
+// own draw data.
 #include "CameraControl.h"
+#include "PanelLayer.h"
 #include "Script.h"
 #include "ShaderWatcher.h"
 
@@ -13,6 +15,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <unistd.h>
 
 using namespace penumbra;
@@ -147,4 +150,102 @@ TEST(ShaderWatcher, SeesEditsAdditionsAndRemovalsOfShadersOnlyOnce)
     std::ofstream(dir / "c.frag") << "void main() {}";
     EXPECT_FALSE(watcher.changed(std::chrono::hours(1)));
     fs::remove_all(dir);
+}
+
+namespace {
+
+// A Dear ImGui frame without a window or a device: a side panel like the viewer's (no
+// border, `panelWidth` wide, the display's height), then, when `tooltipAt` is set, a
+// tooltip there. The font atlas is built on the CPU.
+class ImGuiFrame {
+public:
+    ImGuiFrame(float width, float height, float panelWidth, std::optional<ImVec2> tooltipAt, float framebufferScale = 1.0f)
+    {
+        context_ = ImGui::CreateContext();
+        ImGuiIO& io = ImGui::GetIO();
+        io.IniFilename = nullptr;
+        io.DisplaySize = ImVec2(width, height);
+        io.DisplayFramebufferScale = ImVec2(framebufferScale, framebufferScale);
+        io.DeltaTime = 1.0f / 60.0f;
+        unsigned char* pixels = nullptr;
+        int w = 0, h = 0;
+        io.Fonts->GetTexDataAsRGBA32(&pixels, &w, &h);
+        io.MousePos = tooltipAt ? *tooltipAt : ImVec2(-1.0f, -1.0f);
+        // Twice: a window that sizes itself (the tooltip) is hidden in its first frame.
+        for (int frame = 0; frame < 2; ++frame) {
+            ImGui::NewFrame();
+            ImGui::SetNextWindowPos(ImVec2(0, 0));
+            ImGui::SetNextWindowSize(ImVec2(panelWidth, height));
+            ImGui::PushStyleVar(ImGuiStyleVar_WindowBorderSize, 0.0f);
+            ImGui::Begin("panel", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize);
+            ImGui::PopStyleVar();
+            for (int i = 0; i < 60; ++i) ImGui::Text("line %d of a panel long enough to scroll", i);
+            ImGui::End();
+            if (tooltipAt) ImGui::SetTooltip("pixel (%d, %d)", int(tooltipAt->x), int(tooltipAt->y));
+            ImGui::Render();
+        }
+    }
+    ~ImGuiFrame() { ImGui::DestroyContext(context_); }
+    ImGuiFrame(const ImGuiFrame&) = delete;
+    ImGuiFrame& operator=(const ImGuiFrame&) = delete;
+    const ImDrawData& data() const { return *ImGui::GetDrawData(); }
+
+private:
+    ImGuiContext* context_ = nullptr;
+};
+
+VkRect2D rect(int32_t x, int32_t y, uint32_t w, uint32_t h) { return {{x, y}, {w, h}}; }
+
+} // namespace
+
+TEST(PanelLayer, ThePanelBesideTheViewGoesIntoTheLayerAndATooltipOverItIsDrawnOverTheFrame)
+{
+    for (const float scale : {1.0f, 2.0f}) {  // HiDPI: framebuffer pixels are `scale` points
+        SCOPED_TRACE(scale);
+        const VkExtent2D extent{uint32_t(1200 * scale), uint32_t(600 * scale)};
+        const VkRect2D view = rect(int32_t(440 * scale), 0, uint32_t(760 * scale), uint32_t(600 * scale));
+        {
+            const ImGuiFrame frame(1200, 600, 440, std::nullopt, scale);
+            ASSERT_EQ(frame.data().CmdListsCount, 1);
+            const VkRect2D panel = drawnArea(frame.data(), extent);
+            EXPECT_EQ(panel.offset.x, 0);
+            EXPECT_EQ(panel.offset.y, 0);
+            EXPECT_LE(panel.extent.width, uint32_t(440 * scale));  // not a pixel into the view
+            EXPECT_GT(panel.extent.width, uint32_t(400 * scale));
+            EXPECT_EQ(listsInLayer(frame.data(), view, extent), 1u);
+            EXPECT_EQ(listsInLayer(frame.data(), std::nullopt, extent), 1u);
+        }
+        {
+            const ImGuiFrame frame(1200, 600, 440, ImVec2(900, 300), scale);
+            ASSERT_EQ(frame.data().CmdListsCount, 2);
+            const VkRect2D tooltip = drawnArea(frame.data(), {frame.data().CmdLists[1]}, extent);
+            EXPECT_TRUE(intersects(tooltip, view));
+            EXPECT_GE(tooltip.offset.x, int32_t(900 * scale));  // where it is, not the display's clip rectangle
+            EXPECT_LT(tooltip.extent.width, uint32_t(400 * scale));
+            EXPECT_EQ(listsInLayer(frame.data(), view, extent), 1u);
+            // A panel wider than the band: it reaches into the view, and so does everything after it.
+            EXPECT_EQ(listsInLayer(frame.data(), rect(int32_t(300 * scale), 0, 900, 600), extent), 0u);
+            const std::vector<ImDrawList*> over{frame.data().CmdLists[1]};
+            const ImDrawData part = subset(frame.data(), over);
+            EXPECT_EQ(part.CmdListsCount, 1);
+            EXPECT_EQ(part.TotalVtxCount, frame.data().CmdLists[1]->VtxBuffer.Size);
+            EXPECT_EQ(part.TotalIdxCount, frame.data().CmdLists[1]->IdxBuffer.Size);
+            EXPECT_EQ(part.DisplaySize.x, frame.data().DisplaySize.x);
+        }
+    }
+}
+
+TEST(PanelLayer, RectangleTestsShareOnlyPixelsBothCover)
+{
+    EXPECT_TRUE(intersects(rect(0, 0, 10, 10), rect(9, 9, 5, 5)));
+    EXPECT_FALSE(intersects(rect(0, 0, 10, 10), rect(10, 0, 5, 5)));  // touching edges share no pixel
+    EXPECT_FALSE(intersects(rect(0, 0, 0, 10), rect(0, 0, 5, 5)));    // empty
+    const VkRect2D b = boundingRect(rect(-2, 3, 4, 4), rect(5, 0, 1, 1));
+    EXPECT_EQ(b.offset.x, -2);
+    EXPECT_EQ(b.offset.y, 0);
+    EXPECT_EQ(b.extent.width, 8u);
+    EXPECT_EQ(b.extent.height, 7u);
+    EXPECT_TRUE(sameRects({rect(1, 2, 3, 4)}, {rect(1, 2, 3, 4)}));
+    EXPECT_FALSE(sameRects({rect(1, 2, 3, 4)}, {rect(1, 2, 3, 5)}));
+    EXPECT_FALSE(sameRects({rect(1, 2, 3, 4)}, {}));
 }

@@ -449,6 +449,25 @@ std::vector<float> FrameRenderer::readVisibility(size_t light) const
     return readFloats(slot.visibility);
 }
 
+FrameRenderer::Pixel FrameRenderer::readPixel(uint32_t x, uint32_t y) const
+{
+    if (x >= width_ || y >= height_) {
+        throw Error(fmt::format("readPixel: ({}, {}) is outside the {} x {} frame", x, y, width_, height_));
+    }
+    const VkRect2D texel{{int32_t(x), int32_t(y)}, {1, 1}};
+    Pixel pixel;
+    const std::vector<std::byte> color =
+        gpu::readImage(context_, executor_.image(kColor), executor_.finalLayout(kColor), texel);
+    std::memcpy(pixel.color.data(), color.data(), pixel.color.size());
+    for (const LightSlot& slot : lights_) {
+        pixel.visibility.push_back(slot.unshadowed ? 1.0f
+                                                   : gpu::readImageFloats(context_, executor_.image(slot.visibility),
+                                                                          executor_.finalLayout(slot.visibility), texel)
+                                                         .at(0));
+    }
+    return pixel;
+}
+
 plugin::GBufferIo FrameRenderer::gbufferIo() const
 {
     plugin::GBufferIo io;

@@ -336,8 +336,20 @@ Image uploadImage(Context& context, uint32_t width, uint32_t height, VkFormat fo
 
 std::vector<std::byte> readImage(Context& context, const Image& image, VkImageLayout layout)
 {
+    return readImage(context, image, layout, VkRect2D{{0, 0}, {image.desc().width, image.desc().height}});
+}
+
+std::vector<std::byte> readImage(Context& context, const Image& image, VkImageLayout layout, const VkRect2D& region)
+{
     const ImageDesc& desc = image.desc();
-    const VkDeviceSize size = VkDeviceSize(desc.width) * desc.height * texelSize(desc.format);
+    const bool inside = region.offset.x >= 0 && region.offset.y >= 0 && region.extent.width > 0 &&
+                        region.extent.height > 0 && uint64_t(region.offset.x) + region.extent.width <= desc.width &&
+                        uint64_t(region.offset.y) + region.extent.height <= desc.height;
+    if (!inside) {
+        throw GpuError(fmt::format("readImage: the rectangle ({}, {}) {} x {} is not inside {}", region.offset.x,
+                                   region.offset.y, region.extent.width, region.extent.height, describe(desc)));
+    }
+    const VkDeviceSize size = VkDeviceSize(region.extent.width) * region.extent.height * texelSize(desc.format);
     Buffer staging(context, size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, desc.name + " (read-back)");
     // `layout` with any earlier access -> copy source -> back to `layout`; the copy's
     // writes are made visible to the host.
@@ -348,11 +360,11 @@ std::vector<std::byte> readImage(Context& context, const Image& image, VkImageLa
                             VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT};
     context.submitAndWait([&](VkCommandBuffer cmd) {
         transition(cmd, image, before, copySource);
-        VkBufferImageCopy region{};
-        region.imageSubresource = {image.aspect(), 0, 0, 1};
-        region.imageExtent = {desc.width, desc.height, 1};
-        vkCmdCopyImageToBuffer(cmd, image.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, staging.handle(), 1,
-                               &region);
+        VkBufferImageCopy copy{};
+        copy.imageSubresource = {image.aspect(), 0, 0, 1};
+        copy.imageOffset = {region.offset.x, region.offset.y, 0};
+        copy.imageExtent = {region.extent.width, region.extent.height, 1};
+        vkCmdCopyImageToBuffer(cmd, image.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, staging.handle(), 1, &copy);
         transition(cmd, image, copySource, after);
         memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT},
                       {VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT});
@@ -362,10 +374,12 @@ std::vector<std::byte> readImage(Context& context, const Image& image, VkImageLa
     return out;
 }
 
-std::vector<float> readImageFloats(Context& context, const Image& image, VkImageLayout layout)
+namespace {
+
+// Texels as readImageFloats gives them, from the bytes readImage gave.
+std::vector<float> texelsAsFloats(const Image& image, const std::vector<std::byte>& bytes)
 {
     const VkFormat format = image.desc().format;
-    const std::vector<std::byte> bytes = readImage(context, image, layout);
     if (format == VK_FORMAT_R16_SFLOAT || format == VK_FORMAT_R16G16B16A16_SFLOAT) {
         std::vector<uint16_t> halves(bytes.size() / sizeof(uint16_t));
         std::memcpy(halves.data(), bytes.data(), halves.size() * sizeof(uint16_t));
@@ -398,14 +412,46 @@ std::vector<float> readImageFloats(Context& context, const Image& image, VkImage
         std::memcpy(values.data(), bytes.data(), values.size() * sizeof(uint32_t));
         return std::vector<float>(values.begin(), values.end());
     }
-    if (format != VK_FORMAT_R32_SFLOAT && format != VK_FORMAT_R32G32B32A32_SFLOAT &&
-        format != VK_FORMAT_D32_SFLOAT && format != VK_FORMAT_R32G32_SFLOAT) {
-        throw GpuError(fmt::format("readImageFloats: image '{}' has format {}, which is not read back as numbers",
-                                   image.desc().name, formatName(format)));
-    }
     std::vector<float> out(bytes.size() / sizeof(float));
     std::memcpy(out.data(), bytes.data(), out.size() * sizeof(float));
     return out;
+}
+
+void expectNumbers(const Image& image)
+{
+    switch (image.desc().format) {
+    case VK_FORMAT_R16_SFLOAT:
+    case VK_FORMAT_R16G16B16A16_SFLOAT:
+    case VK_FORMAT_R16_UNORM:
+    case VK_FORMAT_R8_UNORM:
+    case VK_FORMAT_R8G8B8A8_UNORM:
+    case VK_FORMAT_R8G8B8A8_SRGB:
+    case VK_FORMAT_R16G16_SNORM:
+    case VK_FORMAT_R32_UINT:
+    case VK_FORMAT_R32G32B32A32_UINT:
+    case VK_FORMAT_R32_SFLOAT:
+    case VK_FORMAT_R32G32B32A32_SFLOAT:
+    case VK_FORMAT_D32_SFLOAT:
+    case VK_FORMAT_R32G32_SFLOAT:
+        return;
+    default:
+        throw GpuError(fmt::format("readImageFloats: image '{}' has format {}, which is not read back as numbers",
+                                   image.desc().name, formatName(image.desc().format)));
+    }
+}
+
+} // namespace
+
+std::vector<float> readImageFloats(Context& context, const Image& image, VkImageLayout layout)
+{
+    expectNumbers(image);
+    return texelsAsFloats(image, readImage(context, image, layout));
+}
+
+std::vector<float> readImageFloats(Context& context, const Image& image, VkImageLayout layout, const VkRect2D& region)
+{
+    expectNumbers(image);
+    return texelsAsFloats(image, readImage(context, image, layout, region));
 }
 
 } // namespace penumbra::gpu

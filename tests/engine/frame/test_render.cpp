@@ -5,7 +5,9 @@
 #include "TestContext.h"
 
 #include "penumbra/config/Config.h"
+#include "penumbra/core/Error.h"
 #include "penumbra/frame/FrameRenderer.h"
+#include "penumbra/gpu/Resources.h"
 
 #include <gtest/gtest.h>
 
@@ -168,6 +170,47 @@ TEST_F(MultiLight, EachLightHasItsOwnVisibilityImage)
     size_t differ = 0;
     for (size_t i = 0; i < v0.size(); ++i) differ += v0[i] != v1[i];
     EXPECT_GT(differ, v0.size() / 20);
+}
+
+// The pixel inspector's read: one texel of the colour and of each V, equal to that pixel
+// of the whole images, at the corners and across the frame, for a shadowed light and an
+// unshadowed one ("none": V = 1); outside the frame, an error naming the pixel.
+TEST_F(MultiLight, ReadPixelIsThatPixelOfTheWholeImages)
+{
+    config::RenderConfig cfg = test::defaultTestConfig();
+    config::LightConfig unshadowed = cfg.lights[0];
+    unshadowed.name = "unshadowed";
+    unshadowed.shadow = {};
+    unshadowed.shadow.technique = "none";
+    cfg.lights.push_back(unshadowed);
+    const RenderedFrame frame(*context, cfg);
+    const uint32_t w = frame.renderer.width(), h = frame.renderer.height();
+    const std::vector<uint8_t> color = frame.renderer.readColor();
+    const std::vector<float> v0 = frame.renderer.readVisibility(0), v1 = frame.renderer.readVisibility(1);
+    size_t shadowed = 0;
+    for (uint32_t y = 0; y < h; y += std::max(1u, h / 13)) {
+        for (const uint32_t x : {0u, w / 3, w / 2 + 1, w - 1}) {
+            for (const uint32_t py : {y, h - 1 - y}) {
+                const frame::FrameRenderer::Pixel p = frame.renderer.readPixel(x, py);
+                const size_t i = size_t(py) * w + x;
+                for (size_t c = 0; c < 4; ++c) EXPECT_EQ(p.color[c], color[i * 4 + c]) << x << ", " << py;
+                ASSERT_EQ(p.visibility.size(), 2u);
+                EXPECT_EQ(p.visibility[0], v0[i]) << x << ", " << py;
+                EXPECT_EQ(p.visibility[1], 1.0f);
+                shadowed += v0[i] < 0.5f;
+            }
+        }
+    }
+    EXPECT_GT(shadowed, 0u);  // the sweep met a shadow
+    EXPECT_THROW((void)frame.renderer.readPixel(w, 0), Error);
+    EXPECT_THROW((void)frame.renderer.readPixel(0, h), Error);
+    // gpu::readImage's own guard: a rectangle that leaves the image, or an empty one.
+    const gpu::Image& image = frame.renderer.executor().image("color");
+    const VkImageLayout layout = frame.renderer.executor().finalLayout("color");
+    EXPECT_THROW((void)gpu::readImage(*context, image, layout, VkRect2D{{int32_t(w) - 1, 0}, {2, 1}}), GpuError);
+    EXPECT_THROW((void)gpu::readImage(*context, image, layout, VkRect2D{{-1, 0}, {1, 1}}), GpuError);
+    EXPECT_THROW((void)gpu::readImage(*context, image, layout, VkRect2D{{0, 0}, {0, 1}}), GpuError);
+    EXPECT_EQ(gpu::readImage(*context, image, layout, VkRect2D{{0, 0}, {w, 2}}).size(), size_t(w) * 2 * 4);
 }
 
 // Every light type's hard shadow against the ray cast: a directional light (orthographic

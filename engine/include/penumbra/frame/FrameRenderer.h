@@ -23,6 +23,7 @@
 #include "penumbra/visibility/CullingStats.h"
 
 #include <map>
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
@@ -100,6 +101,13 @@ public:
     std::vector<uint8_t> readColor() const;
     // V_l, one float per pixel (all 1 for a light whose technique is "none").
     std::vector<float> readVisibility(size_t light) const;
+    // One pixel of both (a pixel inspector's read: two texels copied, not two images):
+    // readColor()'s RGBA8 and every light's V at (x, y) < (width(), height()).
+    struct Pixel {
+        std::array<uint8_t, 4> color{};
+        std::vector<float> visibility;  // per light
+    };
+    Pixel readPixel(uint32_t x, uint32_t y) const;
     // G-buffer world positions as the techniques read them (rebuilt from the depth,
     // plugin::GBufferExport), four floats per pixel (all 0 where no geometry, w = 1
     // elsewhere).

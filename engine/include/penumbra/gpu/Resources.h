@@ -123,4 +123,9 @@ std::vector<std::byte> readImage(Context& context, const Image& image, VkImageLa
 // image's stored bytes, not decoded), RG16 snorm by 32767, unsigned integers converted.
 std::vector<float> readImageFloats(Context& context, const Image& image, VkImageLayout layout);
 
+// The same for a rectangle of the image (a pixel inspector's one texel), rows tightly
+// packed; a rectangle not inside the image is a GpuError naming both.
+std::vector<std::byte> readImage(Context& context, const Image& image, VkImageLayout layout, const VkRect2D& region);
+std::vector<float> readImageFloats(Context& context, const Image& image, VkImageLayout layout, const VkRect2D& region);
+
 } // namespace penumbra::gpu
