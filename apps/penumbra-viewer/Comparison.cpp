@@ -43,7 +43,8 @@ std::vector<metrics::VisibilityComparison> compareStacks(const std::vector<std::
     return out;
 }
 
-ComparisonWorker::ComparisonWorker(gpu::ContextOptions options) : options_(std::move(options))
+ComparisonWorker::ComparisonWorker(gpu::ContextOptions options, std::vector<std::filesystem::path> pluginSearchPath)
+    : options_(std::move(options)), pluginSearchPath_(std::move(pluginSearchPath))
 {
     options_.presentation.reset();  // B is read back, never shown through a swapchain of its own
     thread_ = std::thread([this] { run(); });
@@ -118,7 +119,7 @@ void ComparisonWorker::run()
         const auto start = std::chrono::steady_clock::now();
         try {
             if (!context) context = std::make_unique<gpu::Context>(options_);
-            if (!plugins) plugins = std::make_unique<plugin::PluginRegistry>();
+            if (!plugins) plugins = std::make_unique<plugin::PluginRegistry>(pluginSearchPath_);
             // The scene is built again only when its source changed.
             const std::string key = config::configJson(request.config, "/")["scene"].dump();
             if (!scene || key != sceneKey) {

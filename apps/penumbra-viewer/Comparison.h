@@ -16,6 +16,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <mutex>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <thread>
@@ -53,8 +54,9 @@ std::vector<metrics::VisibilityComparison> compareStacks(const std::vector<std::
 class ComparisonWorker {
 public:
     // The worker's device is made on its thread, at the first request, as `options` says
-    // (headless; the viewer's device request and validation).
-    explicit ComparisonWorker(gpu::ContextOptions options);
+    // (headless; the viewer's device request and validation), and its plugin registry with
+    // `pluginSearchPath` (after a plugin reload: the fresh copies', PluginReloader.h).
+    ComparisonWorker(gpu::ContextOptions options, std::vector<std::filesystem::path> pluginSearchPath);
     // Waits for a frame in flight (it cannot be interrupted) and joins the thread.
     ~ComparisonWorker();
     ComparisonWorker(const ComparisonWorker&) = delete;
@@ -75,6 +77,7 @@ private:
     void run();
 
     gpu::ContextOptions options_;
+    std::vector<std::filesystem::path> pluginSearchPath_;
     std::thread thread_;
     mutable std::mutex mutex_;
     std::condition_variable wake_;

@@ -231,9 +231,9 @@ int Viewer::run()
         frame();
     }
     vkDeviceWaitIdle(context_->device());
-    if (comparison_ && comparison_->validationMessages() > 0) {
-        spdlog::error("the Vulkan validation layer reported {} message(s) on the comparison's device",
-                      comparison_->validationMessages());
+    const uint32_t bMessages = retiredBValidationMessages_ + (comparison_ ? comparison_->validationMessages() : 0);
+    if (bMessages > 0) {
+        spdlog::error("the Vulkan validation layer reported {} message(s) on the comparison's device", bMessages);
         if (exitCode_ == 0) exitCode_ = 3;
     }
     if (context_->validationEnabled() && context_->validationMessageCount() > 0) {
@@ -306,6 +306,16 @@ void Viewer::frame()
             try {
                 reloadedPlugins_.push_back(pluginReloader_->freshRegistry());
                 session_->usePlugins(*reloadedPlugins_.back());
+                // B too: a new worker whose registry opens the fresh copies (B's settings stay).
+                if (comparison_) {
+                    retiredBValidationMessages_ += comparison_->validationMessages();
+                    comparison_ = std::make_unique<ComparisonWorker>(options_.context, reloadedPlugins_.back()->searchPath());
+                    spdlog::info("B: a new worker with the plugins of {}", reloadedPlugins_.back()->searchPath().front().string());
+                    bResult_.reset();
+                    bError_.clear();
+                    requestedKey_.clear();
+                    lastViewKey_.clear();
+                }
             } catch (const std::exception& e) {
                 message_ = e.what();
             }
@@ -489,7 +499,7 @@ void Viewer::startComparison(const std::string& technique)
         // first look (raise it in the panel).
         if (technique == "reference") b.setParam("samples", 16, "viewer: B reference.samples");
     }
-    if (!comparison_) comparison_ = std::make_unique<ComparisonWorker>(options_.context);
+    if (!comparison_) comparison_ = std::make_unique<ComparisonWorker>(options_.context, session_->plugins().searchPath());
     comparison_->cancel();
     bResult_.reset();
     bError_.clear();

@@ -149,6 +149,7 @@ private:
     // Input events since start (GLFW's callbacks count them) and the count the last
     // panels saw; a change the panels show that no input made (a script command, a new
     // frame after an edit, a message) sets panelsDirty_.
+    uint32_t retiredBValidationMessages_ = 0;  // of comparison workers replaced after a plugin reload
     std::map<std::string, bool> panelOpen_;  // `panel NAME open|closed` to apply, by lower-case name
     uint64_t inputEvents_ = 0;
     uint64_t inputEventsSeen_ = 0;

@@ -553,7 +553,7 @@ TEST_F(ViewerTest, ThePanelLayerShowsWhatDrawingThePanelsShowsAndIsNotRebuiltEve
 }
 
 // A rebuilt plugin library is loaded again without a restart, keeping the light's
-// parameters; a damaged one shows its error and the last frame stays.
+// parameters, for A and for B; a damaged one shows its error and the last frame stays.
 TEST_F(ViewerTest, ARebuiltPluginIsReloadedKeepingTheParameters)
 {
     const fs::path plugins = dir / "plugins";
@@ -562,8 +562,8 @@ TEST_F(ViewerTest, ARebuiltPluginIsReloadedKeepingTheParameters)
     fs::copy_file(built, plugin);
     const fs::path a = dir / "a.png", b = dir / "b.png", c = dir / "c.png", saved = dir / "saved.json", log = dir / "viewer.log";
     const std::string script = fmt::format(
-        "size 96 54; set hard.pcf_kernel=5; frames 2; screenshot {}; wait-for {}; wait-error penumbra-hard.so; "
-        "screenshot {}; wait-for {}; wait-no-error; screenshot {}; save {}; quit",
+        "size 96 54; set hard.pcf_kernel=5; compare hard; wait-compare; frames 2; screenshot {}; wait-for {}; "
+        "wait-error penumbra-hard.so; screenshot {}; wait-for {}; wait-no-error; wait-compare; screenshot {}; save {}; quit",
         a.string(), (dir / "go1").string(), b.string(), (dir / "go2").string(), c.string(), saved.string());
     const pid_t pid = startViewer(fmt::format("PENUMBRA_PLUGIN_PATH='{}'", plugins.string()), config("default.json"), script, log);
     ASSERT_GT(pid, 0);
@@ -586,6 +586,8 @@ TEST_F(ViewerTest, ARebuiltPluginIsReloadedKeepingTheParameters)
 
     const std::string out = slurp(log);
     EXPECT_NE(out.find("reloaded the plugins"), std::string::npos) << out;
+    // B (here the same technique) follows: a new worker opens the fresh copies, and draws.
+    EXPECT_NE(out.find("B: a new worker with the plugins of"), std::string::npos) << out;
     const Png first = readPng(a), broken = readPng(b), reloaded = readPng(c);
     ASSERT_EQ(first.rgba.size(), size_t(96 * 54 * 4));
     EXPECT_EQ(broken.rgba, first.rgba) << "the last good frame stays while the plugin does not load";
