@@ -264,16 +264,7 @@ void Presenter::createSwapchain()
         VkImageView view = VK_NULL_HANDLE;
         gpu::check(vkCreateImageView(context_.device(), &v, nullptr, &view), "vkCreateImageView");
         views_.push_back(view);
-        VkFramebufferCreateInfo fb{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
-        fb.renderPass = renderPass_;
-        fb.attachmentCount = 1;
-        fb.pAttachments = &view;
-        fb.width = extent_.width;
-        fb.height = extent_.height;
-        fb.layers = 1;
-        VkFramebuffer framebuffer = VK_NULL_HANDLE;
-        gpu::check(vkCreateFramebuffer(context_.device(), &fb, nullptr, &framebuffer), "vkCreateFramebuffer");
-        framebuffers_.push_back(framebuffer);
+        framebuffers_.push_back(framebufferFor(view));
         VkSemaphoreCreateInfo s{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
         VkSemaphore semaphore = VK_NULL_HANDLE;
         gpu::check(vkCreateSemaphore(context_.device(), &s, nullptr, &semaphore), "vkCreateSemaphore");
@@ -281,6 +272,21 @@ void Presenter::createSwapchain()
     }
     if (imguiReady_) ImGui_ImplVulkan_SetMinImageCount(info.minImageCount);
     swapchainStale_ = false;
+}
+
+// The panels' render pass over `view`, at the window's size.
+VkFramebuffer Presenter::framebufferFor(VkImageView view) const
+{
+    VkFramebufferCreateInfo fb{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+    fb.renderPass = renderPass_;
+    fb.attachmentCount = 1;
+    fb.pAttachments = &view;
+    fb.width = extent_.width;
+    fb.height = extent_.height;
+    fb.layers = 1;
+    VkFramebuffer framebuffer = VK_NULL_HANDLE;
+    gpu::check(vkCreateFramebuffer(context_.device(), &fb, nullptr, &framebuffer), "vkCreateFramebuffer");
+    return framebuffer;
 }
 
 void Presenter::destroySwapchain()
@@ -380,15 +386,7 @@ void Presenter::drawUiLayer(const std::vector<VkRect2D>& uncovered, ImDrawData* 
         desc.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
         desc.name = "viewer panels";
         uiLayer_ = gpu::Image(context_, desc);
-        VkImageView view = uiLayer_.view();
-        VkFramebufferCreateInfo fb{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
-        fb.renderPass = renderPass_;
-        fb.attachmentCount = 1;
-        fb.pAttachments = &view;
-        fb.width = extent_.width;
-        fb.height = extent_.height;
-        fb.layers = 1;
-        gpu::check(vkCreateFramebuffer(context_.device(), &fb, nullptr, &uiFramebuffer_), "vkCreateFramebuffer");
+        uiFramebuffer_ = framebufferFor(uiLayer_.view());
     }
     // Everything the copies take is drawn again: nothing of the last contents is kept.
     barrier(cmd_, uiLayer_.handle(), VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,

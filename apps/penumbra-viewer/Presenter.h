@@ -94,6 +94,7 @@ private:
     void createSwapchain();
     void destroySwapchain();
     void initImGui();
+    VkFramebuffer framebufferFor(VkImageView view) const;
     void recordUi(VkFramebuffer framebuffer, const std::vector<VkRect2D>& uncovered, ImDrawData* ui,
                   const float background[3]);
     void drawUiLayer(const std::vector<VkRect2D>& uncovered, ImDrawData* ui, const float background[3]);
