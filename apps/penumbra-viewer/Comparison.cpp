@@ -102,6 +102,7 @@ void ComparisonWorker::run()
     std::unique_ptr<plugin::PluginRegistry> plugins;
     std::unique_ptr<scene::Scene> scene;
     std::string sceneKey;
+    const plugin::ProgressScope progress(progress_);
     for (;;) {
         ComparisonRequest request;
         uint64_t generation = 0;
@@ -113,6 +114,8 @@ void ComparisonWorker::run()
             waiting_.reset();
             generation = generation_;
             startedNs_ = std::chrono::steady_clock::now().time_since_epoch().count();
+            progress_.passes = 0;
+            progress_.fraction = 0.0;
         }
         ComparisonResult result;
         result.viewKey = request.viewKey;

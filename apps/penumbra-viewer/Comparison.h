@@ -10,6 +10,7 @@
 #include "penumbra/config/Config.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/metrics/ImageComparison.h"
+#include "penumbra/plugin/Progress.h"
 
 #include <atomic>
 #include <chrono>
@@ -68,6 +69,10 @@ public:
     // A request is waiting or being drawn; for how long the current one has run.
     bool busy() const { return busy_.load(); }
     double busySeconds() const;
+    // The frame in flight's long passes (the reference's tracing, plugin/Progress.h): how
+    // many have started and the fraction of the current one; 0 passes: none reports.
+    uint32_t progressPasses() const { return progress_.passes.load(); }
+    double progressFraction() const { return progress_.fraction.load(); }
     // The latest finished result, once.
     std::optional<ComparisonResult> take();
     // Validation messages of the worker's device (0 before it exists).
@@ -88,6 +93,7 @@ private:
     std::atomic<bool> busy_{false};
     std::atomic<int64_t> startedNs_{0};
     std::atomic<uint32_t> validationMessages_{0};
+    plugin::ProgressSink progress_;
 };
 
 } // namespace penumbra::viewer

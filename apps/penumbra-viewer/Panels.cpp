@@ -535,9 +535,16 @@ void Viewer::drawComparePanel()
     }
     if (comparison_->busy()) {
         const double seconds = comparison_->busySeconds();
-        // The frame cannot report its progress: the bar runs while it is drawn.
-        ImGui::ProgressBar(float(std::fmod(seconds, 2.0) / 2.0), ImVec2(-ImGui::GetFontSize() * 5.0f, 0.0f),
-                           fmt::format("B: drawing, {:.1f} s", seconds).c_str());
+        const ImVec2 size(-ImGui::GetFontSize() * 5.0f, 0.0f);
+        if (const uint32_t passes = comparison_->progressPasses(); passes > 0) {
+            // A pass that reports (the reference's tracing): its fraction of rows done.
+            const double f = comparison_->progressFraction();
+            const std::string pass = passes > 1 ? fmt::format(" pass {},", passes) : std::string();
+            ImGui::ProgressBar(float(f), size, fmt::format("B: tracing{} {:.0f} %, {:.1f} s", pass, 100.0 * f, seconds).c_str());
+        } else {
+            // Nothing reports (a technique's own passes, the first frame's set-up): the bar runs.
+            ImGui::ProgressBar(float(std::fmod(seconds, 2.0) / 2.0), size, fmt::format("B: drawing, {:.1f} s", seconds).c_str());
+        }
         ImGui::SameLine();
         if (ImGui::Button("Cancel")) {
             comparison_->cancel();

@@ -17,6 +17,7 @@
 #include "penumbra/graph/RenderGraph.h"
 #include "penumbra/plugin/GBuffer.h"
 #include "penumbra/plugin/Plugin.h"
+#include "penumbra/plugin/Progress.h"
 #include "penumbra/plugin/Technique.h"
 
 #include <fmt/format.h>
@@ -322,16 +323,21 @@ private:
             }
         };
         const ProgressLine progress(label, height_);
+        // Rows done, on the terminal and to a waiting viewer (plugin/Progress.h).
+        const bool wanted = plugin::progressWanted();
+        plugin::startProgress();
         std::vector<std::thread> pool;
         for (uint32_t t = 0; t < threads; ++t) pool.emplace_back(work);
-        if (progress.shown()) {
+        if (progress.shown() || wanted) {
             while (rowsDone.load() < height_ && !failure) {
-                progress.draw(rowsDone.load());
-                std::this_thread::sleep_for(std::chrono::milliseconds(200));
+                if (progress.shown()) progress.draw(rowsDone.load());
+                plugin::reportProgress(rowsDone.load(), height_);
+                std::this_thread::sleep_for(std::chrono::milliseconds(progress.shown() ? 200 : 50));
             }
         }
         for (std::thread& t : pool) t.join();
         if (failure) std::rethrow_exception(failure);
+        plugin::reportProgress(height_, height_);
         if (progress.shown()) progress.finish();
         ++gFramesTraced;
         gRaysTraced += rays.load();

@@ -13,6 +13,7 @@
 #include "penumbra/core/Error.h"
 #include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/plugin/PluginRegistry.h"
+#include "penumbra/plugin/Progress.h"
 #include "penumbra/scene/Generators.h"
 #include "plugins/reference/ReferenceStats.h"
 
@@ -591,6 +592,23 @@ TEST_F(ReferencePlugin, MovedInstancesAreTracedWhereTheyAreNow)
     frame.render();
     EXPECT_NE(frame.visibility, before);
     EXPECT_EQ(render(cfg, frame.scene).visibility, frame.visibility);
+}
+
+// The tracing reports its rows to a waiting viewer (plugin/Progress.h): one pass per
+// traced light, ending at 1; nothing when nobody waits.
+TEST_F(ReferencePlugin, TracingReportsItsProgressToTheThreadsSink)
+{
+    config::RenderConfig cfg = smallRectConfig({{"samples", 4}});
+    config::LightConfig second = cfg.lights.at(0);
+    second.name = "light1";
+    cfg.lights.push_back(second);
+    plugin::ProgressSink sink;
+    {
+        const plugin::ProgressScope scope(sink);
+        render(cfg, scene::generatePenumbra({}));
+    }
+    EXPECT_EQ(sink.passes.load(), 2u);
+    EXPECT_DOUBLE_EQ(sink.fraction.load(), 1.0);
 }
 
 TEST_F(ReferencePlugin, ParametersAreReflectedWithRanges)
