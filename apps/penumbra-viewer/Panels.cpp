@@ -653,6 +653,10 @@ void Viewer::drawTimingsPanel()
                 TimingHistory::mean(history_.panelsGpuMs), history_.panelsShare());
     tooltip("building the panels (only after input or a change, and 4 times a second) and drawing them (into a layer "
             "of their own, copied into the window between changes); means per shown frame");
+    if (presenter_->lastTimes().valid) {
+        ImGui::Text("view blits: %.2f ms GPU", presenter_->lastTimes().viewsMs);
+        tooltip("the shown images (the frame, B, a debug image) copied or scaled into the window, last frame");
+    }
     ImGui::Text("last edit to its image: %.1f ms", session_->lastRebuildMs());
     tooltip("a technique, parameter, culling or size change builds a new renderer (its shaders and pipelines) and draws "
             "its first frame");

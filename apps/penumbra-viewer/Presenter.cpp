@@ -397,7 +397,6 @@ void Presenter::drawUiLayer(const std::vector<VkRect2D>& uncovered, ImDrawData* 
             VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
             VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
     uiLayerRects_ = uncovered;
-    ++uiLayerDraws_;
 }
 
 void Presenter::present(const std::vector<ViewBlit>& views, ImDrawData* ui, bool uiChanged, const float background[3],
@@ -519,6 +518,7 @@ void Presenter::present(const std::vector<ViewBlit>& views, ImDrawData* ui, bool
         }
     } else {
         recordUi(framebuffers_[index], uncovered, ui, background);  // no layer: as it was before there was one
+        uiLayerRects_.clear();  // the layer missed these panels: drawn again when next used
     }
     timer_->endScope(cmd_, panelsScope);
 

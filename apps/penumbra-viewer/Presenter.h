@@ -1,7 +1,9 @@
 #pragma once
 // The viewer's window on the screen: a GLFW window's Vulkan surface and swapchain, and the
 // one command buffer a shown frame takes — the frame's images blitted into the view's
-// rectangles, then the Dear ImGui panels drawn over them in a render pass, then present.
+// rectangles, then the background and the Dear ImGui panels copied from their layer (drawn
+// into it in a render pass when they changed) and what of them lies over a view drawn
+// over it, then present.
 // It owns no renderer: the images it shows are the render graph's (the colour image after
 // FrameRenderer::renderFrame) or ones it uploads (a mapped debug image, a difference).
 #include "penumbra/gpu/Context.h"
@@ -73,8 +75,6 @@ public:
     // views moved; between, the layer is copied into the window.
     void present(const std::vector<ViewBlit>& views, ImDrawData* ui, bool uiChanged, const float background[3],
                  std::vector<uint8_t>* screenshot = nullptr);
-    // How many times the panels' layer was drawn (tests: unchanged panels are not drawn again).
-    uint64_t uiLayerDraws() const { return uiLayerDraws_; }
     // Off: the panels are drawn into the window every frame, as without a layer (to measure
     // what the layer saves).
     void setPanelLayer(bool on) { panelLayer_ = on; }
@@ -125,7 +125,6 @@ private:
     gpu::Image uiLayer_;
     VkFramebuffer uiFramebuffer_ = VK_NULL_HANDLE;
     std::vector<VkRect2D> uiLayerRects_;  // the window's pixels it holds; empty: none
-    uint64_t uiLayerDraws_ = 0;
     bool panelLayer_ = true;
     std::unique_ptr<gpu::GpuTimer> timer_;
     bool timed_ = false;  // a submitted frame's timestamps wait to be read
