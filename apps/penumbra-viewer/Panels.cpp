@@ -688,10 +688,12 @@ void Viewer::drawTimingsPanel()
         ImGui::Text("culling: camera %.2f, masks %.2f, casters %.2f ms; %llu queries", s.cameraMs, s.maskMs, s.casterCullMs,
                     static_cast<unsigned long long>(s.queriesIssued));
     }
-    if (ImGui::BeginTable("passes", 3, ImGuiTableFlags_RowBg | ImGuiTableFlags_SizingStretchProp)) {
-        ImGui::TableSetupColumn("pass");
-        ImGui::TableSetupColumn("GPU ms");
-        ImGui::TableSetupColumn("last frames");
+    if (ImGui::BeginTable("passes", 3, ImGuiTableFlags_RowBg)) {
+        // The plots get a width of their own: one that fills its column gets none.
+        const float plotWidth = ImGui::GetFontSize() * 8.0f;
+        ImGui::TableSetupColumn("pass", ImGuiTableColumnFlags_WidthStretch);
+        ImGui::TableSetupColumn("GPU ms", ImGuiTableColumnFlags_WidthFixed);
+        ImGui::TableSetupColumn("last frames", ImGuiTableColumnFlags_WidthFixed, plotWidth);
         ImGui::TableHeadersRow();
         for (const std::string& pass : history_.order) {
             const std::deque<float>& gpu = history_.gpuMs[pass];
@@ -706,7 +708,7 @@ void Viewer::drawTimingsPanel()
             std::vector<float> values(gpu.begin(), gpu.end());
             ImGui::PushID(pass.c_str());
             ImGui::PlotLines("##plot", values.data(), int(values.size()), 0, nullptr, 0.0f, FLT_MAX,
-                             ImVec2(-1.0f, ImGui::GetTextLineHeight()));
+                             ImVec2(plotWidth, ImGui::GetTextLineHeight()));
             ImGui::PopID();
         }
         ImGui::EndTable();
@@ -742,9 +744,12 @@ void Viewer::drawPixelInspector()
     frame::FrameRenderer& r = session_->renderer();
     const uint32_t x = std::min(uint32_t(fx * float(r.width())), r.width() - 1);
     const uint32_t y = std::min(uint32_t(fy * float(r.height())), r.height() - 1);
-    // One texel of the colour and of each V, read again for a new frame or pixel only.
-    if (!inspected_ || inspectedFrame_ != session_->framesRendered() || inspectedAt_ != std::pair{x, y}) {
+    // One texel of the colour and of each V, read again for a new frame, renderer (an edit,
+    // another file: its frame count starts again) or pixel only.
+    if (!inspected_ || inspectedRenderer_ != &r || inspectedFrame_ != session_->framesRendered() ||
+        inspectedAt_ != std::pair{x, y}) {
         inspected_ = r.readPixel(x, y);
+        inspectedRenderer_ = &r;
         inspectedFrame_ = session_->framesRendered();
         inspectedAt_ = {x, y};
     }

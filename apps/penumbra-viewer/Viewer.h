@@ -139,6 +139,7 @@ private:
     uint64_t inspectedFrame_ = ~0ull;
     std::optional<frame::FrameRenderer::Pixel> inspected_;  // the pixel inspector's last read
     std::pair<uint32_t, uint32_t> inspectedAt_{};
+    const frame::FrameRenderer* inspectedRenderer_ = nullptr;
 
     CameraMode cameraMode_ = CameraMode::Orbit;
     scene::Camera homeCamera_;  // as the file gave it: R goes back to it
