@@ -53,12 +53,16 @@ bool dragVec3(const char* label, glm::vec3& v, float speed)
 
 } // namespace
 
+std::string Viewer::panelKey(std::string name)
+{
+    std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return name;
+}
+
 bool Viewer::panelHeader(const char* name, bool openAtFirst)
 {
     // A script's `panel NAME open|closed`, applied once.
-    std::string key = name;
-    std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    if (const auto it = panelOpen_.find(key); it != panelOpen_.end()) {
+    if (const auto it = panelOpen_.find(panelKey(name)); it != panelOpen_.end()) {
         ImGui::SetNextItemOpen(it->second, ImGuiCond_Always);
         panelOpen_.erase(it);
     }

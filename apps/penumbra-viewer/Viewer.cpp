@@ -311,10 +311,7 @@ void Viewer::frame()
                     retiredBValidationMessages_ += comparison_->validationMessages();
                     comparison_ = std::make_unique<ComparisonWorker>(options_.context, reloadedPlugins_.back()->searchPath());
                     spdlog::info("B: a new worker with the plugins of {}", reloadedPlugins_.back()->searchPath().front().string());
-                    bResult_.reset();
-                    bError_.clear();
-                    requestedKey_.clear();
-                    lastViewKey_.clear();
+                    forgetB();
                 }
             } catch (const std::exception& e) {
                 message_ = e.what();
@@ -501,6 +498,12 @@ void Viewer::startComparison(const std::string& technique)
     }
     if (!comparison_) comparison_ = std::make_unique<ComparisonWorker>(options_.context, session_->plugins().searchPath());
     comparison_->cancel();
+    forgetB();
+}
+
+// B's last image, error and view: asked for again once the view rests.
+void Viewer::forgetB()
+{
     bResult_.reset();
     bError_.clear();
     requestedKey_.clear();
@@ -845,8 +848,7 @@ void Viewer::runCommand(const ScriptCommand& command)
         expectWords(command, 3, "panel NAME open|closed");
         static const std::set<std::string> names{"file",      "scene",   "camera",       "render", "lights",
                                                  "animation", "compare", "debug images", "timings"};
-        std::string name = command.words[1];
-        std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+        const std::string name = panelKey(command.words[1]);
         if (!names.contains(name)) {
             throw Error(fmt::format("{}: panel \"{}\": expected one of file, scene, camera, render, lights, animation, "
                                     "compare, \"debug images\" or timings",

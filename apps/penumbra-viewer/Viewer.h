@@ -78,6 +78,7 @@ private:
     static void countInput(GLFWwindow* window);  // a GLFW input callback's count
     // Panels.cpp: a panel's collapsing header; a script can open or close it (`panel`).
     bool panelHeader(const char* name, bool openAtFirst);
+    static std::string panelKey(std::string name);  // a panel's name as `panel` takes it: lower case
     void handleInput();
     bool runScriptUntilFrame();  // false when the script quit
     void runCommand(const ScriptCommand& command);
@@ -196,6 +197,7 @@ private:
     bool waitCompare_ = false;  // `wait-compare`: frames run until B of the current view is in
     std::chrono::steady_clock::time_point waitCompareDeadline_{};
     void startComparison(const std::string& technique);
+    void forgetB();
     void updateComparison();
     void updateDifferenceImage();
     bool bCurrent() const;  // B is of the view A shows
