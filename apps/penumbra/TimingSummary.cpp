@@ -95,6 +95,7 @@ std::span<const CullingFigure> cullingFigures()
         {"views_fell_back", "of which to their frustum only", &S::viewsFellBack},
         {"casters_drawn", "casters drawn (instance draws)", &S::castersDrawn},
         {"triangles_drawn", "triangles drawn in caster passes", &S::trianglesDrawn},
+        {"map_texels_rendered", "map texels rendered (render areas)", &S::mapTexelsRendered},
         {"nodes_visited", "BVH nodes visited", &S::nodesVisited},
         {"queries", "occlusion queries issued", &S::queriesIssued},
         {"query_rounds", "query rounds (submissions waited for)", &S::queryRounds},

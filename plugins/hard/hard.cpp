@@ -136,6 +136,9 @@ HardShadow::HardShadow(const plugin::TechniqueSetup& setup)
     // The filter's half width, and the normal offset that moves the lookup (scaled by the
     // filter width, as in shadow_receiver.glsl).
     const float width = footprintWidthTexels(settings_);
+    // Only the visibility pass's taps read the map, all within the footprint: with
+    // receiver-mask culling the depth pass clears and draws only what they can read.
+    shadowMap_.setReadByLookupsOnly(true);
     shadowMap_.setFootprint(0.5f * width +
                             (settings_.variant.bias == BiasMode::NormalOffset ? settings_.normalOffsetTexels * width : 0.0f));
     // Constant and slope bias compare every tap with the receiver's own depth; the taps

@@ -131,6 +131,9 @@ PcssShadow::PcssShadow(const plugin::TechniqueSetup& setup)
     depthSampler_ = render::createShadowDepthSampler(context_);
     lightSize_ = render::softShadowLightSize(setup.light, settings_.lightSizeOverride);
     fitFootprint();
+    // Only the search and the filter read the map, all within the footprint: with
+    // receiver-mask culling the depth pass clears and draws only what they can read.
+    shadowMap_.setReadByLookupsOnly(true);
 }
 
 void PcssShadow::update(const scene::Light& light, const scene::Aabb& sceneBounds)

@@ -3,8 +3,8 @@
 // (sat.glsl), as two scans: along every row (the fixed-point moments of each texel's
 // depth, prefix-summed), then along every column of the result. One invocation sweeps
 // one line serially: linear in the map's size, and what a CPU rasteriser runs fastest
-// (see shaders/engine/mask_dilate.comp); adjacent invocations touch adjacent entries in
-// the column scan.
+// (PLATFORM.md: serial sweeps beat shared-memory scans); adjacent invocations touch
+// adjacent entries in the column scan.
 layout(local_size_x = 64) in;
 
 layout(binding = 0) uniform sampler2D shadowDepth;

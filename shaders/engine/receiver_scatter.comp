@@ -16,7 +16,9 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 0) uniform sampler2D cameraDepth;  // reversed-Z, 0 where nothing was drawn
-layout(binding = 1, r8) uniform writeonly image2D receiverMask;
+// One word per mask texel, row by row, 0 where unmarked: host-visible, the host reads the
+// marks where they are written (and dilates them).
+layout(std430, binding = 1) writeonly buffer ReceiverMarks { uint receiverMarks[]; };
 layout(std430, binding = 2) readonly buffer Camera {
     mat4 inverseViewProj;
     vec4 size;  // xy: camera image size
@@ -30,6 +32,7 @@ layout(push_constant) uniform Push {
     mat4 lightViewProj;
     int maskBlock;   // view texels per mask texel, per side
     int resolution;  // view texels per side
+    int maskSize;    // mask texels per side
 } pc;
 
 #ifdef RECEIVER_DEPTH
@@ -56,6 +59,7 @@ void main()
     mat4 lightViewProj = pc.lightViewProj;
     int maskBlock = pc.maskBlock;
     int resolution = pc.resolution;
+    int maskSize = pc.maskSize;
 #ifdef RECEIVER_DEPTH
     vec3 eye = camera.eye.xyz;
 #endif
@@ -74,7 +78,8 @@ void main()
     vec2 texelCoord = (light.xy * 0.5 + 0.5) * float(resolution);
     ivec2 texel = clamp(ivec2(texelCoord), ivec2(0), ivec2(resolution - 1));
     if (!receiver) return;
-    imageStore(receiverMask, texel / maskBlock, vec4(1.0));
+    ivec2 maskTexel = texel / maskBlock;
+    receiverMarks[maskTexel.y * maskSize + maskTexel.x] = 1u;
 #ifdef RECEIVER_DEPTH
     // The technique's receiver lies within `slack` of p: its depth is at least light.z
     // less the depth gradient times slack, and its texel within `spread` texels of p's.

@@ -430,6 +430,12 @@ std::span<std::byte> PassContext::hostMemory(std::string_view name) const
     return {mapped, size_t(executor_->compiled_->resources[use.resource].sizeBytes)};
 }
 
+bool PassContext::isOutput(std::string_view name) const
+{
+    const ResourceUse& use = declaredUse(*executor_->compiled_, *pass_, name);
+    return executor_->compiled_->resources[use.resource].markedOutput;
+}
+
 VkImageLayout PassContext::layout(std::string_view name) const
 {
     const ResourceUse& use = declaredUse(*executor_->compiled_, *pass_, name);

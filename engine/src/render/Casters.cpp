@@ -22,6 +22,16 @@ void Casters::draw(VkCommandBuffer cmd, const CasterView& view, DrawFilter filte
 
 const scene::Aabb* Casters::focus() const { return culling_ ? culling_->focus() : nullptr; }
 
+std::optional<VkRect2D> Casters::readArea(const CasterView& view) const
+{
+    return culling_ ? culling_->readArea(view) : std::nullopt;
+}
+
+void Casters::countRenderedTexels(uint64_t texels) const
+{
+    if (culling_) culling_->countRenderedTexels(texels);
+}
+
 gpu::VertexLayout Casters::positionLayout() const
 {
     return {scene_->vertexStride(), {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(scene::Vertex, position)}}};

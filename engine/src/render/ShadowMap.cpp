@@ -8,7 +8,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <climits>
 #include <cstring>
+#include <optional>
+#include <vector>
 
 namespace penumbra::render {
 
@@ -184,25 +187,7 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
 {
     VkCommandBuffer cmd = pass.cmd();
     const gpu::Image& target = pass.image(image);
-    VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-    depth.imageView = target.view();
-    depth.imageLayout = pass.layout(image);
-    depth.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-    depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    depth.clearValue.depthStencil = {0.0f, 0};  // reversed-Z: far is 0
-    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
-    info.renderArea = {{0, 0}, {target.desc().width, target.desc().height}};
-    info.layerCount = 1;
-    info.pDepthAttachment = &depth;
-    vkCmdBeginRendering(cmd, &info);
-
-    // Reversed-Z: "away from the light" is towards smaller depth, so every bias term is
-    // negated; a negative clamp bounds the bias from below (Vulkan: max(bias, clamp)).
-    vkCmdSetDepthBias(cmd, -bias.constant, -bias.clamp, -bias.slope);
-
     const uint32_t size = faceTexels();
-    const bool masked = casters_.hasAlphaMasked();
-    bool solidBound = false;
     for (const ShadowMapPlacement& map : maps) {
         if (map.frusta.size() > faceCount_)
             throw Error(fmt::format("{}: a map of {} faces does not fit this shadow map's {} face(s)", name_,
@@ -212,36 +197,85 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
             uint64_t(map.origin.y) + atlasHeight() > target.desc().height)
             throw Error(fmt::format("{}: a map at ({}, {}) does not fit in '{}' ({} x {})", name_, map.origin.x,
                                     map.origin.y, image, target.desc().width, target.desc().height));
+    }
+    // Each face draws into its own cell of the map's atlas (the scissor keeps it there),
+    // and, when only the receivers' lookups read the map, into the texels they can read.
+    // The render area, which bounds the clear, is the union of the faces' scissors.
+    struct FaceDraw {
+        CasterView view;
+        VkViewport viewport;
+        VkRect2D scissor;
+    };
+    std::vector<FaceDraw> faces;
+    const bool readWhole = !readByLookupsOnly_ || pass.isOutput(image);
+    int32_t areaX0 = INT32_MAX, areaY0 = INT32_MAX, areaX1 = 0, areaY1 = 0;
+    for (const ShadowMapPlacement& map : maps)
         for (uint32_t face = 0; face < map.frusta.size(); ++face) {
-            // Each face draws into its own cell of the map's atlas (the scissor keeps it
-            // there).
             const int32_t x = map.origin.x + int32_t((face % 3) * size), y = map.origin.y + int32_t((face / 3) * size);
-            const VkViewport viewport{float(x), float(y), float(size), float(size), 0.0f, 1.0f};
-            const VkRect2D scissor{{x, y}, {size, size}};
-            vkCmdSetViewport(cmd, 0, 1, &viewport);
-            vkCmdSetScissor(cmd, 0, 1, &scissor);
-            const CasterView view{map.frusta[face].viewProj, lightIndex_, map.firstView + face, size, footprint_, bias,
-                                  compareTapRadius_};
-            // The solid pipeline stays bound across faces unless the masked one replaced it.
-            if (!solidBound) {
-                depth_.bind(cmd);
-                gpu::DescriptorPush().storageBuffer("Instances", casters_.instanceBuffer()).push(context_, cmd, depth_);
-                solidBound = true;
+            FaceDraw draw{{map.frusta[face].viewProj, lightIndex_, map.firstView + face, size, footprint_, bias,
+                           compareTapRadius_},
+                          {float(x), float(y), float(size), float(size), 0.0f, 1.0f},
+                          {{x, y}, {size, size}}};
+            const std::optional<VkRect2D> read = readWhole ? std::nullopt : casters_.readArea(draw.view);
+            if (read) {
+                // The read area in view texels, within the face.
+                const int32_t x0 = std::clamp(read->offset.x, 0, int32_t(size));
+                const int32_t y0 = std::clamp(read->offset.y, 0, int32_t(size));
+                const int32_t x1 = std::clamp(read->offset.x + int32_t(read->extent.width), x0, int32_t(size));
+                const int32_t y1 = std::clamp(read->offset.y + int32_t(read->extent.height), y0, int32_t(size));
+                if (x0 == x1 || y0 == y1) continue;  // no receiver reads this face
+                draw.scissor = {{x + x0, y + y0}, {uint32_t(x1 - x0), uint32_t(y1 - y0)}};
             }
-            depth_.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
-            casters_.draw(cmd, view, DrawFilter::Solid);
-            if (!masked) continue;
-            depthMasked_.bind(cmd);
-            depthMasked_.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
-            casters_.draw(cmd, view, DrawFilter::AlphaMasked, [&](const gpu::Image& texture) {
-                gpu::DescriptorPush()
-                    .storageBuffer("Instances", casters_.instanceBuffer())
-                    .storageBuffer("Materials", casters_.materialBuffer())
-                    .sampledImage("baseColorTexture", texture, casters_.textureSampler())
-                    .push(context_, cmd, depthMasked_);
-            });
-            solidBound = false;
+            areaX0 = std::min(areaX0, draw.scissor.offset.x);
+            areaY0 = std::min(areaY0, draw.scissor.offset.y);
+            areaX1 = std::max(areaX1, draw.scissor.offset.x + int32_t(draw.scissor.extent.width));
+            areaY1 = std::max(areaY1, draw.scissor.offset.y + int32_t(draw.scissor.extent.height));
+            faces.push_back(draw);
         }
+    // Nothing read anywhere: one texel keeps the render pass valid (and cleared).
+    if (faces.empty()) areaX0 = areaY0 = 0, areaX1 = areaY1 = 1;
+    VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    depth.imageView = target.view();
+    depth.imageLayout = pass.layout(image);
+    depth.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    depth.clearValue.depthStencil = {0.0f, 0};  // reversed-Z: far is 0
+    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    info.renderArea = {{areaX0, areaY0}, {uint32_t(areaX1 - areaX0), uint32_t(areaY1 - areaY0)}};
+    info.layerCount = 1;
+    info.pDepthAttachment = &depth;
+    vkCmdBeginRendering(cmd, &info);
+    casters_.countRenderedTexels(uint64_t(info.renderArea.extent.width) * info.renderArea.extent.height);
+
+    // Reversed-Z: "away from the light" is towards smaller depth, so every bias term is
+    // negated; a negative clamp bounds the bias from below (Vulkan: max(bias, clamp)).
+    vkCmdSetDepthBias(cmd, -bias.constant, -bias.clamp, -bias.slope);
+
+    const bool masked = casters_.hasAlphaMasked();
+    bool solidBound = false;
+    for (const FaceDraw& face : faces) {
+        const CasterView& view = face.view;
+        vkCmdSetViewport(cmd, 0, 1, &face.viewport);
+        vkCmdSetScissor(cmd, 0, 1, &face.scissor);
+        // The solid pipeline stays bound across faces unless the masked one replaced it.
+        if (!solidBound) {
+            depth_.bind(cmd);
+            gpu::DescriptorPush().storageBuffer("Instances", casters_.instanceBuffer()).push(context_, cmd, depth_);
+            solidBound = true;
+        }
+        depth_.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
+        casters_.draw(cmd, view, DrawFilter::Solid);
+        if (!masked) continue;
+        depthMasked_.bind(cmd);
+        depthMasked_.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
+        casters_.draw(cmd, view, DrawFilter::AlphaMasked, [&](const gpu::Image& texture) {
+            gpu::DescriptorPush()
+                .storageBuffer("Instances", casters_.instanceBuffer())
+                .storageBuffer("Materials", casters_.materialBuffer())
+                .sampledImage("baseColorTexture", texture, casters_.textureSampler())
+                .push(context_, cmd, depthMasked_);
+        });
+        solidBound = false;
     }
     vkCmdEndRendering(cmd);
 }

@@ -37,6 +37,7 @@ struct ScatterPush {  // receiver_scatter.comp Push
     glm::mat4 lightViewProj;
     int32_t maskBlock;
     int32_t resolution;
+    int32_t maskSize;
 };
 
 struct CameraData {  // receiver_scatter.comp Camera
@@ -67,17 +68,58 @@ std::optional<MaskTexelRange> maskTexels(const ReceiverMask& mask, const TexelRe
                           uint32_t(std::min(y1, last))};
 }
 
-// Back to all ones (no receiver) where the last build may have written a depth: one fill
-// per row's span.
+// Back to all ones (no receiver) where the last build may have written a depth. The rows'
+// spans are filled as few byte ranges: a range goes on over the gap to the next row's span
+// when the gap is at most kFillGapBytes (the gap is all ones already, so filling it
+// changes nothing), because on lavapipe each fill command costs about what a memset of
+// some 10 KB does, and a 4096-texel map has 4096 rows.
+constexpr VkDeviceSize kFillGapBytes = 16384;
+
 void clearReceiverDepth(VkCommandBuffer cmd, const ReceiverMask& mask)
 {
     const VkDeviceSize texel = sizeof(uint32_t), row = VkDeviceSize(mask.resolution) * texel;
     const VkBuffer buffer = mask.receiverDepth.handle();
+    VkDeviceSize begin = 0, end = 0;  // the range being gathered; empty when begin == end
+    const auto fill = [&] {
+        if (begin < end) vkCmdFillBuffer(cmd, buffer, begin, end - begin, ~0u);
+    };
     for (size_t y = 0; y < mask.receiverDepthWritten.size(); ++y) {
         const RowSpan span = mask.receiverDepthWritten[y];
-        if (span.begin < span.end)
-            vkCmdFillBuffer(cmd, buffer, y * row + span.begin * texel, (span.end - span.begin) * texel, ~0u);
+        if (span.begin >= span.end) continue;
+        const VkDeviceSize b = y * row + span.begin * texel, e = y * row + span.end * texel;
+        if (begin < end && b <= end + kFillGapBytes) {
+            end = e;
+            continue;
+        }
+        fill();
+        begin = b, end = e;
     }
+    fill();
+}
+
+// Dilates `marked` (size x size words, 0 or not) by `radius` texels in a square neighbourhood
+// into `dilated` (0 or 255): a pass along rows, then one along columns, each sweeping a
+// line forwards and backwards with the distance to the nearest marked texel, so linear in
+// the size whatever the radius.
+void dilateMask(std::span<const uint32_t> marked, uint32_t size, uint32_t radius, std::vector<uint8_t>& dilated)
+{
+    std::vector<uint8_t> rows(marked.size());
+    dilated.assign(marked.size(), 0);
+    const auto sweep = [&](const auto* source, uint8_t* target, size_t line, size_t step) {
+        // Texel i of the line is at line + i * step.
+        int64_t last = INT64_MIN / 2;
+        for (uint32_t i = 0; i < size; ++i) {
+            if (source[line + i * step] != 0) last = i;
+            target[line + i * step] = int64_t(i) - last <= int64_t(radius) ? 255 : 0;
+        }
+        int64_t next = INT64_MAX / 2;
+        for (uint32_t i = size; i-- > 0;) {
+            if (source[line + i * step] != 0) next = i;
+            if (next - int64_t(i) <= int64_t(radius)) target[line + i * step] = 255;
+        }
+    };
+    for (uint32_t y = 0; y < size; ++y) sweep(marked.data(), rows.data(), size_t(y) * size, 1);
+    for (uint32_t x = 0; x < size; ++x) sweep(rows.data(), dilated.data(), x, size);
 }
 
 // Where a build may have written receiver depths: at the texels of the marked mask
@@ -150,18 +192,12 @@ ReceiverMaskBuilder::ReceiverMaskBuilder(gpu::Context& context, const gpu::Shade
     c.name = "visibility.receiver_depth_scatter";
     c.defines = {{"RECEIVER_DEPTH", "1"}};
     scatterDepth_ = gpu::Pipeline(context_, shaders, c);
-    // Separable filters over a radius, one axis per dispatch: push (size, radius,
-    // vertical).
-    const auto imageFilter = [&](const char* name, const char* shader) {
-        gpu::ComputePipelineDesc f;
-        f.name = name;
-        f.shader = shader;
-        f.pushConstantBytes = 3 * sizeof(int32_t);
-        return gpu::Pipeline(context_, shaders, f);
-    };
-    depthMin_ = imageFilter("visibility.receiver_depth_min", "engine/receiver_depth_min.comp");
-    dilate_ = imageFilter("visibility.dilate", "engine/mask_dilate.comp");
-    floor_ = imageFilter("visibility.receiver_floor", "engine/receiver_floor.comp");
+    // The spreading over the taps, one axis per dispatch: push (size, radius, vertical).
+    gpu::ComputePipelineDesc f;
+    f.name = "visibility.receiver_depth_min";
+    f.shader = "engine/receiver_depth_min.comp";
+    f.pushConstantBytes = 3 * sizeof(int32_t);
+    depthMin_ = gpu::Pipeline(context_, shaders, f);
     nearest_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
     cameraData_ =
         gpu::Buffer(context_, sizeof(CameraData), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "visibility.camera");
@@ -183,21 +219,20 @@ ReceiverMask& ReceiverMaskBuilder::maskFor(uint32_t resolution)
     ReceiverMask& mask = masks_[resolution];
     mask.resolution = resolution;
     const std::string name = fmt::format("visibility.light{}", resolution);
-    const VkImageUsageFlags usage =
-        VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
     mask.block = (resolution + kMaxMaskTexels - 1) / kMaxMaskTexels;
     mask.size = (resolution + mask.block - 1) / mask.block;
     const uint32_t m = mask.size;
-    mask.marked = gpu::Image(context_, {m, m, kMaskFormat, usage, name + ".mask"});
-    mask.dilatedRows = gpu::Image(context_, {m, m, kMaskFormat, usage, name + ".mask_rows"});
-    mask.dilated =
-        gpu::Image(context_, {m, m, kMaskFormat, usage | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, name + ".mask_dilated"});
-    mask.readback =
-        gpu::Buffer(context_, VkDeviceSize(m) * m, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, name + ".mask_readback");
+    // Host-visible: the host dilates the marks where the scatter wrote them.
+    mask.marked = gpu::Buffer(context_, VkDeviceSize(m) * m * sizeof(uint32_t),
+                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, true,
+                              name + ".mask");
+    mask.dilated = gpu::Image(context_, {m, m, kMaskFormat, VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                         name + ".mask_dilated"});
+    mask.upload =
+        gpu::Buffer(context_, VkDeviceSize(m) * m, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, true, name + ".mask_upload");
     context_.submitAndWait([&](VkCommandBuffer cmd) {
-        for (const gpu::Image* image : {&mask.marked, &mask.dilatedRows, &mask.dilated})
-            gpu::transition(cmd, *image, gpu::access::kUndefined,
-                            {VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0});
+        gpu::transition(cmd, mask.dilated, gpu::access::kUndefined,
+                        {VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0});
     });
     return mask;
 }
@@ -207,7 +242,8 @@ void ReceiverMaskBuilder::makeReceiverDepth(ReceiverMask& mask, bool withPrefix)
     const std::string name = fmt::format("visibility.light{}", mask.resolution);
     const VkDeviceSize depthBytes = VkDeviceSize(mask.resolution) * mask.resolution * sizeof(uint32_t);
     const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
-    // Host-visible: the CPU culling reads the receiver depths where they are written.
+    // Host-visible: the CPU culling and the receiver floor read the receiver depths where
+    // they are written.
     if (!mask.receiverDepth.handle()) {
         mask.receiverDepth = gpu::Buffer(context_, depthBytes, storage, true, name + ".receiver_depth");
         std::memset(mask.receiverDepth.mapped(), 0xff, depthBytes);  // no receiver anywhere
@@ -215,17 +251,6 @@ void ReceiverMaskBuilder::makeReceiverDepth(ReceiverMask& mask, bool withPrefix)
     }
     if (withPrefix && !mask.receiverDepthPrefix.handle())
         mask.receiverDepthPrefix = gpu::Buffer(context_, depthBytes, storage, false, name + ".receiver_depth_prefix");
-    if (mask.receiverFloor.handle()) return;
-    const uint32_t m = mask.size;
-    mask.receiverFloor =
-        gpu::Image(context_, {m, m, kReceiverDepthFormat,
-                              VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, name + ".receiver_floor"});
-    mask.floorReadback = gpu::Buffer(context_, VkDeviceSize(m) * m * sizeof(uint32_t), VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                                     true, name + ".receiver_floor_readback");
-    context_.submitAndWait([&](VkCommandBuffer cmd) {
-        gpu::transition(cmd, mask.receiverFloor, gpu::access::kUndefined,
-                        {VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, 0});
-    });
 }
 
 const ReceiverMask& ReceiverMaskBuilder::build(const render::CasterView& view)
@@ -234,30 +259,37 @@ const ReceiverMask& ReceiverMaskBuilder::build(const render::CasterView& view)
     mask.hasReceiverDepth = view.compareTapRadius >= 0;
     const int32_t tapRadius = std::min(view.compareTapRadius, int32_t(view.resolution));
     if (mask.hasReceiverDepth) makeReceiverDepth(mask, tapRadius > 0);
-    context_.submitAndWait([&](VkCommandBuffer cmd) { recordMask(cmd, view, mask, tapRadius); });
+    context_.submitAndWait([&](VkCommandBuffer cmd) { recordMask(cmd, mask, view, tapRadius); });
+    // The reach in mask texels: a view texel within `reach` of a marked one lies in a mask
+    // texel within ceil(reach / block) of the marked one's.
+    const float reach = std::min(view.footprintTexels, float(view.resolution)) + kMaskSafetyTexels;
+    const auto radius = uint32_t(std::min(std::ceil(std::max(reach, 0.0f) / float(mask.block)), float(mask.size)));
+    // Dilated on the host: the mask is read back anyway, and lavapipe's serial sweeps
+    // over a 512² image cost 10-16 ms of a street view's mask against about 1 ms here
+    // (docs/culling.md).
+    const size_t texels = size_t(mask.size) * mask.size;
+    dilateMask({static_cast<const uint32_t*>(mask.marked.mapped()), texels}, mask.size, radius, mask.dilatedTexels);
     sumMarkedTexels(mask);
-    if (mask.hasReceiverDepth) mask.receiverDepthWritten = receiverDepthRows(mask, uint32_t(tapRadius) + 1);
-    buildFloorPyramid(mask);
+    if (mask.hasReceiverDepth) {
+        mask.receiverDepthWritten = receiverDepthRows(mask, uint32_t(tapRadius) + 1);
+        buildFloorPyramid(mask);
+    } else {
+        mask.floorLevels.clear();
+        uploadDilated(mask);  // the queries test against it
+    }
     return mask;
 }
 
-void ReceiverMaskBuilder::recordMask(VkCommandBuffer cmd, const render::CasterView& view, ReceiverMask& mask,
+void ReceiverMaskBuilder::recordMask(VkCommandBuffer cmd, ReceiverMask& mask, const render::CasterView& view,
                                      int32_t tapRadius)
 {
     const uint32_t size = view.resolution;
-    // The reach in mask texels: a view texel within `reach` of a marked one lies in a mask
-    // texel within ceil(reach / block) of the marked one's.
-    const float reach = std::min(view.footprintTexels, float(size)) + kMaskSafetyTexels;
-    const auto radius =
-        int32_t(std::min(std::ceil(std::max(reach, 0.0f) / float(mask.block)), float(mask.size)));
     const bool ownDepth = mask.hasReceiverDepth;
 
     // The previous submission's reads and writes of these images (the last view).
     gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT},
                        {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT});
-    const VkClearColorValue zero{{0.0f, 0.0f, 0.0f, 0.0f}};
-    const VkImageSubresourceRange colorRange{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-    vkCmdClearColorImage(cmd, mask.marked.handle(), VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &colorRange);
+    vkCmdFillBuffer(cmd, mask.marked.handle(), 0, VK_WHOLE_SIZE, 0u);
     if (ownDepth) clearReceiverDepth(cmd, mask);
     gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT},
                        {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT});
@@ -266,19 +298,18 @@ void ReceiverMaskBuilder::recordMask(VkCommandBuffer cmd, const render::CasterVi
     scatter.bind(cmd);
     gpu::DescriptorPush scatterBindings;
     scatterBindings.sampledImage("cameraDepth", *cameraDepth_, nearest_, VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL)
-        .storageImage("receiverMask", mask.marked)
+        .storageBuffer("ReceiverMarks", mask.marked)
         .storageBuffer("camera", cameraData_);
     if (ownDepth) scatterBindings.storageBuffer("ReceiverDepth", mask.receiverDepth);
     scatterBindings.push(context_, cmd, scatter);
-    const ScatterPush scatterPush{view.viewProj, int32_t(mask.block), int32_t(size)};
+    const ScatterPush scatterPush{view.viewProj, int32_t(mask.block), int32_t(size), int32_t(mask.size)};
     scatter.pushConstants(cmd, &scatterPush, sizeof(scatterPush));
     scatter.dispatchOver(cmd, *cameraDepth_);
 
-    const gpu::MemoryAccess stores{VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                                   VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
-    const gpu::MemoryAccess loads{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+    const gpu::MemoryAccess stores{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
+    const gpu::MemoryAccess loads{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_COPY_BIT,
                                   VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT |
-                                      VK_ACCESS_2_SHADER_SAMPLED_READ_BIT};
+                                      VK_ACCESS_2_TRANSFER_READ_BIT};
     gpu::memoryBarrier(cmd, stores, loads);
     if (ownDepth && tapRadius > 0) {
         // Each receiver's depth over the texels its taps read (receiver_depth_min.comp).
@@ -294,69 +325,45 @@ void ReceiverMaskBuilder::recordMask(VkCommandBuffer cmd, const render::CasterVi
             gpu::memoryBarrier(cmd, stores, loads);
         }
     }
-    dilate_.bind(cmd);
-    const gpu::Image* passes[2][2] = {{&mask.marked, &mask.dilatedRows}, {&mask.dilatedRows, &mask.dilated}};
-    for (int32_t vertical = 0; vertical < 2; ++vertical) {
-        gpu::DescriptorPush()
-            .storageImage("source", *passes[vertical][0])
-            .storageImage("target", *passes[vertical][1])
-            .push(context_, cmd, dilate_);
-        const int32_t push[3] = {int32_t(mask.size), radius, vertical};
-        dilate_.pushConstants(cmd, push, sizeof(push));
-        dilate_.dispatchOver(cmd, mask.size);
-        gpu::memoryBarrier(cmd, stores, loads);
-    }
-    if (ownDepth) {
-        // The least receiver depth per mask texel, where the dilated mask is marked
-        // (receiver_floor.comp).
-        floor_.bind(cmd);
-        gpu::DescriptorPush()
-            .storageImage("mask", mask.dilated)
-            .storageBuffer("ReceiverDepth", mask.receiverDepth)
-            .storageImage("receiverFloor", mask.receiverFloor)
-            .push(context_, cmd, floor_);
-        const int32_t push[3] = {int32_t(mask.size), int32_t(mask.block), int32_t(size)};
-        floor_.pushConstants(cmd, push, sizeof(push));
-        floor_.dispatchOver(cmd, mask.size, mask.size);
-        gpu::memoryBarrier(cmd, stores, loads);
-    }
-    const gpu::ImageAccess general{VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                                   VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
-    const gpu::ImageAccess copySource{VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
-                                      VK_ACCESS_2_TRANSFER_READ_BIT};
-    // Read back, then back to GENERAL for the queries' reads.
-    const auto readBack = [&](const gpu::Image& image, const gpu::Buffer& buffer, const gpu::ImageAccess& after) {
-        VkBufferImageCopy copy{};
-        copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-        copy.imageExtent = {image.desc().width, image.desc().height, 1};
-        gpu::transition(cmd, image, general, copySource);
-        vkCmdCopyImageToBuffer(cmd, image.handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, buffer.handle(), 1, &copy);
-        gpu::transition(cmd, image, copySource, after);
-    };
-    readBack(mask.dilated, mask.readback,
-             {VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT});
-    if (ownDepth) {
-        readBack(mask.receiverFloor, mask.floorReadback, general);
-    }
-    gpu::memoryBarrier(cmd,
-                       {VK_PIPELINE_STAGE_2_COPY_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                        VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT},
+    // The marks and the receiver depths, for the host.
+    gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT},
                        {VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT});
 }
 
-// A summed-area table of the read-back mask (whether any texel of a rectangle is marked,
-// in O(1)), and the bounds of the marked texels.
+void ReceiverMaskBuilder::uploadDilated(const ReceiverMask& mask)
+{
+    std::memcpy(mask.upload.mapped(), mask.dilatedTexels.data(), mask.dilatedTexels.size());
+    context_.submitAndWait([&](VkCommandBuffer cmd) {
+        // The host's write; the last queries' reads of the image were waited for.
+        gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_WRITE_BIT},
+                           {VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT});
+        const gpu::ImageAccess sampled{VK_IMAGE_LAYOUT_GENERAL, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+                                       VK_ACCESS_2_SHADER_SAMPLED_READ_BIT};
+        const gpu::ImageAccess copyTarget{VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
+                                          VK_ACCESS_2_TRANSFER_WRITE_BIT};
+        VkBufferImageCopy copy{};
+        copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+        copy.imageExtent = {mask.size, mask.size, 1};
+        gpu::transition(cmd, mask.dilated, sampled, copyTarget);
+        vkCmdCopyBufferToImage(cmd, mask.upload.handle(), mask.dilated.handle(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                               1, &copy);
+        gpu::transition(cmd, mask.dilated, copyTarget, sampled);
+    });
+}
+
+// A summed-area table of the dilated mask (whether any texel of a rectangle is marked, in
+// O(1)), and the bounds of the marked texels.
 void ReceiverMaskBuilder::sumMarkedTexels(ReceiverMask& mask)
 {
     const uint32_t m = mask.size;
-    const auto* texels = static_cast<const uint8_t*>(mask.readback.mapped());
+    const uint8_t* texels = mask.dilatedTexels.data();
     mask.summedArea.assign(size_t(m + 1) * (m + 1), 0);
     mask.markedRows.assign(m, RowSpan{m, 0});
     uint32_t x0 = m, y0 = m, x1 = 0, y1 = 0;  // the marked texels' bounds, inclusive
     for (uint32_t y = 0; y < m; ++y) {
         uint32_t row = 0;
         for (uint32_t x = 0; x < m; ++x) {
-            const bool marked = texels[size_t(y) * m + x] >= 128;
+            const bool marked = texels[size_t(y) * m + x] != 0;
             row += marked ? 1u : 0u;
             mask.summedArea[size_t(y + 1) * (m + 1) + x + 1] = mask.summedArea[size_t(y) * (m + 1) + x + 1] + row;
             if (marked) {
@@ -403,11 +410,23 @@ std::vector<std::vector<float>> floorPyramid(std::span<const uint32_t> floorBits
 
 void ReceiverMaskBuilder::buildFloorPyramid(ReceiverMask& mask)
 {
-    mask.floorLevels.clear();
-    if (!mask.hasReceiverDepth) return;
-    const size_t texels = size_t(mask.size) * mask.size;
-    mask.floorLevels =
-        floorPyramid({static_cast<const uint32_t*>(mask.floorReadback.mapped()), texels}, mask.size);
+    // The receiver floor: per mask texel of the dilated mask, the least receiver depth over
+    // the block of view texels it stands for (after the spreading over the taps); none
+    // (all ones) elsewhere.
+    const uint32_t m = mask.size, b = mask.block, size = mask.resolution;
+    std::vector<uint32_t> floorBits(size_t(m) * m, ~0u);
+    for (uint32_t my = 0; my < m; ++my) {
+        const RowSpan marked = mask.markedRows[my];
+        for (uint32_t mx = marked.begin; mx < marked.end; ++mx) {
+            if (mask.dilatedTexels[size_t(my) * m + mx] == 0) continue;
+            uint32_t least = ~0u;
+            for (uint32_t y = my * b; y < std::min((my + 1) * b, size); ++y)
+                for (uint32_t x = mx * b; x < std::min((mx + 1) * b, size); ++x)
+                    least = std::min(least, mask.receiverDepthBits(x, y));
+            floorBits[size_t(my) * m + mx] = least;
+        }
+    }
+    mask.floorLevels = floorPyramid(floorBits, m);
 }
 
 } // namespace penumbra::visibility

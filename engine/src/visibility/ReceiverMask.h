@@ -2,14 +2,13 @@
 // Step 2 of Mattausch et al. (Visibility.h): the receiver mask of a light view, the texels
 // that the camera's visible pixels look up. Each camera pixel, unprojected from the camera
 // depth, marks its texel (engine/receiver_scatter.comp: the reverse shadow test, done from
-// the camera's side); the mask is dilated by the view's footprint (engine/mask_dilate.comp)
-// and read back into a summed-area table, so that the traversal can skip, without a
-// query, every node whose projection meets no marked texel. A view whose technique
-// compares with the receivers' own depth also gets the farthest receiver depth per texel,
-// spread over the technique's taps (engine/receiver_depth_min.comp), and its least value
-// per mask texel, the receiver floor (engine/receiver_floor.comp), read back into a min
-// pyramid: the traversal skips, without a query, every node whose box lies behind the
-// floor wherever it is projected.
+// the camera's side); the mask is read back, dilated by the view's footprint on the host
+// and summed into a summed-area table, so that the traversal can skip, without a query,
+// every node whose projection meets no marked texel. A view whose technique compares with
+// the receivers' own depth also gets the farthest receiver depth per texel, spread over
+// the technique's taps (engine/receiver_depth_min.comp), and, on the host, its least value
+// per mask texel, the receiver floor, in a min pyramid: the traversal skips, without a
+// query, every node whose box lies behind the floor wherever it is projected.
 //
 // The paper also rasterises the receivers' depth here, as the start of the shadow map.
 // Here the technique draws its own map, so that pass would draw the receivers twice (in a
@@ -56,10 +55,12 @@ struct ReceiverMask {
     uint32_t resolution = 0;  // the view's texels per side
     uint32_t size = 0;        // mask texels per side
     uint32_t block = 1;       // view texels per mask texel, per side
-    gpu::Image marked, dilatedRows, dilated;  // the scatter's marks; the row pass; the dilated mask
-    gpu::Buffer readback;                     // the dilated mask, host-visible
-    std::vector<uint32_t> summedArea;         // of the dilated mask, (size + 1)^2
-    std::vector<RowSpan> markedRows;          // per mask row, its marked texels' span (mask texels)
+    gpu::Buffer marked;                // the scatter's marks, a word per mask texel, host-visible
+    gpu::Image dilated;                // the dilated mask, for the queries (views without receiver depths)
+    gpu::Buffer upload;                // host-visible: the dilated mask on its way into `dilated`
+    std::vector<uint8_t> dilatedTexels;  // the dilated mask on the host, 0 or 255
+    std::vector<uint32_t> summedArea;  // of the dilated mask, (size + 1)^2
+    std::vector<RowSpan> markedRows;   // per mask row, the span of its dilated mask's texels (mask texels)
     // Views whose technique compares with the receivers' own depth: the farthest receiver
     // depth per view texel, and the scratch of its spreading over the taps; made on
     // first use.
@@ -71,11 +72,9 @@ struct ReceiverMask {
     // of a whole 4096² buffer (64 MB) took a third of a street view's mask
     // (docs/culling.md); the camera's receivers cover a fifth of such a map or less.
     std::vector<RowSpan> receiverDepthWritten;
-    // With receiver depths: per mask texel the least receiver depth of its block (the bits
-    // of a non-negative float, all ones for none), read back; floorLevels[0] holds it as
-    // floats (+infinity for none) and each next level the least of 2 x 2 of the last.
-    gpu::Image receiverFloor;
-    gpu::Buffer floorReadback;
+    // With receiver depths: per mask texel of the dilated mask the least receiver depth of
+    // its block, as floats (+infinity for none) in floorLevels[0], and in each next level
+    // the least of 2 x 2 cells of the last.
     std::vector<std::vector<float>> floorLevels;
     // The view texels that the marked mask texels cover: the queries render only there.
     VkRect2D bounds{};
@@ -122,19 +121,18 @@ public:
 private:
     ReceiverMask& maskFor(uint32_t resolution);
     void makeReceiverDepth(ReceiverMask& mask, bool withPrefix);
-    void recordMask(VkCommandBuffer cmd, const render::CasterView& view, ReceiverMask& mask, int32_t tapRadius);
+    void recordMask(VkCommandBuffer cmd, ReceiverMask& mask, const render::CasterView& view, int32_t tapRadius);
+    void uploadDilated(const ReceiverMask& mask);
     void sumMarkedTexels(ReceiverMask& mask);
     void buildFloorPyramid(ReceiverMask& mask);
 
     gpu::Context& context_;
     const gpu::Image* cameraDepth_ = nullptr;
     std::map<uint32_t, ReceiverMask> masks_;  // by resolution
-    // The scatter (with receiver depths), the receivers' depths spread over the taps, and
-    // the dilation, the receiver floor.
+    // The scatter (with and without receiver depths), the receivers' depths spread over
+    // the taps.
     gpu::Pipeline scatter_, scatterDepth_;
     gpu::Pipeline depthMin_;
-    gpu::Pipeline dilate_;
-    gpu::Pipeline floor_;
     gpu::Sampler nearest_;
     gpu::Buffer cameraData_;  // the reverse shadow test's camera
 };

@@ -158,16 +158,27 @@ void Visibility::countDraw(const render::DrawCounts& counts)
     stats_.trianglesDrawn += counts.triangles;
 }
 
-const std::vector<uint8_t>* Visibility::casters(const render::CasterView& view)
+Visibility::CulledLightView& Visibility::culledLightView(const render::CasterView& view)
 {
-    if (mode_ == config::CullingMode::None) return nullptr;
     CulledLightView& culled = lightViews_[{view.light, view.view}];
     if (culled.frame != frame_ || !(culled.culledFor == view)) {
         cullLightView(view, culled);
         culled.frame = frame_;
         culled.culledFor = view;
     }
-    return &culled.casters;
+    return culled;
+}
+
+const std::vector<uint8_t>* Visibility::casters(const render::CasterView& view)
+{
+    if (mode_ == config::CullingMode::None) return nullptr;
+    return &culledLightView(view).casters;
+}
+
+std::optional<VkRect2D> Visibility::readArea(const render::CasterView& view)
+{
+    if (mode_ == config::CullingMode::None) return std::nullopt;
+    return culledLightView(view).readArea;
 }
 
 OccluderDepth& Visibility::lightDepth(uint32_t resolution)
@@ -183,6 +194,7 @@ void Visibility::cullLightView(const render::CasterView& view, CulledLightView& 
 {
     ++stats_.views;
     const auto start = std::chrono::steady_clock::now();
+    culled.readArea.reset();
     if (mode_ == config::CullingMode::Frustum || view.resolution == 0) {
         cullFrustum(view.viewProj, culled.casters);
         stats_.casterCullMs += core::msSince(start);
@@ -218,6 +230,7 @@ void Visibility::cullLightViewFully(const render::CasterView& view, CulledLightV
     traversal.bias = view.depthBias;
     if (masks_) {
         traversal.mask = &masks_->build(view);
+        culled.readArea = traversal.mask->bounds;
         stats_.maskMs += core::msSince(start);
         start = std::chrono::steady_clock::now();
         if (traversal.mask->hasReceiverDepth) {

@@ -85,7 +85,11 @@ public:
     // The casters `view` must draw this frame, or null for all. Culls the view on its
     // first call in the frame and keeps the list for the frame.
     const std::vector<uint8_t>* casters(const render::CasterView& view) override;
+    // The bounds of the view's dilated receiver mask when it was culled with one this
+    // frame (receiver-mask mode, the view not fallen back to its frustum); else nullopt.
+    std::optional<VkRect2D> readArea(const render::CasterView& view) override;
     void countDraw(const render::DrawCounts& counts) override;
+    void countRenderedTexels(uint64_t texels) override { stats_.mapTexelsRendered += texels; }
 
     // Shadow-map focusing (Mattausch et al. §1.4): the world box of every point the camera
     // sees this frame (camera pixels unprojected from the camera depth), which lies in the
@@ -106,6 +110,7 @@ private:
         render::CasterView culledFor;
         NodeHistory history;
         std::vector<uint8_t> casters;
+        std::optional<VkRect2D> readArea;  // the receiver mask's bounds, when culled with one
         double keptFraction = 0.0;     // of the frustum's instances, at the last full culling
         uint32_t framesSinceFull = 0;  // frames culled to the frustum since then
     };
@@ -114,6 +119,8 @@ private:
     double keptFraction(const glm::mat4& viewProj, const std::vector<uint8_t>& kept) const;
     void cullCamera(const glm::mat4& cameraViewProj);
     void computeFocus(const glm::mat4& cameraViewProj);
+    // The view's entry, culled for this frame.
+    CulledLightView& culledLightView(const render::CasterView& view);
     void cullLightView(const render::CasterView& view, CulledLightView& culled);
     void cullLightViewFully(const render::CasterView& view, CulledLightView& culled);
     OccluderDepth& lightDepth(uint32_t resolution);

@@ -435,6 +435,57 @@ TEST_F(VisibilityCulling, AStreetViewOfACityCullsMostCasters)
     EXPECT_GT(mask.stats.floorRejected, 0u) << "hard's slope bias: culled behind the receivers on the CPU";
 }
 
+// A technique whose map only its receivers' lookups read (hard, pcss:
+// ShadowMap::setReadByLookupsOnly) gets a depth pass that clears and draws only the texels
+// the frame's receivers can read: the bounds of the dilated receiver mask, with
+// receiver-mask culling. On a street view that is a small part of the map, and the image
+// stays that of every caster. Every other case renders the whole map: the frustum mode, a
+// technique with passes over the whole map (vsm's blur), and a map shown as a debug image.
+TEST_F(VisibilityCulling, ADepthPassRendersOnlyTheTexelsTheReceiversRead)
+{
+    scene::CityParams p;
+    p.blocks = 3;
+    p.seed = 3;
+    const scene::Scene scene = scene::generateCity(p);
+    struct Case {
+        std::string technique;
+        nlohmann::json params;
+        bool lookupsOnly;
+    };
+    const uint64_t wholeMap = 1024u * 1024u;
+    for (const Case& c : {Case{"hard", {{"resolution", 1024}}, true},
+                          Case{"pcss", {{"resolution", 1024}}, true},
+                          Case{"vsm", {{"resolution", 1024}, {"blur_radius", 2}}, false}}) {
+        SCOPED_TRACE(c.technique);
+        config::RenderConfig cfg = smallDefault(scene::LightType::Directional, c.technique, c.params);
+        cfg.camera.position = {3.0f, 1.7f, -110.0f};
+        cfg.camera.target = {-2.0f, 10.0f, 40.0f};
+        cfg.camera.nearWorld = 0.1f;
+        cfg.camera.fovYDeg = 60.0f;
+        cfg.lights[0].light.direction = glm::normalize(glm::vec3(0.6f, -0.45f, 0.35f));
+        const CulledFrame all = render(scene, cfg, CullingMode::None);
+        const CulledFrame frustum = render(scene, cfg, CullingMode::Frustum);
+        const CulledFrame mask = render(scene, cfg, CullingMode::ReceiverMask);
+        EXPECT_TRUE(sameVisibility(all.visibility, mask.visibility, cfg.width));
+        EXPECT_EQ(frustum.stats.mapTexelsRendered, wholeMap);
+        if (c.lookupsOnly) {
+            EXPECT_GT(mask.stats.mapTexelsRendered, 0u);
+            EXPECT_LT(mask.stats.mapTexelsRendered, wholeMap / 2) << "the street's receivers read a part of the map";
+        } else {
+            EXPECT_EQ(mask.stats.mapTexelsRendered, wholeMap);
+        }
+        // Shown as a debug image, the map is whole: the texels no receiver reads too.
+        cfg.culling = CullingMode::ReceiverMask;
+        frame::FrameRenderer shown(*context, scene, cfg, test::plugins());
+        const std::string map = fmt::format("light0.{}.shadow_map", c.technique);
+        const std::vector<std::string> names = shown.imageNames();
+        ASSERT_NE(std::find(names.begin(), names.end(), map), names.end()) << map;
+        shown.requestImage(map);
+        EXPECT_EQ(shown.renderFrame().culling.mapTexelsRendered, wholeMap);
+        EXPECT_TRUE(sameVisibility(all.visibility, shown.readVisibility(0), cfg.width));
+    }
+}
+
 // The receiver depths are cleared only where the last frame wrote them
 // (ReceiverMask::receiverDepthWritten): a frame culls as a first frame of its view does,
 // whatever view came before. Under a slab a small box stands on the ground, the sun

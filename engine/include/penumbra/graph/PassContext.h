@@ -37,6 +37,10 @@ public:
     const gpu::Buffer& buffer(std::string_view name) const;
     // The layout this pass declared for `name` (the executor put it there).
     VkImageLayout layout(std::string_view name) const;
+    // Whether `name` is a marked output (RenderGraph::markOutput): it is read after the
+    // frame (the frame's result, a debug image), so all of it matters, not only what the
+    // passes after this one read.
+    bool isOutput(std::string_view name) const;
     // Host passes: the mapped memory (host-visible, coherent) of a buffer the pass
     // declared with Usage::HostRead or HostWrite, its declared size. The GPU work before
     // the pass has finished and its writes are visible; what the pass writes is visible

@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 
 namespace penumbra::render {
 
@@ -78,6 +79,16 @@ public:
               const std::function<void(const gpu::Image& texture)>& bindTexture = {}) const;
 
     bool hasAlphaMasked() const { return scene_->hasAlphaMasked(); }
+
+    // The texels of `view` that this frame's receivers can read through the view's
+    // footprint (CasterView::footprintTexels), in view texels: with receiver-mask culling
+    // the bounds of the view's dilated receiver mask; nullopt (any texel) otherwise. A
+    // depth pass whose map nothing else reads clears and draws only there
+    // (render::ShadowMap::setReadByLookupsOnly).
+    std::optional<VkRect2D> readArea(const CasterView& view) const;
+    // Counts the texels a caster pass cleared and drew into, for the frame's figures
+    // (visibility::CullingStats::mapTexelsRendered).
+    void countRenderedTexels(uint64_t texels) const;
 
     // The box of what the camera sees this frame when the config asks for shadow-map
     // focusing ("shadow_focus"), else null: render::ShadowMap fits directional lights'

@@ -169,7 +169,7 @@ public:
     void addDepthPass(graph::RenderGraph& graph, const std::string& image, ShadowDepthBias bias) const;
 
     // Records, in a graphics pass that writes `image` as Usage::DepthAttachment, the clear
-    // of the whole image and the casters of every map of `maps` into its atlas at its
+    // of the image (of the texels the receivers read: setReadByLookupsOnly) and the casters of every map of `maps` into its atlas at its
     // origin, with `bias`: the depth pass of addDepthPass for one map, and for a technique
     // that packs the maps of several views of the light's shape into one image with the
     // pipelines created once (the reference's rasterised light samples). Each map's atlas
@@ -196,6 +196,16 @@ public:
     // Receiver-mask culling then draws only the casters that lie in front of a visible
     // receiver point after the depth pass's bias.
     void setOwnDepthCompare(int32_t tapRadius) { compareTapRadius_ = tapRadius; }
+
+    // Declares that only the receivers' lookups read the map (compares within the
+    // footprint, in a visibility pass), no pass over all of it (moments, blurs,
+    // summed-area tables, mip chains). The depth pass then clears and draws only the
+    // texels that this frame's receivers can read (Casters::readArea: with receiver-mask
+    // culling, the bounds of the view's dilated receiver mask), and the rest of the map
+    // is undefined; a map that is a marked output (a debug image) is drawn whole. On a
+    // CPU rasteriser the clear and store of a whole 4096² map cost more than the culled
+    // casters drawn into it (docs/culling.md). false (the default): the whole map.
+    void setReadByLookupsOnly(bool only) { readByLookupsOnly_ = only; }
 
     uint32_t faceCount() const { return faceCount_; }
     // The map's layout for its shaders: SHADOW_FACE_COUNT, SHADOW_FACE_TEXELS and
@@ -233,6 +243,7 @@ private:
     std::vector<LightFrustum> frusta_;
     float footprint_ = 0.0f;
     int32_t compareTapRadius_ = -1;
+    bool readByLookupsOnly_ = false;
 };
 
 } // namespace penumbra::render

@@ -21,6 +21,7 @@ struct CullingStats {
     uint64_t viewsFellBack = 0;     // of which culled to their frustum: culling kept most last time
     uint64_t castersDrawn = 0;      // instance draws through Casters::draw
     uint64_t trianglesDrawn = 0;    // their triangles
+    uint64_t mapTexelsRendered = 0; // texels the caster passes cleared and drew into (render areas)
     double cameraMs = 0.0;          // step 1: camera culling (wall clock, GPU work waited for)
     double maskMs = 0.0;            // step 2: receiver masks
     double casterCullMs = 0.0;      // step 3: caster culling (queries, or frustum tests)
