@@ -199,8 +199,9 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
                                     map.origin.y, image, target.desc().width, target.desc().height));
     }
     // Each face draws into its own cell of the map's atlas (the scissor keeps it there),
-    // and, when only the receivers' lookups read the map, into the texels they can read.
-    // The render area, which bounds the clear, is the union of the faces' scissors.
+    // and, when only the receivers' lookups read the map, into the texels they can read;
+    // the render area, which bounds the clear, is then the union of the faces' scissors.
+    // Otherwise it is the whole image.
     struct FaceDraw {
         CasterView view;
         VkViewport viewport;
@@ -232,8 +233,12 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
             areaY1 = std::max(areaY1, draw.scissor.offset.y + int32_t(draw.scissor.extent.height));
             faces.push_back(draw);
         }
-    // Nothing read anywhere: one texel keeps the render pass valid (and cleared).
-    if (faces.empty()) areaX0 = areaY0 = 0, areaX1 = areaY1 = 1;
+    if (readWhole) {
+        areaX0 = areaY0 = 0;
+        areaX1 = int32_t(target.desc().width), areaY1 = int32_t(target.desc().height);
+    } else if (faces.empty()) {
+        areaX0 = areaY0 = 0, areaX1 = areaY1 = 1;  // nothing read anywhere: one texel keeps the pass valid
+    }
     VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
     depth.imageView = target.view();
     depth.imageLayout = pass.layout(image);

@@ -405,6 +405,18 @@ TEST_F(VisibilityCulling, AViewWhereCullingCannotPayTakesItsFrustum)
     }
 }
 
+// A city's street seen from the street, in the sun, through `technique`.
+config::RenderConfig streetView(const std::string& technique, const nlohmann::json& params)
+{
+    config::RenderConfig cfg = smallDefault(scene::LightType::Directional, technique, params);
+    cfg.camera.position = {3.0f, 1.7f, -110.0f};
+    cfg.camera.target = {-2.0f, 10.0f, 40.0f};
+    cfg.camera.nearWorld = 0.1f;
+    cfg.camera.fovYDeg = 60.0f;
+    cfg.lights[0].light.direction = glm::normalize(glm::vec3(0.6f, -0.45f, 0.35f));
+    return cfg;
+}
+
 // In a city seen from the street the camera sees few of the instances, and the receiver
 // mask keeps fewer casters than the light's own occlusion culling, which keeps fewer
 // than its frustum: and all of them give one image.
@@ -414,12 +426,7 @@ TEST_F(VisibilityCulling, AStreetViewOfACityCullsMostCasters)
     p.blocks = 3;
     p.seed = 3;
     scene::Scene scene = scene::generateCity(p);
-    config::RenderConfig cfg = smallDefault(scene::LightType::Directional, "hard", {{"resolution", 1024}});
-    cfg.camera.position = {3.0f, 1.7f, -110.0f};
-    cfg.camera.target = {-2.0f, 10.0f, 40.0f};
-    cfg.camera.nearWorld = 0.1f;
-    cfg.camera.fovYDeg = 60.0f;
-    cfg.lights[0].light.direction = glm::normalize(glm::vec3(0.6f, -0.45f, 0.35f));
+    const config::RenderConfig cfg = streetView("hard", {{"resolution", 1024}});
     const CulledFrame all = render(scene, cfg, CullingMode::None);
     const CulledFrame frustum = render(scene, cfg, CullingMode::Frustum);
     const CulledFrame occlusion = render(scene, cfg, CullingMode::LightOcclusion);
@@ -457,12 +464,7 @@ TEST_F(VisibilityCulling, ADepthPassRendersOnlyTheTexelsTheReceiversRead)
                           Case{"pcss", {{"resolution", 1024}}, true},
                           Case{"vsm", {{"resolution", 1024}, {"blur_radius", 2}}, false}}) {
         SCOPED_TRACE(c.technique);
-        config::RenderConfig cfg = smallDefault(scene::LightType::Directional, c.technique, c.params);
-        cfg.camera.position = {3.0f, 1.7f, -110.0f};
-        cfg.camera.target = {-2.0f, 10.0f, 40.0f};
-        cfg.camera.nearWorld = 0.1f;
-        cfg.camera.fovYDeg = 60.0f;
-        cfg.lights[0].light.direction = glm::normalize(glm::vec3(0.6f, -0.45f, 0.35f));
+        config::RenderConfig cfg = streetView(c.technique, c.params);
         const CulledFrame all = render(scene, cfg, CullingMode::None);
         const CulledFrame frustum = render(scene, cfg, CullingMode::Frustum);
         const CulledFrame mask = render(scene, cfg, CullingMode::ReceiverMask);
