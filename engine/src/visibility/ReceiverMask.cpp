@@ -265,7 +265,7 @@ const ReceiverMask& ReceiverMaskBuilder::build(const render::CasterView& view)
     const float reach = std::min(view.footprintTexels, float(view.resolution)) + kMaskSafetyTexels;
     const auto radius = uint32_t(std::min(std::ceil(std::max(reach, 0.0f) / float(mask.block)), float(mask.size)));
     // Dilated on the host: the mask is read back anyway, and lavapipe's serial sweeps
-    // over a 512² image cost 10-16 ms of a street view's mask against about 1 ms here
+    // over a 512² image cost 10-16 ms of a street view's mask against about 2 ms here
     // (docs/culling.md).
     const size_t texels = size_t(mask.size) * mask.size;
     dilateMask({static_cast<const uint32_t*>(mask.marked.mapped()), texels}, mask.size, radius, mask.dilatedTexels);
