@@ -227,10 +227,6 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
                 if (x0 == x1 || y0 == y1) continue;  // no receiver reads this face
                 draw.scissor = {{x + x0, y + y0}, {uint32_t(x1 - x0), uint32_t(y1 - y0)}};
             }
-            areaX0 = std::min(areaX0, draw.scissor.offset.x);
-            areaY0 = std::min(areaY0, draw.scissor.offset.y);
-            areaX1 = std::max(areaX1, draw.scissor.offset.x + int32_t(draw.scissor.extent.width));
-            areaY1 = std::max(areaY1, draw.scissor.offset.y + int32_t(draw.scissor.extent.height));
             faces.push_back(draw);
         }
     if (readWhole) {
@@ -238,6 +234,13 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
         areaX1 = int32_t(target.desc().width), areaY1 = int32_t(target.desc().height);
     } else if (faces.empty()) {
         areaX0 = areaY0 = 0, areaX1 = areaY1 = 1;  // nothing read anywhere: one texel keeps the pass valid
+    } else {
+        for (const FaceDraw& face : faces) {
+            areaX0 = std::min(areaX0, face.scissor.offset.x);
+            areaY0 = std::min(areaY0, face.scissor.offset.y);
+            areaX1 = std::max(areaX1, face.scissor.offset.x + int32_t(face.scissor.extent.width));
+            areaY1 = std::max(areaY1, face.scissor.offset.y + int32_t(face.scissor.extent.height));
+        }
     }
     VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
     depth.imageView = target.view();
