@@ -52,8 +52,16 @@ expect address_error 1 1
 fake ub 'echo "a.cpp:3:5: runtime error: signed integer overflow" >&2; echo "Tracer caught signal 11" >&2; echo "LeakSanitizer has encountered a fatal error." >&2; exit 1' "$passes"
 expect ub 1 1
 
-fake failed_test 'echo "[  FAILED  ] A.B"; echo "Tracer caught signal 11" >&2; echo "LeakSanitizer has encountered a fatal error." >&2; exit 1' "$passes"
-expect failed_test 1 1
+# A death test whose child's tracer crashed: the child's output is in the test's stdout.
+fake death_test 'echo "[  DEATH   ] Tracer caught signal 11: addr=0x100004ad0"; echo "[  DEATH   ] ==613==LeakSanitizer has encountered a fatal error."; echo "[  FAILED  ] A.B"; exit 1' "$passes"
+expect death_test 0 2
+
+# A test that fails for its own reasons as well fails on the rerun too.
+fake failed_twice 'echo "[  FAILED  ] A.B"; echo "Tracer caught signal 11" >&2; echo "LeakSanitizer has encountered a fatal error." >&2; exit 1' 'echo "[  FAILED  ] A.B"; exit 1'
+expect failed_twice 1 2
+
+fake leak_in_child 'echo "[  DEATH   ] ERROR: LeakSanitizer: detected memory leaks"; echo "Tracer caught signal 11"; echo "LeakSanitizer has encountered a fatal error."; exit 1' "$passes"
+expect leak_in_child 1 1
 
 fake plain_failure 'echo "[  FAILED  ] A.B"; exit 1' "$passes"
 expect plain_failure 1 1
