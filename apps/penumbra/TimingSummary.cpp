@@ -96,6 +96,7 @@ std::span<const CullingFigure> cullingFigures()
         {"casters_drawn", "casters drawn (instance draws)", &S::castersDrawn},
         {"triangles_drawn", "triangles drawn in caster passes", &S::trianglesDrawn},
         {"map_texels_rendered", "map texels rendered (render areas)", &S::mapTexelsRendered},
+        {"masks_on_host", "receiver masks scattered on the host", &S::masksOnHost},
         {"nodes_visited", "BVH nodes visited", &S::nodesVisited},
         {"queries", "occlusion queries issued", &S::queriesIssued},
         {"query_rounds", "query rounds (submissions waited for)", &S::queryRounds},

@@ -5,6 +5,8 @@
 // pass), since a receiver's lookups read every texel within the technique's tap radius
 // of its own and compare them all with the same depth.
 //
+// On a CPU device the host spreads instead (engine/src/visibility/ReceiverScatter.cpp).
+//
 // One invocation per row (or column), in place, with van Herk's and Gil and Werman's
 // running minima over blocks of 2 radius + 1: three reads per texel whatever the radius
 // (lavapipe runs serial sweeps far faster than shared-memory reductions). The forward

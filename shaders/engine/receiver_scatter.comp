@@ -13,6 +13,10 @@
 // view's full resolution, the texel's farthest receiver depth to its own (atomic min of
 // the bits of a non-negative float); engine/receiver_depth_min.comp then spreads it over
 // the technique's taps.
+//
+// On a CPU device the host runs the same arithmetic instead (engine/src/visibility/
+// ReceiverScatter.cpp, faster there): a change here belongs there too (the visibility test
+// HostAndDeviceScattersGiveNonesImageAndCullAlike compares the two).
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 0) uniform sampler2D cameraDepth;  // reversed-Z, 0 where nothing was drawn

@@ -1,5 +1,7 @@
 #include "visibility/ReceiverMask.h"
 
+#include "visibility/ReceiverScatter.h"
+
 #include "penumbra/gpu/Barrier.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/gpu/ShaderCompiler.h"
@@ -9,10 +11,13 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <optional>
+#include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace penumbra::visibility {
 namespace {
@@ -182,8 +187,25 @@ bool ReceiverMask::behindReceivers(const TexelRect& rect, float nearestDepth) co
     return true;
 }
 
-ReceiverMaskBuilder::ReceiverMaskBuilder(gpu::Context& context, const gpu::ShaderCompiler& shaders) : context_(context)
+ScatterPlacement scatterPlacementFor(const gpu::Context& context)
 {
+    const char* chosen = std::getenv(kScatterPlacementVariable);
+    const std::string_view choice = chosen ? chosen : "";
+    if (choice == "host") return ScatterPlacement::Host;
+    if (choice == "device") return ScatterPlacement::Device;
+    if (!choice.empty() && choice != "auto") {
+        throw std::runtime_error(fmt::format("{}={}: expected host, device or auto (the default: host on a CPU "
+                                             "device, device elsewhere)",
+                                             kScatterPlacementVariable, choice));
+    }
+    return context.deviceInfo().type == "cpu" ? ScatterPlacement::Host : ScatterPlacement::Device;
+}
+
+ReceiverMaskBuilder::ReceiverMaskBuilder(gpu::Context& context, const gpu::ShaderCompiler& shaders,
+                                         ScatterPlacement placement)
+    : context_(context), placement_(placement)
+{
+    if (placement_ == ScatterPlacement::Host) return;
     gpu::ComputePipelineDesc c;
     c.name = "visibility.receiver_scatter";
     c.shader = "engine/receiver_scatter.comp";
@@ -206,7 +228,11 @@ ReceiverMaskBuilder::ReceiverMaskBuilder(gpu::Context& context, const gpu::Shade
 void ReceiverMaskBuilder::setCamera(const gpu::Image& depth, const glm::mat4& viewProj, const glm::vec3& eye)
 {
     cameraDepth_ = &depth;
-    const CameraData data{glm::inverse(viewProj),
+    cameraInverseViewProj_ = glm::inverse(viewProj);
+    cameraEye_ = eye;
+    cameraDepthRead_ = false;
+    if (placement_ == ScatterPlacement::Host) return;
+    const CameraData data{cameraInverseViewProj_,
                           glm::vec4(float(depth.desc().width), float(depth.desc().height), 0.0f, 0.0f),
                           glm::vec4(eye, 0.0f)};
     std::memcpy(cameraData_.mapped(), &data, sizeof(data));
@@ -249,7 +275,7 @@ void ReceiverMaskBuilder::makeReceiverDepth(ReceiverMask& mask, bool withPrefix)
         std::memset(mask.receiverDepth.mapped(), 0xff, depthBytes);  // no receiver anywhere
         mask.receiverDepthWritten.clear();
     }
-    if (withPrefix && !mask.receiverDepthPrefix.handle())
+    if (withPrefix && placement_ == ScatterPlacement::Device && !mask.receiverDepthPrefix.handle())
         mask.receiverDepthPrefix = gpu::Buffer(context_, depthBytes, storage, false, name + ".receiver_depth_prefix");
 }
 
@@ -259,7 +285,10 @@ const ReceiverMask& ReceiverMaskBuilder::build(const render::CasterView& view)
     mask.hasReceiverDepth = view.compareTapRadius >= 0;
     const int32_t tapRadius = std::min(view.compareTapRadius, int32_t(view.resolution));
     if (mask.hasReceiverDepth) makeReceiverDepth(mask, tapRadius > 0);
-    context_.submitAndWait([&](VkCommandBuffer cmd) { recordMask(cmd, mask, view, tapRadius); });
+    if (placement_ == ScatterPlacement::Host)
+        scatterOnHost(mask, view, tapRadius);
+    else
+        context_.submitAndWait([&](VkCommandBuffer cmd) { recordMask(cmd, mask, view, tapRadius); });
     // The reach in mask texels: a view texel within `reach` of a marked one lies in a mask
     // texel within ceil(reach / block) of the marked one's.
     const float reach = std::min(view.footprintTexels, float(view.resolution)) + kMaskSafetyTexels;
@@ -328,6 +357,71 @@ void ReceiverMaskBuilder::recordMask(VkCommandBuffer cmd, ReceiverMask& mask, co
     // The marks and the receiver depths, for the host.
     gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT},
                        {VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT});
+}
+
+// The camera depth into a host-visible buffer kept across frames (a fresh one per frame
+// cost its pages' first touch, a few ms for 1280 x 720 on lavapipe), as the floats the
+// scatter reads: the depth is D32_SFLOAT, which a copy leaves as it is.
+void ReceiverMaskBuilder::readCameraDepth()
+{
+    const gpu::ImageDesc& desc = cameraDepth_->desc();
+    if (desc.format != VK_FORMAT_D32_SFLOAT) {
+        throw std::logic_error(fmt::format("ReceiverMaskBuilder: the camera depth {} is not D32_SFLOAT", desc.name));
+    }
+    const VkDeviceSize bytes = VkDeviceSize(desc.width) * desc.height * sizeof(float);
+    if (cameraDepthReadback_.size() != bytes) {
+        cameraDepthReadback_ = gpu::Buffer(context_, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true,
+                                           "visibility.camera_depth_readback");
+    }
+    const gpu::ImageAccess sampled{VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                                   VK_ACCESS_2_MEMORY_WRITE_BIT};
+    const gpu::ImageAccess copySource{VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_PIPELINE_STAGE_2_COPY_BIT,
+                                      VK_ACCESS_2_TRANSFER_READ_BIT};
+    const gpu::ImageAccess back{VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                                VK_ACCESS_2_MEMORY_READ_BIT};
+    context_.submitAndWait([&](VkCommandBuffer cmd) {
+        gpu::transition(cmd, *cameraDepth_, sampled, copySource);
+        VkBufferImageCopy copy{};
+        copy.imageSubresource = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 0, 1};
+        copy.imageExtent = {desc.width, desc.height, 1};
+        vkCmdCopyImageToBuffer(cmd, cameraDepth_->handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                               cameraDepthReadback_.handle(), 1, &copy);
+        gpu::transition(cmd, *cameraDepth_, copySource, back);
+        gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT},
+                           {VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT});
+    });
+    cameraDepthRead_ = true;
+}
+
+void ReceiverMaskBuilder::scatterOnHost(ReceiverMask& mask, const render::CasterView& view, int32_t tapRadius)
+{
+    if (!cameraDepthRead_) readCameraDepth();
+    // As recordMask's clears: no marks; no receiver depth where the last build wrote one.
+    const size_t maskTexels = size_t(mask.size) * mask.size;
+    std::memset(mask.marked.mapped(), 0, maskTexels * sizeof(uint32_t));
+    ScatterView target;
+    target.lightViewProj = view.viewProj;
+    target.resolution = view.resolution;
+    target.block = mask.block;
+    target.maskSize = mask.size;
+    target.marks = {static_cast<uint32_t*>(mask.marked.mapped()), maskTexels};
+    if (mask.hasReceiverDepth) {
+        target.receiverDepth = {static_cast<uint32_t*>(mask.receiverDepth.mapped()),
+                                size_t(view.resolution) * view.resolution};
+        for (size_t y = 0; y < mask.receiverDepthWritten.size(); ++y) {
+            const RowSpan span = mask.receiverDepthWritten[y];
+            if (span.begin < span.end)
+                std::fill(target.receiverDepth.begin() + ptrdiff_t(y * view.resolution + span.begin),
+                          target.receiverDepth.begin() + ptrdiff_t(y * view.resolution + span.end), ~0u);
+        }
+    }
+    const gpu::ImageDesc& depth = cameraDepth_->desc();
+    const ScatterCamera camera{cameraInverseViewProj_, cameraEye_, depth.width, depth.height,
+                               {static_cast<const float*>(cameraDepthReadback_.mapped()),
+                                size_t(depth.width) * depth.height}};
+    const TexelBounds written = scatterReceivers(camera, target);
+    if (mask.hasReceiverDepth && tapRadius > 0)
+        spreadReceiverDepth(target.receiverDepth, view.resolution, uint32_t(tapRadius), written);
 }
 
 void ReceiverMaskBuilder::uploadDilated(const ReceiverMask& mask)

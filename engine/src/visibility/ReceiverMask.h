@@ -102,11 +102,24 @@ struct ReceiverMask {
 // 2 x 2 cells of the last (an odd side's last cell takes what it has), down to 1 x 1.
 std::vector<std::vector<float>> floorPyramid(std::span<const uint32_t> floorBits, uint32_t size);
 
+// Where the receivers are scattered into a view's mask and receiver depths: by the device
+// (engine/receiver_scatter.comp, engine/receiver_depth_min.comp) or by the host
+// (ReceiverScatter.h, from the camera depth read back once a frame). Both give the same
+// marks and depths up to the rounding of the same float operations.
+enum class ScatterPlacement { Device, Host };
+
+// The host on a CPU device, where the shader's scattered stores run lane by lane and the
+// host loop is several times faster (ReceiverScatter.h); the device elsewhere. The
+// environment variable PENUMBRA_RECEIVER_SCATTER (host, device or auto) overrides it, to
+// compare the two; any other value throws, naming it.
+inline constexpr const char* kScatterPlacementVariable = "PENUMBRA_RECEIVER_SCATTER";
+ScatterPlacement scatterPlacementFor(const gpu::Context& context);
+
 // Builds the receiver masks: their pipelines, the camera they are scattered from, and one
 // mask per light-view resolution (views of one resolution share it, one after another).
 class ReceiverMaskBuilder {
 public:
-    ReceiverMaskBuilder(gpu::Context& context, const gpu::ShaderCompiler& shaders);
+    ReceiverMaskBuilder(gpu::Context& context, const gpu::ShaderCompiler& shaders, ScatterPlacement placement);
 
     // This frame's camera: its depth (reversed-Z, in DEPTH_READ_ONLY_OPTIMAL, which must
     // outlive the builder), its world -> clip matrix, and its eye (OcclusionTraversal.h
@@ -114,27 +127,38 @@ public:
     void setCamera(const gpu::Image& depth, const glm::mat4& viewProj, const glm::vec3& eye);
 
     // The mask of `view` (resolution > 0), with its receiver depths when the view's
-    // technique compares with them (CasterView::compareTapRadius >= 0). One submission,
-    // waited for.
+    // technique compares with them (CasterView::compareTapRadius >= 0). On the device: one
+    // submission, waited for; on the host: none but the camera depth's read-back, once a
+    // frame.
     const ReceiverMask& build(const render::CasterView& view);
+
+    ScatterPlacement placement() const { return placement_; }
 
 private:
     ReceiverMask& maskFor(uint32_t resolution);
     void makeReceiverDepth(ReceiverMask& mask, bool withPrefix);
     void recordMask(VkCommandBuffer cmd, ReceiverMask& mask, const render::CasterView& view, int32_t tapRadius);
+    void scatterOnHost(ReceiverMask& mask, const render::CasterView& view, int32_t tapRadius);
+    void readCameraDepth();
     void uploadDilated(const ReceiverMask& mask);
     void sumMarkedTexels(ReceiverMask& mask);
     void buildFloorPyramid(ReceiverMask& mask);
 
     gpu::Context& context_;
+    const ScatterPlacement placement_;
     const gpu::Image* cameraDepth_ = nullptr;
     std::map<uint32_t, ReceiverMask> masks_;  // by resolution
-    // The scatter (with and without receiver depths), the receivers' depths spread over
-    // the taps.
+    // On the device: the scatter (with and without receiver depths), the receivers'
+    // depths spread over the taps, and the camera they read.
     gpu::Pipeline scatter_, scatterDepth_;
     gpu::Pipeline depthMin_;
     gpu::Sampler nearest_;
-    gpu::Buffer cameraData_;  // the reverse shadow test's camera
+    gpu::Buffer cameraData_;
+    // On the host: the camera, and its depth once read back this frame.
+    glm::mat4 cameraInverseViewProj_{1.0f};
+    glm::vec3 cameraEye_{0.0f};
+    gpu::Buffer cameraDepthReadback_;
+    bool cameraDepthRead_ = false;
 };
 
 } // namespace penumbra::visibility

@@ -45,7 +45,7 @@ Visibility::Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders
     // masks too.
     const bool withMask = mode_ == config::CullingMode::ReceiverMask;
     traversal_ = std::make_unique<OcclusionTraversal>(context_, shaders, scene, sceneGpu, bvh_, withMask);
-    if (withMask) masks_ = std::make_unique<ReceiverMaskBuilder>(context_, shaders);
+    if (withMask) masks_ = std::make_unique<ReceiverMaskBuilder>(context_, shaders, scatterPlacementFor(context_));
     cameraDepth_.emplace(context_, width_, height_, VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
                          "visibility.camera_depth");
 }
@@ -230,6 +230,7 @@ void Visibility::cullLightViewFully(const render::CasterView& view, CulledLightV
     traversal.bias = view.depthBias;
     if (masks_) {
         traversal.mask = &masks_->build(view);
+        if (masks_->placement() == ScatterPlacement::Host) ++stats_.masksOnHost;
         culled.readArea = traversal.mask->bounds;
         stats_.maskMs += core::msSince(start);
         start = std::chrono::steady_clock::now();

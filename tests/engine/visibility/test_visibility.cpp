@@ -6,6 +6,8 @@
 #include "TestConfigs.h"
 #include "TestContext.h"
 
+#include "engine/src/visibility/ReceiverScatter.h"
+
 #include "penumbra/config/Config.h"
 #include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/gpu/Barrier.h"
@@ -19,6 +21,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <random>
 #include <ostream>
@@ -417,15 +420,21 @@ config::RenderConfig streetView(const std::string& technique, const nlohmann::js
     return cfg;
 }
 
+// A city of 3 x 3 blocks, for the street views above.
+scene::Scene smallCity(uint32_t seed)
+{
+    scene::CityParams p;
+    p.blocks = 3;
+    p.seed = seed;
+    return scene::generateCity(p);
+}
+
 // In a city seen from the street the camera sees few of the instances, and the receiver
 // mask keeps fewer casters than the light's own occlusion culling, which keeps fewer
 // than its frustum: and all of them give one image.
 TEST_F(VisibilityCulling, AStreetViewOfACityCullsMostCasters)
 {
-    scene::CityParams p;
-    p.blocks = 3;
-    p.seed = 3;
-    scene::Scene scene = scene::generateCity(p);
+    const scene::Scene scene = smallCity(3);
     const config::RenderConfig cfg = streetView("hard", {{"resolution", 1024}});
     const CulledFrame all = render(scene, cfg, CullingMode::None);
     const CulledFrame frustum = render(scene, cfg, CullingMode::Frustum);
@@ -450,10 +459,7 @@ TEST_F(VisibilityCulling, AStreetViewOfACityCullsMostCasters)
 // technique with passes over the whole map (vsm's blur), and a map shown as a debug image.
 TEST_F(VisibilityCulling, ADepthPassRendersOnlyTheTexelsTheReceiversRead)
 {
-    scene::CityParams p;
-    p.blocks = 3;
-    p.seed = 3;
-    const scene::Scene scene = scene::generateCity(p);
+    const scene::Scene scene = smallCity(3);
     struct Case {
         std::string technique;
         nlohmann::json params;
@@ -485,6 +491,64 @@ TEST_F(VisibilityCulling, ADepthPassRendersOnlyTheTexelsTheReceiversRead)
         shown.requestImage(map);
         EXPECT_EQ(shown.renderFrame().culling.mapTexelsRendered, wholeMap);
         EXPECT_TRUE(sameVisibility(all.visibility, shown.readVisibility(0), cfg.width));
+    }
+}
+
+// Sets an environment variable for the scope (the variable unset after it).
+class ScopedEnvironment {
+public:
+    ScopedEnvironment(const char* name, const char* value) : name_(name) { ::setenv(name, value, 1); }
+    ~ScopedEnvironment() { ::unsetenv(name_); }
+    ScopedEnvironment(const ScopedEnvironment&) = delete;
+    ScopedEnvironment& operator=(const ScopedEnvironment&) = delete;
+
+private:
+    const char* name_;
+};
+
+// The receivers are scattered into the masks by the host on a CPU device and by the
+// device's shaders elsewhere (visibility::scatterPlacementFor; PENUMBRA_RECEIVER_SCATTER
+// picks one). Both give none's image on a street view, through techniques with marks
+// only (vsm), with receiver depths (hard), and with receiver depths spread over taps
+// (PCF 5 x 5, pcss), and cull alike: the same casters up to the rounding of the same
+// float operations on two compilers (the triangle counts within 1 %). A value the
+// variable does not know is an error that names it.
+TEST_F(VisibilityCulling, HostAndDeviceScattersGiveNonesImageAndCullAlike)
+{
+    const scene::Scene scene = smallCity(5);
+    struct Case {
+        std::string name, technique;
+        nlohmann::json params;
+    };
+    for (const Case& c : {Case{"hard", "hard", {{"resolution", 1024}}},
+                          Case{"pcf5", "hard", {{"resolution", 1024}, {"filter", "pcf"}, {"pcf_kernel", 5}}},
+                          Case{"pcss", "pcss", {{"resolution", 1024}}},
+                          Case{"vsm", "vsm", {{"resolution", 1024}, {"blur_radius", 2}}}}) {
+        SCOPED_TRACE(c.name);
+        const config::RenderConfig cfg = streetView(c.technique, c.params);
+        const CulledFrame all = render(scene, cfg, CullingMode::None);
+        CulledFrame placed[2];
+        for (const int host : {0, 1}) {
+            const ScopedEnvironment placement("PENUMBRA_RECEIVER_SCATTER", host ? "host" : "device");
+            placed[host] = render(scene, cfg, CullingMode::ReceiverMask);
+            EXPECT_TRUE(sameVisibility(all.visibility, placed[host].visibility, cfg.width)) << (host ? "host" : "device");
+            EXPECT_EQ(placed[host].stats.views, 1u);
+            EXPECT_EQ(placed[host].stats.masksOnHost, host ? 1u : 0u);
+        }
+        const auto device = double(placed[0].stats.trianglesDrawn), host = double(placed[1].stats.trianglesDrawn);
+        EXPECT_LT(device, double(all.stats.trianglesDrawn) / 4) << "culling culls";
+        EXPECT_NEAR(host, device, 0.01 * device);
+    }
+    const ScopedEnvironment wrong("PENUMBRA_RECEIVER_SCATTER", "gpu");
+    config::RenderConfig cfg = streetView("hard", {{"resolution", 256}});
+    cfg.culling = CullingMode::ReceiverMask;
+    try {
+        frame::FrameRenderer renderer(*context, scene, cfg, test::plugins());
+        renderer.renderFrame();
+        ADD_FAILURE() << "PENUMBRA_RECEIVER_SCATTER=gpu was accepted";
+    } catch (const std::exception& e) {
+        EXPECT_NE(std::string(e.what()).find("PENUMBRA_RECEIVER_SCATTER=gpu"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("host, device or auto"), std::string::npos) << e.what();
     }
 }
 
@@ -644,11 +708,44 @@ TEST_F(VisibilityCulling, ACameraThatSeesNothingDrawsNoCaster)
     EXPECT_EQ(mask.stats.queriesIssued, 0u);
 }
 
+// The texels of `spread` (size² words) that are not the least of `texels` within `radius`
+// (a square, clipped to the view).
+size_t texelsNotTheSquareMinimum(const std::vector<uint32_t>& texels, const std::vector<uint32_t>& spread,
+                                 int32_t size, int32_t radius)
+{
+    const auto n = size_t(size);
+    size_t wrong = 0;
+    for (int32_t y = 0; y < size; ++y) {
+        for (int32_t x = 0; x < size; ++x) {
+            uint32_t expected = ~0u;
+            for (int32_t v = std::max(y - radius, 0); v <= std::min(y + radius, size - 1); ++v)
+                for (int32_t u = std::max(x - radius, 0); u <= std::min(x + radius, size - 1); ++u)
+                    expected = std::min(expected, texels[size_t(v) * n + size_t(u)]);
+            wrong += spread[size_t(y) * n + size_t(x)] != expected ? 1 : 0;
+        }
+    }
+    return wrong;
+}
+
+// The bounds of the texels that hold a depth.
+visibility::TexelBounds writtenBounds(const std::vector<uint32_t>& texels, int32_t size)
+{
+    visibility::TexelBounds b;
+    for (uint32_t y = 0; y < uint32_t(size); ++y)
+        for (uint32_t x = 0; x < uint32_t(size); ++x)
+            if (texels[size_t(y) * size_t(size) + x] != ~0u) {
+                b.x0 = std::min(b.x0, x), b.y0 = std::min(b.y0, y);
+                b.x1 = std::max(b.x1, x), b.y1 = std::max(b.y1, y);
+            }
+    return b;
+}
+
 // engine/receiver_depth_min.comp spreads each receiver's depth over the taps of radius r
 // (the least value in a (2 r + 1)^2 square, running minima over blocks of 2 r + 1): the
 // same as the brute-force minimum on random images (buffers, row by row), with most texels
-// empty (all ones),
-// for sizes that are and are not multiples of the block, and radii past the image.
+// empty (all ones), for sizes that are and are not multiples of the block, and radii past
+// the image. So does the host's (visibility/ReceiverScatter.h), also with the depths in a
+// corner (it visits only the texels the written ones reach).
 TEST_F(VisibilityCulling, ReceiverDepthsSpreadOverTheTapsExactly)
 {
     const gpu::ShaderCompiler compiler({gpu::engineShaderDir()});
@@ -687,17 +784,18 @@ TEST_F(VisibilityCulling, ReceiverDepthsSpreadOverTheTapsExactly)
         });
         std::vector<uint32_t> spreadTexels(n * n);
         std::memcpy(spreadTexels.data(), depth.mapped(), bytes);
-        size_t wrong = 0;
-        for (int32_t y = 0; y < c.size; ++y) {
-            for (int32_t x = 0; x < c.size; ++x) {
-                uint32_t expected = ~0u;
-                for (int32_t v = std::max(y - c.radius, 0); v <= std::min(y + c.radius, c.size - 1); ++v)
-                    for (int32_t u = std::max(x - c.radius, 0); u <= std::min(x + c.radius, c.size - 1); ++u)
-                        expected = std::min(expected, texels[size_t(v) * n + size_t(u)]);
-                wrong += spreadTexels[size_t(y) * n + size_t(x)] != expected ? 1 : 0;
-            }
-        }
-        EXPECT_EQ(wrong, 0u);
+        EXPECT_EQ(texelsNotTheSquareMinimum(texels, spreadTexels, c.size, c.radius), 0u) << "the device's";
+        // The host's (visibility/ReceiverScatter.h), which visits only what the written
+        // texels reach: over the whole view, and with the depths in a corner only.
+        std::vector<uint32_t> host = texels;
+        visibility::spreadReceiverDepth(host, uint32_t(c.size), uint32_t(c.radius), writtenBounds(texels, c.size));
+        EXPECT_EQ(texelsNotTheSquareMinimum(texels, host, c.size, c.radius), 0u) << "the host's";
+        std::vector<uint32_t> corner(n * n, ~0u);
+        for (size_t y = 0; y < n / 3; ++y)
+            for (size_t x = n - n / 3; x < n; ++x) corner[y * n + x] = texels[y * n + x];
+        host = corner;
+        visibility::spreadReceiverDepth(host, uint32_t(c.size), uint32_t(c.radius), writtenBounds(corner, c.size));
+        EXPECT_EQ(texelsNotTheSquareMinimum(corner, host, c.size, c.radius), 0u) << "the host's, a corner";
     }
 }
 

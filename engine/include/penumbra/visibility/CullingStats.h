@@ -22,6 +22,7 @@ struct CullingStats {
     uint64_t castersDrawn = 0;      // instance draws through Casters::draw
     uint64_t trianglesDrawn = 0;    // their triangles
     uint64_t mapTexelsRendered = 0; // texels the caster passes cleared and drew into (render areas)
+    uint64_t masksOnHost = 0;       // receiver masks scattered by the host, not the device
     double cameraMs = 0.0;          // step 1: camera culling (wall clock, GPU work waited for)
     double maskMs = 0.0;            // step 2: receiver masks
     double casterCullMs = 0.0;      // step 3: caster culling (queries, or frustum tests)
