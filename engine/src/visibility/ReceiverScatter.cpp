@@ -40,25 +40,23 @@ void minFilterLine(uint32_t* line, ptrdiff_t stride, uint32_t n, uint32_t radius
     const size_t padded = size_t(n) + 2 * size_t(radius), width = 2 * size_t(radius) + 1;
     prefix.resize(padded);
     suffix.resize(padded);
-    const auto at = [&](size_t k) { return k < radius || k >= radius + n ? kNone : line[ptrdiff_t(k - radius) * stride]; };
+    const auto at = [&](size_t k) {
+        return k < radius || k >= radius + n ? kNone : line[ptrdiff_t(k - radius) * stride];
+    };
     for (size_t k = 0; k < padded; ++k) prefix[k] = k % width == 0 ? at(k) : std::min(prefix[k - 1], at(k));
     for (size_t k = padded; k-- > 0;)
         suffix[k] = k + 1 == padded || (k + 1) % width == 0 ? at(k) : std::min(suffix[k + 1], at(k));
     for (size_t i = 0; i < n; ++i) line[ptrdiff_t(i) * stride] = std::min(suffix[i], prefix[i + 2 * radius]);
 }
 
-} // namespace
-
-namespace {
-
 // One camera row's receivers, computed branch-free over the row (so that the compiler
 // vectorises it) into structure-of-arrays form; the scattered writes follow, pixel by
 // pixel, for the receivers only.
 struct RowReceivers {
-    std::vector<int32_t> tx, ty;     // view texel (valid pixels only)
+    std::vector<int32_t> tx, ty;          // view texel (valid pixels only)
     std::vector<int32_t> x0, y0, x1, y1;  // the receiver depth's texels, inclusive
-    std::vector<uint32_t> bits;      // the receiver depth's bits
-    std::vector<int32_t> valid;      // a receiver in the view (1) or not (0)
+    std::vector<uint32_t> bits;           // the receiver depth's bits
+    std::vector<int32_t> valid;           // a receiver in the view (1) or not (0)
     void resize(size_t n)
     {
         for (auto* v : {&tx, &ty, &x0, &y0, &x1, &y1}) v->resize(n);
@@ -96,24 +94,27 @@ template <bool WithDepth>
         // GLSL's ivec2(float) truncates; inside the view the coordinate is >= 0 (and
         // outside it, the value is not used).
         const float lastTexel = res - 1.0f;
+        // std::max(c, v) and std::min(c, v) with the constant first give the constant for a
+        // NaN v: no NaN reaches a conversion to int (whose result would index anywhere).
+        const auto clampTexel = [&](float v) { return int32_t(std::min(lastTexel, std::max(0.0f, v))); };
         valid[x] = receiver ? 1 : 0;
-        tx[x] = int32_t(std::min(std::max(receiver ? cx : 0.0f, 0.0f), lastTexel));
-        ty[x] = int32_t(std::min(std::max(receiver ? cy : 0.0f, 0.0f), lastTexel));
+        tx[x] = clampTexel(receiver ? cx : 0.0f);
+        ty[x] = clampTexel(receiver ? cy : 0.0f);
         if constexpr (WithDepth) {
-        const float slack = kReconstructionRelative * (glm::length(p) + glm::length(p - eye));
-        const float farthest = light.z - projectedGradient(rowZ, rowW, clip.z, cw) * slack - kDepthUlps;
-        bits[x] = std::bit_cast<uint32_t>(std::max(farthest, 0.0f));
-        float spread = texelsPerNdc * slack *
-                           std::max(projectedGradient(rowX, rowW, clip.x, cw), projectedGradient(rowY, rowW, clip.y, cw)) +
-                       1.0f / 64.0f;
-        spread = std::min(spread, 1.0f);
-        const auto texelOf = [&](float c) {
-            return int32_t(std::min(std::max(std::floor(receiver ? c : 0.0f), 0.0f), lastTexel));
-        };
-        x0[x] = texelOf(cx - spread);
-        x1[x] = texelOf(cx + spread);
-        y0[x] = texelOf(cy - spread);
-        y1[x] = texelOf(cy + spread);
+            const float slack = kReconstructionRelative * (glm::length(p) + glm::length(p - eye));
+            const float farthest = light.z - projectedGradient(rowZ, rowW, clip.z, cw) * slack - kDepthUlps;
+            // A NaN depth becomes 0, the farthest: it keeps every caster.
+            bits[x] = std::bit_cast<uint32_t>(std::max(0.0f, farthest));
+            const float gradient =
+                std::max(projectedGradient(rowX, rowW, clip.x, cw), projectedGradient(rowY, rowW, clip.y, cw));
+            // At most a texel (receiver_scatter.comp); a NaN spread (an overflowing slack)
+            // takes the whole texel too.
+            const float spread = std::min(1.0f, texelsPerNdc * slack * gradient + 1.0f / 64.0f);
+            const auto texelOf = [&](float c) { return clampTexel(std::floor(receiver ? c : 0.0f)); };
+            x0[x] = texelOf(cx - spread);
+            x1[x] = texelOf(cx + spread);
+            y0[x] = texelOf(cy - spread);
+            y1[x] = texelOf(cy + spread);
         }
     }
 }
@@ -137,11 +138,6 @@ __attribute__((target_clones("avx2", "default"))) void computeDepthsRow(PENUMBRA
 }
 #undef PENUMBRA_ROW_CALL
 #undef PENUMBRA_ROW_ARGS
-
-
-} // namespace
-
-namespace {
 
 // What every band of rows shares.
 struct ScatterShared {

@@ -4,12 +4,12 @@
 // engine/receiver_depth_min.comp's spreading over the taps, here restricted to the texels
 // a receiver depth can reach.
 //
-// Why on the host at all: on a CPU device (lavapipe) a compute invocation per pixel that
-// ends in scattered stores and atomics runs every store lane by lane; measured on
-// config/bench/streets/street-c.json (1280 x 720, a 4096² map) the shader took about
-// 45 ms where this loop takes a few (docs/culling.md). The receiver depths and the marks
-// are read on the host anyway. On a GPU the shader stays (ReceiverMaskBuilder picks by the
-// device's type).
+// Why on the host at all: on a CPU device (lavapipe) the shader's scattered stores and
+// atomics run lane by lane, and its arithmetic costs several times its count; on
+// config/bench/streets/street-c.json (1280 x 720, a 4096² map) its mask step took 40-50
+// ms, the host's about 25 ms with two cores (docs/culling.md, "The receiver scatter on
+// the host"). The receiver depths and the marks are read on the host anyway. On a GPU
+// the shaders stay (ReceiverMaskBuilder picks by the device's type).
 #include <glm/glm.hpp>
 
 #include <cstdint>

@@ -531,7 +531,8 @@ TEST_F(VisibilityCulling, HostAndDeviceScattersGiveNonesImageAndCullAlike)
         for (const int host : {0, 1}) {
             const ScopedEnvironment placement("PENUMBRA_RECEIVER_SCATTER", host ? "host" : "device");
             placed[host] = render(scene, cfg, CullingMode::ReceiverMask);
-            EXPECT_TRUE(sameVisibility(all.visibility, placed[host].visibility, cfg.width)) << (host ? "host" : "device");
+            const char* name = host ? "host" : "device";
+            EXPECT_TRUE(sameVisibility(all.visibility, placed[host].visibility, cfg.width)) << name;
             EXPECT_EQ(placed[host].stats.views, 1u);
             EXPECT_EQ(placed[host].stats.masksOnHost, host ? 1u : 0u);
         }
