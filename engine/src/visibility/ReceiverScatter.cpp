@@ -86,10 +86,11 @@ template <bool WithDepth>
         const glm::vec4 clip = m * glm::vec4(p, 1.0f);
         const float cw = clip.w > 0.0f ? clip.w : 1.0f;
         const glm::vec3 light = glm::vec3(clip) / cw;
-        // Bitwise: branch-free, and a NaN fails every test.
-        const bool inView = (std::abs(light.x) <= 1.0f) & (std::abs(light.y) <= 1.0f) & (light.z >= 0.0f) &
-                            (light.z <= 1.0f);
-        const bool receiver = (depth > 0.0f) & (world.w != 0.0f) & (clip.w > 0.0f) & inView;
+        // Bitwise on ints: branch-free (&& would be a branch the vectoriser refuses), and a
+        // NaN fails every test.
+        const int inView = int(std::abs(light.x) <= 1.0f) & int(std::abs(light.y) <= 1.0f) & int(light.z >= 0.0f) &
+                           int(light.z <= 1.0f);
+        const bool receiver = (int(depth > 0.0f) & int(world.w != 0.0f) & int(clip.w > 0.0f) & inView) != 0;
         const float cx = (light.x * 0.5f + 0.5f) * res, cy = (light.y * 0.5f + 0.5f) * res;
         // GLSL's ivec2(float) truncates; inside the view the coordinate is >= 0 (and
         // outside it, the value is not used).
