@@ -26,6 +26,9 @@ if [[ $# -eq 0 ]]; then
     exit 2
 fi
 
+# Where the runs' output is copied to be searched. Without a temporary folder (a full or
+# read-only $TMPDIR) nothing can be searched, so the test runs once, as it would without
+# this launcher, and its own status stands.
 logs=$(mktemp -d "${TMPDIR:-/tmp}/penumbra-rerun.XXXXXX") || exec "$@"
 trap 'rm -rf "$logs"' EXIT
 
