@@ -65,18 +65,24 @@ PenumbraWidths measurePenumbra(const RenderedFrame& frame, const std::vector<flo
 {
     const scene::PenumbraParams params = penumbraParams(p);
     std::vector<float> exact(v.size(), 1.0f);
-    double squared = 0.0;
-    size_t ground = 0;
+    double squared = 0.0, penumbraSquared = 0.0;
+    size_t ground = 0, penumbra = 0;
     const scene::RectAreaLight light{{0.0f, kPenumbraLightHeight, 0.0f}, {p.lightSide, p.lightSide}};
     for (size_t i = 0; i < v.size(); ++i) {
         if (!frame.onGround(i)) continue;
         const glm::vec3 q = frame.position(i);
         exact[i] = float(scene::penumbraVisibility(params, light, {q.x, q.z}));
-        squared += (v[i] - exact[i]) * (v[i] - exact[i]);
+        const double e = (v[i] - exact[i]) * (v[i] - exact[i]);
+        squared += e;
         ++ground;
+        if (exact[i] > 0.001f && exact[i] < 0.999f) {
+            penumbraSquared += e;
+            ++penumbra;
+        }
     }
     EXPECT_GT(ground, v.size() / 2) << "the camera sees the ground";
-    return {edgeWidth(frame, v), edgeWidth(frame, exact), std::sqrt(squared / double(std::max<size_t>(ground, 1)))};
+    return {edgeWidth(frame, v), edgeWidth(frame, exact), std::sqrt(squared / double(std::max<size_t>(ground, 1))),
+            std::sqrt(penumbraSquared / double(std::max<size_t>(penumbra, 1)))};
 }
 
 } // namespace penumbra::test

@@ -66,11 +66,13 @@ double edgeWidth(const RenderedFrame& frame, const std::vector<float>& v);
 double sideEdgeWidth(const RenderedFrame& frame, const std::vector<float>& v, float x);
 
 // A technique's edge width on the penumbra scene, the exact one measured the same way,
-// and the RMSE of V over the ground against the exact visibility.
+// and the RMSE of V against the exact visibility over the ground and over the penumbra
+// region alone (the ground pixels whose exact V lies in (0.001, 0.999)).
 struct PenumbraWidths {
     double technique;
     double exact;
     double rmse;
+    double penumbraRmse = 0.0;
 };
 
 // `v`: the visibility `frame` rendered of penumbraConfig(p) over generatePenumbra.

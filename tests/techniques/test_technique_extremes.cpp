@@ -1,4 +1,4 @@
-// Every shadow-map technique (hard, PCF, PCSS, VSM, EVSM, ESM, VSSM) under the same extremes,
+// Every shadow-map technique (hard, PCF, PCSS, VSM, EVSM, ESM, VSSM, backprojection) under the same extremes,
 // end to end through frame::FrameRenderer, with the contract's invariants (every V
 // finite and in [0, 1], 1 without geometry: PluginFrame's checkedVisibility) on every
 // image:
@@ -67,6 +67,8 @@ const TechniqueCase kTechniques[] = {
     {"evsm", "vsm", {{"resolution", 1024}, {"variant", "evsm"}}, "resolution", {256, 512, 1024, 2048}, false, 0.03},
     {"esm", "vsm", {{"resolution", 1024}, {"variant", "esm"}}, "resolution", {256, 512, 1024, 2048}, false, 0.12},
     {"vssm", "vssm", {{"resolution", 1024}}, "resolution", {256, 512, 1024, 2048}, true, 0.03},
+    // Cube maps at most 512: the multi-scale shadow map must fit one storage buffer.
+    {"backprojection", "backprojection", {{"resolution", 512}}, "resolution", {128, 256, 512}, true},
 };
 
 void applyTechnique(config::LightConfig& light, const TechniqueCase& t)

@@ -132,6 +132,7 @@ const TechniqueCase kTechniques[] = {
     {"pcss_slope", "pcss", R"({"resolution": 512, "bias_mode": "slope"})"},
     {"vsm_blur", "vsm", R"({"resolution": 512, "blur_radius": 4})"},
     {"vsm_mips", "vsm", R"({"resolution": 512, "filter": "trilinear"})"},
+    {"backprojection", "backprojection", R"({"resolution": 512, "light_size": 0.6})"},  // kernels up to its cap
     {"example", "example", R"({"resolution": 512})"},  // the SDK's example: hard's one compare, declared by hand
 };
 

@@ -1,0 +1,436 @@
+// Soft shadows by back-projection (Guennebaud, Barthe, Paulin 2007; Yang, Feng,
+// Guennebaud, Liu 2009, "Packet-based hierarchal soft shadow mapping"; README.md next to
+// this file): the occluders' contour in the light's shadow map, extracted by marching
+// squares over the samples that can hide part of the light from a receiver, is
+// back-projected onto the light and the hidden area integrated exactly.
+// Passes (paper Algorithm 1): the engine's shadow map (render/ShadowMap.h, step 3), its
+// multi-scale shadow map (mssm.comp, mssm.glsl: step 4) and the per-pixel visibility
+// (visibility.comp: steps 5 and 8). The MSSM is a transient graph buffer.
+#include "penumbra/core/Error.h"
+#include "penumbra/gpu/Barrier.h"
+#include "penumbra/gpu/Context.h"
+#include "penumbra/gpu/Pipeline.h"
+#include "penumbra/gpu/Resources.h"
+#include "penumbra/graph/PassContext.h"
+#include "penumbra/graph/RenderGraph.h"
+#include "penumbra/plugin/GBuffer.h"
+#include "penumbra/plugin/Plugin.h"
+#include "penumbra/plugin/ShadowMapParams.h"
+#include "penumbra/plugin/Technique.h"
+#include "penumbra/plugin/VisibilityPass.h"
+#include "penumbra/render/ShadowMap.h"
+
+#include <fmt/format.h>
+#include <glm/glm.hpp>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <iterator>
+#include <numbers>
+#include <optional>
+#include <string>
+
+namespace penumbra::backprojection {
+namespace {
+
+using plugin::ParamType;
+
+// Parameter `traversal`: visibility.comp's TRAVERSAL.
+enum class Traversal : uint32_t { Flat, Hierarchical };
+constexpr const char* kTraversalNames[] = {"flat", "hierarchical"};
+
+// The debug images the debug_views pass writes (visibility.comp DEBUG_IMAGES), each
+// io.local(name): requested by name, else the pass is culled and costs nothing.
+constexpr const char* kDebugImages[] = {"kernel", "visited"};
+
+// visibility.comp's MAX_LEVELS: the traversal's stack is sized for it.
+constexpr int kMaxLevels = 14;
+
+const plugin::ParamSpec kParams[] = {
+    plugin::shadowResolutionParam(1024, 4096),
+    {"light_size", ParamType::Float, -1, -1, 1e9, "world or deg",
+     "-1: the light's own shape (rect, disk, a point light's sphere, a directional light's angular diameter; a spot "
+     "light has none: a hard shadow); >= 0: instead a square of this side facing along the spot's axis or in the rect's "
+     "plane, a disk or sphere of this diameter, or a sun of this angular diameter in degrees"},
+    {"traversal", ParamType::Enum, double(Traversal::Hierarchical), 0, 0, "",
+     "flat: every 2 x 2 block of samples in the kernel ([GBP07] with MSSM kernels); hierarchical: the MSSM descended "
+     "from the kernel's corner, pruning blocks that hold no contour (Yang et al. 2009, 4.2): the same edges",
+     kTraversalNames, uint32_t(std::size(kTraversalNames))},
+    plugin::kernelLimitParam("max_kernel", 0.0625,
+                             "the kernel cap: the largest side of a receiver's kernel, a fraction of the face's side "
+                             "(occluders beyond it are not seen; it bounds the work of an occluder near the light)"),
+    plugin::kShadowDepthBiasParam,
+};
+
+struct Settings {
+    uint32_t resolution = 1024;
+    float lightSizeOverride = -1.0f;
+    Traversal traversal = Traversal::Hierarchical;
+    int maxKernel = 64;  // cells per side
+    float depthBias = 4.0f;
+};
+
+Settings readSettings(const plugin::ParamValues& params)
+{
+    Settings s;
+    s.resolution = uint32_t(params.getInt("resolution"));
+    s.lightSizeOverride = plugin::lightSizeOverride(params, "backprojection");
+    s.traversal = Traversal(params.getEnumIndex("traversal"));
+    s.maxKernel = std::max(1, int(std::ceil(plugin::kernelLimitTexels(params.getFloat("max_kernel"), s.resolution))));
+    s.depthBias = params.getFloat("depth_bias");
+    return s;
+}
+
+// MSSM levels so that 2^(levels - 1) >= maxKernel: the node that covers a kernel exists.
+int mssmLevels(int maxKernel)
+{
+    return maxKernel > 1 ? int(std::bit_width(uint32_t(maxKernel - 1))) + 1 : 1;
+}
+
+VkDeviceSize mssmBytes(uint32_t width, uint32_t height, int levels)
+{
+    return VkDeviceSize(width) * height * VkDeviceSize(levels) * 2 * sizeof(float);
+}
+
+// visibility.comp's FaceFrame and BackprojectionLight (std430).
+struct FaceFrame {
+    glm::vec4 base0{0.0f}, baseU{0.0f}, baseV{0.0f}, dir0{0.0f}, dirU{0.0f}, dirV{0.0f};
+};
+struct LightData {
+    glm::vec4 centre{0.0f};
+    glm::vec4 normal{0.0f};
+    glm::vec4 tangent{0.0f};
+    glm::vec4 bitangent{0.0f};
+    glm::vec4 extent{0.0f};
+    FaceFrame faces[render::kMaxShadowFaces];
+};
+static_assert(sizeof(LightData) == 5 * 16 + render::kMaxShadowFaces * 96, "std430 layout of visibility.comp");
+
+struct VisibilityPush {
+    glm::ivec2 atlasSize{0};
+    int32_t levels = 1;
+    int32_t maxKernel = 1;
+};
+
+struct MssmPush {
+    glm::ivec2 atlasSize{0};
+    int32_t faceTexels = 0;
+    int32_t level = 0;
+};
+
+// An orthonormal frame (t, b) with t x b = n.
+void frameAround(const glm::dvec3& n, glm::dvec3& t, glm::dvec3& b)
+{
+    t = glm::normalize(glm::cross(n, std::abs(n.y) < 0.9 ? glm::dvec3(0.0, 1.0, 0.0) : glm::dvec3(1.0, 0.0, 0.0)));
+    b = glm::cross(n, t);
+}
+
+glm::dvec3 unitOr(const glm::vec3& v, const glm::dvec3& fallback)
+{
+    const glm::dvec3 d(v);
+    const double len = glm::length(d);
+    return len > 0.0 && std::isfinite(len) ? d / len : fallback;
+}
+
+// The light's shape on its plane (visibility.comp lightPlaneFor), from the light and the
+// technique's light_size.
+LightData lightShape(const scene::Light& light, float overrideSize)
+{
+    LightData d;
+    const double size = overrideSize >= 0.0f ? double(overrideSize) : -1.0;
+    glm::dvec3 n = unitOr(light.direction, {0.0, -1.0, 0.0}), t, b;
+    frameAround(n, t, b);
+    glm::dvec4 extent(0.0);
+    switch (light.type) {
+    case scene::LightType::Spot: extent = {0.5 * std::max(size, 0.0), 0.5 * std::max(size, 0.0), 0.0, 0.0}; break;
+    case scene::LightType::Rect: {
+        // The config makes the tangent unit and normal to the direction; make sure.
+        const glm::dvec3 tangent = glm::dvec3(light.tangent) - glm::dot(glm::dvec3(light.tangent), n) * n;
+        if (glm::length(tangent) > 1e-6) {
+            t = glm::normalize(tangent);
+            b = glm::cross(n, t);
+        }
+        extent = size >= 0.0 ? glm::dvec4(0.5 * size, 0.5 * size, 0.0, 0.0)
+                             : glm::dvec4(0.5 * std::max(double(light.sizeWorld.x), 0.0),
+                                          0.5 * std::max(double(light.sizeWorld.y), 0.0), 0.0, 0.0);
+        break;
+    }
+    case scene::LightType::Disk:
+        extent = {size >= 0.0 ? 0.5 * size : std::max(double(light.radiusWorld), 0.0), 0.0, 1.0, 0.0};
+        break;
+    case scene::LightType::Point:
+        // The outline's radius is the shader's, per receiver; x only says "has a size".
+        extent = {0.0, 0.0, 1.0, size >= 0.0 ? 0.5 * size : std::max(double(light.radiusWorld), 0.0)};
+        extent.x = extent.w;
+        break;
+    case scene::LightType::Directional: {
+        // The sun's disk of directions on the plane one unit towards it: radius
+        // tan(angular radius), the diameter clamped below 179 degrees.
+        n = -n;
+        frameAround(n, t, b);
+        const double degrees = std::clamp(size >= 0.0 ? size : double(light.angularDiameterDeg), 0.0, 179.0);
+        extent = {std::tan(0.5 * degrees * std::numbers::pi / 180.0), 0.0, 1.0, 0.0};
+        break;
+    }
+    }
+    d.centre = glm::vec4(glm::vec3(light.position), 1.0f);
+    d.normal = glm::vec4(glm::vec3(n), 0.0f);
+    d.tangent = glm::vec4(glm::vec3(t), 0.0f);
+    d.bitangent = glm::vec4(glm::vec3(b), 0.0f);
+    d.extent = glm::vec4(extent);
+    return d;
+}
+
+// The size render::softShadowKernelReach measures the PCSS framework's reach with, that
+// bounds this light's kernels: its widest extent (a spot's or rect's diagonal, a disk's
+// diameter, 2 tan(θ/2) of a sun); a sphere's outline grows without bound near it.
+float reachSize(const LightData& d, scene::LightType type)
+{
+    const glm::vec4 e = d.extent;
+    switch (type) {
+    case scene::LightType::Spot:
+    case scene::LightType::Rect: return 2.0f * std::sqrt(e.x * e.x + e.y * e.y);
+    case scene::LightType::Disk:
+    case scene::LightType::Directional: return 2.0f * e.x;
+    case scene::LightType::Point: return e.w > 0.0f ? std::numeric_limits<float>::infinity() : 0.0f;
+    }
+    return 0.0f;
+}
+
+// Face uv (u, v) and distance along the face's axis back to the world, as the shader's
+// FaceFrame: linear in u, v and (for each) in the distance. From two depths at each of
+// three uvs, unprojected in double precision.
+FaceFrame faceFrame(const render::ShadowFaceData& face)
+{
+    const glm::dmat4 inverse = glm::inverse(glm::dmat4(face.viewProj));
+    const glm::dvec4 range(face.depthRange);
+    const bool orthographic = range.z != 0.0;
+    // shaders/common/shadow_map.glsl shadowDistanceInRange.
+    const auto distance = [&](double ndc) {
+        return orthographic ? range.y + (range.x - range.y) * ndc : range.x / std::max(ndc, range.x / range.y);
+    };
+    const auto point = [&](glm::dvec2 uv, double ndc) {
+        const glm::dvec4 h = inverse * glm::dvec4(uv * 2.0 - 1.0, ndc, 1.0);
+        return glm::dvec3(h) / h.w;
+    };
+    const double ndcA = 1.0, ndcB = 0.5;
+    const double da = distance(ndcA), db = distance(ndcB);
+    FaceFrame f;
+    glm::dvec3 base[3], dir[3];
+    const glm::dvec2 uvs[3] = {{0.0, 0.0}, {1.0, 0.0}, {0.0, 1.0}};
+    for (int i = 0; i < 3; ++i) {
+        const glm::dvec3 a = point(uvs[i], ndcA), b = point(uvs[i], ndcB);
+        dir[i] = db != da ? (b - a) / (db - da) : glm::dvec3(0.0);
+        base[i] = a - da * dir[i];
+    }
+    const auto finite = [](const glm::dvec3& v) {
+        return glm::vec4(glm::vec3(std::isfinite(v.x + v.y + v.z) ? v : glm::dvec3(0.0)), 0.0f);
+    };
+    f.base0 = finite(base[0]);
+    f.baseU = finite(base[1] - base[0]);
+    f.baseV = finite(base[2] - base[0]);
+    f.dir0 = finite(dir[0]);
+    f.dirU = finite(dir[1] - dir[0]);
+    f.dirV = finite(dir[2] - dir[0]);
+    return f;
+}
+
+class BackprojectionShadow final : public plugin::Technique {
+public:
+    explicit BackprojectionShadow(const plugin::TechniqueSetup& setup);
+
+    void update(const scene::Light& light, const scene::Aabb& sceneBounds) override;
+    void registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io) override;
+
+private:
+    void checkDevice() const;
+    void writeLight(const scene::Light& light);
+    void recordMssm(const graph::PassContext& pass, const std::string& map, const std::string& mssm) const;
+    void bindVisibility(const graph::PassContext& pass, gpu::DescriptorPush& descriptors, const std::string& map,
+                        const std::string& mssm, const gpu::Pipeline& pipeline) const;
+    void recordDebugViews(const graph::PassContext& pass, const plugin::LightPassIo& io, const std::string& map,
+                          const std::string& mssm);
+    glm::ivec2 atlasSize() const { return {int(shadowMap_.atlasWidth()), int(shadowMap_.atlasHeight())}; }
+
+    gpu::Context& context_;
+    const Settings settings_;
+    const int levels_;
+    render::ShadowMap shadowMap_;
+    gpu::Pipeline mssm_;
+    gpu::Pipeline visibility_;
+    const gpu::ShaderCompiler& shaders_;
+    gpu::ComputePipelineDesc debugViewsDesc_;
+    std::optional<gpu::Pipeline> debugViews_;
+    gpu::Buffer lightBuffer_;
+    gpu::Sampler compareSampler_;
+    gpu::Sampler depthSampler_;
+    uint32_t width_ = 0, height_ = 0;  // V_l's
+};
+
+BackprojectionShadow::BackprojectionShadow(const plugin::TechniqueSetup& setup)
+    : context_(setup.context),
+      settings_(readSettings(setup.params)),
+      levels_(mssmLevels(settings_.maxKernel)),
+      // A kernel reaches half the cap (and its one-cell margin) past a cube edge: its
+      // samples lie in the receiver's face.
+      shadowMap_(setup, settings_.resolution, "backprojection",
+                 render::kernelGuardTexels(0.5f * float(settings_.maxKernel) + 2.0f, settings_.resolution)),
+      shaders_(setup.shaders),
+      lightBuffer_(setup.context, sizeof(LightData), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true,
+                   fmt::format("light{}.backprojection.light", setup.lightIndex)),
+      width_(setup.width),
+      height_(setup.height)
+{
+    if (levels_ > kMaxLevels) {
+        throw ConfigError(fmt::format("backprojection: max_kernel: a kernel of {} texels needs {} MSSM levels, more "
+                                      "than the traversal holds ({}); lower max_kernel or resolution",
+                                      settings_.maxKernel, levels_, kMaxLevels));
+    }
+    checkDevice();
+    const std::string name = fmt::format("light{}.backprojection.", setup.lightIndex);
+
+    gpu::ComputePipelineDesc c;
+    c.name = name + "mssm";
+    c.shader = "mssm.comp";
+    c.pushConstantBytes = sizeof(MssmPush);
+    mssm_ = gpu::Pipeline(context_, setup.shaders, c);
+
+    c.name = name + "visibility";
+    c.shader = "visibility.comp";
+    c.defines = {{"TRAVERSAL", std::to_string(uint32_t(settings_.traversal))}};
+    std::ranges::copy(shadowMap_.shaderDefines(), std::back_inserter(c.defines));
+    c.pushConstantBytes = sizeof(VisibilityPush);
+    visibility_ = gpu::Pipeline(context_, setup.shaders, c);
+    debugViewsDesc_ = c;
+    debugViewsDesc_.name = name + "debug_views";
+    debugViewsDesc_.defines.push_back({"DEBUG_IMAGES", "1"});
+
+    compareSampler_ = render::createShadowCompareSampler(context_);
+    depthSampler_ = render::createShadowDepthSampler(context_);
+    writeLight(setup.light);
+}
+
+// The MSSM must fit one storage buffer binding.
+void BackprojectionShadow::checkDevice() const
+{
+    VkPhysicalDeviceProperties properties{};
+    vkGetPhysicalDeviceProperties(context_.physicalDevice(), &properties);
+    const VkDeviceSize bytes = mssmBytes(shadowMap_.atlasWidth(), shadowMap_.atlasHeight(), levels_);
+    if (bytes > properties.limits.maxStorageBufferRange) {
+        throw ConfigError(fmt::format("backprojection: resolution: {} texels per face with max_kernel {} texels need a "
+                                      "{} MiB multi-scale shadow map ({} levels), more than this device binds as one "
+                                      "buffer ({} MiB); lower resolution or max_kernel",
+                                      settings_.resolution, settings_.maxKernel, bytes >> 20, levels_,
+                                      properties.limits.maxStorageBufferRange >> 20));
+    }
+}
+
+void BackprojectionShadow::writeLight(const scene::Light& light)
+{
+    LightData d = lightShape(light, settings_.lightSizeOverride);
+    const render::ShadowMapData& map = shadowMap_.data();
+    for (uint32_t f = 0; f < std::min(map.faceCount, render::kMaxShadowFaces); ++f) d.faces[f] = faceFrame(map.faces[f]);
+    std::memcpy(lightBuffer_.mapped(), &d, sizeof(d));
+    // The kernels reach no further than the light's extent allows on this map (plus the
+    // kernel's margin cell and the dual grid's sample), nor past half the cap.
+    shadowMap_.setSoftShadowFootprint(reachSize(d, light.type), 0.5f * float(settings_.maxKernel) + 2.0f);
+}
+
+void BackprojectionShadow::update(const scene::Light& light, const scene::Aabb& sceneBounds)
+{
+    shadowMap_.update(light, sceneBounds);
+    writeLight(light);
+}
+
+void BackprojectionShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io)
+{
+    const std::string map = io.local("shadow_map");
+    shadowMap_.addDepthPass(graph, map, {settings_.depthBias, 0.0f, 0.0f});
+
+    const uint32_t width = shadowMap_.atlasWidth(), height = shadowMap_.atlasHeight();
+    const std::string mssm = io.local("mssm");
+    graph.declareBuffer({mssm, mssmBytes(width, height, levels_)});
+    graph.addPass(mssm, graph::QueueKind::Compute)
+        .read(map, graph::Usage::Sampled)
+        .write(mssm, graph::Usage::Storage)
+        .execute([this, map, mssm](graph::PassContext& pass) { recordMssm(pass, map, mssm); });
+
+    const auto bind = [this, map, mssm](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
+        bindVisibility(pass, descriptors, map, mssm, visibility_);
+    };
+    plugin::addVisibilityPass(graph, io, visibility_, bind)
+        .read(map, graph::Usage::Sampled)
+        .read(mssm, graph::Usage::Storage);
+
+    // The debug views: nothing reads their images, so the graph culls the pass unless one
+    // of them is requested (FrameRenderer::requestImage, render --debug-image).
+    graph::PassBuilder debug = graph.addPass(io.local("debug_views"), graph::QueueKind::Compute);
+    plugin::readGBuffer(debug, io.gbuffer);
+    debug.read(map, graph::Usage::Sampled).read(mssm, graph::Usage::Storage);
+    for (const char* image : kDebugImages) {
+        graph.declareImage({io.local(image), width_, height_, VK_FORMAT_R32_SFLOAT});
+        debug.write(io.local(image), graph::Usage::Storage);
+    }
+    debug.execute([this, io, map, mssm](graph::PassContext& pass) { recordDebugViews(pass, io, map, mssm); });
+}
+
+constexpr gpu::MemoryAccess kComputeWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
+constexpr gpu::MemoryAccess kComputeReadWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                                              VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
+
+void BackprojectionShadow::recordMssm(const graph::PassContext& pass, const std::string& map,
+                                      const std::string& mssm) const
+{
+    VkCommandBuffer cmd = pass.cmd();
+    mssm_.bind(cmd);
+    gpu::DescriptorPush()
+        .sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map))
+        .storageBuffer("MssmBuffer", pass.buffer(mssm))
+        .push(context_, cmd, mssm_);
+    const glm::ivec2 size = atlasSize();
+    for (int level = 0; level < levels_; ++level) {
+        if (level > 0) gpu::memoryBarrier(cmd, kComputeWrite, kComputeReadWrite);
+        const MssmPush push{size, int32_t(shadowMap_.faceTexels()), level};
+        mssm_.pushConstants(cmd, &push, sizeof(push));
+        mssm_.dispatchOver(cmd, uint32_t(size.x), uint32_t(size.y));
+    }
+}
+
+void BackprojectionShadow::bindVisibility(const graph::PassContext& pass, gpu::DescriptorPush& descriptors,
+                                          const std::string& map, const std::string& mssm,
+                                          const gpu::Pipeline& pipeline) const
+{
+    descriptors.sampledImage("shadowCompare", pass.image(map), compareSampler_, pass.layout(map))
+        .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
+        .sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map))
+        .storageBuffer("MssmBuffer", pass.buffer(mssm))
+        .storageBuffer("BackprojectionLight", lightBuffer_);
+    const VisibilityPush push{atlasSize(), levels_, settings_.maxKernel};
+    pipeline.pushConstants(pass.cmd(), &push, sizeof(push));
+}
+
+void BackprojectionShadow::recordDebugViews(const graph::PassContext& pass, const plugin::LightPassIo& io,
+                                            const std::string& map, const std::string& mssm)
+{
+    if (!debugViews_) debugViews_.emplace(context_, shaders_, debugViewsDesc_);
+    const VkCommandBuffer cmd = pass.cmd();
+    debugViews_->bind(cmd);
+    gpu::DescriptorPush descriptors;
+    plugin::bindGBuffer(pass, io.gbuffer, descriptors);
+    descriptors.storageImage("kernelOut", pass.image(io.local("kernel")))
+        .storageImage("visitedOut", pass.image(io.local("visited")));
+    bindVisibility(pass, descriptors, map, mssm, *debugViews_);
+    descriptors.push(context_, cmd, *debugViews_);
+    debugViews_->dispatchOver(cmd, pass.image(io.local("kernel")));
+}
+
+} // namespace
+} // namespace penumbra::backprojection
+
+PENUMBRA_DEFINE_PLUGIN("backprojection", "1.0.0",
+                       "soft shadows by back-projection: marching-squares contours over a multi-scale shadow map, "
+                       "radial integration of the hidden light area, hierarchical traversal (Guennebaud et al. 2007, "
+                       "Yang et al. 2009)",
+                       penumbra::backprojection::kParams, penumbra::backprojection::BackprojectionShadow)
