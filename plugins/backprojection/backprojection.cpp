@@ -49,7 +49,8 @@ constexpr const char* kDebugImages[] = {"kernel", "visited"};
 constexpr int kMaxLevels = 14;
 
 const plugin::ParamSpec kParams[] = {
-    plugin::shadowResolutionParam(1024, 4096),
+    // 512: a cube atlas's MSSM at the default cap fits one storage buffer (README, "Memory").
+    plugin::shadowResolutionParam(512, 4096),
     {"light_size", ParamType::Float, -1, -1, 1e9, "world or deg",
      "-1: the light's own shape (rect, disk, a point light's sphere, a directional light's angular diameter; a spot "
      "light has none: a hard shadow); >= 0: instead a square of this side facing along the spot's axis or in the rect's "
@@ -65,7 +66,7 @@ const plugin::ParamSpec kParams[] = {
 };
 
 struct Settings {
-    uint32_t resolution = 1024;
+    uint32_t resolution = 512;
     float lightSizeOverride = -1.0f;
     Traversal traversal = Traversal::Hierarchical;
     int maxKernel = 64;  // cells per side
