@@ -259,7 +259,8 @@ private:
     const Settings settings_;
     const int levels_;
     render::ShadowMap shadowMap_;
-    gpu::Pipeline mssm_;
+    gpu::Pipeline mssm_;        // levels 1 and up
+    gpu::Pipeline mssmLevel0_;  // level 0, from the depth map
     gpu::Pipeline visibility_;
     const gpu::ShaderCompiler& shaders_;
     gpu::ComputePipelineDesc debugViewsDesc_;
@@ -296,7 +297,11 @@ BackprojectionShadow::BackprojectionShadow(const plugin::TechniqueSetup& setup)
     c.name = name + "mssm";
     c.shader = "mssm.comp";
     c.pushConstantBytes = sizeof(MssmPush);
+    c.defines = {{"MSSM_LEVEL0", "0"}};
     mssm_ = gpu::Pipeline(context_, setup.shaders, c);
+    c.name = name + "mssm_level0";
+    c.defines = {{"MSSM_LEVEL0", "1"}};
+    mssmLevel0_ = gpu::Pipeline(context_, setup.shaders, c);
 
     c.name = name + "visibility";
     c.shader = "visibility.comp";
@@ -385,17 +390,19 @@ void BackprojectionShadow::recordMssm(const graph::PassContext& pass, const std:
                                       const std::string& mssm) const
 {
     VkCommandBuffer cmd = pass.cmd();
-    mssm_.bind(cmd);
-    gpu::DescriptorPush()
-        .sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map))
-        .storageBuffer("MssmBuffer", pass.buffer(mssm))
-        .push(context_, cmd, mssm_);
     const glm::ivec2 size = atlasSize();
     for (int level = 0; level < levels_; ++level) {
+        const gpu::Pipeline& pipeline = level == 0 ? mssmLevel0_ : mssm_;
         if (level > 0) gpu::memoryBarrier(cmd, kComputeWrite, kComputeReadWrite);
+        if (level <= 1) {
+            pipeline.bind(cmd);
+            gpu::DescriptorPush descriptors;
+            if (level == 0) descriptors.sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map));
+            descriptors.storageBuffer("MssmBuffer", pass.buffer(mssm)).push(context_, cmd, pipeline);
+        }
         const MssmPush push{size, int32_t(shadowMap_.faceTexels()), level};
-        mssm_.pushConstants(cmd, &push, sizeof(push));
-        mssm_.dispatchOver(cmd, uint32_t(size.x), uint32_t(size.y));
+        pipeline.pushConstants(cmd, &push, sizeof(push));
+        pipeline.dispatchOver(cmd, uint32_t(size.x), uint32_t(size.y));
     }
 }
 

@@ -18,29 +18,35 @@ layout(push_constant) uniform Push {
 } pc;
 
 // Straight-line (docs/performance.md, "Uniform loads"): invocations past the atlas
-// compute a clamped cell and store nothing.
+// compute a clamped cell and store nothing. MSSM_LEVEL0 selects level 0's pipeline, so
+// that neither runs the other's loads (a branch on the level ran both: llvmpipe masks
+// lanes, it does not skip a side).
+#ifndef MSSM_LEVEL0
+#define MSSM_LEVEL0 0
+#endif
 void main()
 {
     ivec2 atlasSize = pc.atlasSize;
     int faceTexels = pc.faceTexels;
-    int level = pc.level;
     ivec2 cell = ivec2(gl_GlobalInvocationID.xy);
     bool inAtlas = all(lessThan(cell, atlasSize));
     cell = min(cell, atlasSize - 1);
     ivec2 last = mssmFaceLast(cell, faceTexels);
-    vec2 range;
-    if (level == 0) {
-        ivec2 b = min(cell + 1, last);
-        float d00 = texelFetch(shadowDepth, cell, 0).r, d10 = texelFetch(shadowDepth, ivec2(b.x, cell.y), 0).r;
-        float d01 = texelFetch(shadowDepth, ivec2(cell.x, b.y), 0).r, d11 = texelFetch(shadowDepth, b, 0).r;
-        range = vec2(min(min(d00, d10), min(d01, d11)), max(max(d00, d10), max(d01, d11)));
-    } else {
-        ivec2 b = min(cell + (1 << (level - 1)), last);
-        vec2 v00 = mssmNodes[mssmIndex(atlasSize, level - 1, cell)];
-        vec2 v10 = mssmNodes[mssmIndex(atlasSize, level - 1, ivec2(b.x, cell.y))];
-        vec2 v01 = mssmNodes[mssmIndex(atlasSize, level - 1, ivec2(cell.x, b.y))];
-        vec2 v11 = mssmNodes[mssmIndex(atlasSize, level - 1, b)];
-        range = vec2(min(min(v00.x, v10.x), min(v01.x, v11.x)), max(max(v00.y, v10.y), max(v01.y, v11.y)));
-    }
+#if MSSM_LEVEL0
+    ivec2 b = min(cell + 1, last);
+    float d00 = texelFetch(shadowDepth, cell, 0).r, d10 = texelFetch(shadowDepth, ivec2(b.x, cell.y), 0).r;
+    float d01 = texelFetch(shadowDepth, ivec2(cell.x, b.y), 0).r, d11 = texelFetch(shadowDepth, b, 0).r;
+    vec2 range = vec2(min(min(d00, d10), min(d01, d11)), max(max(d00, d10), max(d01, d11)));
+    if (inAtlas) mssmNodes[mssmIndex(atlasSize, 0, cell)] = range;
+#else
+    int level = pc.level;
+    ivec2 b = min(cell + (1 << (level - 1)), last);
+    int below = mssmIndex(atlasSize, level - 1, ivec2(0));
+    vec2 v00 = mssmNodes[below + cell.y * atlasSize.x + cell.x];
+    vec2 v10 = mssmNodes[below + cell.y * atlasSize.x + b.x];
+    vec2 v01 = mssmNodes[below + b.y * atlasSize.x + cell.x];
+    vec2 v11 = mssmNodes[below + b.y * atlasSize.x + b.x];
+    vec2 range = vec2(min(min(v00.x, v10.x), min(v01.x, v11.x)), max(max(v00.y, v10.y), max(v01.y, v11.y)));
     if (inAtlas) mssmNodes[mssmIndex(atlasSize, level, cell)] = range;
+#endif
 }
