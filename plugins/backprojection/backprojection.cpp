@@ -48,6 +48,14 @@ constexpr const char* kDebugImages[] = {"kernel", "visited"};
 // visibility.comp's MAX_LEVELS: the traversal's stack is sized for it.
 constexpr int kMaxLevels = 14;
 
+// llvmpipe stops a shader invocation's loops after 65,535 iterations in all (gallivm's
+// loop limiter, LP_MAX_TGSI_LOOP_ITERATIONS, shared by every loop: docs/plugins.md,
+// "Shaders"), silently. One receiver's walk iterates once per block of its kernel (flat)
+// or once per node visited (hierarchical: at most 4/3 of the blocks, and a few more for
+// a kernel that is not a power of two), so on a CPU device the cap keeps the worst case
+// well inside it: 181² blocks flat, 4/3 of that hierarchical (43,700).
+constexpr int kCpuMaxKernel = 181;
+
 const plugin::ParamSpec kParams[] = {
     // 512: a cube atlas's MSSM at the default cap fits one storage buffer (README, "Memory").
     plugin::shadowResolutionParam(512, 4096),
@@ -289,6 +297,13 @@ BackprojectionShadow::BackprojectionShadow(const plugin::TechniqueSetup& setup)
         throw ConfigError(fmt::format("backprojection: max_kernel: a kernel of {} texels needs {} MSSM levels, more "
                                       "than the traversal holds ({}); lower max_kernel or resolution",
                                       settings_.maxKernel, levels_, kMaxLevels));
+    }
+    if (context_.deviceInfo().type == "cpu" && settings_.maxKernel > kCpuMaxKernel) {
+        throw ConfigError(fmt::format("backprojection: max_kernel: {} texels per side at resolution {} is more than a "
+                                      "CPU device's shader loops allow ({} texels: llvmpipe stops a shader's loops "
+                                      "after 65,535 iterations, and a kernel walk iterates once per block); lower "
+                                      "max_kernel or resolution",
+                                      settings_.maxKernel, settings_.resolution, kCpuMaxKernel));
     }
     checkDevice();
     const std::string name = fmt::format("light{}.backprojection.", setup.lightIndex);

@@ -414,6 +414,28 @@ INSTANTIATE_TEST_SUITE_P(Backprojection, BackprojectionScales,
                                     std::get<1>(info.param).name;
                          });
 
+TEST_F(BackprojectionTest, CpuDeviceRefusesKernelsPastTheLoopLimit)
+{
+    // 0.25 of a 1024-texel face is a 256-texel kernel: 65,536 blocks flat, past the 65,535
+    // loop iterations llvmpipe allows a shader invocation. The refusal names the parameter.
+    config::RenderConfig cfg = test::defaultTestConfig();
+    BackprojectionSettings s;
+    s.lightSize = 0.6;
+    s.maxKernelTexels = 256.0;
+    applyBackprojection(cfg.lights[0], s);
+    try {
+        render(cfg, config::buildScene(cfg.scene));
+        FAIL() << "a 256-texel kernel cap was accepted on a CPU device";
+    } catch (const std::exception& e) {
+        EXPECT_NE(std::string(e.what()).find("max_kernel"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("65,535"), std::string::npos) << e.what();
+    }
+    s.maxKernelTexels = 181.0;  // the largest allowed
+    applyBackprojection(cfg.lights[0], s);
+    render(cfg, config::buildScene(cfg.scene));
+    frame->checkedVisibility();
+}
+
 // ---------------------------------------------------------------------------------
 // Debug views.
 
