@@ -106,7 +106,7 @@ LightPlane lightPlaneFor(vec3 p)
 #if SHADOW_LIGHT_TYPE == 2
     // A sphere of radius R at distance d: its outline is the circle where the cone of
     // half-angle asin(R / d) from p meets the plane through the centre facing p, radius
-    // R d / sqrt(d^2 - R^2). Inside the sphere nothing lies between: radius 0 (lit).
+    // R d / sqrt(d^2 - R^2). Inside the sphere: radius 0, so the hard compare.
     vec3 d = p - l.centre;
     float dist = length(d);
     float radius = extent.w;
