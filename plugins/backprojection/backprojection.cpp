@@ -57,7 +57,8 @@ constexpr int kMaxLevels = 14;
 constexpr int kCpuMaxKernel = 181;
 
 const plugin::ParamSpec kParams[] = {
-    // 512: a cube atlas's MSSM at the default cap fits one storage buffer (README, "Memory").
+    // 512: a 1024-texel cube atlas's MSSM (384 MiB) takes seconds to build on lavapipe
+    // (README, "Memory").
     plugin::shadowResolutionParam(512, 4096),
     {"light_size", ParamType::Float, -1, -1, 1e9, "world or deg",
      "-1: the light's own shape (rect, disk, a point light's sphere, a directional light's angular diameter; a spot "
@@ -98,6 +99,8 @@ int mssmLevels(int maxKernel)
     return maxKernel > 1 ? int(std::bit_width(uint32_t(maxKernel - 1))) + 1 : 1;
 }
 
+// The MSSM image (mssm.glsl): the levels stacked downwards, RG32F.
+constexpr VkFormat kMssmFormat = VK_FORMAT_R32G32_SFLOAT;
 VkDeviceSize mssmBytes(uint32_t width, uint32_t height, int levels)
 {
     return VkDeviceSize(width) * height * VkDeviceSize(levels) * 2 * sizeof(float);
@@ -333,18 +336,19 @@ BackprojectionShadow::BackprojectionShadow(const plugin::TechniqueSetup& setup)
     writeLight(setup.light);
 }
 
-// The MSSM must fit one storage buffer binding.
+// The MSSM's levels, stacked, must fit one image side.
 void BackprojectionShadow::checkDevice() const
 {
     VkPhysicalDeviceProperties properties{};
     vkGetPhysicalDeviceProperties(context_.physicalDevice(), &properties);
-    const VkDeviceSize bytes = mssmBytes(shadowMap_.atlasWidth(), shadowMap_.atlasHeight(), levels_);
-    if (bytes > properties.limits.maxStorageBufferRange) {
+    const uint64_t rows = uint64_t(shadowMap_.atlasHeight()) * uint64_t(levels_);
+    if (rows > properties.limits.maxImageDimension2D) {
         throw ConfigError(fmt::format("backprojection: resolution: {} texels per face with max_kernel {} texels need a "
-                                      "{} MiB multi-scale shadow map ({} levels), more than this device binds as one "
-                                      "buffer ({} MiB); lower resolution or max_kernel",
-                                      settings_.resolution, settings_.maxKernel, bytes >> 20, levels_,
-                                      properties.limits.maxStorageBufferRange >> 20));
+                                      "multi-scale shadow map of {} levels of {} rows ({} MiB), taller than this "
+                                      "device's largest image ({} texels); lower resolution or max_kernel",
+                                      settings_.resolution, settings_.maxKernel, levels_, shadowMap_.atlasHeight(),
+                                      mssmBytes(shadowMap_.atlasWidth(), shadowMap_.atlasHeight(), levels_) >> 20,
+                                      properties.limits.maxImageDimension2D));
     }
 }
 
@@ -372,7 +376,7 @@ void BackprojectionShadow::registerPasses(graph::RenderGraph& graph, const plugi
 
     const uint32_t width = shadowMap_.atlasWidth(), height = shadowMap_.atlasHeight();
     const std::string mssm = io.local("mssm");
-    graph.declareBuffer({mssm, mssmBytes(width, height, levels_)});
+    graph.declareImage({mssm, width, height * uint32_t(levels_), kMssmFormat});
     graph.addPass(mssm, graph::QueueKind::Compute)
         .read(map, graph::Usage::Sampled)
         .write(mssm, graph::Usage::Storage)
@@ -413,7 +417,7 @@ void BackprojectionShadow::recordMssm(const graph::PassContext& pass, const std:
             pipeline.bind(cmd);
             gpu::DescriptorPush descriptors;
             if (level == 0) descriptors.sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map));
-            descriptors.storageBuffer("MssmBuffer", pass.buffer(mssm)).push(context_, cmd, pipeline);
+            descriptors.storageImage("mssmImage", pass.image(mssm)).push(context_, cmd, pipeline);
         }
         const MssmPush push{size, int32_t(shadowMap_.faceTexels()), level};
         pipeline.pushConstants(cmd, &push, sizeof(push));
@@ -428,7 +432,7 @@ void BackprojectionShadow::bindVisibility(const graph::PassContext& pass, gpu::D
     descriptors.sampledImage("shadowCompare", pass.image(map), compareSampler_, pass.layout(map))
         .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
         .sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map))
-        .storageBuffer("MssmBuffer", pass.buffer(mssm))
+        .storageImage("mssmImage", pass.image(mssm))
         .storageBuffer("BackprojectionLight", lightBuffer_);
     const VisibilityPush push{atlasSize(), levels_, settings_.maxKernel};
     pipeline.pushConstants(pass.cmd(), &push, sizeof(push));

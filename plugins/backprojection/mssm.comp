@@ -37,16 +37,16 @@ void main()
     float d00 = texelFetch(shadowDepth, cell, 0).r, d10 = texelFetch(shadowDepth, ivec2(b.x, cell.y), 0).r;
     float d01 = texelFetch(shadowDepth, ivec2(cell.x, b.y), 0).r, d11 = texelFetch(shadowDepth, b, 0).r;
     vec2 range = vec2(min(min(d00, d10), min(d01, d11)), max(max(d00, d10), max(d01, d11)));
-    if (inAtlas) mssmNodes[mssmIndex(atlasSize, 0, cell)] = range;
+    if (inAtlas) imageStore(mssmImage, mssmTexel(atlasSize, 0, cell), vec4(range, 0.0, 0.0));
 #else
     int level = pc.level;
     ivec2 b = min(cell + (1 << (level - 1)), last);
-    int below = mssmIndex(atlasSize, level - 1, ivec2(0));
-    vec2 v00 = mssmNodes[below + cell.y * atlasSize.x + cell.x];
-    vec2 v10 = mssmNodes[below + cell.y * atlasSize.x + b.x];
-    vec2 v01 = mssmNodes[below + b.y * atlasSize.x + cell.x];
-    vec2 v11 = mssmNodes[below + b.y * atlasSize.x + b.x];
+    int below = (level - 1) * atlasSize.y;
+    vec2 v00 = imageLoad(mssmImage, ivec2(cell.x, below + cell.y)).xy;
+    vec2 v10 = imageLoad(mssmImage, ivec2(b.x, below + cell.y)).xy;
+    vec2 v01 = imageLoad(mssmImage, ivec2(cell.x, below + b.y)).xy;
+    vec2 v11 = imageLoad(mssmImage, ivec2(b.x, below + b.y)).xy;
     vec2 range = vec2(min(min(v00.x, v10.x), min(v01.x, v11.x)), max(max(v00.y, v10.y), max(v01.y, v11.y)));
-    if (inAtlas) mssmNodes[mssmIndex(atlasSize, level, cell)] = range;
+    if (inAtlas) imageStore(mssmImage, mssmTexel(atlasSize, level, cell), vec4(range, 0.0, 0.0));
 #endif
 }

@@ -11,17 +11,26 @@
 // Cells and nodes never cross a face of a cube atlas: a sample or child past the face's
 // last one is clamped to it (that node covers fewer cells).
 //
+// One RG32F storage image, the levels stacked downwards (level l's node for atlas cell c
+// at (c.x, l * atlas height + c.y)): an image is not bound by a device's largest storage
+// buffer range (lavapipe: 128 MiB, which a 1024-texel cube atlas's 7 levels exceed), only
+// by its largest 2-D image side (backprojection.cpp checks both).
+//
 // The including shader defines MSSM_BINDING and MSSM_QUALIFIER first.
 #ifndef PENUMBRA_BACKPROJECTION_MSSM_GLSL
 #define PENUMBRA_BACKPROJECTION_MSSM_GLSL
 
-layout(std430, binding = MSSM_BINDING) MSSM_QUALIFIER buffer MssmBuffer {
-    vec2 mssmNodes[];  // (least NDC depth, largest NDC depth), level after level
-};
+// (least NDC depth, largest NDC depth) per node.
+layout(binding = MSSM_BINDING, rg32f) uniform MSSM_QUALIFIER image2D mssmImage;
 
-int mssmIndex(ivec2 atlasSize, int level, ivec2 cell)
+ivec2 mssmTexel(ivec2 atlasSize, int level, ivec2 cell)
 {
-    return (level * atlasSize.y + cell.y) * atlasSize.x + cell.x;
+    return ivec2(cell.x, level * atlasSize.y + cell.y);
+}
+
+vec2 mssmNode(ivec2 atlasSize, int level, ivec2 cell)
+{
+    return imageLoad(mssmImage, mssmTexel(atlasSize, level, cell)).xy;
 }
 
 // The last cell (and sample) of the face that holds atlas cell `cell`.
@@ -44,7 +53,7 @@ vec2 mssmRange(ivec2 atlasSize, int levels, ivec2 lo, ivec2 hi)
     for (int j = 0; j < count.y; ++j)
         for (int i = 0; i < count.x; ++i) {
             ivec2 node = max(min(lo + ivec2(i, j) * step, hi - step + 1), lo);
-            vec2 v = mssmNodes[mssmIndex(atlasSize, level, node)];
+            vec2 v = mssmNode(atlasSize, level, node);
             range = vec2(min(range.x, v.x), max(range.y, v.y));
         }
     return range;

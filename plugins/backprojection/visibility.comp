@@ -321,7 +321,7 @@ void walkKernel(inout Walk w, ivec4 k, int levels)
         if (any(greaterThan(node.xy, k.zw))) continue;  // beyond the kernel
         int level = node.z;
         ivec2 last = min(node.xy + (1 << level) - 1, k.zw);
-        vec2 depths = mssmNodes[mssmIndex(atlasSize, level, w.origin + node.xy)];
+        vec2 depths = mssmNode(atlasSize, level, w.origin + node.xy);
         ++w.fetches;
         vec2 reference = referenceRange(w, node.xy, min(last + 1, ivec2(w.faceTexels - 1)));
         // Fig. 6 cases 4 and 5: every sample behind the receiver, or every one in front.

@@ -195,7 +195,7 @@ INSTANTIATE_TEST_SUITE_P(Backprojection, BackprojectionLightTypes,
                                            LightCase{"directional", scene::LightType::Directional, -1.0, 1024},
                                            LightCase{"point", scene::LightType::Point, -1.0, 512},
                                            LightCase{"rect", scene::LightType::Rect, -1.0, 512},
-                                           LightCase{"disk", scene::LightType::Disk, -1.0, 512}),
+                                           LightCase{"disk", scene::LightType::Disk, -1.0, 1024}),
                          [](const ::testing::TestParamInfo<LightCase>& info) { return info.param.name; });
 
 TEST_F(BackprojectionTest, ZeroSizeEqualsTheHardShadow)
@@ -436,6 +436,26 @@ TEST_F(BackprojectionTest, CpuDeviceRefusesKernelsPastTheLoopLimit)
     frame->checkedVisibility();
 }
 
+TEST_F(BackprojectionTest, MssmTallerThanTheLargestImageIsRefused)
+{
+    // A 2048-texel cube atlas (2 faces of 2048 + guard high) with 8 levels of MSSM is
+    // taller than lavapipe's largest image (16,384): refused before anything renders,
+    // naming the parameter and the sizes. 1024 per face fits (LightTypes/disk).
+    config::RenderConfig cfg = test::defaultTestConfig();
+    test::setLightType(cfg.lights[0], scene::LightType::Disk);
+    BackprojectionSettings s;
+    s.resolution = 2048;
+    s.maxKernelTexels = 128.0;
+    applyBackprojection(cfg.lights[0], s);
+    try {
+        render(cfg, config::buildScene(cfg.scene));
+        FAIL() << "a 2048-texel cube atlas's MSSM was accepted";
+    } catch (const std::exception& e) {
+        EXPECT_NE(std::string(e.what()).find("resolution: 2048"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("largest image"), std::string::npos) << e.what();
+    }
+}
+
 // ---------------------------------------------------------------------------------
 // Debug views.
 
@@ -517,7 +537,7 @@ TEST(BackprojectionPluginEntry, ReflectsEveryParameterWithItsDefault)
 {
     plugin::PluginRegistry registry;
     const plugin::ParamValues params = registry.load("backprojection").defaultParams();
-    EXPECT_EQ(params.getInt("resolution"), 512);  // every light type's MSSM fits lavapipe's 128 MiB binding
+    EXPECT_EQ(params.getInt("resolution"), 512);
     EXPECT_EQ(params.getEnum("traversal"), "hierarchical");
     EXPECT_FLOAT_EQ(params.getFloat("max_kernel"), 0.0625f);
     EXPECT_FLOAT_EQ(params.getFloat("light_size"), -1.0f);
