@@ -40,6 +40,10 @@ void scaleConfig(config::RenderConfig& c, float s)
     c.camera.nearWorld *= s;
     for (config::LightConfig& l : c.lights) {
         l.light.position *= s;
+        // An area light's extent too: left unscaled, a disk of radius 0.5 over a scene a
+        // thousandth the size straddled every receiver's horizon (V = 0.51 on box sides).
+        l.light.sizeWorld *= s;
+        l.light.radiusWorld *= s;
         l.light.intensity *= s * s;
     }
 }

@@ -408,7 +408,8 @@ TEST_P(BackprojectionScales, MatchesRayCastAwayFromPenumbrae)
 INSTANTIATE_TEST_SUITE_P(Backprojection, BackprojectionScales,
                          ::testing::Combine(::testing::Values(1e-3f, 1e5f),
                                             ::testing::Values(LightCase{"spot", scene::LightType::Spot, 0.6},
-                                                              LightCase{"point", scene::LightType::Point, 0.4, 512})),
+                                                              LightCase{"point", scene::LightType::Point, 0.4, 512},
+                                                              LightCase{"disk", scene::LightType::Disk, 1.0, 512})),
                          [](const ::testing::TestParamInfo<std::tuple<float, LightCase>>& info) {
                              return std::string(std::get<0>(info.param) < 1.0f ? "milli_" : "e5_") +
                                     std::get<1>(info.param).name;

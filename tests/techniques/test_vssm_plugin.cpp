@@ -618,7 +618,8 @@ TEST_P(VssmScales, MatchesRayCastAwayFromPenumbrae)
 INSTANTIATE_TEST_SUITE_P(Vssm, VssmScales,
                          ::testing::Combine(::testing::Values(1e-3f, 1e5f),
                                             ::testing::Values(LightCase{"spot", scene::LightType::Spot, 0.6},
-                                                              LightCase{"point", scene::LightType::Point, 0.4})),
+                                                              LightCase{"point", scene::LightType::Point, 0.4},
+                                                              LightCase{"disk", scene::LightType::Disk, 1.0})),
                          [](const ::testing::TestParamInfo<std::tuple<float, LightCase>>& info) {
                              return std::string(std::get<0>(info.param) < 1.0f ? "milli_" : "e5_") +
                                     std::get<1>(info.param).name;
