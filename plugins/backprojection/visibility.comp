@@ -343,12 +343,14 @@ void walkKernel(inout Walk w, ivec4 k, int levels)
 // nearest occluder in the last kernel, which can only shrink it).
 const int kKernelRefinements = 2;
 
-float backprojectionVisibility(ShadowReceiver r, vec3 p, out float kernelTexels, out int fetches)
+// `light`: lightPlaneFor(p), which main() has already built to know whether the light
+// has a size.
+float backprojectionVisibility(ShadowReceiver r, vec3 p, LightPlane light, out float kernelTexels, out int fetches)
 {
     Walk w;
     w.r = r;
     w.p = p;
-    w.light = lightPlaneFor(p);
+    w.light = light;
     w.range = shadowMapData.faces[r.face].depthRange;
     w.faceTexels = int(shadowFaceTexels());
     w.origin = ivec2(int(r.face % 3u), int(r.face / 3u)) * w.faceTexels;
@@ -411,7 +413,7 @@ void main()
     float soft = 1.0;
     LightPlane light = lightPlaneFor(position.xyz);
     bool hasSize = light.area > 0.0 && shadowMapData.faces[r.face].texel.x > 0.0;
-    if (inMap && position.w != 0.0 && hasSize) soft = backprojectionVisibility(r, position.xyz, kernelTexels, fetches);
+    if (inMap && position.w != 0.0 && hasSize) soft = backprojectionVisibility(r, position.xyz, light, kernelTexels, fetches);
     // A light of size 0 casts a hard shadow: exactly hard's one nearest compare.
     float hard = shadowCompareTap(shadowCompare, r, vec2(0.0));
     float v = hasSize ? soft : hard;
