@@ -4,8 +4,10 @@
 // squares over the samples that can hide part of the light from a receiver, is
 // back-projected onto the light and the hidden area integrated exactly.
 // Passes (paper Algorithm 1): the engine's shadow map (render/ShadowMap.h, step 3), its
-// multi-scale shadow map (mssm.comp, mssm.glsl: step 4) and the per-pixel visibility
-// (visibility.comp: steps 5 and 8). The MSSM is a transient graph buffer.
+// multi-scale shadow map (mssm.comp, mssm.glsl: step 4), with packets the packet pass
+// (packets.comp: steps 6 and 7) and the per-pixel visibility (visibility.comp: steps 5
+// and 8; contour.glsl holds what both do). The MSSM and the packets' results are
+// transient graph images.
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
 #include "penumbra/gpu/Context.h"
@@ -41,9 +43,15 @@ using plugin::ParamType;
 enum class Traversal : uint32_t { Flat, Hierarchical };
 constexpr const char* kTraversalNames[] = {"flat", "hierarchical"};
 
+// Parameter `packet`: PACKET, the packet's side in pixels (§4.1), in choice order.
+constexpr const char* kPacketNames[] = {"1x1", "2x2", "3x3", "4x4"};
+
 // The debug images the debug_views pass writes (visibility.comp DEBUG_IMAGES), each
 // io.local(name): requested by name, else the pass is culled and costs nothing.
-constexpr const char* kDebugImages[] = {"kernel", "visited"};
+constexpr const char* kDebugImages[] = {"kernel", "visited", "coherence"};
+
+// packets.comp's result per pixel: (V or -1, class, reads, kernel side).
+constexpr VkFormat kPacketsFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
 
 // visibility.comp's MAX_LEVELS: the traversal's stack is sized for it.
 constexpr int kMaxLevels = 14;
@@ -55,6 +63,12 @@ constexpr int kMaxLevels = 14;
 // a kernel that is not a power of two), so on a CPU device the cap keeps the worst case
 // well inside it: 181² blocks flat, 4/3 of that hierarchical (43,700).
 constexpr int kCpuMaxKernel = 181;
+
+// Q_e and Q_v of eq. 6 (Q_n = 1): README, "Packets", gives the sweep.
+constexpr double kDefaultEdgeCost = 1.0;
+constexpr double kDefaultVisibilityCost = 4.0;
+// T_d of eq. 5 (README, "Packets": why not the paper's 0.8).
+constexpr double kDefaultDivergenceThreshold = 0.8;
 
 const plugin::ParamSpec kParams[] = {
     // 512: a 1024-texel cube atlas's MSSM (384 MiB) takes seconds to build on lavapipe
@@ -68,6 +82,18 @@ const plugin::ParamSpec kParams[] = {
      "flat: every 2 x 2 block of samples in the kernel ([GBP07] with MSSM kernels); hierarchical: the MSSM descended "
      "from the kernel's corner, pruning blocks that hold no contour (Yang et al. 2009, 4.2): the same edges",
      kTraversalNames, uint32_t(std::size(kTraversalNames))},
+    {"packet", ParamType::Enum, 0, 0, 0, "",
+     "pixels that share one kernel walk (Yang et al. 2009, 4.1): 1x1 is per pixel; a packet that the cost model or "
+     "a diverging contour (the null status) rules out walks per pixel, so every size gives the same image",
+     kPacketNames, uint32_t(std::size(kPacketNames))},
+    {"edge_cost", ParamType::Float, kDefaultEdgeCost, 0, 1e6, "Q_n",
+     "Q_e of eq. 6: extracting an edge, in units of visiting a node (Q_n = 1); with visibility_cost it prices a "
+     "packet walk against its pixels' own (README, \"Packets\": the sweep that chose the default)"},
+    {"visibility_cost", ParamType::Float, kDefaultVisibilityCost, 0, 1e6, "Q_n",
+     "Q_v of eq. 6: back-projecting and integrating an edge for one receiver, in units of visiting a node"},
+    {"divergence_threshold", ParamType::Float, kDefaultDivergenceThreshold, 0, 1, "",
+     "T_d of eq. 5: a packet whose estimated probability of diverging contours exceeds it walks per pixel (1: only "
+     "the cost model and the null status met in the walk decide)"},
     plugin::kernelLimitParam("max_kernel", 0.0625,
                              "the kernel cap: the largest side of a receiver's kernel, a fraction of the face's side "
                              "(occluders beyond it are not seen; it bounds the work of an occluder near the light)"),
@@ -78,6 +104,10 @@ struct Settings {
     uint32_t resolution = 512;
     float lightSizeOverride = -1.0f;
     Traversal traversal = Traversal::Hierarchical;
+    int packet = 1;  // pixels per side
+    float edgeCost = float(kDefaultEdgeCost);
+    float visibilityCost = float(kDefaultVisibilityCost);
+    float divergenceThreshold = float(kDefaultDivergenceThreshold);
     int maxKernel = 64;  // cells per side
     float depthBias = 4.0f;
 };
@@ -88,6 +118,10 @@ Settings readSettings(const plugin::ParamValues& params)
     s.resolution = uint32_t(params.getInt("resolution"));
     s.lightSizeOverride = plugin::lightSizeOverride(params, "backprojection");
     s.traversal = Traversal(params.getEnumIndex("traversal"));
+    s.packet = int(params.getEnumIndex("packet")) + 1;
+    s.edgeCost = params.getFloat("edge_cost");
+    s.visibilityCost = params.getFloat("visibility_cost");
+    s.divergenceThreshold = params.getFloat("divergence_threshold");
     s.maxKernel = std::max(1, int(std::ceil(plugin::kernelLimitTexels(params.getFloat("max_kernel"), s.resolution))));
     s.depthBias = params.getFloat("depth_bias");
     return s;
@@ -124,6 +158,9 @@ struct VisibilityPush {
     glm::ivec2 atlasSize{0};
     int32_t levels = 1;
     int32_t maxKernel = 1;
+    float edgeCost = 0.0f;
+    float visibilityCost = 0.0f;
+    float divergenceThreshold = 0.0f;
 };
 
 struct MssmPush {
@@ -262,8 +299,10 @@ private:
     void recordMssm(const graph::PassContext& pass, const std::string& map, const std::string& mssm) const;
     void bindVisibility(const graph::PassContext& pass, gpu::DescriptorPush& descriptors, const std::string& map,
                         const std::string& mssm, const gpu::Pipeline& pipeline) const;
+    void recordPackets(const graph::PassContext& pass, const plugin::LightPassIo& io, const std::string& map,
+                       const std::string& mssm, const std::string& packets) const;
     void recordDebugViews(const graph::PassContext& pass, const plugin::LightPassIo& io, const std::string& map,
-                          const std::string& mssm);
+                          const std::string& mssm, const std::string& packets);
     glm::ivec2 atlasSize() const { return {int(shadowMap_.atlasWidth()), int(shadowMap_.atlasHeight())}; }
 
     gpu::Context& context_;
@@ -273,6 +312,7 @@ private:
     gpu::Pipeline mssm_;        // levels 1 and up
     gpu::Pipeline mssmLevel0_;  // level 0, from the depth map
     gpu::Pipeline visibility_;
+    std::optional<gpu::Pipeline> packets_;  // with packets larger than 1 x 1
     const gpu::ShaderCompiler& shaders_;
     gpu::ComputePipelineDesc debugViewsDesc_;
     std::optional<gpu::Pipeline> debugViews_;
@@ -323,10 +363,17 @@ BackprojectionShadow::BackprojectionShadow(const plugin::TechniqueSetup& setup)
 
     c.name = name + "visibility";
     c.shader = "visibility.comp";
-    c.defines = {{"TRAVERSAL", std::to_string(uint32_t(settings_.traversal))}};
+    c.defines = {{"TRAVERSAL", std::to_string(uint32_t(settings_.traversal))},
+                 {"PACKET", std::to_string(settings_.packet)}};
     std::ranges::copy(shadowMap_.shaderDefines(), std::back_inserter(c.defines));
     c.pushConstantBytes = sizeof(VisibilityPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
+    if (settings_.packet > 1) {
+        gpu::ComputePipelineDesc p = c;
+        p.name = name + "packets";
+        p.shader = "packets.comp";
+        packets_.emplace(context_, setup.shaders, p);
+    }
     debugViewsDesc_ = c;
     debugViewsDesc_.name = name + "debug_views";
     debugViewsDesc_.defines.push_back({"DEBUG_IMAGES", "1"});
@@ -382,23 +429,39 @@ void BackprojectionShadow::registerPasses(graph::RenderGraph& graph, const plugi
         .write(mssm, graph::Usage::Storage)
         .execute([this, map, mssm](graph::PassContext& pass) { recordMssm(pass, map, mssm); });
 
-    const auto bind = [this, map, mssm](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
+    // Packets (Algorithm 1, steps 6 and 7): one invocation per packet leaves each pixel's
+    // V, or -1 where the visibility pass walks the pixel alone (step 8).
+    const std::string packets = packets_ ? io.local("packets") : std::string();
+    if (packets_) {
+        graph.declareImage({packets, width_, height_, kPacketsFormat});
+        graph::PassBuilder pass = graph.addPass(packets, graph::QueueKind::Compute);
+        plugin::readGBuffer(pass, io.gbuffer);
+        pass.read(map, graph::Usage::Sampled)
+            .read(mssm, graph::Usage::Storage)
+            .write(packets, graph::Usage::Storage)
+            .execute([this, io, map, mssm, packets](graph::PassContext& p) { recordPackets(p, io, map, mssm, packets); });
+    }
+
+    const auto bind = [this, map, mssm, packets](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
+        if (!packets.empty()) descriptors.storageImage("packetsIn", pass.image(packets));
         bindVisibility(pass, descriptors, map, mssm, visibility_);
     };
-    plugin::addVisibilityPass(graph, io, visibility_, bind)
-        .read(map, graph::Usage::Sampled)
-        .read(mssm, graph::Usage::Storage);
+    graph::PassBuilder visibility = plugin::addVisibilityPass(graph, io, visibility_, bind);
+    visibility.read(map, graph::Usage::Sampled).read(mssm, graph::Usage::Storage);
+    if (packets_) visibility.read(packets, graph::Usage::Storage);
 
     // The debug views: nothing reads their images, so the graph culls the pass unless one
     // of them is requested (FrameRenderer::requestImage, render --debug-image).
     graph::PassBuilder debug = graph.addPass(io.local("debug_views"), graph::QueueKind::Compute);
     plugin::readGBuffer(debug, io.gbuffer);
     debug.read(map, graph::Usage::Sampled).read(mssm, graph::Usage::Storage);
+    if (packets_) debug.read(packets, graph::Usage::Storage);
     for (const char* image : kDebugImages) {
         graph.declareImage({io.local(image), width_, height_, VK_FORMAT_R32_SFLOAT});
         debug.write(io.local(image), graph::Usage::Storage);
     }
-    debug.execute([this, io, map, mssm](graph::PassContext& pass) { recordDebugViews(pass, io, map, mssm); });
+    debug.execute(
+        [this, io, map, mssm, packets](graph::PassContext& pass) { recordDebugViews(pass, io, map, mssm, packets); });
 }
 
 constexpr gpu::MemoryAccess kComputeWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
@@ -434,12 +497,31 @@ void BackprojectionShadow::bindVisibility(const graph::PassContext& pass, gpu::D
         .sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map))
         .storageImage("mssmImage", pass.image(mssm))
         .storageBuffer("BackprojectionLight", lightBuffer_);
-    const VisibilityPush push{atlasSize(), levels_, settings_.maxKernel};
+    const VisibilityPush push{atlasSize(), levels_, settings_.maxKernel, settings_.edgeCost, settings_.visibilityCost,
+                              settings_.divergenceThreshold};
     pipeline.pushConstants(pass.cmd(), &push, sizeof(push));
 }
 
+void BackprojectionShadow::recordPackets(const graph::PassContext& pass, const plugin::LightPassIo& io,
+                                         const std::string& map, const std::string& mssm,
+                                         const std::string& packets) const
+{
+    const VkCommandBuffer cmd = pass.cmd();
+    packets_->bind(cmd);
+    gpu::DescriptorPush descriptors;
+    plugin::bindGBuffer(pass, io.gbuffer, descriptors);
+    descriptors.storageImage("packetsOut", pass.image(packets));
+    bindVisibility(pass, descriptors, map, mssm, *packets_);
+    descriptors.push(context_, cmd, *packets_);
+    const auto packetsOver = [this](uint32_t pixels) {
+        return (pixels + uint32_t(settings_.packet) - 1) / uint32_t(settings_.packet);
+    };
+    packets_->dispatchOver(cmd, packetsOver(width_), packetsOver(height_));
+}
+
 void BackprojectionShadow::recordDebugViews(const graph::PassContext& pass, const plugin::LightPassIo& io,
-                                            const std::string& map, const std::string& mssm)
+                                            const std::string& map, const std::string& mssm,
+                                            const std::string& packets)
 {
     if (!debugViews_) debugViews_.emplace(context_, shaders_, debugViewsDesc_);
     const VkCommandBuffer cmd = pass.cmd();
@@ -447,7 +529,9 @@ void BackprojectionShadow::recordDebugViews(const graph::PassContext& pass, cons
     gpu::DescriptorPush descriptors;
     plugin::bindGBuffer(pass, io.gbuffer, descriptors);
     descriptors.storageImage("kernelOut", pass.image(io.local("kernel")))
-        .storageImage("visitedOut", pass.image(io.local("visited")));
+        .storageImage("visitedOut", pass.image(io.local("visited")))
+        .storageImage("coherenceOut", pass.image(io.local("coherence")));
+    if (!packets.empty()) descriptors.storageImage("packetsIn", pass.image(packets));
     bindVisibility(pass, descriptors, map, mssm, *debugViews_);
     descriptors.push(context_, cmd, *debugViews_);
     debugViews_->dispatchOver(cmd, pass.image(io.local("kernel")));

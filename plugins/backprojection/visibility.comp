@@ -1,7 +1,7 @@
 #version 460
 // Soft shadows by back-projection of the occluders' contour (Guennebaud, Barthe, Paulin
 // 2007, "[GBP07]" in Yang, Feng, Guennebaud, Liu 2009), for one light, per G-buffer
-// pixel (README.md next to this file):
+// pixel (README.md next to this file; contour.glsl does the work):
 //   1. the kernel: the region of the map where an occluder can hide part of the light
 //      from the receiver (eq. 1, as the light's corners project through the receiver),
 //      first down to the map's near plane, then refined twice down to the nearest
@@ -16,387 +16,42 @@
 //   3. the integration: each edge back-projected from the receiver onto the light's
 //      plane, clipped to the light, and its hidden area integrated radially around the
 //      light's centre (light_area.glsl). V = 1 - occluded area / light area.
+// With PACKET > 1 the packet pass (packets.comp) ran first and left each pixel's V, or
+// -1 where the pixel walks its own kernel here (Algorithm 1's step 8).
 // Light size 0 takes the hard shadow's one nearest compare.
-#define GBUFFER_BINDING 6  // gDepth, gNormal, GBufferCamera: plugin::bindGBuffer
-#include "common/gbuffer.glsl"
-#include "common/visibility.glsl"
-
-#ifndef TRAVERSAL
-#define TRAVERSAL 1
-#endif
 #ifndef DEBUG_IMAGES
 #define DEBUG_IMAGES 0
 #endif
-// The levels the plugin builds at most (backprojection.cpp kMaxLevels): the stack holds
-// three siblings per level and the node being visited.
-#define MAX_LEVELS 14
+#ifndef PACKET
+#define PACKET 1
+#endif
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(binding = 1) uniform sampler2DShadow shadowCompare;
+#include "contour.glsl"
+
 #if !DEBUG_IMAGES
 layout(binding = 2, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
 #define OUTPUT_SIZE imageSize(visibilityOut)
 #endif
-layout(binding = 5) uniform sampler2D shadowDepth;  // the same map, raw depths
 
-#define SHADOW_MAP_BINDING 3
-#define SHADOW_RECEIVER_BIAS 2
-#include "common/shadow_receiver.glsl"
-
-#define MSSM_BINDING 4
-#define MSSM_QUALIFIER readonly
-#include "mssm.glsl"
-#include "light_area.glsl"
-
-// A face's texels back to the world: the point of face uv `uv` at distance `dist` along
-// the face's axis is base0 + u baseU + v baseV + dist (dir0 + u dirU + v dirV)
-// (perspective: base is the light's centre; orthographic: dir is the axis). Set up in
-// double precision from the face's view-projection (backprojection.cpp).
-struct FaceFrame {
-    vec4 base0, baseU, baseV, dir0, dirU, dirV;
-};
-
-layout(std430, binding = 9) readonly buffer BackprojectionLight {
-    vec4 centre;     // xyz: the light's centre (lights at a position)
-    vec4 normal;     // xyz: unit normal of the light's plane, towards the scene; directional: unit towards the light
-    vec4 tangent;    // xyz: the plane's first axis (rect: its width axis)
-    vec4 bitangent;  // xyz: normal x tangent
-    // x, y: half width and half height of a rectangle; x: radius of a disk (directional:
-    // tan of the angular radius, on the plane one unit towards the light); z: 1 for a
-    // disk; w: a point light's sphere radius (the disk is then the sphere's outline as
-    // the receiver sees it, on the plane through its centre facing the receiver).
-    vec4 extent;
-    FaceFrame faces[6];
-} bp;
-
-layout(push_constant) uniform Push {
-    ivec2 atlasSize;
-    int levels;      // of the MSSM: 2^(levels - 1) >= maxKernel
-    int maxKernel;   // the kernel cap: cells per side
-} pc;
+#if PACKET > 1
+// packets.comp's result per pixel: (V or -1, class, samples and nodes read, kernel side).
+layout(binding = 12, rgba32f) uniform readonly image2D packetsIn;
+#endif
 
 // With DEBUG_IMAGES (the debug_views pass, which the graph runs only when one of its
 // images is requested: backprojection.cpp) the same work writes, instead of V, each
-// pixel's kernel side in texels (kernelOut) and the depth-map samples and MSSM nodes it
-// read (visitedOut; the paper's Fig. 5 and 8), 0 without geometry.
+// pixel's kernel side in texels (kernelOut), the depth-map samples and MSSM nodes it
+// read (visitedOut; the paper's Fig. 5 and 8; a coherent packet's walk shared among the
+// pixels that walked it) and how its V was found (coherenceOut: contour.glsl's classes),
+// 0 without geometry.
 #if DEBUG_IMAGES
 layout(binding = 10, r32f) uniform writeonly image2D kernelOut;
 layout(binding = 11, r32f) uniform writeonly image2D visitedOut;
+layout(binding = 13, r32f) uniform writeonly image2D coherenceOut;
 #define OUTPUT_SIZE imageSize(kernelOut)
 #endif
-
-struct LightPlane {
-    vec3 centre, normal, t1, t2;
-    vec2 halfSize;  // rectangle: half sizes; disk: (radius, radius)
-    bool disk;
-    float area;
-};
-
-LightPlane lightPlaneFor(vec3 p)
-{
-    LightPlane l;
-    l.centre = bp.centre.xyz;
-    l.normal = bp.normal.xyz;
-    l.t1 = bp.tangent.xyz;
-    l.t2 = bp.bitangent.xyz;
-    vec4 extent = bp.extent;
-    l.disk = extent.z != 0.0;
-    l.halfSize = l.disk ? extent.xx : extent.xy;
-#if SHADOW_LIGHT_TYPE == 2
-    // A sphere of radius R at distance d: its outline is the circle where the cone of
-    // half-angle asin(R / d) from p meets the plane through the centre facing p, radius
-    // R d / sqrt(d^2 - R^2). Inside the sphere: radius 0, so the hard compare.
-    vec3 d = p - l.centre;
-    float dist = length(d);
-    float radius = extent.w;
-    l.normal = dist > 0.0 ? d / dist : vec3(0.0, 1.0, 0.0);
-    l.t1 = normalize(cross(l.normal, abs(l.normal.y) < 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
-    l.t2 = cross(l.normal, l.t1);
-    float outline = dist > radius ? radius * dist / sqrt(dist * dist - radius * radius) : 0.0;
-    l.halfSize = vec2(outline);
-#endif
-    l.area = l.disk ? 3.14159265358979 * l.halfSize.x * l.halfSize.x : 4.0 * l.halfSize.x * l.halfSize.y;
-    return l;
-}
-
-// A point far outside the light in the direction q of the plane (for a contour point
-// whose ray from the receiver never meets the light's plane).
-vec2 farOutside(vec2 q, LightPlane l)
-{
-    float len = length(q);
-    float far = 1e4 * max(max(l.halfSize.x, l.halfSize.y), 1e-30);
-    return len > 0.0 ? q * (far / len) : vec2(far, 0.0);
-}
-
-// The light-plane coordinates of the ray from the receiver p through the contour point e.
-vec2 backproject(LightPlane l, vec3 p, vec3 e)
-{
-    vec3 d = e - p;
-    vec2 across = vec2(dot(d, l.t1), dot(d, l.t2));
-#if SHADOW_LIGHT_TYPE == 0
-    // Directional: the plane one unit towards the light (gnomonic projection of the
-    // directions; the sun's disk of angular radius rho is a disk of radius tan(rho)).
-    float along = dot(d, l.normal);
-    return along > 0.0 ? across / along : farOutside(across, l);
-#else
-    float towards = dot(d, l.normal);        // < 0: towards the light's side
-    float gap = dot(l.centre - p, l.normal);  // < 0: p is on the lit side of the plane
-    vec3 x = p + d * (gap / (towards < 0.0 ? towards : -1.0)) - l.centre;
-    return towards < 0.0 && gap < 0.0 ? vec2(dot(x, l.t1), dot(x, l.t2)) : farOutside(across, l);
-#endif
-}
-
-vec3 unprojectFace(uint face, vec2 uv, float ndc, vec4 range)
-{
-    FaceFrame f = bp.faces[face];
-    float dist = shadowDistanceInRange(range, ndc);
-    return f.base0.xyz + uv.x * f.baseU.xyz + uv.y * f.baseV.xyz +
-           dist * (f.dir0.xyz + uv.x * f.dirU.xyz + uv.y * f.dirV.xyz);
-}
-
-// Distance along the face's axis (linear in x: clip w, or the orthographic depth).
-float axisDistance(uint face, vec3 x, vec4 range)
-{
-    vec4 clip = shadowMapData.faces[face].viewProj * vec4(x, 1.0);
-#if SHADOW_LIGHT_TYPE == 0
-    return mix(range.y, range.x, clip.z);
-#else
-    return clip.w;
-#endif
-}
-
-// Everything one receiver needs while it walks its kernel.
-struct Walk {
-    ShadowReceiver r;
-    vec3 p;
-    LightPlane light;
-    vec4 range;      // the face's depthRange
-    ivec2 origin;    // the face's first texel in the atlas
-    int faceTexels;
-    float sum;       // of the edges' signed hidden areas (light_area.glsl)
-    int fetches;     // depth-map and MSSM reads (the debug image)
-};
-
-float sampleDepth(inout Walk w, ivec2 s)
-{
-    return texelFetch(shadowDepth, w.origin + s, 0).r;
-}
-
-vec2 sampleUv(Walk w, ivec2 s)
-{
-    return (vec2(s) + 0.5) / float(w.faceTexels);
-}
-
-// An occluder: nearer the light than the receiver's plane at the sample (the exact
-// negation of the compare sampler's "lit").
-bool occludes(Walk w, float depth, vec2 uv)
-{
-    return depth > shadowReferenceDepth(w.r, uv);
-}
-
-// The reference depths (least, largest) over the samples [a, b] of the face: the
-// receiver's plane is linear, and the margin's max() keeps the order.
-vec2 referenceRange(Walk w, ivec2 a, ivec2 b)
-{
-    vec2 ua = sampleUv(w, a), ub = sampleUv(w, b);
-    float r00 = shadowReferenceDepth(w.r, ua), r11 = shadowReferenceDepth(w.r, ub);
-    float r10 = shadowReferenceDepth(w.r, vec2(ub.x, ua.y)), r01 = shadowReferenceDepth(w.r, vec2(ua.x, ub.y));
-    return vec2(min(min(r00, r11), min(r10, r01)), max(max(r00, r11), max(r10, r01)));
-}
-
-// The 2 x 2 samples of dual cell `cell` in counter-clockwise order (00, 10, 11, 01),
-// clamped into the face.
-void cellSamples(inout Walk w, ivec2 cell, out ivec2 s[4], out float depth[4], out bool occ[4])
-{
-    ivec2 b = min(cell + 1, ivec2(w.faceTexels - 1));
-    s = ivec2[4](cell, ivec2(b.x, cell.y), b, ivec2(cell.x, b.y));
-    for (int k = 0; k < 4; ++k) {
-        depth[k] = sampleDepth(w, s[k]);
-        occ[k] = occludes(w, depth[k], sampleUv(w, s[k]));
-    }
-    w.fetches += 4;
-}
-
-// Marching squares on one dual cell: each edge runs from the midpoint of a side where
-// the boundary leaves the occluders (counter-clockwise) to the next side where it
-// enters them, with the occluders on its left; a saddle keeps its two occluders joined
-// (the free corners are cut off), as centreOccluded() does. An endpoint takes the depth
-// of its side's occluding sample; it is back-projected and its hidden area added.
-void processCell(inout Walk w, ivec2 cell)
-{
-    ivec2 s[4];
-    float depth[4];
-    bool occ[4];
-    cellSamples(w, cell, s, depth, occ);
-    for (int side = 0; side < 4; ++side) {
-        if (!occ[side] || occ[(side + 1) % 4]) continue;
-        int next = side + 1;
-        while (!occ[(next + 1) % 4]) ++next;  // ends: occ[side] is true
-        int a0 = side, a1 = (side + 1) % 4, b0 = next % 4, b1 = (next + 1) % 4;
-        vec2 ua = 0.5 * (sampleUv(w, s[a0]) + sampleUv(w, s[a1]));
-        vec2 ub = 0.5 * (sampleUv(w, s[b0]) + sampleUv(w, s[b1]));
-        vec3 ea = unprojectFace(w.r.face, ua, depth[a0], w.range);
-        vec3 eb = unprojectFace(w.r.face, ub, depth[b1], w.range);
-        w.sum += edgeBeyond(backproject(w.light, w.p, ea), backproject(w.light, w.p, eb), w.light.halfSize, w.light.disk);
-    }
-}
-
-// Is the light's centre hidden: the receiver's own point in the map inside the contour
-// (the hard shadow, with the contour's geometry rather than the nearest sample's).
-bool centreOccluded(inout Walk w)
-{
-    vec2 t = w.r.uv * float(w.faceTexels) - 0.5;
-    ivec2 cell = clamp(ivec2(floor(t)), ivec2(0), ivec2(w.faceTexels - 1));
-    vec2 f = clamp(t - vec2(cell), 0.0, 1.0);
-    ivec2 s[4];
-    float depth[4];
-    bool occ[4];
-    cellSamples(w, cell, s, depth, occ);
-    // The quadrant's corner k and its neighbours; corner k sits at (kx, ky).
-    bool right = f.x >= 0.5, up = f.y >= 0.5;
-    int k = up ? (right ? 2 : 3) : (right ? 1 : 0);
-    vec2 corner = vec2(right ? 1.0 : 0.0, up ? 1.0 : 0.0);
-    bool beyondDiagonal = abs(f.x - corner.x) + abs(f.y - corner.y) >= 0.5;
-    bool a = occ[(k + 3) % 4], b = occ[(k + 1) % 4], o = occ[(k + 2) % 4];
-    return occ[k] ? (a || b || o || !beyondDiagonal) : (a && b && beyondDiagonal);
-}
-
-// The kernel (cells, inclusive, clamped into the face and to the cap) for occluders at
-// distance z along the face's axis or farther: the bounding box of the receiver's own
-// map position and of the light's corners as seen from the receiver at that depth
-// (a disk's bounding square). A corner the projection cannot place (behind the light)
-// makes it the cap.
-ivec4 kernelAt(inout Walk w, float z, float wp, ivec2 centreCell, int cap)
-{
-    vec2 lo = w.r.uv, hi = w.r.uv;
-    bool bounded = true;
-    for (int k = 0; k < 4; ++k) {
-        vec2 o = vec2((k & 1) != 0 ? 1.0 : -1.0, (k & 2) != 0 ? 1.0 : -1.0) * w.light.halfSize;
-#if SHADOW_LIGHT_TYPE == 0
-        vec3 x = w.p + max(wp - z, 0.0) * (w.light.normal + o.x * w.light.t1 + o.y * w.light.t2);
-#else
-        vec3 l = w.light.centre + o.x * w.light.t1 + o.y * w.light.t2;
-        float wl = axisDistance(w.r.face, l, w.range);
-        float t = wp - wl > 0.0 ? clamp((wp - z) / (wp - wl), 0.0, 1.0) : 1.0;
-        vec3 x = w.p + t * (l - w.p);
-#endif
-        vec3 uvDepth;
-        float clipW;
-        bounded = bounded && shadowProject(w.r.face, x, uvDepth, clipW);
-        lo = min(lo, uvDepth.xy);
-        hi = max(hi, uvDepth.xy);
-    }
-    float n = float(w.faceTexels);
-    // Clamped before the conversion to int (no overflow, no NaN: constant first).
-    vec2 loT = clamp(lo * n - 0.5, -2.0, n + 1.0), hiT = clamp(hi * n - 0.5, -2.0, n + 1.0);
-    ivec2 a = ivec2(floor(loT)) - 1, b = ivec2(floor(hiT)) + 1;
-    int below = cap / 2, above = cap - 1 - cap / 2;
-    a = bounded ? max(a, centreCell - below) : centreCell - below;
-    b = bounded ? min(b, centreCell + above) : centreCell + above;
-    return ivec4(clamp(a, ivec2(0), ivec2(w.faceTexels - 1)), clamp(b, ivec2(0), ivec2(w.faceTexels - 1)));
-}
-
-vec2 kernelRange(inout Walk w, ivec4 k)
-{
-    w.fetches += 4;
-    return mssmRange(pc.atlasSize, pc.levels, w.origin + k.xy, w.origin + k.zw);
-}
-
-void walkKernel(inout Walk w, ivec4 k, int levels)
-{
-#if TRAVERSAL == 0
-    for (int y = k.y; y <= k.w; ++y)
-        for (int x = k.x; x <= k.z; ++x) processCell(w, ivec2(x, y));
-#else
-    ivec2 extent = k.zw - k.xy + 1;
-    int top = max(extent.x, extent.y);
-    int start = min(top > 1 ? findMSB(top - 1) + 1 : 0, levels - 1);  // 2^start >= the kernel's side
-    ivec3 stack[3 * MAX_LEVELS + 1];
-    int size = 0;
-    stack[size++] = ivec3(k.xy, start);
-    ivec2 atlasSize = pc.atlasSize;
-    while (size > 0) {
-        ivec3 node = stack[--size];
-        if (any(greaterThan(node.xy, k.zw))) continue;  // beyond the kernel
-        int level = node.z;
-        ivec2 last = min(node.xy + (1 << level) - 1, k.zw);
-        vec2 depths = mssmNode(atlasSize, level, w.origin + node.xy);
-        ++w.fetches;
-        vec2 reference = referenceRange(w, node.xy, min(last + 1, ivec2(w.faceTexels - 1)));
-        // Fig. 6 cases 4 and 5: every sample behind the receiver, or every one in front.
-        if (depths.y <= reference.x || depths.x > reference.y) continue;
-        if (level == 0) {
-            processCell(w, node.xy);
-            continue;
-        }
-        int h = 1 << (level - 1);
-        stack[size++] = ivec3(node.xy + ivec2(h, h), level - 1);
-        stack[size++] = ivec3(node.xy + ivec2(0, h), level - 1);
-        stack[size++] = ivec3(node.xy + ivec2(h, 0), level - 1);
-        stack[size++] = ivec3(node.xy, level - 1);
-    }
-#endif
-}
-
-// The refinements of the kernel after the first (SS07's iteration: each finds the
-// nearest occluder in the last kernel, which can only shrink it).
-const int kKernelRefinements = 2;
-
-// `light`: lightPlaneFor(p), which main() has already built to know whether the light
-// has a size.
-float backprojectionVisibility(ShadowReceiver r, vec3 p, LightPlane light, out float kernelTexels, out int fetches)
-{
-    Walk w;
-    w.r = r;
-    w.p = p;
-    w.light = light;
-    w.range = shadowMapData.faces[r.face].depthRange;
-    w.faceTexels = int(shadowFaceTexels());
-    w.origin = ivec2(int(r.face % 3u), int(r.face / 3u)) * w.faceTexels;
-    w.sum = 0.0;
-    w.fetches = 0;
-    int levels = pc.levels;
-    int cap = max(pc.maxKernel, 1);
-
-    float wp = axisDistance(r.face, p, w.range);
-    ivec2 centreCell = clamp(ivec2(floor(r.uv * float(w.faceTexels) - 0.5)), ivec2(0), ivec2(w.faceTexels - 1));
-    ivec4 k = kernelAt(w, w.range.x, wp, centreCell, cap);
-    vec2 depths = kernelRange(w, k);
-    for (int i = 0; i < kKernelRefinements; ++i) {
-        // The nearest sample of the kernel (largest NDC depth) bounds the occluders.
-        float nearest = shadowDistanceInRange(w.range, depths.y);
-        k = kernelAt(w, max(nearest, w.range.x), wp, centreCell, cap);
-        depths = kernelRange(w, k);
-    }
-    kernelTexels = float(max(k.z - k.x, k.w - k.y) + 1);
-    // Step 5: nothing nearer than the receiver anywhere in the kernel is lit, everything
-    // nearer is umbra (no contour: the centre's status, which is then occluded).
-    vec2 reference = referenceRange(w, k.xy, min(k.zw + 1, ivec2(w.faceTexels - 1)));
-    bool lit = depths.y <= reference.x;
-    bool umbra = depths.x > reference.y;
-    float v = 1.0;
-    if (!lit && !umbra && w.light.area > 0.0) {
-        bool centre = centreOccluded(w);
-        walkKernel(w, k, levels);
-        // The map's (u, v) turn the same way as the light's (t1, t2) as the receiver
-        // projects one onto the other where the patch and the plane face the receiver
-        // alike (both normals against the ray towards the light, or both along it).
-        FaceFrame f = bp.faces[r.face];
-        vec3 mapNormal = cross(f.baseU.xyz + f.dirU.xyz, f.baseV.xyz + f.dirV.xyz);
-#if SHADOW_LIGHT_TYPE == 0
-        vec3 towards = w.light.normal;
-#else
-        vec3 towards = w.light.centre - p;
-#endif
-        float orientation = sign(dot(mapNormal, towards)) * sign(dot(cross(w.light.t1, w.light.t2), towards));
-        float occluded = (centre ? w.light.area : 0.0) - orientation * w.sum;
-        v = 1.0 - occluded / w.light.area;
-    }
-    v = umbra ? 0.0 : v;
-    fetches = w.fetches;
-    return v;
-}
 
 void main()
 {
@@ -413,7 +68,25 @@ void main()
     float soft = 1.0;
     LightPlane light = lightPlaneFor(position.xyz);
     bool hasSize = light.area > 0.0 && shadowMapData.faces[r.face].texel.x > 0.0;
-    if (inMap && position.w != 0.0 && hasSize) soft = backprojectionVisibility(r, position.xyz, light, kernelTexels, fetches);
+    bool soften = inMap && position.w != 0.0 && hasSize;
+    int coherence = soften ? kClassPerPixel : kClassNone;
+#if PACKET > 1
+    vec4 packet = imageLoad(packetsIn, pixel);
+    bool done = packet.x >= 0.0;
+    coherence = soften ? int(packet.y) : coherence;
+    soft = done ? packet.x : soft;
+    fetches = done ? int(packet.z) : fetches;
+    kernelTexels = done ? packet.w : kernelTexels;
+#else
+    const bool done = false;
+#endif
+    if (soften && !done) {
+        bool walked;
+        soft = backprojectionVisibility(r, position.xyz, light, kernelTexels, fetches, walked);
+#if PACKET == 1
+        coherence = walked ? kClassPerPixel : kClassDecided;
+#endif
+    }
     // A light of size 0 casts a hard shadow: exactly hard's one nearest compare.
     float hard = shadowCompareTap(shadowCompare, r, vec2(0.0));
     float v = hasSize ? soft : hard;
@@ -423,6 +96,7 @@ void main()
     bool seen = position.w != 0.0;
     if (inImage) imageStore(kernelOut, pixel, vec4(seen ? kernelTexels : 0.0));
     if (inImage) imageStore(visitedOut, pixel, vec4(seen ? float(fetches) : 0.0));
+    if (inImage) imageStore(coherenceOut, pixel, vec4(float(coherence)));
 #else
     if (inImage) imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
 #endif
