@@ -46,6 +46,10 @@ constexpr const char* kTraversalNames[] = {"flat", "hierarchical"};
 // Parameter `packet`: PACKET, the packet's side in pixels (§4.1), in choice order.
 constexpr const char* kPacketNames[] = {"1x1", "2x2", "3x3", "4x4"};
 
+// Parameter `coherence`: packets.comp's pc.classify.
+enum class Coherence : uint32_t { Model, Always };
+constexpr const char* kCoherenceNames[] = {"model", "always"};
+
 // The debug images the debug_views pass writes (visibility.comp DEBUG_IMAGES), each
 // io.local(name): requested by name, else the pass is culled and costs nothing.
 constexpr const char* kDebugImages[] = {"kernel", "visited", "coherence"};
@@ -63,6 +67,10 @@ constexpr int kMaxLevels = 14;
 // a kernel that is not a power of two), so on a CPU device the cap keeps the worst case
 // well inside it: 181² blocks flat, 4/3 of that hierarchical (43,700).
 constexpr int kCpuMaxKernel = 181;
+// The loop iterations packets.comp lets a packet's walk run on a CPU device (the rest of
+// the 65,535 for the pass's own loops); elsewhere no limit.
+constexpr int32_t kCpuPacketLoopBudget = 60000;
+constexpr int32_t kUnlimitedLoops = 1 << 30;
 
 // Q_e and Q_v of eq. 6 (Q_n = 1): README, "Packets", gives the sweep.
 constexpr double kDefaultEdgeCost = 1.0;
@@ -86,6 +94,11 @@ const plugin::ParamSpec kParams[] = {
      "pixels that share one kernel walk (Yang et al. 2009, 4.1): 1x1 is per pixel; a packet that the cost model or "
      "a diverging contour (the null status) rules out walks per pixel, so every size gives the same image",
      kPacketNames, uint32_t(std::size(kPacketNames))},
+    {"coherence", ParamType::Enum, double(Coherence::Model), 0, 0, "",
+     "model: a packet walks as one where eq. 5 and eq. 6 (divergence_threshold, edge_cost, visibility_cost) expect "
+     "it to pay; always: every packet does (only a null status met in the walk, and on a CPU device its loop budget, "
+     "send its pixels to their own walks)",
+     kCoherenceNames, uint32_t(std::size(kCoherenceNames))},
     {"edge_cost", ParamType::Float, kDefaultEdgeCost, 0, 1e6, "Q_n",
      "Q_e of eq. 6: extracting an edge, in units of visiting a node (Q_n = 1); with visibility_cost it prices a "
      "packet walk against its pixels' own (README, \"Packets\": the sweep that chose the default)"},
@@ -105,6 +118,7 @@ struct Settings {
     float lightSizeOverride = -1.0f;
     Traversal traversal = Traversal::Hierarchical;
     int packet = 1;  // pixels per side
+    Coherence coherence = Coherence::Model;
     float edgeCost = float(kDefaultEdgeCost);
     float visibilityCost = float(kDefaultVisibilityCost);
     float divergenceThreshold = float(kDefaultDivergenceThreshold);
@@ -119,6 +133,7 @@ Settings readSettings(const plugin::ParamValues& params)
     s.lightSizeOverride = plugin::lightSizeOverride(params, "backprojection");
     s.traversal = Traversal(params.getEnumIndex("traversal"));
     s.packet = int(params.getEnumIndex("packet")) + 1;
+    s.coherence = Coherence(params.getEnumIndex("coherence"));
     s.edgeCost = params.getFloat("edge_cost");
     s.visibilityCost = params.getFloat("visibility_cost");
     s.divergenceThreshold = params.getFloat("divergence_threshold");
@@ -161,6 +176,8 @@ struct VisibilityPush {
     float edgeCost = 0.0f;
     float visibilityCost = 0.0f;
     float divergenceThreshold = 0.0f;
+    int32_t loopBudget = 0;
+    int32_t classify = 1;
 };
 
 struct MssmPush {
@@ -308,6 +325,7 @@ private:
     gpu::Context& context_;
     const Settings settings_;
     const int levels_;
+    int32_t loopBudget_ = kUnlimitedLoops;  // packets.comp's
     render::ShadowMap shadowMap_;
     gpu::Pipeline mssm_;        // levels 1 and up
     gpu::Pipeline mssmLevel0_;  // level 0, from the depth map
@@ -349,6 +367,7 @@ BackprojectionShadow::BackprojectionShadow(const plugin::TechniqueSetup& setup)
                                       settings_.maxKernel, settings_.resolution, kCpuMaxKernel));
     }
     checkDevice();
+    if (context_.deviceInfo().type == "cpu") loopBudget_ = kCpuPacketLoopBudget;
     const std::string name = fmt::format("light{}.backprojection.", setup.lightIndex);
 
     gpu::ComputePipelineDesc c;
@@ -498,7 +517,8 @@ void BackprojectionShadow::bindVisibility(const graph::PassContext& pass, gpu::D
         .storageImage("mssmImage", pass.image(mssm))
         .storageBuffer("BackprojectionLight", lightBuffer_);
     const VisibilityPush push{atlasSize(), levels_, settings_.maxKernel, settings_.edgeCost, settings_.visibilityCost,
-                              settings_.divergenceThreshold};
+                              settings_.divergenceThreshold, loopBudget_,
+                              settings_.coherence == Coherence::Model ? 1 : 0};
     pipeline.pushConstants(pass.cmd(), &push, sizeof(push));
 }
 

@@ -5,6 +5,10 @@
 // The including shader defines TRAVERSAL (0 flat, 1 hierarchical) and its outputs.
 #ifndef PENUMBRA_BACKPROJECTION_CONTOUR_GLSL
 #define PENUMBRA_BACKPROJECTION_CONTOUR_GLSL
+// llvmpipe stops an invocation's loops after 65,535 iterations in all (every loop's
+// iterations count: backprojection.cpp kCpuMaxKernel), so every loop with a constant
+// trip count is [[unroll]]ed: only the kernel walk iterates.
+#extension GL_EXT_control_flow_attributes : require
 #define GBUFFER_BINDING 6  // gDepth, gNormal, GBufferCamera: plugin::bindGBuffer
 #include "common/gbuffer.glsl"
 #include "common/visibility.glsl"
@@ -71,6 +75,8 @@ layout(push_constant) uniform Push {
     float edgeCost;        // packets.comp: Q_e of eq. 6 (Q_n = 1)
     float visibilityCost;  // packets.comp: Q_v of eq. 6
     float divergenceThreshold;  // packets.comp: T_d of eq. 5
+    int loopBudget;             // packets.comp: loop iterations a packet's walk may run
+    int classify;               // packets.comp: 1 eq. 5 and 6 decide, 0 every packet walks as one
 } pc;
 
 
@@ -199,7 +205,7 @@ void cellSamples(inout Walk w, ivec2 cell, out ivec2 s[4], out float depth[4], o
 {
     ivec2 b = min(cell + 1, ivec2(w.faceTexels - 1));
     s = ivec2[4](cell, ivec2(b.x, cell.y), b, ivec2(cell.x, b.y));
-    for (int k = 0; k < 4; ++k) {
+    [[unroll]] for (int k = 0; k < 4; ++k) {
         depth[k] = sampleDepth(w, s[k]);
         occ[k] = occludes(w, depth[k], sampleUv(w, s[k]));
     }
@@ -227,7 +233,7 @@ void processCell(inout Walk w, ivec2 cell)
     float depth[4];
     bool occ[4];
     cellSamples(w, cell, s, depth, occ);
-    for (int side = 0; side < 4; ++side) {
+    [[unroll]] for (int side = 0; side < 4; ++side) {
         if (!occ[side] || occ[(side + 1) % 4]) continue;
         int next = contourExitSide(occ, side);
         int a0 = side, a1 = (side + 1) % 4, b0 = next % 4, b1 = (next + 1) % 4;
@@ -268,7 +274,7 @@ ivec4 kernelAt(inout Walk w, float z, float wp, ivec2 centreCell, int cap)
 {
     vec2 lo = w.r.uv, hi = w.r.uv;
     bool bounded = true;
-    for (int k = 0; k < 4; ++k) {
+    [[unroll]] for (int k = 0; k < 4; ++k) {
         vec2 o = vec2((k & 1) != 0 ? 1.0 : -1.0, (k & 2) != 0 ? 1.0 : -1.0) * w.light.halfSize;
 #if SHADOW_LIGHT_TYPE == 0
         vec3 x = w.p + max(wp - z, 0.0) * (w.light.normal + o.x * w.light.t1 + o.y * w.light.t2);
@@ -365,7 +371,7 @@ float receiverKernel(inout Walk w, out ivec4 k)
     ivec2 centreCell = clamp(ivec2(floor(w.r.uv * float(w.faceTexels) - 0.5)), ivec2(0), ivec2(w.faceTexels - 1));
     k = kernelAt(w, w.range.x, wp, centreCell, cap);
     vec2 depths = kernelRange(w, k);
-    for (int i = 0; i < kKernelRefinements; ++i) {
+    [[unroll]] for (int i = 0; i < kKernelRefinements; ++i) {
         // The nearest sample of the kernel (largest NDC depth) bounds the occluders.
         float nearest = shadowDistanceInRange(w.range, depths.y);
         k = kernelAt(w, max(nearest, w.range.x), wp, centreCell, cap);

@@ -15,6 +15,9 @@
 // the light's own border adds nothing (its sector and triangle areas are equal).
 #ifndef PENUMBRA_BACKPROJECTION_LIGHT_AREA_GLSL
 #define PENUMBRA_BACKPROJECTION_LIGHT_AREA_GLSL
+// Its loops are [[unroll]]ed (the including shader enables GL_EXT_control_flow_attributes):
+// llvmpipe counts every loop iteration of an invocation against one limit (contour.glsl),
+// and a packet integrates an edge for each of up to 16 receivers.
 
 float lightCross(vec2 a, vec2 b) { return a.x * b.y - a.y * b.x; }
 
@@ -26,16 +29,17 @@ bool clipToRect(inout vec2 a, inout vec2 b, vec2 h)
     float t0 = 0.0, t1 = 1.0;
     vec4 p = vec4(-d.x, d.x, -d.y, d.y);
     vec4 q = vec4(a.x + h.x, h.x - a.x, a.y + h.y, h.y - a.y);
-    for (int i = 0; i < 4; ++i) {
+    bool outside = false;
+    [[unroll]] for (int i = 0; i < 4; ++i) {
         if (p[i] == 0.0) {
-            if (q[i] < 0.0) return false;  // parallel to this side, outside it
+            outside = outside || q[i] < 0.0;  // parallel to this side, outside it
         } else {
             float t = q[i] / p[i];
             if (p[i] < 0.0) t0 = max(t0, t);
             else t1 = min(t1, t);
         }
     }
-    if (!(t0 < t1)) return false;
+    if (outside || !(t0 < t1)) return false;
     vec2 a0 = a;
     a = a0 + t0 * d;
     b = a0 + t1 * d;
@@ -78,13 +82,13 @@ float rectSectorCcw(vec2 a, vec2 b, vec2 h)
 {
     vec2 corner[4] = vec2[4](vec2(h.x, h.y), vec2(-h.x, h.y), vec2(-h.x, -h.y), vec2(h.x, -h.y));
     bool inside[4];
-    for (int k = 0; k < 4; ++k) inside[k] = lightCross(a, corner[k]) > 0.0 && lightCross(corner[k], b) > 0.0;
+    [[unroll]] for (int k = 0; k < 4; ++k) inside[k] = lightCross(a, corner[k]) > 0.0 && lightCross(corner[k], b) > 0.0;
     // At most two corners lie in a sector narrower than pi, and they are neighbours:
     // in counter-clockwise order they are k, k + 1, except that 3 comes before 0.
     vec2 previous = rectExit(a, h);
     float twice = 0.0;
     bool wraps = inside[3] && inside[0];
-    for (int i = 0; i < 4; ++i) {
+    [[unroll]] for (int i = 0; i < 4; ++i) {
         int k = wraps ? (i + 3) % 4 : i;
         if (!inside[k]) continue;
         twice += lightCross(previous, corner[k]);

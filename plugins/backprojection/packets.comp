@@ -16,10 +16,8 @@
 // stops it. A non-coherent packet's walkers get V = -1: visibility.comp walks them one
 // by one (step 8). So every packet size gives the same V.
 //
-// Every loop over the packet's pixels is unrolled: llvmpipe counts each loop iteration
-// of an invocation against its limit (backprojection.cpp kCpuMaxKernel), and constant
-// indices keep the pixels' state in registers. The walk itself iterates at most as
-// often as one pixel's walk under the cap.
+// The loops over the packet's pixels stay loops, the large ones [[dont_unroll]] (see
+// kLoopBudget).
 #extension GL_EXT_control_flow_attributes : require
 
 #ifndef PACKET
@@ -35,29 +33,56 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(binding = 12, rgba32f) uniform writeonly image2D packetsOut;
 
 
-// The packet's pixels: their walks (receiver, light, sum of edges), kernels, and whether
-// each walks the packet kernel.
-Walk gWalk[PACKET_PIXELS];
+// llvmpipe stops an invocation's loops after 65,535 iterations in all, counted per SIMD
+// group: a loop iterates as often as its busiest lane. Unrolling the loops over the
+// packet's pixels would keep them out of that count but multiplies the shader (a 3 x 3
+// packet's took over a minute to compile), so they stay loops and, on such a device
+// (pc.loopBudget: backprojection.cpp), the walk charges every iteration any lane might
+// run before it runs it: a dual cell kCellIterations whatever its own lane does (the
+// walkers' masks, statuses and edge loops, two edges each), a node 1 + PACKET_PIXELS,
+// a row 1, the setup kSetupIterations per pixel (the kernel's three MSSM ranges:
+// mssmRange's rows and fetches) and the classification. A packet that would pass the
+// budget stops; its walkers walk alone, each within the cap's bound. The constant
+// 4-iteration loops of contour.glsl and light_area.glsl are [[unroll]]ed: they count
+// nothing.
+const int kSetupIterations = 24;
+const int kCellIterations = 1 + 5 * PACKET_PIXELS;
+
+// The packet's walkers (only their entries with gWalking set mean anything): receiver,
+// position, kernel, sum of edges; the light as each sees it (one for all but a point
+// light's, whose outline faces each receiver).
+ShadowReceiver gReceiver[PACKET_PIXELS];
+vec3 gPosition[PACKET_PIXELS];
 ivec4 gKernel[PACKET_PIXELS];
+float gSum[PACKET_PIXELS];
 bool gWalking[PACKET_PIXELS];
+#if SHADOW_LIGHT_TYPE == 2
+LightPlane gLight[PACKET_PIXELS];
+#define WALKER_LIGHT(i) gLight[i]
+#else
+LightPlane gLight;
+#define WALKER_LIGHT(i) gLight
+#endif
+int gBudget;
 
 // Bit i: walker i's kernel holds cell c.
 uint walkersHolding(ivec2 c)
 {
     uint mask = 0u;
-    [[unroll]] for (int i = 0; i < PACKET_PIXELS; ++i) {
+    for (int i = 0; i < PACKET_PIXELS; ++i) {
         bool holds = all(greaterThanEqual(c, gKernel[i].xy)) && all(lessThanEqual(c, gKernel[i].zw));
         mask |= gWalking[i] && holds ? 1u << i : 0u;
     }
     return mask;
 }
 
-// The walkers' reference depths (least, largest) over the samples [a, b].
-vec2 packetReferenceRange(ivec2 a, ivec2 b)
+// The walkers' reference depths (least, largest) over the samples [a, b] of the face.
+vec2 packetReferenceRange(Walk lead, ivec2 a, ivec2 b)
 {
     vec2 range = vec2(3.4e38, -3.4e38);
-    [[unroll]] for (int i = 0; i < PACKET_PIXELS; ++i) {
-        vec2 ri = referenceRange(gWalk[i], a, b);
+    for (int i = 0; i < PACKET_PIXELS; ++i) {
+        lead.r = gReceiver[i];
+        vec2 ri = referenceRange(lead, a, b);
         range = gWalking[i] ? vec2(min(range.x, ri.x), max(range.y, ri.y)) : range;
     }
     return range;
@@ -77,68 +102,94 @@ bool processPacketCell(Walk lead, ivec2 cell, vec2 reference, inout int fetches)
     bool ignored[4];
     cellSamples(lead, cell, s, depth, ignored);
     fetches += 4;
-    bool occ[4] = bool[4](false, false, false, false);
-    bool first = true, diverged = false;
-    bool known[4];
+    bool occ[4], known[4];
     [[unroll]] for (int k = 0; k < 4; ++k) {
         known[k] = depth[k] <= reference.x || depth[k] > reference.y;
         occ[k] = depth[k] > reference.y;
     }
     if (!(known[0] && known[1] && known[2] && known[3])) {
-        [[unroll]] for (int i = 0; i < PACKET_PIXELS; ++i) {
-            if ((holding & (1u << i)) != 0u) {
-                [[unroll]] for (int k = 0; k < 4; ++k) {
-                    bool o = known[k] ? occ[k] : occludes(gWalk[i], depth[k], sampleUv(lead, s[k]));
-                    diverged = diverged || (!first && o != occ[k]);
-                    occ[k] = first ? o : occ[k];
-                }
-                first = false;
+        bool first = true, diverged = false;
+        [[dont_unroll]] for (int i = 0; i < PACKET_PIXELS; ++i) {
+            if ((holding & (1u << i)) == 0u) continue;
+            lead.r = gReceiver[i];
+            [[unroll]] for (int k = 0; k < 4; ++k) {
+                bool o = known[k] ? occ[k] : occludes(lead, depth[k], sampleUv(lead, s[k]));
+                diverged = diverged || (!first && o != occ[k]);
+                occ[k] = first ? o : occ[k];
             }
+            first = false;
         }
+        if (diverged) return false;
     }
-    if (diverged) return false;
+    // The cell's edges (at most two: a saddle's), then each walker integrates them.
+    vec3 ea[2], eb[2];
+    int edges = 0;
     [[unroll]] for (int side = 0; side < 4; ++side) {
         if (!occ[side] || occ[(side + 1) % 4]) continue;
         int next = contourExitSide(occ, side);
         int a0 = side, a1 = (side + 1) % 4, b0 = next % 4, b1 = (next + 1) % 4;
         vec2 ua = 0.5 * (sampleUv(lead, s[a0]) + sampleUv(lead, s[a1]));
         vec2 ub = 0.5 * (sampleUv(lead, s[b0]) + sampleUv(lead, s[b1]));
-        vec3 ea = unprojectFace(lead.r.face, ua, depth[a0], lead.range);
-        vec3 eb = unprojectFace(lead.r.face, ub, depth[b1], lead.range);
-        [[unroll]] for (int i = 0; i < PACKET_PIXELS; ++i) {
-            if ((holding & (1u << i)) != 0u) {
-                LightPlane l = gWalk[i].light;
-                gWalk[i].sum += edgeBeyond(backproject(l, gWalk[i].p, ea), backproject(l, gWalk[i].p, eb), l.halfSize,
-                                           l.disk);
-            }
-        }
+        vec3 a = unprojectFace(lead.r.face, ua, depth[a0], lead.range);
+        vec3 b = unprojectFace(lead.r.face, ub, depth[b1], lead.range);
+        ea[edges == 0 ? 0 : 1] = a;
+        eb[edges == 0 ? 0 : 1] = b;
+        ++edges;
+    }
+    if (edges == 0) return true;
+    [[dont_unroll]] for (int i = 0; i < PACKET_PIXELS; ++i) {
+        if ((holding & (1u << i)) == 0u) continue;
+        LightPlane l = WALKER_LIGHT(i);
+        vec3 p = gPosition[i];
+        float sum = gSum[i];
+        for (int e = 0; e < edges; ++e)
+            sum += edgeBeyond(backproject(l, p, ea[e]), backproject(l, p, eb[e]), l.halfSize, l.disk);
+        gSum[i] = sum;
     }
     return true;
 }
 
 // Walks the packet kernel k once (Algorithm 2 with TRAVERSAL 0, Algorithm 3 with 1);
-// false at a null status. `lead`: any walker's walk (face, origin, range).
-bool walkPacket(Walk lead, ivec4 k, inout int fetches)
+// false at a null status or where the loop budget runs out. `lead`: any walker's walk
+// (face, origin, range).
+bool walkPacket(Walk lead, ivec4 k, inout int fetches, out bool outOfBudget)
 {
+    outOfBudget = false;
 #if TRAVERSAL == 0
-    for (int y = k.y; y <= k.w; ++y)
-        for (int x = k.x; x <= k.z; ++x)
+    for (int y = k.y; y <= k.w; ++y) {
+        for (int x = k.x; x <= k.z; ++x) {
+            gBudget -= kCellIterations + (x == k.x ? 1 : 0);
+            outOfBudget = gBudget < 0;
+            if (outOfBudget) return false;
             if (!processPacketCell(lead, ivec2(x, y), vec2(-3.4e38, 3.4e38), fetches)) return false;
+        }
+    }
 #else
+    // A packet kernel may reach past the top level's node (up to twice its side:
+    // packetJoins): then the walk starts at the four top-level nodes from its corner.
     ivec2 extent = k.zw - k.xy + 1;
     int top = max(extent.x, extent.y);
-    int start = min(top > 1 ? findMSB(top - 1) + 1 : 0, pc.levels - 1);
-    ivec3 stack[3 * MAX_LEVELS + 1];
+    int start = top > 1 ? findMSB(top - 1) + 1 : 0;
+    ivec3 stack[3 * MAX_LEVELS + 4];
     int size = 0;
-    stack[size++] = ivec3(k.xy, start);
+    if (start >= pc.levels) {
+        int s = 1 << (pc.levels - 1);
+        stack[size++] = ivec3(k.xy + ivec2(s, s), pc.levels - 1);
+        stack[size++] = ivec3(k.xy + ivec2(0, s), pc.levels - 1);
+        stack[size++] = ivec3(k.xy + ivec2(s, 0), pc.levels - 1);
+    }
+    stack[size++] = ivec3(k.xy, min(start, pc.levels - 1));
     while (size > 0) {
         ivec3 node = stack[--size];
+        gBudget -= 1 + PACKET_PIXELS + (node.z == 0 ? kCellIterations : 0);
+        outOfBudget = gBudget < 0;
+        if (outOfBudget) return false;
         if (any(greaterThan(node.xy, k.zw))) continue;  // beyond the kernel
         int level = node.z;
         ivec2 last = min(node.xy + (1 << level) - 1, k.zw);
         vec2 depths = mssmNode(pc.atlasSize, level, lead.origin + node.xy);
         ++fetches;
-        vec2 reference = packetReferenceRange(node.xy, min(last + 1, ivec2(lead.faceTexels - 1)));
+        vec2 reference = packetReferenceRange(lead, node.xy, min(last + 1, ivec2(lead.faceTexels - 1)));
         // Fig. 6 cases 4 and 5 for every walker at once.
         if (depths.y <= reference.x || depths.x > reference.y) continue;
         if (level == 0) {
@@ -173,17 +224,18 @@ float walkCost(float w, float receivers)
 // such, is largest at a corner).
 float packetReferenceSpread(ivec2 a, ivec2 b, int faceTexels)
 {
-    float spread = 0.0;
-    [[unroll]] for (int c = 0; c < 4; ++c) {
-        vec2 uv = (vec2((c & 1) != 0 ? b.x : a.x, (c & 2) != 0 ? b.y : a.y) + 0.5) / float(faceTexels);
-        vec2 range = vec2(3.4e38, -3.4e38);
-        [[unroll]] for (int i = 0; i < PACKET_PIXELS; ++i) {
-            float ri = shadowReferenceDepth(gWalk[i].r, uv);
-            range = gWalking[i] ? vec2(min(range.x, ri), max(range.y, ri)) : range;
+    vec4 lo = vec4(3.4e38), hi = vec4(-3.4e38);
+    for (int i = 0; i < PACKET_PIXELS; ++i) {
+        if (!gWalking[i]) continue;
+        [[unroll]] for (int c = 0; c < 4; ++c) {
+            vec2 uv = (vec2((c & 1) != 0 ? b.x : a.x, (c & 2) != 0 ? b.y : a.y) + 0.5) / float(faceTexels);
+            float ri = shadowReferenceDepth(gReceiver[i], uv);
+            lo[c] = min(lo[c], ri);
+            hi[c] = max(hi[c], ri);
         }
-        spread = max(spread, range.y - range.x);
     }
-    return spread;
+    vec4 spread = hi - lo;
+    return max(max(spread.x, spread.y), max(spread.z, spread.w));
 }
 
 // §4.3: the class of a packet with kernel k (walkers only), before its walk.
@@ -198,7 +250,7 @@ int packetClass(Walk lead, ivec4 k, int walkers, inout int fetches)
     vec2 kernelDepths = mssmRange(pc.atlasSize, pc.levels, lead.origin + k.xy, lead.origin + k.zw);
     fetches += 4;
     ivec2 far = min(k.zw + 1, ivec2(lead.faceTexels - 1));
-    vec2 packetDepths = packetReferenceRange(k.xy, far);
+    vec2 packetDepths = packetReferenceRange(lead, k.xy, far);
     bool meets = packetDepths.y >= kernelDepths.x && packetDepths.x <= kernelDepths.y;
     float band = packetReferenceSpread(k.xy, far, lead.faceTexels);
     float spread = kernelDepths.y - kernelDepths.x;
@@ -210,8 +262,7 @@ int packetClass(Walk lead, ivec4 k, int walkers, inout int fetches)
     if (pDiverge > pc.divergenceThreshold) return kClassDiverging;
     // Eq. 6.
     float pixelCost = 0.0;
-    [[unroll]] for (int i = 0; i < PACKET_PIXELS; ++i)
-        pixelCost += gWalking[i] ? walkCost(kernelSide(gKernel[i]), 1.0) : 0.0;
+    for (int i = 0; i < PACKET_PIXELS; ++i) pixelCost += gWalking[i] ? walkCost(kernelSide(gKernel[i]), 1.0) : 0.0;
     return walkCost(side, float(walkers)) > pixelCost ? kClassCostly : kClassCoherent;
 }
 
@@ -221,13 +272,16 @@ void main()
     ivec2 base = ivec2(gl_GlobalInvocationID.xy) * PACKET;
     if (any(greaterThanEqual(base, size))) return;
 
+    // The setup, the classification (an MSSM range, three loops over the pixels) and
+    // the final loops over the pixels.
+    gBudget = pc.loopBudget - PACKET_PIXELS * (kSetupIterations + 6) - kSetupIterations;
     vec4 result[PACKET_PIXELS];
     bool centre[PACKET_PIXELS];
     int walkers = 0;
-    Walk lead;  // the first walker's: the packet's face
+    Walk lead;  // the first walker's: the packet's face, and the light of all but point lights
     bool oneFace = true;
     ivec4 k = ivec4(1 << 30, 1 << 30, -(1 << 30), -(1 << 30));
-    [[unroll]] for (int i = 0; i < PACKET_PIXELS; ++i) {
+    [[dont_unroll]] for (int i = 0; i < PACKET_PIXELS; ++i) {
         // A packet past the image's edge repeats its last row or column.
         ivec2 pixel = min(base + ivec2(i % PACKET, i / PACKET), size - 1);
         vec4 position = gbufferPosition(pixel);
@@ -237,44 +291,64 @@ void main()
         bool hasSize = light.area > 0.0 && shadowMapData.faces[r.face].texel.x > 0.0;
         bool soften = inMap && position.w != 0.0 && hasSize;
         // Without geometry, outside the map or without a light size: visibility.comp.
-        result[i] = vec4(-1.0, float(soften ? kClassPerPixel : kClassNone), 0.0, 0.0);
-        gWalk[i] = startWalk(r, position.xyz, light);
-        gWalking[i] = false;
-        gKernel[i] = ivec4(0);
-        centre[i] = false;
+        vec4 res = vec4(-1.0, float(soften ? kClassPerPixel : kClassNone), 0.0, 0.0);
+        Walk w = startWalk(r, position.xyz, light);
+        ivec4 kernel = ivec4(0);
+        bool walking = false, hidden = false;
         if (soften) {
-            float v = receiverKernel(gWalk[i], gKernel[i]);
-            gWalking[i] = v < 0.0;
-            result[i] = vec4(v, float(kClassDecided), float(gWalk[i].fetches), kernelSide(gKernel[i]));
-            if (gWalking[i]) {
-                centre[i] = centreOccluded(gWalk[i]);
+            float v = receiverKernel(w, kernel);
+            walking = v < 0.0;
+            if (walking) hidden = centreOccluded(w);
+            res = vec4(v, float(kClassDecided), float(w.fetches), kernelSide(kernel));
+            if (walking) {
                 oneFace = oneFace && (walkers == 0 || r.face == lead.r.face);
-                if (walkers == 0) lead = gWalk[i];
-                k = ivec4(min(k.xy, gKernel[i].xy), max(k.zw, gKernel[i].zw));
+                if (walkers == 0) lead = w;
+                k = ivec4(min(k.xy, kernel.xy), max(k.zw, kernel.zw));
                 ++walkers;
             }
         }
+        result[i] = res;
+        centre[i] = hidden;
+        gReceiver[i] = r;
+        gPosition[i] = position.xyz;
+        gKernel[i] = kernel;
+        gSum[i] = 0.0;
+        gWalking[i] = walking;
+#if SHADOW_LIGHT_TYPE == 2
+        gLight[i] = light;
+#endif
     }
 
     if (walkers > 0) {
-        // The packet kernel within the cap keeps the walk inside the loop limit; a lone
-        // walker's packet walk is its own walk.
-        bool joins = oneFace && kernelSide(k) <= float(max(pc.maxKernel, 1));
+#if SHADOW_LIGHT_TYPE != 2
+        gLight = lead.light;
+#endif
+        // A packet walks as one within a face and where its kernel is at most twice the
+        // MSSM's top node (walkPacket starts from four of them); a lone walker's packet
+        // walk is its own walk.
+        bool joins = oneFace && kernelSide(k) <= float(2 << (pc.levels - 1));
         int walkFetches = 0;
-        int kind = !joins ? kClassPerPixel : walkers == 1 ? kClassCoherent : packetClass(lead, k, walkers, walkFetches);
-        if (kind == kClassCoherent && !walkPacket(lead, k, walkFetches)) kind = kClassNullStatus;
+        bool classify = pc.classify != 0 && walkers > 1;
+        int kind = !joins ? kClassPerPixel : classify ? packetClass(lead, k, walkers, walkFetches) : kClassCoherent;
+        bool outOfBudget = false;
+        if (kind == kClassCoherent && !walkPacket(lead, k, walkFetches, outOfBudget))
+            kind = outOfBudget ? kClassPerPixel : kClassNullStatus;
         bool joined = kind == kClassCoherent;
         // The debug image: each walker's own reads and its share of the packet's.
         float share = float(walkFetches) / float(walkers);
-        [[unroll]] for (int i = 0; i < PACKET_PIXELS; ++i) {
-            if (gWalking[i]) {
-                float v = joined ? contourVisibility(gWalk[i], centre[i]) : -1.0;
-                result[i] = vec4(v, float(kind), float(gWalk[i].fetches) + (joined ? share : 0.0), result[i].w);
-            }
+        [[dont_unroll]] for (int i = 0; i < PACKET_PIXELS; ++i) {
+            if (!gWalking[i]) continue;
+            Walk w = lead;
+            w.r = gReceiver[i];
+            w.p = gPosition[i];
+            w.light = WALKER_LIGHT(i);
+            w.sum = gSum[i];
+            float v = joined ? contourVisibility(w, centre[i]) : -1.0;
+            result[i] = vec4(v, float(kind), result[i].z + (joined ? share : 0.0), result[i].w);
         }
     }
 
-    [[unroll]] for (int i = 0; i < PACKET_PIXELS; ++i) {
+    for (int i = 0; i < PACKET_PIXELS; ++i) {
         ivec2 pixel = base + ivec2(i % PACKET, i / PACKET);
         if (all(lessThan(pixel, size))) imageStore(packetsOut, pixel, result[i]);
     }

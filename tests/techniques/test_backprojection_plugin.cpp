@@ -41,13 +41,20 @@ struct BackprojectionSettings {
     int resolution = 1024;
     double maxKernelTexels = 64.0;
     std::string traversal = "hierarchical";
+    std::string packet = "1x1";
+    // Every packet walks as one unless a null status (or the loop budget) stops it:
+    // eq. 5 and eq. 6 off, so that the packet pass does the work a test checks.
+    bool joinEveryPacket = false;
 
     nlohmann::json params() const
     {
-        return {{"light_size", lightSize},
-                {"resolution", resolution},
-                {"max_kernel", maxKernelTexels / resolution},
-                {"traversal", traversal}};
+        nlohmann::json j = {{"light_size", lightSize},
+                            {"resolution", resolution},
+                            {"max_kernel", maxKernelTexels / resolution},
+                            {"traversal", traversal},
+                            {"packet", packet}};
+        if (joinEveryPacket) j["coherence"] = "always";
+        return j;
     }
     // Away from penumbrae: half the widest kernel, its margin cell and two texels.
     double bandTexels() const { return 0.5 * maxKernelTexels + 3.0; }
@@ -154,6 +161,69 @@ TEST_P(BackprojectionTraversals, FlatAndHierarchicalAgreeToRounding)
     }
     EXPECT_LE(worst, 2.0f / 65535.0f) << "largest |V_flat - V_hierarchical|";
     EXPECT_GT(penumbra, flat.size() / 200) << "the scene has penumbrae to compare";
+    RecordProperty("max_difference", fmt::format("{:.3g}", worst));
+}
+
+// Packets (§4.1): a walker of a coherent packet sums exactly the edges of its own
+// kernel's blocks (flat: in its own walk's order), and a non-coherent packet's walkers
+// walk alone, so every packet size gives the per-pixel image. 4 x 4 runs the flat walk
+// of kernels up to the cap (64 texels: 4,096 blocks) past packets.comp's loop budget on
+// a CPU device (81 iterations a block): there a miscounted loop would break V off at
+// llvmpipe's 65,535 iterations, and the packets past the budget walk per pixel.
+TEST_P(BackprojectionTraversals, PacketsGiveThePerPixelImage)
+{
+    const TraversalScene& t = GetParam();
+    const config::RenderConfig cfg = t.config();
+    BackprojectionSettings s;
+    s.lightSize = t.lightSize;
+    s.resolution = t.resolution;
+    float worst = 0.0f;
+    for (const char* traversal : {"flat", "hierarchical"}) {
+        s.traversal = traversal;
+        s.packet = "1x1";
+        s.joinEveryPacket = false;
+        const std::vector<float> perPixel = renderWith(cfg, s, t.scene(cfg));
+        s.joinEveryPacket = true;
+        std::vector<std::string> sizes = {"2x2", "3x3"};
+        if (s.traversal == "flat") sizes.push_back("4x4");
+        for (const std::string& packet : sizes) {
+            s.packet = packet;
+            config::RenderConfig packed = cfg;
+            applyBackprojection(packed.lights[0], s);
+            render(packed, t.scene(cfg), {"light0.backprojection.coherence"});
+            const std::vector<float> v = frame->checkedVisibility();
+            const std::vector<float> coherence = frame->renderer.readImage("light0.backprojection.coherence").values;
+            ASSERT_EQ(v.size(), perPixel.size());
+            float largest = 0.0f;
+            size_t joined = 0, walked = 0;
+            for (size_t i = 0; i < v.size(); ++i) {
+                largest = std::max(largest, std::abs(v[i] - perPixel[i]));
+                joined += coherence[i] == 2.0f;
+                walked += coherence[i] >= 2.0f;
+            }
+            const std::string label = fmt::format("{} {} {}", t.name, traversal, packet);
+            // Measured: 0 (the same sums; the hierarchical walks visit a walker's blocks
+            // in another order only where its kernel's corner is not the packet's).
+            EXPECT_LE(largest, 2.0f / 65535.0f) << label << ": largest |V_packet - V_per_pixel|";
+            if (packet == "4x4") {
+                EXPECT_GT(joined, 0u) << label << ": walkers in packets";
+            } else {
+                EXPECT_GT(joined, walked / 2) << label << ": most walkers walk their packet's kernel";
+            }
+            worst = std::max(worst, largest);
+            RecordProperty(fmt::format("joined_{}_{}", traversal, packet),
+                           fmt::format("{:.3f}", double(joined) / double(std::max<size_t>(walked, 1))));
+        }
+    }
+    // The paper's classification (eq. 5, eq. 6 at the defaults) changes which pixels
+    // walk alone, not V.
+    s.packet = "3x3";
+    s.joinEveryPacket = false;
+    const std::vector<float> classified = renderWith(cfg, s, t.scene(cfg));
+    s.packet = "1x1";
+    const std::vector<float> perPixel = renderWith(cfg, s, t.scene(cfg));
+    for (size_t i = 0; i < perPixel.size(); ++i) worst = std::max(worst, std::abs(classified[i] - perPixel[i]));
+    EXPECT_LE(worst, 2.0f / 65535.0f);
     RecordProperty("max_difference", fmt::format("{:.3g}", worst));
 }
 
@@ -531,6 +601,76 @@ TEST_F(BackprojectionTest, DebugViewsPassRunsOnlyWhenOneOfItsImagesIsRequested)
     EXPECT_TRUE(runs(frame->renderer.compiledGraph(), "light0.backprojection.debug_views"));
 }
 
+// The coherence image (contour.glsl's classes): per pixel, only "decided by its kernel"
+// and "walked alone"; with packets, coherent packets, and a non-coherent class only for
+// pixels whose kernel did not decide them; 0 exactly where nothing is soft.
+TEST_F(BackprojectionTest, CoherenceImageClassifiesEveryPixel)
+{
+    config::RenderConfig cfg = test::defaultTestConfig();
+    BackprojectionSettings s;
+    s.lightSize = 0.6;
+    for (const char* packet : {"1x1", "2x2"}) {
+        s.packet = packet;
+        s.joinEveryPacket = true;
+        applyBackprojection(cfg.lights[0], s);
+        render(cfg, config::buildScene(cfg.scene), {"light0.backprojection.coherence"});
+        const std::vector<float> v = frame->checkedVisibility();
+        const std::vector<float> coherence = frame->renderer.readImage("light0.backprojection.coherence").values;
+        ASSERT_EQ(coherence.size(), v.size());
+        std::map<float, size_t> classes;
+        for (size_t i = 0; i < v.size(); ++i) {
+            ++classes[coherence[i]];
+            if (!frame->hasGeometry(i)) {
+                EXPECT_EQ(coherence[i], 0.0f) << packet << " pixel " << i;
+            }
+            // A penumbra pixel was walked, alone or in its packet.
+            if (v[i] > 0.02f && v[i] < 0.98f) {
+                EXPECT_GE(coherence[i], 2.0f) << packet << " pixel " << i;
+            }
+        }
+        for (const auto& [c, n] : classes) {
+            EXPECT_TRUE(c == std::floor(c) && c >= 0.0f && c <= 6.0f) << packet << ": class " << c;
+            RecordProperty(fmt::format("class_{}_{}", packet, int(c)), std::to_string(n));
+        }
+        EXPECT_GT(classes[1.0f], 0u) << packet << ": pixels decided by their kernel";
+        if (std::string(packet) == "1x1") {
+            EXPECT_GT(classes[6.0f], 0u) << "pixels that walk alone";
+            EXPECT_EQ(classes[2.0f] + classes[3.0f] + classes[4.0f] + classes[5.0f], 0u) << "no packets";
+        } else {
+            EXPECT_GT(classes[2.0f], classes[5.0f]) << "most walkers in coherent packets";
+        }
+    }
+}
+
+// Eq. 5 and eq. 6 decide: a huge Q_v prices a packet of walkers with different kernels
+// above their own walks (only its once-per-packet terms are cheaper), T_d = 0 calls a
+// packet diverging wherever a sample might be null; T_d = 1 never.
+TEST_F(BackprojectionTest, CostModelAndDivergenceSendPacketsToPerPixelWalks)
+{
+    config::RenderConfig cfg = test::defaultTestConfig();
+    BackprojectionSettings s;
+    s.lightSize = 0.6;
+    s.packet = "2x2";
+    const auto classes = [&](double threshold, double visibilityCost) {
+        nlohmann::json params = s.params();
+        params["divergence_threshold"] = threshold;
+        params["visibility_cost"] = visibilityCost;
+        test::setShadow(cfg.lights[0], "backprojection", params);
+        render(cfg, config::buildScene(cfg.scene), {"light0.backprojection.coherence"});
+        std::map<int, size_t> counts;
+        for (float c : frame->renderer.readImage("light0.backprojection.coherence").values) ++counts[int(c)];
+        return counts;
+    };
+    std::map<int, size_t> costly = classes(1.0, 1e6);
+    EXPECT_GT(costly[4], costly[2] / 4) << "eq. 6 rules packets out";
+    EXPECT_EQ(costly[3], 0u) << "T_d = 1: eq. 5 rules nothing out";
+    std::map<int, size_t> diverging = classes(0.0, 0.0);
+    EXPECT_GT(diverging[3], diverging[4] + diverging[5]) << "eq. 5 rules packets out first";
+    // A packet with one walker walks its own kernel: coherent under any model.
+    EXPECT_GT(costly[2], 0u);
+    EXPECT_GT(diverging[2], 0u);
+}
+
 // ---------------------------------------------------------------------------------
 // Parameters.
 
@@ -542,6 +682,11 @@ TEST(BackprojectionPluginEntry, ReflectsEveryParameterWithItsDefault)
     EXPECT_EQ(params.getEnum("traversal"), "hierarchical");
     EXPECT_FLOAT_EQ(params.getFloat("max_kernel"), 0.0625f);
     EXPECT_FLOAT_EQ(params.getFloat("light_size"), -1.0f);
+    EXPECT_EQ(params.getEnum("packet"), "1x1");
+    EXPECT_EQ(params.getEnum("coherence"), "model");
+    EXPECT_FLOAT_EQ(params.getFloat("divergence_threshold"), 0.8f);
+    EXPECT_GE(params.getFloat("edge_cost"), 0.0f);
+    EXPECT_GE(params.getFloat("visibility_cost"), 0.0f);
     for (const plugin::ParamSpec& spec : params.specs()) EXPECT_NE(std::string(spec.doc), "") << spec.name;
 }
 
@@ -550,5 +695,10 @@ TEST(BackprojectionPluginEntry, OutOfRangeValuesNameTheParameter)
     test::expectRefusalsNameTheParameter("backprojection", {{"resolution", 16384},
                                                             {"traversal", "bvh"},
                                                             {"max_kernel", 0.0},
-                                                            {"max_kernel", 2.0}});
+                                                            {"max_kernel", 2.0},
+                                                            {"packet", "5x5"},
+                                                            {"coherence", "never"},
+                                                            {"divergence_threshold", 1.5},
+                                                            {"edge_cost", -1.0},
+                                                            {"visibility_cost", -1.0}});
 }

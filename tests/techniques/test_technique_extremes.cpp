@@ -1,4 +1,5 @@
-// Every shadow-map technique (hard, PCF, PCSS, VSM, EVSM, ESM, VSSM, backprojection) under the same extremes,
+// Every shadow-map technique (hard, PCF, PCSS, VSM, EVSM, ESM, VSSM, backprojection per pixel
+// and in packets) under the same extremes,
 // end to end through frame::FrameRenderer, with the contract's invariants (every V
 // finite and in [0, 1], 1 without geometry: PluginFrame's checkedVisibility) on every
 // image:
@@ -70,6 +71,13 @@ const TechniqueCase kTechniques[] = {
     // Rect-light cube atlases of up to 512: a 1024-texel one's multi-scale shadow map takes
     // seconds to build on lavapipe.
     {"backprojection", "backprojection", {{"resolution", 512}}, "resolution", {128, 256, 512}, true},
+    // The packet pass with every packet walked as one (eq. 5 and eq. 6 off).
+    {"backprojection_packets",
+     "backprojection",
+     {{"resolution", 512}, {"packet", "3x3"}, {"coherence", "always"}},
+     "resolution",
+     {128, 256, 512},
+     true},
 };
 
 void applyTechnique(config::LightConfig& light, const TechniqueCase& t)
