@@ -61,12 +61,14 @@ constexpr VkFormat kPacketsFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
 constexpr int kMaxLevels = 14;
 
 // llvmpipe stops a shader invocation's loops after 65,535 iterations in all (gallivm's
-// loop limiter, LP_MAX_TGSI_LOOP_ITERATIONS, shared by every loop: docs/plugins.md,
-// "Shaders"), silently. One receiver's walk iterates once per block of its kernel (flat)
-// or once per node visited (hierarchical: at most 4/3 of the blocks, and a few more for
-// a kernel that is not a power of two), so on a CPU device the cap keeps the worst case
-// well inside it: 181² blocks flat, 4/3 of that hierarchical (43,700).
-constexpr int kCpuMaxKernel = 181;
+// loop limiter, LP_MAX_TGSI_LOOP_ITERATIONS, shared by every loop and counted per SIMD
+// group: docs/plugins.md, "Shaders"), silently. One receiver's walk of a k x k kernel
+// iterates once per node popped (flat: once per block and row; hierarchical: at most
+// 4/3 k² + 8 k nodes, four children pushed per node that meets the kernel) and four
+// times per block it reads (contour.glsl processCell's sides), so at most
+// (4/3 + 4) k² + 8 k + the setup's few dozen: inside the count for k <= 109. On a CPU
+// device the cap stops at 104 (5% margin).
+constexpr int kCpuMaxKernel = 104;
 // The loop iterations packets.comp lets a packet's walk run on a CPU device (the rest of
 // the 65,535 for the pass's own loops); elsewhere no limit.
 constexpr int32_t kCpuPacketLoopBudget = 60000;

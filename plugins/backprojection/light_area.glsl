@@ -21,25 +21,29 @@
 
 float lightCross(vec2 a, vec2 b) { return a.x * b.y - a.y * b.x; }
 
+// One side of clipToRect: the segment's parameter t on a + t d meets the side's line
+// where p t = q (p: the side's outward component of d); false when the segment runs
+// parallel to the side outside it.
+bool clipToSide(float p, float q, inout float t0, inout float t1)
+{
+    if (p == 0.0) return q >= 0.0;
+    float t = q / p;
+    if (p < 0.0) t0 = max(t0, t);
+    else t1 = min(t1, t);
+    return true;
+}
+
 // Clips the segment a -> b to the rectangle |x| <= h.x, |y| <= h.y (Liang-Barsky);
-// false when nothing is left.
+// false when nothing is left. The four sides without a loop: a loop that leaves early is
+// not unrolled, and each of its iterations would count against llvmpipe's loop limit
+// (contour.glsl) once per edge and receiver.
 bool clipToRect(inout vec2 a, inout vec2 b, vec2 h)
 {
     vec2 d = b - a;
     float t0 = 0.0, t1 = 1.0;
-    vec4 p = vec4(-d.x, d.x, -d.y, d.y);
-    vec4 q = vec4(a.x + h.x, h.x - a.x, a.y + h.y, h.y - a.y);
-    bool outside = false;
-    [[unroll]] for (int i = 0; i < 4; ++i) {
-        if (p[i] == 0.0) {
-            outside = outside || q[i] < 0.0;  // parallel to this side, outside it
-        } else {
-            float t = q[i] / p[i];
-            if (p[i] < 0.0) t0 = max(t0, t);
-            else t1 = min(t1, t);
-        }
-    }
-    if (outside || !(t0 < t1)) return false;
+    bool inside = clipToSide(-d.x, a.x + h.x, t0, t1) && clipToSide(d.x, h.x - a.x, t0, t1) &&
+                  clipToSide(-d.y, a.y + h.y, t0, t1) && clipToSide(d.y, h.y - a.y, t0, t1);
+    if (!inside || !(t0 < t1)) return false;
     vec2 a0 = a;
     a = a0 + t0 * d;
     b = a0 + t1 * d;

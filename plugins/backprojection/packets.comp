@@ -39,14 +39,15 @@ layout(binding = 12, rgba32f) uniform writeonly image2D packetsOut;
 // packet's took over a minute to compile), so they stay loops and, on such a device
 // (pc.loopBudget: backprojection.cpp), the walk charges every iteration any lane might
 // run before it runs it: a dual cell kCellIterations whatever its own lane does (the
-// walkers' masks, statuses and edge loops, two edges each), a node 1 + PACKET_PIXELS,
+// cell's four sides and the loops over the walkers for their masks, statuses and two
+// edges), a node 1 + PACKET_PIXELS,
 // a row 1, the setup kSetupIterations per pixel (the kernel's three MSSM ranges:
 // mssmRange's rows and fetches) and the classification. A packet that would pass the
 // budget stops; its walkers walk alone, each within the cap's bound. The constant
 // 4-iteration loops of contour.glsl and light_area.glsl are [[unroll]]ed: they count
 // nothing.
 const int kSetupIterations = 24;
-const int kCellIterations = 1 + 5 * PACKET_PIXELS;
+const int kCellIterations = 5 + 4 * PACKET_PIXELS;
 
 // The packet's walkers (only their entries with gWalking set mean anything): receiver,
 // position, kernel, sum of edges; the light as each sees it (one for all but a point
@@ -121,30 +122,12 @@ bool processPacketCell(Walk lead, ivec2 cell, vec2 reference, inout int fetches)
         }
         if (diverged) return false;
     }
-    // The cell's edges (at most two: a saddle's), then each walker integrates them.
-    vec3 ea[2], eb[2];
-    int edges = 0;
-    [[unroll]] for (int side = 0; side < 4; ++side) {
-        if (!occ[side] || occ[(side + 1) % 4]) continue;
-        int next = contourExitSide(occ, side);
-        int a0 = side, a1 = (side + 1) % 4, b0 = next % 4, b1 = (next + 1) % 4;
-        vec2 ua = 0.5 * (sampleUv(lead, s[a0]) + sampleUv(lead, s[a1]));
-        vec2 ub = 0.5 * (sampleUv(lead, s[b0]) + sampleUv(lead, s[b1]));
-        vec3 a = unprojectFace(lead.r.face, ua, depth[a0], lead.range);
-        vec3 b = unprojectFace(lead.r.face, ub, depth[b1], lead.range);
-        ea[edges == 0 ? 0 : 1] = a;
-        eb[edges == 0 ? 0 : 1] = b;
-        ++edges;
-    }
-    if (edges == 0) return true;
-    [[dont_unroll]] for (int i = 0; i < PACKET_PIXELS; ++i) {
-        if ((holding & (1u << i)) == 0u) continue;
-        LightPlane l = WALKER_LIGHT(i);
-        vec3 p = gPosition[i];
-        float sum = gSum[i];
-        for (int e = 0; e < edges; ++e)
-            sum += edgeBeyond(backproject(l, p, ea[e]), backproject(l, p, eb[e]), l.halfSize, l.disk);
-        gSum[i] = sum;
+    // Each edge extracted once; each walker integrates it.
+    [[dont_unroll]] for (int side = 0; side < 4; ++side) {
+        vec3 a, b;
+        if (!cellEdge(lead, s, depth, occ, side, a, b)) continue;
+        [[dont_unroll]] for (int i = 0; i < PACKET_PIXELS; ++i)
+            if ((holding & (1u << i)) != 0u) gSum[i] += edgeHidden(WALKER_LIGHT(i), gPosition[i], a, b);
     }
     return true;
 }

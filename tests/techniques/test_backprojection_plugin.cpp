@@ -501,22 +501,49 @@ TEST_F(BackprojectionTest, CpuDeviceRefusesKernelsPastTheLoopLimit)
         EXPECT_NE(std::string(e.what()).find("max_kernel"), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find("65,535"), std::string::npos) << e.what();
     }
-    s.maxKernelTexels = 181.0;  // the largest allowed
+}
+
+// At the largest cap a CPU device allows (104 texels) every walk runs to its end: on the
+// lattice fence under a light whose kernels reach the cap, the flat walk, the
+// hierarchical walk and 3 x 3 packets give one image (a walk cut off by llvmpipe's loop
+// limit would not: the flat walk runs the most iterations, the hierarchy the fewest).
+TEST_F(BackprojectionTest, WalksAtTheLargestCpuCapRunToTheirEnd)
+{
+    config::RenderConfig cfg = fenceConfig();
+    cfg.width = 64;
+    cfg.height = 36;
+    BackprojectionSettings s;
+    s.lightSize = 1.5;
+    s.maxKernelTexels = 104.0;
+    s.traversal = "flat";
     applyBackprojection(cfg.lights[0], s);
-    render(cfg, config::buildScene(cfg.scene));
-    frame->checkedVisibility();
+    render(cfg, config::buildScene(cfg.scene), {"light0.backprojection.kernel"});
+    const std::vector<float> flat = frame->checkedVisibility();
+    const std::vector<float> kernel = frame->renderer.readImage("light0.backprojection.kernel").values;
+    EXPECT_GT(std::ranges::count(kernel, 104.0f), ptrdiff_t(flat.size() / 10)) << "kernels at the cap";
+    s.traversal = "hierarchical";
+    const std::vector<float> hierarchical = renderWith(cfg, s);
+    s.packet = "3x3";
+    s.joinEveryPacket = true;
+    const std::vector<float> packets = renderWith(cfg, s);
+    float worst = 0.0f;
+    for (size_t i = 0; i < flat.size(); ++i) {
+        worst = std::max(worst, std::abs(flat[i] - hierarchical[i]));
+        worst = std::max(worst, std::abs(flat[i] - packets[i]));
+    }
+    EXPECT_LE(worst, 2.0f / 65535.0f);
 }
 
 TEST_F(BackprojectionTest, MssmTallerThanTheLargestImageIsRefused)
 {
-    // A 2048-texel cube atlas (2 faces of 2048 + guard high) with 8 levels of MSSM is
+    // A 2048-texel cube atlas (2 faces of 2048 + guard high) with 7 levels of MSSM is
     // taller than lavapipe's largest image (16,384): refused before anything renders,
     // naming the parameter and the sizes. 1024 per face fits (LightTypes/disk).
     config::RenderConfig cfg = test::defaultTestConfig();
     test::setLightType(cfg.lights[0], scene::LightType::Disk);
     BackprojectionSettings s;
     s.resolution = 2048;
-    s.maxKernelTexels = 128.0;
+    s.maxKernelTexels = 64.0;
     applyBackprojection(cfg.lights[0], s);
     try {
         render(cfg, config::buildScene(cfg.scene));
