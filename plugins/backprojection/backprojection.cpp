@@ -75,10 +75,15 @@ constexpr int32_t kCpuPacketLoopBudget = 60000;
 constexpr int32_t kUnlimitedLoops = 1 << 30;
 
 // Q_e and Q_v of eq. 6 (Q_n = 1): README, "Packets", gives the sweep.
-constexpr double kDefaultEdgeCost = 1.0;
+constexpr double kDefaultEdgeCost = 16.0;
 constexpr double kDefaultVisibilityCost = 4.0;
-// T_d of eq. 5 (README, "Packets": why not the paper's 0.8).
-constexpr double kDefaultDivergenceThreshold = 0.8;
+// T_d of eq. 5: 1 turns eq. 5 off (README, "Packets": the paper's 0.8 sent almost every
+// packet to per-pixel walks here, none of which diverged when walked).
+constexpr double kDefaultDivergenceThreshold = 1.0;
+// The packet size (kPacketNames' index): 1 x 1. 3 x 3 packets were 1.16-1.57x faster
+// under the packet bench's sun and 1.23x slower on config/default.json's spot (README,
+// "Packets"): per pixel is never the slower here.
+constexpr double kDefaultPacket = 0;
 
 const plugin::ParamSpec kParams[] = {
     // 512: a 1024-texel cube atlas's MSSM (384 MiB) takes seconds to build on lavapipe
@@ -92,7 +97,7 @@ const plugin::ParamSpec kParams[] = {
      "flat: every 2 x 2 block of samples in the kernel ([GBP07] with MSSM kernels); hierarchical: the MSSM descended "
      "from the kernel's corner, pruning blocks that hold no contour (Yang et al. 2009, 4.2): the same edges",
      kTraversalNames, uint32_t(std::size(kTraversalNames))},
-    {"packet", ParamType::Enum, 0, 0, 0, "",
+    {"packet", ParamType::Enum, kDefaultPacket, 0, 0, "",
      "pixels that share one kernel walk (Yang et al. 2009, 4.1): 1x1 is per pixel; a packet that the cost model or "
      "a diverging contour (the null status) rules out walks per pixel, so every size gives the same image",
      kPacketNames, uint32_t(std::size(kPacketNames))},
@@ -119,7 +124,7 @@ struct Settings {
     uint32_t resolution = 512;
     float lightSizeOverride = -1.0f;
     Traversal traversal = Traversal::Hierarchical;
-    int packet = 1;  // pixels per side
+    int packet = int(kDefaultPacket) + 1;  // pixels per side
     Coherence coherence = Coherence::Model;
     float edgeCost = float(kDefaultEdgeCost);
     float visibilityCost = float(kDefaultVisibilityCost);

@@ -17,7 +17,7 @@
 // by one (step 8). So every packet size gives the same V.
 //
 // The loops over the packet's pixels stay loops, the large ones [[dont_unroll]] (see
-// kLoopBudget).
+// kCellIterations).
 #extension GL_EXT_control_flow_attributes : require
 
 #ifndef PACKET
@@ -32,20 +32,18 @@ layout(local_size_x = 8, local_size_y = 8) in;
 // Per pixel: (V or -1, contour.glsl's class, samples and nodes read, kernel side).
 layout(binding = 12, rgba32f) uniform writeonly image2D packetsOut;
 
-
 // llvmpipe stops an invocation's loops after 65,535 iterations in all, counted per SIMD
 // group: a loop iterates as often as its busiest lane. Unrolling the loops over the
 // packet's pixels would keep them out of that count but multiplies the shader (a 3 x 3
 // packet's took over a minute to compile), so they stay loops and, on such a device
 // (pc.loopBudget: backprojection.cpp), the walk charges every iteration any lane might
-// run before it runs it: a dual cell kCellIterations whatever its own lane does (the
-// cell's four sides and the loops over the walkers for their masks, statuses and two
-// edges), a node 1 + PACKET_PIXELS,
-// a row 1, the setup kSetupIterations per pixel (the kernel's three MSSM ranges:
-// mssmRange's rows and fetches) and the classification. A packet that would pass the
-// budget stops; its walkers walk alone, each within the cap's bound. The constant
-// 4-iteration loops of contour.glsl and light_area.glsl are [[unroll]]ed: they count
-// nothing.
+// run before it runs it: a dual cell kCellIterations whatever its own lane does (its
+// four sides, and the loops over the walkers for their masks, their statuses and up to
+// two edges), a node 1 + PACKET_PIXELS, a row 1, the setup kSetupIterations per pixel
+// (the kernel's three MSSM ranges: mssmRange's rows and fetches) and the classification.
+// A packet that would pass the budget stops; its walkers walk alone, each within the
+// cap's bound. The small constant loops of contour.glsl and light_area.glsl are
+// [[unroll]]ed: they count nothing.
 const int kSetupIterations = 24;
 const int kCellIterations = 5 + 4 * PACKET_PIXELS;
 

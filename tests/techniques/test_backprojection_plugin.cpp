@@ -711,7 +711,7 @@ TEST(BackprojectionPluginEntry, ReflectsEveryParameterWithItsDefault)
     EXPECT_FLOAT_EQ(params.getFloat("light_size"), -1.0f);
     EXPECT_EQ(params.getEnum("packet"), "1x1");
     EXPECT_EQ(params.getEnum("coherence"), "model");
-    EXPECT_FLOAT_EQ(params.getFloat("divergence_threshold"), 0.8f);
+    EXPECT_FLOAT_EQ(params.getFloat("divergence_threshold"), 1.0f);
     EXPECT_GE(params.getFloat("edge_cost"), 0.0f);
     EXPECT_GE(params.getFloat("visibility_cost"), 0.0f);
     for (const plugin::ParamSpec& spec : params.specs()) EXPECT_NE(std::string(spec.doc), "") << spec.name;

@@ -70,7 +70,7 @@ const TechniqueCase kTechniques[] = {
     {"vssm", "vssm", {{"resolution", 1024}}, "resolution", {256, 512, 1024, 2048}, true, 0.03},
     // Rect-light cube atlases of up to 512: a 1024-texel one's multi-scale shadow map takes
     // seconds to build on lavapipe.
-    {"backprojection", "backprojection", {{"resolution", 512}}, "resolution", {128, 256, 512}, true},
+    {"backprojection", "backprojection", {{"resolution", 512}, {"packet", "1x1"}}, "resolution", {128, 256, 512}, true},
     // The packet pass with every packet walked as one (eq. 5 and eq. 6 off).
     {"backprojection_packets",
      "backprojection",
