@@ -168,12 +168,15 @@ TEST_P(BackprojectionTraversals, FlatAndHierarchicalAgreeToRounding)
 // kernel's blocks (flat: in its own walk's order), and a non-coherent packet's walkers
 // walk alone, so every packet size gives the per-pixel image. 4 x 4 runs the flat walk
 // of kernels up to the cap (64 texels: 4,096 blocks) past packets.comp's loop budget on
-// a CPU device (81 iterations a block): there a miscounted loop would break V off at
+// a CPU device (69 iterations a block): there a miscounted loop would break V off at
 // llvmpipe's 65,535 iterations, and the packets past the budget walk per pixel.
 TEST_P(BackprojectionTraversals, PacketsGiveThePerPixelImage)
 {
     const TraversalScene& t = GetParam();
-    const config::RenderConfig cfg = t.config();
+    // Half the traversal test's image: nine renders a scene.
+    config::RenderConfig cfg = t.config();
+    cfg.width /= 2;
+    cfg.height /= 2;
     BackprojectionSettings s;
     s.lightSize = t.lightSize;
     s.resolution = t.resolution;
@@ -202,8 +205,9 @@ TEST_P(BackprojectionTraversals, PacketsGiveThePerPixelImage)
                 walked += coherence[i] >= 2.0f;
             }
             const std::string label = fmt::format("{} {} {}", t.name, traversal, packet);
-            // Measured: 0 (the same sums; the hierarchical walks visit a walker's blocks
-            // in another order only where its kernel's corner is not the packet's).
+            // Measured: 0 on the box grid and the blockers, 1.5e-5 (one step of the R16
+            // image) on the lattice, where the hierarchical packet walk adds a walker's
+            // edges in another order than its own walk.
             EXPECT_LE(largest, 2.0f / 65535.0f) << label << ": largest |V_packet - V_per_pixel|";
             if (packet == "4x4") {
                 EXPECT_GT(joined, 0u) << label << ": walkers in packets";
@@ -510,8 +514,8 @@ TEST_F(BackprojectionTest, CpuDeviceRefusesKernelsPastTheLoopLimit)
 TEST_F(BackprojectionTest, WalksAtTheLargestCpuCapRunToTheirEnd)
 {
     config::RenderConfig cfg = fenceConfig();
-    cfg.width = 64;
-    cfg.height = 36;
+    cfg.width = 48;
+    cfg.height = 27;
     BackprojectionSettings s;
     s.lightSize = 1.5;
     s.maxKernelTexels = 104.0;
