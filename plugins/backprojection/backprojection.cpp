@@ -7,7 +7,8 @@
 // multi-scale shadow map (mssm.comp, mssm.glsl: step 4), with packets the packet pass
 // (packets.comp: steps 6 and 7) and the per-pixel visibility (visibility.comp: steps 5
 // and 8; contour.glsl holds what both do). The MSSM and the packets' results are
-// transient graph images.
+// transient graph images. With S x S sub-lights (step 2, §5) each sub-light runs those
+// passes in turn and adds its share to V.
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
 #include "penumbra/gpu/Context.h"
@@ -30,9 +31,12 @@
 #include <cmath>
 #include <cstring>
 #include <iterator>
+#include <memory>
 #include <numbers>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace penumbra::backprojection {
 namespace {
@@ -74,6 +78,10 @@ constexpr int kCpuMaxKernel = 104;
 constexpr int32_t kCpuPacketLoopBudget = 60000;
 constexpr int32_t kUnlimitedLoops = 1 << 30;
 
+// Parameter `sub_lights`: S of §5, at most 4 (16 shadow maps and MSSMs a frame: the maps
+// and MSSMs, not the walks, then cost the most).
+constexpr int kMaxSubLights = 4;
+
 // Q_e and Q_v of eq. 6 (Q_n = 1): README, "Packets", gives the sweep.
 constexpr double kDefaultEdgeCost = 16.0;
 constexpr double kDefaultVisibilityCost = 4.0;
@@ -114,6 +122,12 @@ const plugin::ParamSpec kParams[] = {
     {"divergence_threshold", ParamType::Float, kDefaultDivergenceThreshold, 0, 1, "",
      "T_d of eq. 5: a packet whose estimated probability of diverging contours exceeds it walks per pixel (1: only "
      "the cost model and the null status met in the walk decide)"},
+    {"sub_lights", ParamType::Int, 1, 1, kMaxSubLights, "S",
+     "multi-view shadow maps (Yang et al. 2009, 5): the light's rectangle (a rect light's, or the square of a spot "
+     "light's light_size) split into S x S equal sub-lights, each with its own shadow map and MSSM drawn from its "
+     "centre (the graph reuses one allocation for all), V their average: an occluder that the light's centre does "
+     "not see still shadows, for S^2 maps and MSSMs. A light without size uses one map; a disk, sphere or sun light "
+     "takes only 1"},
     plugin::kernelLimitParam("max_kernel", 0.0625,
                              "the kernel cap: the largest side of a receiver's kernel, a fraction of the face's side "
                              "(occluders beyond it are not seen; it bounds the work of an occluder near the light)"),
@@ -129,6 +143,7 @@ struct Settings {
     float edgeCost = float(kDefaultEdgeCost);
     float visibilityCost = float(kDefaultVisibilityCost);
     float divergenceThreshold = float(kDefaultDivergenceThreshold);
+    int subLights = 1;   // S
     int maxKernel = 64;  // cells per side
     float depthBias = 4.0f;
 };
@@ -144,6 +159,7 @@ Settings readSettings(const plugin::ParamValues& params)
     s.edgeCost = params.getFloat("edge_cost");
     s.visibilityCost = params.getFloat("visibility_cost");
     s.divergenceThreshold = params.getFloat("divergence_threshold");
+    s.subLights = params.getInt("sub_lights");
     s.maxKernel = std::max(1, int(std::ceil(plugin::kernelLimitTexels(params.getFloat("max_kernel"), s.resolution))));
     s.depthBias = params.getFloat("depth_bias");
     return s;
@@ -272,6 +288,37 @@ float reachSize(const LightData& d, scene::LightType type)
     return 0.0f;
 }
 
+// Whether §5's S x S split applies: a rectangle with an area (a rect light's, a spot
+// light's light_size square). A disk, a sphere's outline or a sun's disk of directions
+// has no split into equal rectangles that light_area.glsl integrates.
+bool hasRectangle(const LightData& d, scene::LightType type)
+{
+    const bool rectangle = type == scene::LightType::Rect || type == scene::LightType::Spot;
+    return rectangle && d.extent.x > 0.0f && d.extent.y > 0.0f;
+}
+
+// Sub-light (i, j) of the S x S split of `whole` (lightShape of `light`; hasRectangle):
+// the cell's rectangle, and the light moved to the cell's centre in the light's plane
+// (a rect light's size the cell's, so that its map's horizon test sees the cell; a spot
+// light keeps its cone).
+struct SubLight {
+    scene::Light light;
+    LightData shape;
+};
+SubLight subLight(const scene::Light& light, const LightData& whole, int s, int i, int j)
+{
+    const glm::dvec2 half = glm::dvec2(whole.extent) / double(s);
+    const glm::dvec2 offset = (glm::dvec2(i, j) + 0.5) * 2.0 * half - glm::dvec2(whole.extent);
+    const glm::dvec3 centre = glm::dvec3(whole.centre) + offset.x * glm::dvec3(whole.tangent) +
+                              offset.y * glm::dvec3(whole.bitangent);
+    SubLight sub{light, whole};
+    sub.shape.centre = glm::vec4(glm::vec3(centre), 1.0f);
+    sub.shape.extent = glm::vec4(float(half.x), float(half.y), 0.0f, 0.0f);
+    sub.light.position = glm::vec3(centre);
+    if (light.type == scene::LightType::Rect) sub.light.sizeWorld = glm::vec2(2.0 * half);
+    return sub;
+}
+
 // Face uv (u, v) and distance along the face's axis back to the world, as the shader's
 // FaceFrame: linear in u, v and (for each) in the distance. From two depths at each of
 // three uvs, unprojected in double precision.
@@ -310,6 +357,20 @@ FaceFrame faceFrame(const render::ShadowFaceData& face)
     return f;
 }
 
+// S of the split the light takes: sub_lights where it has a rectangle, else 1 (a light
+// without size casts the hard shadow one map gives); a disk, sphere or sun is refused.
+int splitFor(const scene::Light& light, const LightData& whole, int subLights)
+{
+    if (subLights == 1 || hasRectangle(whole, light.type)) return subLights;
+    if (light.type != scene::LightType::Rect && light.type != scene::LightType::Spot) {
+        throw ConfigError(fmt::format("backprojection: sub_lights: {} x {} sub-lights split a rectangular light (a "
+                                      "rect light, or a spot light with light_size > 0); a {} light's shape has no "
+                                      "such split here: set sub_lights to 1",
+                                      subLights, subLights, scene::lightTypeName(light.type)));
+    }
+    return 1;
+}
+
 class BackprojectionShadow final : public plugin::Technique {
 public:
     explicit BackprojectionShadow(const plugin::TechniqueSetup& setup);
@@ -318,22 +379,51 @@ public:
     void registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io) override;
 
 private:
+    // One shadow map's worth: the light's own, or one sub-light's (§5).
+    struct View {
+        View(const plugin::TechniqueSetup& setup, SubLight first, uint32_t resolution, uint32_t guardTexels,
+             const std::string& technique)
+            : sub(std::move(first)),
+              shadowMap(render::ShadowMapSetup{setup.context, setup.shaders, setup.casters, sub.light,
+                                               setup.sceneBounds, setup.lightIndex},
+                        resolution, technique, guardTexels),
+              lightBuffer(setup.context, sizeof(LightData), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true,
+                          fmt::format("light{}.{}.light", setup.lightIndex, technique))
+        {
+        }
+        SubLight sub;  // the (sub-)light its map is drawn from, and its shape
+        render::ShadowMap shadowMap;
+        gpu::Buffer lightBuffer;  // LightData: sub.shape and the map's faces
+    };
+    // A view's graph names: its images, and what its visibility pass writes (V_l for the
+    // last view, else the sum so far).
+    struct ViewNames {
+        std::string map, mssm, packets, out;
+        std::string prefix;  // of its passes and debug images: "" or "view1."
+    };
+
+    std::vector<SubLight> subLights(const scene::Light& light) const;
+    void addViewPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io, size_t k);
     void checkDevice() const;
-    void writeLight(const scene::Light& light);
-    void recordMssm(const graph::PassContext& pass, const std::string& map, const std::string& mssm) const;
-    void bindVisibility(const graph::PassContext& pass, gpu::DescriptorPush& descriptors, const std::string& map,
-                        const std::string& mssm, const gpu::Pipeline& pipeline) const;
-    void recordPackets(const graph::PassContext& pass, const plugin::LightPassIo& io, const std::string& map,
-                       const std::string& mssm, const std::string& packets) const;
-    void recordDebugViews(const graph::PassContext& pass, const plugin::LightPassIo& io, const std::string& map,
-                          const std::string& mssm, const std::string& packets);
-    glm::ivec2 atlasSize() const { return {int(shadowMap_.atlasWidth()), int(shadowMap_.atlasHeight())}; }
+    void writeLight(View& view);
+    void recordMssm(const graph::PassContext& pass, const View& view, const ViewNames& names) const;
+    void bindVisibility(const graph::PassContext& pass, gpu::DescriptorPush& descriptors, size_t view,
+                        const ViewNames& names, const gpu::Pipeline& pipeline) const;
+    void recordPackets(const graph::PassContext& pass, const plugin::LightPassIo& io, size_t view,
+                       const ViewNames& names) const;
+    void recordDebugViews(const graph::PassContext& pass, const plugin::LightPassIo& io, size_t view,
+                          const ViewNames& names);
+    const render::ShadowMap& firstMap() const { return views_.front()->shadowMap; }
+    glm::ivec2 atlasSize() const { return {int(firstMap().atlasWidth()), int(firstMap().atlasHeight())}; }
 
     gpu::Context& context_;
     const Settings settings_;
     const int levels_;
     int32_t loopBudget_ = kUnlimitedLoops;  // packets.comp's
-    render::ShadowMap shadowMap_;
+    int split_ = 1;                         // S: sub_lights, or 1 for a light without size
+    // One per sub-light, in row order (S x S where the light has a rectangle, else one),
+    // each with its own map, same size and type.
+    std::vector<std::unique_ptr<View>> views_;
     gpu::Pipeline mssm_;        // levels 1 and up
     gpu::Pipeline mssmLevel0_;  // level 0, from the depth map
     gpu::Pipeline visibility_;
@@ -341,7 +431,6 @@ private:
     const gpu::ShaderCompiler& shaders_;
     gpu::ComputePipelineDesc debugViewsDesc_;
     std::optional<gpu::Pipeline> debugViews_;
-    gpu::Buffer lightBuffer_;
     gpu::Sampler compareSampler_;
     gpu::Sampler depthSampler_;
     uint32_t width_ = 0, height_ = 0;  // V_l's
@@ -351,13 +440,7 @@ BackprojectionShadow::BackprojectionShadow(const plugin::TechniqueSetup& setup)
     : context_(setup.context),
       settings_(readSettings(setup.params)),
       levels_(mssmLevels(settings_.maxKernel)),
-      // A kernel reaches half the cap (and its one-cell margin) past a cube edge: its
-      // samples lie in the receiver's face.
-      shadowMap_(setup, settings_.resolution, "backprojection",
-                 render::kernelGuardTexels(0.5f * float(settings_.maxKernel) + 2.0f, settings_.resolution)),
       shaders_(setup.shaders),
-      lightBuffer_(setup.context, sizeof(LightData), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true,
-                   fmt::format("light{}.backprojection.light", setup.lightIndex)),
       width_(setup.width),
       height_(setup.height)
 {
@@ -372,6 +455,15 @@ BackprojectionShadow::BackprojectionShadow(const plugin::TechniqueSetup& setup)
                                       "after 65,535 iterations, and a kernel walk iterates once per block); lower "
                                       "max_kernel or resolution",
                                       settings_.maxKernel, settings_.resolution, kCpuMaxKernel));
+    }
+    // A kernel reaches half the cap (and its one-cell margin) past a cube edge: its
+    // samples lie in the receiver's face.
+    const uint32_t guard = render::kernelGuardTexels(0.5f * float(settings_.maxKernel) + 2.0f, settings_.resolution);
+    split_ = splitFor(setup.light, lightShape(setup.light, settings_.lightSizeOverride), settings_.subLights);
+    const std::vector<SubLight> subs = subLights(setup.light);
+    for (size_t k = 0; k < subs.size(); ++k) {
+        const std::string technique = subs.size() > 1 ? fmt::format("backprojection.view{}", k) : "backprojection";
+        views_.push_back(std::make_unique<View>(setup, subs[k], settings_.resolution, guard, technique));
     }
     checkDevice();
     if (context_.deviceInfo().type == "cpu") loopBudget_ = kCpuPacketLoopBudget;
@@ -391,7 +483,13 @@ BackprojectionShadow::BackprojectionShadow(const plugin::TechniqueSetup& setup)
     c.shader = "visibility.comp";
     c.defines = {{"TRAVERSAL", std::to_string(uint32_t(settings_.traversal))},
                  {"PACKET", std::to_string(settings_.packet)}};
-    std::ranges::copy(shadowMap_.shaderDefines(), std::back_inserter(c.defines));
+    if (views_.size() > 1) c.defines.push_back({"VIEWS", std::to_string(views_.size())});
+    // Every view's map has the light's type: its defines fix it (ShadowMap::update throws
+    // on a change), and one set serves them all.
+    for (const auto& view : views_) {
+        const std::vector<gpu::ShaderDefine> defines = view->shadowMap.shaderDefines();
+        if (view == views_.front()) std::ranges::copy(defines, std::back_inserter(c.defines));
+    }
     c.pushConstantBytes = sizeof(VisibilityPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
     if (settings_.packet > 1) {
@@ -406,7 +504,18 @@ BackprojectionShadow::BackprojectionShadow(const plugin::TechniqueSetup& setup)
 
     compareSampler_ = render::createShadowCompareSampler(context_);
     depthSampler_ = render::createShadowDepthSampler(context_);
-    writeLight(setup.light);
+    for (auto& view : views_) writeLight(*view);
+}
+
+// The light itself, or its split_ x split_ sub-lights in row order.
+std::vector<SubLight> BackprojectionShadow::subLights(const scene::Light& light) const
+{
+    const LightData whole = lightShape(light, settings_.lightSizeOverride);
+    if (split_ == 1) return {SubLight{light, whole}};
+    std::vector<SubLight> subs;
+    for (int j = 0; j < split_; ++j)
+        for (int i = 0; i < split_; ++i) subs.push_back(subLight(light, whole, split_, i, j));
+    return subs;
 }
 
 // The MSSM's levels, stacked, must fit one image side.
@@ -414,88 +523,124 @@ void BackprojectionShadow::checkDevice() const
 {
     VkPhysicalDeviceProperties properties{};
     vkGetPhysicalDeviceProperties(context_.physicalDevice(), &properties);
-    const uint64_t rows = uint64_t(shadowMap_.atlasHeight()) * uint64_t(levels_);
+    const uint64_t rows = uint64_t(firstMap().atlasHeight()) * uint64_t(levels_);
     if (rows > properties.limits.maxImageDimension2D) {
         throw ConfigError(fmt::format("backprojection: resolution: {} texels per face with max_kernel {} texels need a "
                                       "multi-scale shadow map of {} levels of {} rows ({} MiB), taller than this "
                                       "device's largest image ({} texels); lower resolution or max_kernel",
-                                      settings_.resolution, settings_.maxKernel, levels_, shadowMap_.atlasHeight(),
-                                      mssmBytes(shadowMap_.atlasWidth(), shadowMap_.atlasHeight(), levels_) >> 20,
+                                      settings_.resolution, settings_.maxKernel, levels_, firstMap().atlasHeight(),
+                                      mssmBytes(firstMap().atlasWidth(), firstMap().atlasHeight(), levels_) >> 20,
                                       properties.limits.maxImageDimension2D));
     }
 }
 
-void BackprojectionShadow::writeLight(const scene::Light& light)
+void BackprojectionShadow::writeLight(View& view)
 {
-    LightData d = lightShape(light, settings_.lightSizeOverride);
-    const render::ShadowMapData& map = shadowMap_.data();
+    LightData d = view.sub.shape;
+    const render::ShadowMapData& map = view.shadowMap.data();
     for (uint32_t f = 0; f < std::min(map.faceCount, render::kMaxShadowFaces); ++f) d.faces[f] = faceFrame(map.faces[f]);
-    std::memcpy(lightBuffer_.mapped(), &d, sizeof(d));
-    // The kernels reach no further than the light's extent allows on this map (plus the
-    // kernel's margin cell and the dual grid's sample), nor past half the cap.
-    shadowMap_.setSoftShadowFootprint(reachSize(d, light.type), 0.5f * float(settings_.maxKernel) + 2.0f);
+    std::memcpy(view.lightBuffer.mapped(), &d, sizeof(d));
+    // The kernels reach no further than the (sub-)light's extent allows on this map (plus
+    // the kernel's margin cell and the dual grid's sample), nor past half the cap.
+    view.shadowMap.setSoftShadowFootprint(reachSize(d, view.sub.light.type), 0.5f * float(settings_.maxKernel) + 2.0f);
 }
 
 void BackprojectionShadow::update(const scene::Light& light, const scene::Aabb& sceneBounds)
 {
-    shadowMap_.update(light, sceneBounds);
-    writeLight(light);
+    std::vector<SubLight> subs = subLights(light);
+    for (size_t k = 0; k < views_.size(); ++k) {
+        View& view = *views_[k];
+        view.sub = std::move(subs[k]);
+        view.shadowMap.update(view.sub.light, sceneBounds);
+        writeLight(view);
+    }
 }
 
 void BackprojectionShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io)
 {
-    const std::string map = io.local("shadow_map");
-    shadowMap_.addDepthPass(graph, map, {settings_.depthBias, 0.0f, 0.0f});
+    // The views one after another, each its map, MSSM, packets and share of V: the graph
+    // keeps that order (its declaration order where nothing else decides), so their
+    // images' lifetimes do not overlap and it reuses one allocation for all (§5). View
+    // k's pass adds its share to the sum of the views before it (view<k>.sum, a cleared
+    // image for view 0) and writes the sum with it (view<k+1>.sum); the last writes V_l.
+    if (views_.size() > 1) {
+        const std::string start = io.local("view0.sum");
+        graph.declareImage({start, width_, height_, plugin::kVisibilityFormat});
+        graph.addPass(start, graph::QueueKind::Compute)
+            .write(start, graph::Usage::TransferDst)
+            .execute([start](graph::PassContext& pass) {
+                const VkClearColorValue zero{};
+                const VkImageSubresourceRange all{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+                vkCmdClearColorImage(pass.cmd(), pass.image(start).handle(), pass.layout(start), &zero, 1, &all);
+            });
+    }
+    for (size_t k = 0; k < views_.size(); ++k) addViewPasses(graph, io, k);
+}
 
-    const uint32_t width = shadowMap_.atlasWidth(), height = shadowMap_.atlasHeight();
-    const std::string mssm = io.local("mssm");
-    graph.declareImage({mssm, width, height * uint32_t(levels_), kMssmFormat});
-    graph.addPass(mssm, graph::QueueKind::Compute)
-        .read(map, graph::Usage::Sampled)
-        .write(mssm, graph::Usage::Storage)
-        .execute([this, map, mssm](graph::PassContext& pass) { recordMssm(pass, map, mssm); });
+// View k's passes (with one view, the technique's passes under their plain names).
+void BackprojectionShadow::addViewPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io, size_t k)
+{
+    const bool multiView = views_.size() > 1, last = k + 1 == views_.size();
+    ViewNames names;
+    names.prefix = multiView ? fmt::format("view{}.", k) : "";
+    names.map = io.local(names.prefix + "shadow_map");
+    names.mssm = io.local(names.prefix + "mssm");
+    names.packets = packets_ ? io.local(names.prefix + "packets") : std::string();
+    names.out = last ? io.visibility : io.local(fmt::format("view{}.sum", k + 1));
+    const std::string before = multiView ? io.local(names.prefix + "sum") : std::string();
+    const render::ShadowMap& map = views_[k]->shadowMap;
+
+    map.addDepthPass(graph, names.map, {settings_.depthBias, 0.0f, 0.0f}, uint32_t(k * map.faceCount()));
+    graph.declareImage({names.mssm, map.atlasWidth(), map.atlasHeight() * uint32_t(levels_), kMssmFormat});
+    graph.addPass(names.mssm, graph::QueueKind::Compute)
+        .read(names.map, graph::Usage::Sampled)
+        .write(names.mssm, graph::Usage::Storage)
+        .execute([this, k, names](graph::PassContext& pass) { recordMssm(pass, *views_[k], names); });
 
     // Packets (Algorithm 1, steps 6 and 7): one invocation per packet leaves each pixel's
     // V, or -1 where the visibility pass walks the pixel alone (step 8).
-    const std::string packets = packets_ ? io.local("packets") : std::string();
     if (packets_) {
-        graph.declareImage({packets, width_, height_, kPacketsFormat});
-        graph::PassBuilder pass = graph.addPass(packets, graph::QueueKind::Compute);
+        graph.declareImage({names.packets, width_, height_, kPacketsFormat});
+        graph::PassBuilder pass = graph.addPass(names.packets, graph::QueueKind::Compute);
         plugin::readGBuffer(pass, io.gbuffer);
-        pass.read(map, graph::Usage::Sampled)
-            .read(mssm, graph::Usage::Storage)
-            .write(packets, graph::Usage::Storage)
-            .execute([this, io, map, mssm, packets](graph::PassContext& p) { recordPackets(p, io, map, mssm, packets); });
+        pass.read(names.map, graph::Usage::Sampled)
+            .read(names.mssm, graph::Usage::Storage)
+            .write(names.packets, graph::Usage::Storage)
+            .execute([this, io, k, names](graph::PassContext& p) { recordPackets(p, io, k, names); });
     }
 
-    const auto bind = [this, map, mssm, packets](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
-        if (!packets.empty()) descriptors.storageImage("packetsIn", pass.image(packets));
-        bindVisibility(pass, descriptors, map, mssm, visibility_);
+    const auto bind = [this, k, names, before](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
+        if (!names.packets.empty()) descriptors.storageImage("packetsIn", pass.image(names.packets));
+        if (!before.empty()) descriptors.storageImage("viewsIn", pass.image(before));
+        bindVisibility(pass, descriptors, k, names, visibility_);
     };
-    graph::PassBuilder visibility = plugin::addVisibilityPass(graph, io, visibility_, bind);
-    visibility.read(map, graph::Usage::Sampled).read(mssm, graph::Usage::Storage);
-    if (packets_) visibility.read(packets, graph::Usage::Storage);
+    if (!last) graph.declareImage({names.out, width_, height_, plugin::kVisibilityFormat});
+    graph::PassBuilder visibility =
+        last ? plugin::addVisibilityPass(graph, io, visibility_, bind)
+             : plugin::addVisibilityStepPass(graph, io, io.local(names.prefix + "visibility"), names.out, visibility_,
+                                             bind);
+    visibility.read(names.map, graph::Usage::Sampled).read(names.mssm, graph::Usage::Storage);
+    if (packets_) visibility.read(names.packets, graph::Usage::Storage);
+    if (!before.empty()) visibility.read(before, graph::Usage::Storage);
 
     // The debug views: nothing reads their images, so the graph culls the pass unless one
     // of them is requested (FrameRenderer::requestImage, render --debug-image).
-    graph::PassBuilder debug = graph.addPass(io.local("debug_views"), graph::QueueKind::Compute);
+    graph::PassBuilder debug = graph.addPass(io.local(names.prefix + "debug_views"), graph::QueueKind::Compute);
     plugin::readGBuffer(debug, io.gbuffer);
-    debug.read(map, graph::Usage::Sampled).read(mssm, graph::Usage::Storage);
-    if (packets_) debug.read(packets, graph::Usage::Storage);
+    debug.read(names.map, graph::Usage::Sampled).read(names.mssm, graph::Usage::Storage);
+    if (packets_) debug.read(names.packets, graph::Usage::Storage);
     for (const char* image : kDebugImages) {
-        graph.declareImage({io.local(image), width_, height_, VK_FORMAT_R32_SFLOAT});
-        debug.write(io.local(image), graph::Usage::Storage);
+        graph.declareImage({io.local(names.prefix + image), width_, height_, VK_FORMAT_R32_SFLOAT});
+        debug.write(io.local(names.prefix + image), graph::Usage::Storage);
     }
-    debug.execute(
-        [this, io, map, mssm, packets](graph::PassContext& pass) { recordDebugViews(pass, io, map, mssm, packets); });
+    debug.execute([this, io, k, names](graph::PassContext& pass) { recordDebugViews(pass, io, k, names); });
 }
 
 constexpr gpu::MemoryAccess kComputeWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
 constexpr gpu::MemoryAccess kComputeReadWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                                               VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
 
-void BackprojectionShadow::recordMssm(const graph::PassContext& pass, const std::string& map,
-                                      const std::string& mssm) const
+void BackprojectionShadow::recordMssm(const graph::PassContext& pass, const View& view, const ViewNames& names) const
 {
     VkCommandBuffer cmd = pass.cmd();
     const glm::ivec2 size = atlasSize();
@@ -505,40 +650,45 @@ void BackprojectionShadow::recordMssm(const graph::PassContext& pass, const std:
         if (level <= 1) {
             pipeline.bind(cmd);
             gpu::DescriptorPush descriptors;
-            if (level == 0) descriptors.sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map));
-            descriptors.storageImage("mssmImage", pass.image(mssm)).push(context_, cmd, pipeline);
+            if (level == 0)
+                descriptors.sampledImage("shadowDepth", pass.image(names.map), depthSampler_, pass.layout(names.map));
+            descriptors.storageImage("mssmImage", pass.image(names.mssm)).push(context_, cmd, pipeline);
         }
-        const MssmPush push{size, int32_t(shadowMap_.faceTexels()), level};
+        const MssmPush push{size, int32_t(view.shadowMap.faceTexels()), level};
         pipeline.pushConstants(cmd, &push, sizeof(push));
         pipeline.dispatchOver(cmd, uint32_t(size.x), uint32_t(size.y));
     }
 }
 
 void BackprojectionShadow::bindVisibility(const graph::PassContext& pass, gpu::DescriptorPush& descriptors,
-                                          const std::string& map, const std::string& mssm,
-                                          const gpu::Pipeline& pipeline) const
+                                          size_t view, const ViewNames& names, const gpu::Pipeline& pipeline) const
 {
-    descriptors.sampledImage("shadowCompare", pass.image(map), compareSampler_, pass.layout(map))
-        .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
-        .sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map))
-        .storageImage("mssmImage", pass.image(mssm))
-        .storageBuffer("BackprojectionLight", lightBuffer_);
-    const VisibilityPush push{atlasSize(), levels_, settings_.maxKernel, settings_.edgeCost, settings_.visibilityCost,
-                              settings_.divergenceThreshold, loopBudget_,
+    const View& v = *views_[view];
+    descriptors.sampledImage("shadowCompare", pass.image(names.map), compareSampler_, pass.layout(names.map))
+        .storageBuffer("shadowMapBuffer", v.shadowMap.buffer())
+        .sampledImage("shadowDepth", pass.image(names.map), depthSampler_, pass.layout(names.map))
+        .storageImage("mssmImage", pass.image(names.mssm))
+        .storageBuffer("BackprojectionLight", v.lightBuffer);
+    const VisibilityPush push{atlasSize(),
+                              levels_,
+                              settings_.maxKernel,
+                              settings_.edgeCost,
+                              settings_.visibilityCost,
+                              settings_.divergenceThreshold,
+                              loopBudget_,
                               settings_.coherence == Coherence::Model ? 1 : 0};
     pipeline.pushConstants(pass.cmd(), &push, sizeof(push));
 }
 
-void BackprojectionShadow::recordPackets(const graph::PassContext& pass, const plugin::LightPassIo& io,
-                                         const std::string& map, const std::string& mssm,
-                                         const std::string& packets) const
+void BackprojectionShadow::recordPackets(const graph::PassContext& pass, const plugin::LightPassIo& io, size_t view,
+                                         const ViewNames& names) const
 {
     const VkCommandBuffer cmd = pass.cmd();
     packets_->bind(cmd);
     gpu::DescriptorPush descriptors;
     plugin::bindGBuffer(pass, io.gbuffer, descriptors);
-    descriptors.storageImage("packetsOut", pass.image(packets));
-    bindVisibility(pass, descriptors, map, mssm, *packets_);
+    descriptors.storageImage("packetsOut", pass.image(names.packets));
+    bindVisibility(pass, descriptors, view, names, *packets_);
     descriptors.push(context_, cmd, *packets_);
     const auto packetsOver = [this](uint32_t pixels) {
         return (pixels + uint32_t(settings_.packet) - 1) / uint32_t(settings_.packet);
@@ -547,21 +697,21 @@ void BackprojectionShadow::recordPackets(const graph::PassContext& pass, const p
 }
 
 void BackprojectionShadow::recordDebugViews(const graph::PassContext& pass, const plugin::LightPassIo& io,
-                                            const std::string& map, const std::string& mssm,
-                                            const std::string& packets)
+                                            size_t view, const ViewNames& names)
 {
     if (!debugViews_) debugViews_.emplace(context_, shaders_, debugViewsDesc_);
     const VkCommandBuffer cmd = pass.cmd();
     debugViews_->bind(cmd);
     gpu::DescriptorPush descriptors;
     plugin::bindGBuffer(pass, io.gbuffer, descriptors);
-    descriptors.storageImage("kernelOut", pass.image(io.local("kernel")))
-        .storageImage("visitedOut", pass.image(io.local("visited")))
-        .storageImage("coherenceOut", pass.image(io.local("coherence")));
-    if (!packets.empty()) descriptors.storageImage("packetsIn", pass.image(packets));
-    bindVisibility(pass, descriptors, map, mssm, *debugViews_);
+    const std::string kernel = io.local(names.prefix + "kernel");
+    descriptors.storageImage("kernelOut", pass.image(kernel))
+        .storageImage("visitedOut", pass.image(io.local(names.prefix + "visited")))
+        .storageImage("coherenceOut", pass.image(io.local(names.prefix + "coherence")));
+    if (!names.packets.empty()) descriptors.storageImage("packetsIn", pass.image(names.packets));
+    bindVisibility(pass, descriptors, view, names, *debugViews_);
     descriptors.push(context_, cmd, *debugViews_);
-    debugViews_->dispatchOver(cmd, pass.image(io.local("kernel")));
+    debugViews_->dispatchOver(cmd, pass.image(kernel));
 }
 
 } // namespace
@@ -569,6 +719,6 @@ void BackprojectionShadow::recordDebugViews(const graph::PassContext& pass, cons
 
 PENUMBRA_DEFINE_PLUGIN("backprojection", "1.0.0",
                        "soft shadows by back-projection: marching-squares contours over a multi-scale shadow map, "
-                       "radial integration of the hidden light area, hierarchical traversal (Guennebaud et al. 2007, "
-                       "Yang et al. 2009)",
+                       "radial integration of the hidden light area, hierarchical traversal, pixel packets, multi-view "
+                       "sub-lights (Guennebaud et al. 2007, Yang et al. 2009)",
                        penumbra::backprojection::kParams, penumbra::backprojection::BackprojectionShadow)

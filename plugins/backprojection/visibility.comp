@@ -19,11 +19,19 @@
 // With PACKET > 1 the packet pass (packets.comp) ran first and left each pixel's V, or
 // -1 where the pixel walks its own kernel here (Algorithm 1's step 8).
 // Light size 0 takes the hard shadow's one nearest compare.
+// With VIEWS > 1 (Yang et al. 2009 §5) the light is split into VIEWS sub-lights, each
+// with its own map, MSSM and pass: each adds V / VIEWS of its sub-light to the sum of the
+// passes before it (viewsIn; cleared for the first), so that the last one writes the average. The
+// sums are stored as V is (R16_UNORM: within 7.7e-6), so the average is within
+// VIEWS x 7.7e-6 of the exact sum's.
 #ifndef DEBUG_IMAGES
 #define DEBUG_IMAGES 0
 #endif
 #ifndef PACKET
 #define PACKET 1
+#endif
+#ifndef VIEWS
+#define VIEWS 1
 #endif
 
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -33,6 +41,9 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #if !DEBUG_IMAGES
 layout(binding = 2, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
 #define OUTPUT_SIZE imageSize(visibilityOut)
+#if VIEWS > 1
+layout(binding = 14, VISIBILITY_FORMAT) uniform readonly image2D viewsIn;
+#endif
 #endif
 
 #if PACKET > 1
@@ -98,6 +109,10 @@ void main()
     if (inImage) imageStore(visitedOut, pixel, vec4(seen ? float(fetches) : 0.0));
     if (inImage) imageStore(coherenceOut, pixel, vec4(float(coherence)));
 #else
-    if (inImage) imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
+    v = sanitizeVisibility(v);
+#if VIEWS > 1
+    v = sanitizeVisibility(imageLoad(viewsIn, pixel).x + v * (1.0 / float(VIEWS)));
+#endif
+    if (inImage) imageStore(visibilityOut, pixel, vec4(v));
 #endif
 }

@@ -7,6 +7,7 @@
 #include "frame/LightTable.h"
 #include "penumbra/plugin/GBuffer.h"
 #include "penumbra/plugin/Params.h"
+#include "penumbra/plugin/VisibilityPass.h"
 #include "visibility/Visibility.h"
 
 #include <fmt/format.h>
@@ -22,7 +23,7 @@ namespace {
 // The G-buffer's formats: shaders/common/gbuffer.glsl.
 constexpr VkFormat kNormalFormat = VK_FORMAT_R16G16_SNORM;
 constexpr VkFormat kAlbedoFormat = VK_FORMAT_R8G8B8A8_UNORM;
-constexpr VkFormat kVisibilityFormat = VK_FORMAT_R16_UNORM;  // shaders/common/visibility.glsl
+using plugin::kVisibilityFormat;
 
 struct GBufferCameraData {  // matches GBufferCamera in shaders/common/gbuffer.glsl (std140)
     glm::vec4 eye;

@@ -169,15 +169,16 @@ void ShadowMap::update(const scene::Light& light, const scene::Aabb& sceneBounds
     std::memcpy(buffer_.mapped(), &data_, sizeof(data_));
 }
 
-void ShadowMap::addDepthPass(graph::RenderGraph& graph, const std::string& image, ShadowDepthBias bias) const
+void ShadowMap::addDepthPass(graph::RenderGraph& graph, const std::string& image, ShadowDepthBias bias,
+                             uint32_t firstView) const
 {
     // Transient: written and read within the frame, so the graph may alias its memory
     // with other lights' maps.
     graph.declareImage({image, atlasWidth(), atlasHeight(), kShadowDepthFormat});
     graph.addPass(image, graph::QueueKind::Graphics)
         .write(image, graph::Usage::DepthAttachment)
-        .execute([this, image, bias](graph::PassContext& pass) {
-            const ShadowMapPlacement own{frusta_, {0, 0}, 0};
+        .execute([this, image, bias, firstView](graph::PassContext& pass) {
+            const ShadowMapPlacement own{frusta_, {0, 0}, firstView};
             recordDepthMaps(pass, image, bias, {&own, 1});
         });
 }

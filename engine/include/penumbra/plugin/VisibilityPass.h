@@ -13,6 +13,10 @@
 
 namespace penumbra::plugin {
 
+// V_l's format (shaders/common/visibility.glsl VISIBILITY_FORMAT, which says why): also
+// that of the steps of addVisibilityStepPass that a shader writes as visibilityOut.
+inline constexpr VkFormat kVisibilityFormat = VK_FORMAT_R16_UNORM;
+
 // Called as the pass records, with the pipeline bound: add the technique's own
 // descriptors to `descriptors` (pushed after it returns, with the G-buffer's and V_l's)
 // and push its constants into pass.cmd().
@@ -26,5 +30,11 @@ using BindVisibilityFn = std::function<void(const graph::PassContext& pass, gpu:
 // map, ...). `pipeline` must live as long as the technique (a member of it).
 graph::PassBuilder addVisibilityPass(graph::RenderGraph& graph, const LightPassIo& io, const gpu::Pipeline& pipeline,
                                      BindVisibilityFn bind);
+
+// The same pass for a step towards V_l (one sub-light's share of a sum that the last step
+// writes into V_l): named `name`, it writes the screen-size storage image `out`, which the
+// technique declares, as visibilityOut instead of io.visibility.
+graph::PassBuilder addVisibilityStepPass(graph::RenderGraph& graph, const LightPassIo& io, std::string name,
+                                         std::string out, const gpu::Pipeline& pipeline, BindVisibilityFn bind);
 
 } // namespace penumbra::plugin

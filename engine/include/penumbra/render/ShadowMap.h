@@ -165,8 +165,11 @@ public:
 
     // Declares the transient depth image `image` (atlasWidth() x atlasHeight(),
     // kShadowDepthFormat) and the graphics pass named `image` that clears it and draws
-    // every face's casters with `bias`. Readers declare it as Usage::Sampled.
-    void addDepthPass(graph::RenderGraph& graph, const std::string& image, ShadowDepthBias bias) const;
+    // every face's casters with `bias`. Readers declare it as Usage::Sampled. `firstView`:
+    // the CasterView::view of its first face (the others follow), so that a technique
+    // with several maps of one light (sub-lights) gives each its own culled views.
+    void addDepthPass(graph::RenderGraph& graph, const std::string& image, ShadowDepthBias bias,
+                      uint32_t firstView = 0) const;
 
     // Records, in a graphics pass that writes `image` as Usage::DepthAttachment, the clear
     // of the image (of the texels the receivers read: setReadByLookupsOnly) and the casters of every map of `maps` into its atlas at its
