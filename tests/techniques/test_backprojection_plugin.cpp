@@ -607,18 +607,29 @@ TEST_F(BackprojectionPenumbra, SubLightsFollowTheExactPenumbraAtEveryTexelPhase)
     }
 }
 
-// The views run one after another, so the graph gives their maps one allocation, and
-// their MSSMs one (§5: "only one shadow map and one MSSM are allocated and reused").
-TEST_F(BackprojectionTest, SubLightsReuseOneMapAndOneMssm)
+namespace {
+
+// The platform scene at `width` x `height`, its light split into 2 x 2 sub-lights of
+// 256-texel maps.
+config::RenderConfig platformWithSubLights(uint32_t width, uint32_t height)
 {
     config::RenderConfig cfg = platformConfig();
-    cfg.width = 64;
-    cfg.height = 36;
+    cfg.width = width;
+    cfg.height = height;
     BackprojectionSettings s;
     s.resolution = 256;
     s.subLights = 2;
     applyBackprojection(cfg.lights[0], s);
-    render(cfg, platformScene());
+    return cfg;
+}
+
+} // namespace
+
+// The views run one after another, so the graph gives their maps one allocation, and
+// their MSSMs one (§5: "only one shadow map and one MSSM are allocated and reused").
+TEST_F(BackprojectionTest, SubLightsReuseOneMapAndOneMssm)
+{
+    render(platformWithSubLights(64, 36), platformScene());
     const graph::CompiledGraph& compiled = frame->renderer.compiledGraph();
     for (const char* image : {"shadow_map", "mssm"}) {
         std::set<int> slots;
@@ -693,13 +704,7 @@ TEST_F(BackprojectionTest, SubLightsReadNoMoreSamplesThanOneMap)
 // first frame of a renderer built with the light there.
 TEST_F(BackprojectionTest, SubLightsFollowAMovingLight)
 {
-    config::RenderConfig cfg = platformConfig();
-    cfg.width = 96;
-    cfg.height = 54;
-    BackprojectionSettings s;
-    s.resolution = 256;
-    s.subLights = 2;
-    applyBackprojection(cfg.lights[0], s);
+    const config::RenderConfig cfg = platformWithSubLights(96, 54);
     config::RenderConfig moved = cfg;
     moved.lights[0].light.position += glm::vec3(0.4f, -0.5f, -0.3f);
     render(moved, platformScene());
