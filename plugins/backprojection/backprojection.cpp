@@ -8,7 +8,8 @@
 // (packets.comp: steps 6 and 7) and the per-pixel visibility (visibility.comp: steps 5
 // and 8; contour.glsl holds what both do). The MSSM and the packets' results are
 // transient graph images. With S x S sub-lights (step 2, §5) each sub-light runs those
-// passes in turn and adds its share to V.
+// passes in turn and adds its share to V; with two depth layers (§5's alternative) a
+// peeled second map and its MSSM join the first, and V counts what either hides.
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
 #include "penumbra/gpu/Context.h"
@@ -73,6 +74,9 @@ constexpr int kMaxLevels = 14;
 // (4/3 + 4) k² + 8 k + the setup's few dozen: inside the count for k <= 109. On a CPU
 // device the cap stops at 104 (5% margin).
 constexpr int kCpuMaxKernel = 104;
+// With two depth layers each receiver walks twice in one invocation: 2 ((4/3 + 4) k² +
+// 8 k) + the setup's few dozen stay inside the count for k <= 77; 73 with the same margin.
+constexpr int kCpuMaxKernelTwoLayers = 73;
 // The loop iterations packets.comp lets a packet's walk run on a CPU device (the rest of
 // the 65,535 for the pass's own loops); elsewhere no limit.
 constexpr int32_t kCpuPacketLoopBudget = 60000;
@@ -81,6 +85,8 @@ constexpr int32_t kUnlimitedLoops = 1 << 30;
 // Parameter `sub_lights`: S of §5, at most 4 (16 shadow maps and MSSMs a frame: the maps
 // and MSSMs, not the walks, then cost the most).
 constexpr int kMaxSubLights = 4;
+// Parameter `layers`: the depth-peeled layers, at most two (visibility.comp LAYERS).
+constexpr int kMaxLayers = 2;
 
 // Q_e and Q_v of eq. 6 (Q_n = 1): README, "Packets", gives the sweep.
 constexpr double kDefaultEdgeCost = 16.0;
@@ -128,6 +134,12 @@ const plugin::ParamSpec kParams[] = {
      "centre (the graph reuses one allocation for all), V their average: an occluder that the light's centre does "
      "not see still shadows, for S^2 maps and MSSMs. A light without size uses one map; a disk, sphere or sun light "
      "takes only 1"},
+    {"layers", ParamType::Int, 1, 1, kMaxLayers, "",
+     "depth-peeled shadow-map layers (the multi-layer alternative Yang et al. 2009, 5 compare with sub_lights: "
+     "Bavoil et al. 2008, Schwarz and Stamminger 2007): 2 adds a second map of the nearest surfaces behind the "
+     "first, with its own MSSM and kernels, and V counts the light either layer hides once (their overlap from "
+     "16 x 16 light samples), so an occluder hidden behind another from the light's centre still shadows. Walks "
+     "per pixel (packet 1x1) with one view (sub_lights 1)"},
     plugin::kernelLimitParam("max_kernel", 0.0625,
                              "the kernel cap: the largest side of a receiver's kernel, a fraction of the face's side "
                              "(occluders beyond it are not seen; it bounds the work of an occluder near the light)"),
@@ -144,6 +156,7 @@ struct Settings {
     float visibilityCost = float(kDefaultVisibilityCost);
     float divergenceThreshold = float(kDefaultDivergenceThreshold);
     int subLights = 1;   // S
+    int layers = 1;
     int maxKernel = 64;  // cells per side
     float depthBias = 4.0f;
 };
@@ -160,6 +173,7 @@ Settings readSettings(const plugin::ParamValues& params)
     s.visibilityCost = params.getFloat("visibility_cost");
     s.divergenceThreshold = params.getFloat("divergence_threshold");
     s.subLights = params.getInt("sub_lights");
+    s.layers = params.getInt("layers");
     s.maxKernel = std::max(1, int(std::ceil(plugin::kernelLimitTexels(params.getFloat("max_kernel"), s.resolution))));
     s.depthBias = params.getFloat("depth_bias");
     return s;
@@ -206,7 +220,8 @@ struct VisibilityPush {
 struct MssmPush {
     glm::ivec2 atlasSize{0};
     int32_t faceTexels = 0;
-    int32_t level = 0;
+    int32_t level = 0;  // of the layer's MSSM
+    int32_t base = 0;   // the image level where the layer's MSSM starts
 };
 
 // An orthonormal frame (t, b) with t x b = n.
@@ -371,6 +386,28 @@ int splitFor(const scene::Light& light, const LightData& whole, int subLights)
     return 1;
 }
 
+// The depth layers the light takes: `layers`, or 1 for a light without size (its hard
+// compare reads the first map only). Two layers are refused with packets (a packet's
+// walk would carry each receiver's light samples) and with sub-lights (the paper
+// compares the two; one at a time here).
+int layersFor(const scene::Light& light, const LightData& whole, const Settings& s, int split)
+{
+    if (s.layers == 1) return 1;
+    if (s.packet > 1) {
+        throw ConfigError(fmt::format("backprojection: layers: {} depth layers walk each pixel alone (the union of "
+                                      "the layers needs each receiver's own light samples): set packet to 1x1, not {}",
+                                      s.layers, kPacketNames[s.packet - 1]));
+    }
+    if (split > 1) {
+        throw ConfigError(fmt::format("backprojection: layers: {} depth layers take one view of the light: set "
+                                      "sub_lights to 1 (it is {}), or layers to 1 for the multi-view maps",
+                                      s.layers, split));
+    }
+    const bool rectangle = light.type == scene::LightType::Rect || light.type == scene::LightType::Spot;
+    const bool sized = whole.extent.x > 0.0f && (!rectangle || whole.extent.y > 0.0f);
+    return sized ? s.layers : 1;
+}
+
 class BackprojectionShadow final : public plugin::Technique {
 public:
     explicit BackprojectionShadow(const plugin::TechniqueSetup& setup);
@@ -398,7 +435,7 @@ private:
     // A view's graph names: its images, and what its visibility pass writes (V_l for the
     // last view, else the sum so far).
     struct ViewNames {
-        std::string map, mssm, packets, out;
+        std::string map, peeled, mssm, packets, out;  // peeled: the second layer's map, or empty
         std::string prefix;  // of its passes and debug images: "" or "view1."
     };
 
@@ -421,6 +458,7 @@ private:
     const int levels_;
     int32_t loopBudget_ = kUnlimitedLoops;  // packets.comp's
     int split_ = 1;                         // S: sub_lights, or 1 for a light without size
+    int layers_ = 1;                        // depth layers: layers, or 1 for a light without size
     // One per sub-light, in row order (S x S where the light has a rectangle, else one),
     // each with its own map, same size and type.
     std::vector<std::unique_ptr<View>> views_;
@@ -449,17 +487,21 @@ BackprojectionShadow::BackprojectionShadow(const plugin::TechniqueSetup& setup)
                                       "than the traversal holds ({}); lower max_kernel or resolution",
                                       settings_.maxKernel, levels_, kMaxLevels));
     }
-    if (context_.deviceInfo().type == "cpu" && settings_.maxKernel > kCpuMaxKernel) {
-        throw ConfigError(fmt::format("backprojection: max_kernel: {} texels per side at resolution {} is more than a "
-                                      "CPU device's shader loops allow ({} texels: llvmpipe stops a shader's loops "
+    const LightData whole = lightShape(setup.light, settings_.lightSizeOverride);
+    split_ = splitFor(setup.light, whole, settings_.subLights);
+    layers_ = layersFor(setup.light, whole, settings_, split_);
+    const int cpuMaxKernel = layers_ > 1 ? kCpuMaxKernelTwoLayers : kCpuMaxKernel;
+    if (context_.deviceInfo().type == "cpu" && settings_.maxKernel > cpuMaxKernel) {
+        throw ConfigError(fmt::format("backprojection: max_kernel: {} texels per side at resolution {}{} is more than "
+                                      "a CPU device's shader loops allow ({} texels: llvmpipe stops a shader's loops "
                                       "after 65,535 iterations, and a kernel walk iterates once per block); lower "
                                       "max_kernel or resolution",
-                                      settings_.maxKernel, settings_.resolution, kCpuMaxKernel));
+                                      settings_.maxKernel, settings_.resolution,
+                                      layers_ > 1 ? fmt::format(" with {} layers", layers_) : "", cpuMaxKernel));
     }
     // A kernel reaches half the cap (and its one-cell margin) past a cube edge: its
     // samples lie in the receiver's face.
     const uint32_t guard = render::kernelGuardTexels(0.5f * float(settings_.maxKernel) + 2.0f, settings_.resolution);
-    split_ = splitFor(setup.light, lightShape(setup.light, settings_.lightSizeOverride), settings_.subLights);
     const std::vector<SubLight> subs = subLights(setup.light);
     for (size_t k = 0; k < subs.size(); ++k) {
         const std::string technique = subs.size() > 1 ? fmt::format("backprojection.view{}", k) : "backprojection";
@@ -484,6 +526,7 @@ BackprojectionShadow::BackprojectionShadow(const plugin::TechniqueSetup& setup)
     c.defines = {{"TRAVERSAL", std::to_string(uint32_t(settings_.traversal))},
                  {"PACKET", std::to_string(settings_.packet)}};
     if (views_.size() > 1) c.defines.push_back({"VIEWS", std::to_string(views_.size())});
+    if (layers_ > 1) c.defines.push_back({"LAYERS", std::to_string(layers_)});
     // Every view's map has the light's type: its defines fix it (ShadowMap::update throws
     // on a change), and one set serves them all.
     for (const auto& view : views_) {
@@ -518,18 +561,21 @@ std::vector<SubLight> BackprojectionShadow::subLights(const scene::Light& light)
     return subs;
 }
 
-// The MSSM's levels, stacked, must fit one image side.
+// The MSSM's levels (every layer's), stacked, must fit one image side.
 void BackprojectionShadow::checkDevice() const
 {
     VkPhysicalDeviceProperties properties{};
     vkGetPhysicalDeviceProperties(context_.physicalDevice(), &properties);
-    const uint64_t rows = uint64_t(firstMap().atlasHeight()) * uint64_t(levels_);
+    const int levels = levels_ * layers_;
+    const uint64_t rows = uint64_t(firstMap().atlasHeight()) * uint64_t(levels);
     if (rows > properties.limits.maxImageDimension2D) {
-        throw ConfigError(fmt::format("backprojection: resolution: {} texels per face with max_kernel {} texels need a "
-                                      "multi-scale shadow map of {} levels of {} rows ({} MiB), taller than this "
+        throw ConfigError(fmt::format("backprojection: resolution: {} texels per face with max_kernel {} texels{} need "
+                                      "a multi-scale shadow map of {} levels of {} rows ({} MiB), taller than this "
                                       "device's largest image ({} texels); lower resolution or max_kernel",
-                                      settings_.resolution, settings_.maxKernel, levels_, firstMap().atlasHeight(),
-                                      mssmBytes(firstMap().atlasWidth(), firstMap().atlasHeight(), levels_) >> 20,
+                                      settings_.resolution, settings_.maxKernel,
+                                      layers_ > 1 ? fmt::format(" and {} layers", layers_) : "", levels,
+                                      firstMap().atlasHeight(),
+                                      mssmBytes(firstMap().atlasWidth(), firstMap().atlasHeight(), levels) >> 20,
                                       properties.limits.maxImageDimension2D));
     }
 }
@@ -588,14 +634,21 @@ void BackprojectionShadow::addViewPasses(graph::RenderGraph& graph, const plugin
     names.packets = packets_ ? io.local(names.prefix + "packets") : std::string();
     names.out = last ? io.visibility : io.local(fmt::format("view{}.sum", k + 1));
     const std::string before = multiView ? io.local(names.prefix + "sum") : std::string();
-    const render::ShadowMap& map = views_[k]->shadowMap;
+    render::ShadowMap& map = views_[k]->shadowMap;
 
-    map.addDepthPass(graph, names.map, {settings_.depthBias, 0.0f, 0.0f}, uint32_t(k * map.faceCount()));
-    graph.declareImage({names.mssm, map.atlasWidth(), map.atlasHeight() * uint32_t(levels_), kMssmFormat});
-    graph.addPass(names.mssm, graph::QueueKind::Compute)
-        .read(names.map, graph::Usage::Sampled)
-        .write(names.mssm, graph::Usage::Storage)
-        .execute([this, k, names](graph::PassContext& pass) { recordMssm(pass, *views_[k], names); });
+    const render::ShadowDepthBias bias{settings_.depthBias, 0.0f, 0.0f};
+    const uint32_t firstView = uint32_t(k * map.faceCount());
+    map.addDepthPass(graph, names.map, bias, firstView);
+    if (layers_ > 1) {
+        names.peeled = io.local("layer1.shadow_map");
+        map.addPeeledDepthPass(graph, names.peeled, names.map, bias, firstView);
+    }
+    // Every layer's MSSM, the second's levels after the first's (mssm.glsl).
+    graph.declareImage({names.mssm, map.atlasWidth(), map.atlasHeight() * uint32_t(levels_ * layers_), kMssmFormat});
+    graph::PassBuilder mssm = graph.addPass(names.mssm, graph::QueueKind::Compute);
+    mssm.read(names.map, graph::Usage::Sampled).write(names.mssm, graph::Usage::Storage);
+    if (!names.peeled.empty()) mssm.read(names.peeled, graph::Usage::Sampled);
+    mssm.execute([this, k, names](graph::PassContext& pass) { recordMssm(pass, *views_[k], names); });
 
     // Packets (Algorithm 1, steps 6 and 7): one invocation per packet leaves each pixel's
     // V, or -1 where the visibility pass walks the pixel alone (step 8).
@@ -620,6 +673,7 @@ void BackprojectionShadow::addViewPasses(graph::RenderGraph& graph, const plugin
              : plugin::addVisibilityStepPass(graph, io, io.local(names.prefix + "visibility"), names.out, visibility_,
                                              bind);
     visibility.read(names.map, graph::Usage::Sampled).read(names.mssm, graph::Usage::Storage);
+    if (!names.peeled.empty()) visibility.read(names.peeled, graph::Usage::Sampled);
     if (packets_) visibility.read(names.packets, graph::Usage::Storage);
     if (!before.empty()) visibility.read(before, graph::Usage::Storage);
 
@@ -628,6 +682,7 @@ void BackprojectionShadow::addViewPasses(graph::RenderGraph& graph, const plugin
     graph::PassBuilder debug = graph.addPass(io.local(names.prefix + "debug_views"), graph::QueueKind::Compute);
     plugin::readGBuffer(debug, io.gbuffer);
     debug.read(names.map, graph::Usage::Sampled).read(names.mssm, graph::Usage::Storage);
+    if (!names.peeled.empty()) debug.read(names.peeled, graph::Usage::Sampled);
     if (packets_) debug.read(names.packets, graph::Usage::Storage);
     for (const char* image : kDebugImages) {
         graph.declareImage({io.local(names.prefix + image), width_, height_, VK_FORMAT_R32_SFLOAT});
@@ -644,19 +699,23 @@ void BackprojectionShadow::recordMssm(const graph::PassContext& pass, const View
 {
     VkCommandBuffer cmd = pass.cmd();
     const glm::ivec2 size = atlasSize();
-    for (int level = 0; level < levels_; ++level) {
-        const gpu::Pipeline& pipeline = level == 0 ? mssmLevel0_ : mssm_;
-        if (level > 0) gpu::memoryBarrier(cmd, kComputeWrite, kComputeReadWrite);
-        if (level <= 1) {
-            pipeline.bind(cmd);
-            gpu::DescriptorPush descriptors;
-            if (level == 0)
-                descriptors.sampledImage("shadowDepth", pass.image(names.map), depthSampler_, pass.layout(names.map));
-            descriptors.storageImage("mssmImage", pass.image(names.mssm)).push(context_, cmd, pipeline);
+    // Layer j's levels follow layer j - 1's; level 0 of each from its own depth map.
+    for (int layer = 0; layer < layers_; ++layer) {
+        const std::string& map = layer == 0 ? names.map : names.peeled;
+        for (int level = 0; level < levels_; ++level) {
+            const gpu::Pipeline& pipeline = level == 0 ? mssmLevel0_ : mssm_;
+            if (level > 0) gpu::memoryBarrier(cmd, kComputeWrite, kComputeReadWrite);
+            if (level <= 1) {
+                pipeline.bind(cmd);
+                gpu::DescriptorPush descriptors;
+                if (level == 0)
+                    descriptors.sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map));
+                descriptors.storageImage("mssmImage", pass.image(names.mssm)).push(context_, cmd, pipeline);
+            }
+            const MssmPush push{size, int32_t(view.shadowMap.faceTexels()), level, layer * levels_};
+            pipeline.pushConstants(cmd, &push, sizeof(push));
+            pipeline.dispatchOver(cmd, uint32_t(size.x), uint32_t(size.y));
         }
-        const MssmPush push{size, int32_t(view.shadowMap.faceTexels()), level};
-        pipeline.pushConstants(cmd, &push, sizeof(push));
-        pipeline.dispatchOver(cmd, uint32_t(size.x), uint32_t(size.y));
     }
 }
 
@@ -669,6 +728,8 @@ void BackprojectionShadow::bindVisibility(const graph::PassContext& pass, gpu::D
         .sampledImage("shadowDepth", pass.image(names.map), depthSampler_, pass.layout(names.map))
         .storageImage("mssmImage", pass.image(names.mssm))
         .storageBuffer("BackprojectionLight", v.lightBuffer);
+    if (!names.peeled.empty())
+        descriptors.sampledImage("peeledDepth", pass.image(names.peeled), depthSampler_, pass.layout(names.peeled));
     const VisibilityPush push{atlasSize(),
                               levels_,
                               settings_.maxKernel,

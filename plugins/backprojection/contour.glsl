@@ -2,7 +2,8 @@
 // pass (packets.comp): the light as the receiver sees it, its kernel in the shadow map
 // (step 1 and step 5 of visibility.comp's outline), the marching squares on the dual grid
 // and the back-projection of each edge (steps 2 and 3), and V from the edges' sum.
-// The including shader defines TRAVERSAL (0 flat, 1 hierarchical) and its outputs.
+// The including shader defines TRAVERSAL (0 flat, 1 hierarchical), LAYERS (1, or 2 for a
+// depth-peeled second layer: backprojectionVisibility) and its outputs.
 #ifndef PENUMBRA_BACKPROJECTION_CONTOUR_GLSL
 #define PENUMBRA_BACKPROJECTION_CONTOUR_GLSL
 // llvmpipe stops an invocation's loops after 65,535 iterations in all (every loop's
@@ -17,12 +18,21 @@
 #ifndef TRAVERSAL
 #define TRAVERSAL 1
 #endif
+#ifndef LAYERS
+#define LAYERS 1
+#endif
 // The levels the plugin builds at most (backprojection.cpp kMaxLevels): the stack holds
 // three siblings per level and the node being visited.
 #define MAX_LEVELS 14
 
 layout(binding = 1) uniform sampler2DShadow shadowCompare;
 layout(binding = 5) uniform sampler2D shadowDepth;  // the same map, raw depths
+#if LAYERS > 1
+// The second depth layer (render::ShadowMap::addPeeledDepthPass): per texel the nearest
+// surface behind the first layer's, raw depths; its MSSM follows the first's levels in
+// mssmImage.
+layout(binding = 15) uniform sampler2D peeledDepth;
+#endif
 
 #define SHADOW_MAP_BINDING 3
 #define SHADOW_RECEIVER_BIAS 2
@@ -32,6 +42,9 @@ layout(binding = 5) uniform sampler2D shadowDepth;  // the same map, raw depths
 #define MSSM_QUALIFIER readonly
 #include "mssm.glsl"
 #include "light_area.glsl"
+#if LAYERS > 1
+#include "light_samples.glsl"
+#endif
 
 // How a pixel's V was found (the `coherence` debug image; packets.comp, Yang et al. 2009
 // §4.1 and §4.3): no geometry or outside the map (or no light size: the hard compare),
@@ -169,12 +182,20 @@ struct Walk {
     vec4 range;      // the face's depthRange
     ivec2 origin;    // the face's first texel in the atlas
     int faceTexels;
+    int layer;       // the depth layer it walks: 0, or 1 (peeledDepth)
+    int mssmBase;    // the image level where that layer's MSSM starts
     float sum;       // of the edges' signed hidden areas (light_area.glsl)
     int fetches;     // depth-map and MSSM reads (the debug image)
+#if LAYERS > 1
+    LightSamples hidden;  // the light samples the layer's contour hides (light_samples.glsl)
+#endif
 };
 
 float sampleDepth(inout Walk w, ivec2 s)
 {
+#if LAYERS > 1
+    if (w.layer != 0) return texelFetch(peeledDepth, w.origin + s, 0).r;
+#endif
     return texelFetch(shadowDepth, w.origin + s, 0).r;
 }
 
@@ -263,7 +284,12 @@ void processCell(inout Walk w, ivec2 cell)
     cellSamples(w, cell, s, depth, occ);
     [[dont_unroll]] for (int side = 0; side < 4; ++side) {
         vec3 a, b;
-        if (cellEdge(w, s, depth, occ, side, a, b)) w.sum += edgeHidden(w.light, w.p, a, b);
+        if (!cellEdge(w, s, depth, occ, side, a, b)) continue;
+        vec2 la = backproject(w.light, w.p, a), lb = backproject(w.light, w.p, b);
+        w.sum += edgeBeyond(la, lb, w.light.halfSize, w.light.disk);
+#if LAYERS > 1
+        lightSamplesFlipBeyond(w.hidden, la, lb, w.light.halfSize);
+#endif
     }
 }
 
@@ -325,7 +351,7 @@ ivec4 kernelAt(inout Walk w, float z, float wp, ivec2 centreCell, int cap)
 vec2 kernelRange(inout Walk w, ivec4 k)
 {
     w.fetches += 4;
-    return mssmRange(pc.atlasSize, pc.levels, w.origin + k.xy, w.origin + k.zw);
+    return mssmRange(pc.atlasSize, pc.levels, w.mssmBase, w.origin + k.xy, w.origin + k.zw);
 }
 
 void walkKernel(inout Walk w, ivec4 k, int levels)
@@ -346,7 +372,7 @@ void walkKernel(inout Walk w, ivec4 k, int levels)
         if (any(greaterThan(node.xy, k.zw))) continue;  // beyond the kernel
         int level = node.z;
         ivec2 last = min(node.xy + (1 << level) - 1, k.zw);
-        vec2 depths = mssmNode(atlasSize, level, w.origin + node.xy);
+        vec2 depths = mssmNode(atlasSize, w.mssmBase + level, w.origin + node.xy);
         ++w.fetches;
         vec2 reference = referenceRange(w, node.xy, min(last + 1, ivec2(w.faceTexels - 1)));
         // Fig. 6 cases 4 and 5: every sample behind the receiver, or every one in front.
@@ -378,8 +404,13 @@ Walk startWalk(ShadowReceiver r, vec3 p, LightPlane light)
     w.range = shadowMapData.faces[r.face].depthRange;
     w.faceTexels = int(shadowFaceTexels());
     w.origin = ivec2(int(r.face % 3u), int(r.face / 3u)) * w.faceTexels;
+    w.layer = 0;
+    w.mssmBase = 0;
     w.sum = 0.0;
     w.fetches = 0;
+#if LAYERS > 1
+    w.hidden = lightSamplesFilled(false);
+#endif
     return w;
 }
 
@@ -430,21 +461,61 @@ float contourVisibility(Walk w, bool centre)
     return 1.0 - occluded / w.light.area;
 }
 
-// The whole per-receiver visibility (light.area > 0); `walked`: the kernel did not decide.
-float backprojectionVisibility(ShadowReceiver r, vec3 p, LightPlane light, out float kernelTexels, out int fetches,
-                               out bool walked)
+// One depth layer's visibility for the receiver (light.area > 0): its own kernel (eq. 8:
+// the layer's nearest occluder bounds it), its contour and V. With LAYERS > 1, `hidden`:
+// the light samples its contour hides. `walked`: the kernel did not decide.
+float layerVisibility(ShadowReceiver r, vec3 p, LightPlane light, int layer, inout float kernelTexels,
+                      inout int fetches, inout bool walked, out Walk w)
 {
-    Walk w = startWalk(r, p, light);
+    w = startWalk(r, p, light);
+    w.layer = layer;
+    w.mssmBase = layer * pc.levels;
     ivec4 k;
     float v = receiverKernel(w, k);
-    kernelTexels = kernelSide(k);
-    walked = v < 0.0;
-    if (walked) {
+    kernelTexels = max(kernelTexels, kernelSide(k));
+    if (v < 0.0) {
+        walked = true;
         bool centre = centreOccluded(w);
+#if LAYERS > 1
+        w.hidden = lightSamplesFilled(centre);
+#endif
         walkKernel(w, k, pc.levels);
         v = contourVisibility(w, centre);
     }
-    fetches = w.fetches;
+#if LAYERS > 1
+    else {
+        w.hidden = lightSamplesFilled(v == 0.0);
+    }
+#endif
+    fetches += w.fetches;
+    return v;
+}
+
+// The whole per-receiver visibility (light.area > 0); `walked`: a kernel did not decide.
+// With LAYERS 2 the light is hidden by the union of what either layer hides: each
+// layer's area exactly (radial integration) less their overlap, which the light samples
+// estimate (light_samples.glsl). Where one layer hides nothing, or the two hide disjoint
+// parts, that is exact; the samples' error enters only where both hide the same part.
+float backprojectionVisibility(ShadowReceiver r, vec3 p, LightPlane light, out float kernelTexels, out int fetches,
+                               out bool walked)
+{
+    kernelTexels = 0.0;
+    fetches = 0;
+    walked = false;
+    Walk w;
+    float v = layerVisibility(r, p, light, 0, kernelTexels, fetches, walked, w);
+#if LAYERS > 1
+    // The first layer hiding all of the light (umbra) leaves nothing to add.
+    if (v > 0.0) {
+        LightSamples first = w.hidden;
+        float v2 = layerVisibility(r, p, light, 1, kernelTexels, fetches, walked, w);
+        LightSamples on = lightSamplesOn(light.halfSize, light.disk);
+        float overlap = float(lightSamplesCountBoth(first, w.hidden, on)) / float(max(lightSamplesCount(on), 1u));
+        float hidden1 = 1.0 - clamp(v, 0.0, 1.0), hidden2 = 1.0 - clamp(v2, 0.0, 1.0);
+        // The overlap is at most the lesser layer's hidden part.
+        v = clamp(1.0 - (hidden1 + hidden2 - min(overlap, min(hidden1, hidden2))), 0.0, 1.0);
+    }
+#endif
     return v;
 }
 #endif

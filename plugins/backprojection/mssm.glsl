@@ -42,8 +42,10 @@ ivec2 mssmFaceLast(ivec2 cell, int faceTexels)
 #ifndef MSSM_WRITES
 // The range of depths over the cells [lo, hi] (inclusive, one face) at the level whose
 // nodes are no wider than the narrower side: at most 2 x 2 fetches for a square, and a
-// few more along the longer side of a rectangle. `levels`: how many the buffer holds.
-vec2 mssmRange(ivec2 atlasSize, int levels, ivec2 lo, ivec2 hi)
+// few more along the longer side of a rectangle. `levels`: how many one map's MSSM
+// holds; `base`: the image's level where it starts (a second depth layer's MSSM follows
+// the first's: visibility.comp LAYERS).
+vec2 mssmRange(ivec2 atlasSize, int levels, int base, ivec2 lo, ivec2 hi)
 {
     ivec2 extent = max(hi - lo + 1, ivec2(1));
     int level = min(findMSB(min(extent.x, extent.y)), levels - 1);
@@ -53,7 +55,7 @@ vec2 mssmRange(ivec2 atlasSize, int levels, ivec2 lo, ivec2 hi)
     for (int j = 0; j < count.y; ++j)
         for (int i = 0; i < count.x; ++i) {
             ivec2 node = max(min(lo + ivec2(i, j) * step, hi - step + 1), lo);
-            vec2 v = mssmNode(atlasSize, level, node);
+            vec2 v = mssmNode(atlasSize, base + level, node);
             range = vec2(min(range.x, v.x), max(range.y, v.y));
         }
     return range;

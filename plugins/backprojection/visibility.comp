@@ -18,6 +18,10 @@
 //      light's centre (light_area.glsl). V = 1 - occluded area / light area.
 // With PACKET > 1 the packet pass (packets.comp) ran first and left each pixel's V, or
 // -1 where the pixel walks its own kernel here (Algorithm 1's step 8).
+// With LAYERS 2 (the multi-layer alternative of §5: Bavoil et al. 2008, Schwarz and
+// Stamminger 2007) a depth-peeled second layer holds, per texel, the nearest surface
+// behind the first: each layer gets its own kernel (eq. 8) and contour, and V counts
+// the light that either hides once (contour.glsl backprojectionVisibility).
 // Light size 0 takes the hard shadow's one nearest compare.
 // With VIEWS > 1 (Yang et al. 2009 §5) the light is split into VIEWS sub-lights, each
 // with its own map, MSSM and pass: each adds V / VIEWS of its sub-light to the sum of the

@@ -79,7 +79,10 @@ TEST(HardShaders, CasterShadersCompileSolidAndMasked)
     const gpu::ShaderCompiler compiler = pluginCompiler();
     EXPECT_NO_THROW(compiler.compile("engine/shadow_depth.vert"));
     EXPECT_NO_THROW(compiler.compile("engine/shadow_depth.vert", {{"ALPHA_MASK", "1"}}));
-    EXPECT_NO_THROW(compiler.compile("engine/shadow_masked.frag", {{"ALPHA_MASK", "1"}}));
+    EXPECT_NO_THROW(compiler.compile("engine/shadow_depth.frag", {{"ALPHA_MASK", "1"}}));
+    // Depth peeling's (ShadowMap::addPeeledDepthPass), solid and masked.
+    EXPECT_NO_THROW(compiler.compile("engine/shadow_depth.frag", {{"PEEL", "1"}}));
+    EXPECT_NO_THROW(compiler.compile("engine/shadow_depth.frag", {{"PEEL", "1"}, {"ALPHA_MASK", "1"}}));
 }
 
 TEST(HardShaders, VariantWithoutItsDefinesIsAnError)

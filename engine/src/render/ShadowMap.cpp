@@ -75,6 +75,7 @@ ShadowMap::ShadowMap(const ShadowMapSetup& setup, uint32_t resolution, std::stri
       faceCount_(shadowFaceCount(setup.light.type)),
       guard_(faceCount_ == kMaxShadowFaces ? std::min(guardTexels, resolution) : 0u),
       lightType_(setup.light.type),
+      shaders_(setup.shaders),
       buffer_(setup.context, sizeof(ShadowMapData), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, name_ + ".shadow_faces")
 {
     if (resolution_ == 0) throw ConfigError(fmt::format("{}: resolution: must be at least 1 texel, got 0", technique));
@@ -100,10 +101,11 @@ ShadowMap::ShadowMap(const ShadowMapSetup& setup, uint32_t resolution, std::stri
     // Both faces cast: a receiver's own back faces would otherwise let light leak
     // through single-sided or open geometry.
     d.cullMode = VK_CULL_MODE_NONE;
+    depthDesc_ = d;
     depth_ = gpu::Pipeline(context_, setup.shaders, d);
     if (casters_.hasAlphaMasked()) {
         d.name += ".masked";
-        d.fragmentShader = "engine/shadow_masked.frag";
+        d.fragmentShader = "engine/shadow_depth.frag";
         d.defines = {{"ALPHA_MASK", "1"}};
         d.vertexLayout = casters_.positionUvLayout();
         depthMasked_ = gpu::Pipeline(context_, setup.shaders, d);
@@ -183,8 +185,41 @@ void ShadowMap::addDepthPass(graph::RenderGraph& graph, const std::string& image
         });
 }
 
+void ShadowMap::addPeeledDepthPass(graph::RenderGraph& graph, const std::string& image,
+                                   const std::string& nearerLayer, ShadowDepthBias bias, uint32_t firstView)
+{
+    if (!peel_.handle()) {
+        gpu::GraphicsPipelineDesc d = depthDesc_;
+        d.name += ".peel";
+        d.fragmentShader = "engine/shadow_depth.frag";
+        d.defines = {{"PEEL", "1"}};
+        peel_ = gpu::Pipeline(context_, shaders_, d);
+        if (casters_.hasAlphaMasked()) {
+            d.name += ".masked";
+            d.defines.push_back({"ALPHA_MASK", "1"});
+            d.vertexLayout = casters_.positionUvLayout();
+            peelMasked_ = gpu::Pipeline(context_, shaders_, d);
+        }
+        peelSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
+    }
+    graph.declareImage({image, atlasWidth(), atlasHeight(), kShadowDepthFormat});
+    graph.addPass(image, graph::QueueKind::Graphics)
+        .read(nearerLayer, graph::Usage::Sampled)
+        .write(image, graph::Usage::DepthAttachment)
+        .execute([this, image, nearerLayer, bias, firstView](graph::PassContext& pass) {
+            const ShadowMapPlacement own{frusta_, {0, 0}, firstView};
+            recordLayer(pass, image, bias, {&own, 1}, &nearerLayer);
+        });
+}
+
 void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
                                 std::span<const ShadowMapPlacement> maps) const
+{
+    recordLayer(pass, image, bias, maps, nullptr);
+}
+
+void ShadowMap::recordLayer(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
+                            std::span<const ShadowMapPlacement> maps, const std::string* nearerLayer) const
 {
     VkCommandBuffer cmd = pass.cmd();
     const gpu::Image& target = pass.image(image);
@@ -261,6 +296,16 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
     vkCmdSetDepthBias(cmd, -bias.constant, -bias.clamp, -bias.slope);
 
     const bool masked = casters_.hasAlphaMasked();
+    const gpu::Pipeline& solid = nearerLayer ? peel_ : depth_;
+    const gpu::Pipeline& cutout = nearerLayer ? peelMasked_ : depthMasked_;
+    // Every pipeline's descriptors: the casters' instances, and a peeled layer's nearer one.
+    const auto descriptors = [&]() {
+        gpu::DescriptorPush d;
+        d.storageBuffer("Instances", casters_.instanceBuffer());
+        if (nearerLayer)
+            d.sampledImage("nearerLayer", pass.image(*nearerLayer), peelSampler_, pass.layout(*nearerLayer));
+        return d;
+    };
     bool solidBound = false;
     for (const FaceDraw& face : faces) {
         const CasterView& view = face.view;
@@ -268,21 +313,20 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
         vkCmdSetScissor(cmd, 0, 1, &face.scissor);
         // The solid pipeline stays bound across faces unless the masked one replaced it.
         if (!solidBound) {
-            depth_.bind(cmd);
-            gpu::DescriptorPush().storageBuffer("Instances", casters_.instanceBuffer()).push(context_, cmd, depth_);
+            solid.bind(cmd);
+            descriptors().push(context_, cmd, solid);
             solidBound = true;
         }
-        depth_.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
+        solid.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
         casters_.draw(cmd, view, DrawFilter::Solid);
         if (!masked) continue;
-        depthMasked_.bind(cmd);
-        depthMasked_.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
+        cutout.bind(cmd);
+        cutout.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
         casters_.draw(cmd, view, DrawFilter::AlphaMasked, [&](const gpu::Image& texture) {
-            gpu::DescriptorPush()
-                .storageBuffer("Instances", casters_.instanceBuffer())
+            descriptors()
                 .storageBuffer("Materials", casters_.materialBuffer())
                 .sampledImage("baseColorTexture", texture, casters_.textureSampler())
-                .push(context_, cmd, depthMasked_);
+                .push(context_, cmd, cutout);
         });
         solidBound = false;
     }

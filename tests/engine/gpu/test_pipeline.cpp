@@ -173,7 +173,7 @@ TEST_F(PipelineTest, GraphicsLayoutJoinsTheStagesBindings)
     gpu::GraphicsPipelineDesc d;
     d.name = "masked depth";
     d.vertexShader = "engine/shadow_depth.vert";
-    d.fragmentShader = "engine/shadow_masked.frag";
+    d.fragmentShader = "engine/shadow_depth.frag";
     d.defines = {{"ALPHA_MASK", "1"}};
     d.pushConstantBytes = 64;
     d.vertexLayout = {20, {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0}, {2, 0, VK_FORMAT_R32G32_SFLOAT, 12}}};

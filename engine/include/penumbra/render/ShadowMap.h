@@ -171,6 +171,18 @@ public:
     void addDepthPass(graph::RenderGraph& graph, const std::string& image, ShadowDepthBias bias,
                       uint32_t firstView = 0) const;
 
+    // Depth peeling (Everitt 2001; the multi-layer shadow maps of Bavoil et al. 2008 and
+    // Schwarz and Stamminger 2007): declares the transient depth image `image`, like
+    // addDepthPass's, and the graphics pass named `image` that draws into it, per texel,
+    // the nearest caster surface strictly behind the one `nearerLayer` stores there
+    // (an image of this map's addDepthPass, or of this function for a third layer, drawn
+    // with the same `bias` and `firstView`). A texel with nothing behind its nearer
+    // layer stays cleared (0, the far plane). A closed caster's second layer is its own
+    // far side; a single-sided surface (a plate) has none. The peeling pipelines are
+    // created on the first call.
+    void addPeeledDepthPass(graph::RenderGraph& graph, const std::string& image, const std::string& nearerLayer,
+                            ShadowDepthBias bias, uint32_t firstView = 0);
+
     // Records, in a graphics pass that writes `image` as Usage::DepthAttachment, the clear
     // of the image (of the texels the receivers read: setReadByLookupsOnly) and the casters of every map of `maps` into its atlas at its
     // origin, with `bias`: the depth pass of addDepthPass for one map, and for a technique
@@ -239,8 +251,18 @@ private:
     const uint32_t guard_;  // 0 for one face
     const scene::LightType lightType_;  // as created
     bool typeCompiledIn_ = false;          // shaderDefines() was asked for
+    // Draws `maps` into `image`; with `nearerLayer`, the peeling pipelines draw only what
+    // lies behind it.
+    void recordLayer(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
+                     std::span<const ShadowMapPlacement> maps, const std::string* nearerLayer) const;
+
+    const gpu::ShaderCompiler& shaders_;
+    gpu::GraphicsPipelineDesc depthDesc_;  // the solid casters' pipeline, which the others extend
     gpu::Pipeline depth_;        // solid casters: no fragment shader
     gpu::Pipeline depthMasked_;  // alpha-masked casters: a fragment shader cuts the holes
+    gpu::Pipeline peel_;         // addPeeledDepthPass: solid casters behind the nearer layer
+    gpu::Pipeline peelMasked_;   // and alpha-masked ones
+    gpu::Sampler peelSampler_;   // reads the nearer layer's depths, one texel each
     gpu::Buffer buffer_;         // data_ for the shaders, host-visible
     ShadowMapData data_;
     std::vector<LightFrustum> frusta_;
