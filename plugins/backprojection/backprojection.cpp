@@ -220,8 +220,8 @@ struct VisibilityPush {
 struct MssmPush {
     glm::ivec2 atlasSize{0};
     int32_t faceTexels = 0;
-    int32_t level = 0;  // of the layer's MSSM
-    int32_t base = 0;   // the image level where the layer's MSSM starts
+    int32_t level = 0;
+    int32_t layerOffset = 0;  // x of the layer's MSSM in the image (mssm.glsl)
 };
 
 // An orthonormal frame (t, b) with t x b = n.
@@ -561,22 +561,23 @@ std::vector<SubLight> BackprojectionShadow::subLights(const scene::Light& light)
     return subs;
 }
 
-// The MSSM's levels (every layer's), stacked, must fit one image side.
+// The MSSM's levels, stacked, must fit one image side, and its layers side by side the
+// other.
 void BackprojectionShadow::checkDevice() const
 {
     VkPhysicalDeviceProperties properties{};
     vkGetPhysicalDeviceProperties(context_.physicalDevice(), &properties);
-    const int levels = levels_ * layers_;
-    const uint64_t rows = uint64_t(firstMap().atlasHeight()) * uint64_t(levels);
-    if (rows > properties.limits.maxImageDimension2D) {
-        throw ConfigError(fmt::format("backprojection: resolution: {} texels per face with max_kernel {} texels{} need "
-                                      "a multi-scale shadow map of {} levels of {} rows ({} MiB), taller than this "
-                                      "device's largest image ({} texels); lower resolution or max_kernel",
-                                      settings_.resolution, settings_.maxKernel,
-                                      layers_ > 1 ? fmt::format(" and {} layers", layers_) : "", levels,
-                                      firstMap().atlasHeight(),
-                                      mssmBytes(firstMap().atlasWidth(), firstMap().atlasHeight(), levels) >> 20,
-                                      properties.limits.maxImageDimension2D));
+    const uint64_t rows = uint64_t(firstMap().atlasHeight()) * uint64_t(levels_);
+    const uint64_t columns = uint64_t(firstMap().atlasWidth()) * uint64_t(layers_);
+    if (rows > properties.limits.maxImageDimension2D || columns > properties.limits.maxImageDimension2D) {
+        const std::string layers =
+            layers_ > 1 ? fmt::format(", {} layers of {} columns", layers_, firstMap().atlasWidth()) : "";
+        const VkDeviceSize bytes = mssmBytes(firstMap().atlasWidth(), firstMap().atlasHeight(), levels_) * layers_;
+        throw ConfigError(fmt::format("backprojection: resolution: {} texels per face with max_kernel {} texels need a "
+                                      "multi-scale shadow map of {} levels of {} rows{} ({} MiB), larger than this "
+                                      "device's largest image ({} texels a side); lower resolution or max_kernel",
+                                      settings_.resolution, settings_.maxKernel, levels_, firstMap().atlasHeight(),
+                                      layers, bytes >> 20, properties.limits.maxImageDimension2D));
     }
 }
 
@@ -643,8 +644,9 @@ void BackprojectionShadow::addViewPasses(graph::RenderGraph& graph, const plugin
         names.peeled = io.local("layer1.shadow_map");
         map.addPeeledDepthPass(graph, names.peeled, names.map, bias, firstView);
     }
-    // Every layer's MSSM, the second's levels after the first's (mssm.glsl).
-    graph.declareImage({names.mssm, map.atlasWidth(), map.atlasHeight() * uint32_t(levels_ * layers_), kMssmFormat});
+    // Every layer's MSSM, the second's right of the first's (mssm.glsl).
+    graph.declareImage({names.mssm, map.atlasWidth() * uint32_t(layers_), map.atlasHeight() * uint32_t(levels_),
+                        kMssmFormat});
     graph::PassBuilder mssm = graph.addPass(names.mssm, graph::QueueKind::Compute);
     mssm.read(names.map, graph::Usage::Sampled).write(names.mssm, graph::Usage::Storage);
     if (!names.peeled.empty()) mssm.read(names.peeled, graph::Usage::Sampled);
@@ -699,7 +701,7 @@ void BackprojectionShadow::recordMssm(const graph::PassContext& pass, const View
 {
     VkCommandBuffer cmd = pass.cmd();
     const glm::ivec2 size = atlasSize();
-    // Layer j's levels follow layer j - 1's; level 0 of each from its own depth map.
+    // Layer j's MSSM right of layer j - 1's; level 0 of each from its own depth map.
     for (int layer = 0; layer < layers_; ++layer) {
         const std::string& map = layer == 0 ? names.map : names.peeled;
         for (int level = 0; level < levels_; ++level) {
@@ -712,7 +714,7 @@ void BackprojectionShadow::recordMssm(const graph::PassContext& pass, const View
                     descriptors.sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map));
                 descriptors.storageImage("mssmImage", pass.image(names.mssm)).push(context_, cmd, pipeline);
             }
-            const MssmPush push{size, int32_t(view.shadowMap.faceTexels()), level, layer * levels_};
+            const MssmPush push{size, int32_t(view.shadowMap.faceTexels()), level, layer * size.x};
             pipeline.pushConstants(cmd, &push, sizeof(push));
             pipeline.dispatchOver(cmd, uint32_t(size.x), uint32_t(size.y));
         }

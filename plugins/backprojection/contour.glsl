@@ -29,8 +29,8 @@ layout(binding = 1) uniform sampler2DShadow shadowCompare;
 layout(binding = 5) uniform sampler2D shadowDepth;  // the same map, raw depths
 #if LAYERS > 1
 // The second depth layer (render::ShadowMap::addPeeledDepthPass): per texel the nearest
-// surface behind the first layer's, raw depths; its MSSM follows the first's levels in
-// mssmImage.
+// surface behind the first layer's, raw depths; its MSSM lies right of the first's in
+// mssmImage (mssm.glsl).
 layout(binding = 15) uniform sampler2D peeledDepth;
 #endif
 
@@ -183,7 +183,7 @@ struct Walk {
     ivec2 origin;    // the face's first texel in the atlas
     int faceTexels;
     int layer;       // the depth layer it walks: 0, or 1 (peeledDepth)
-    int mssmBase;    // the image level where that layer's MSSM starts
+    ivec2 mssmOrigin;  // the face's first node in mssmImage: a second layer's MSSM lies right of the first's
     float sum;       // of the edges' signed hidden areas (light_area.glsl)
     int fetches;     // depth-map and MSSM reads (the debug image)
 #if LAYERS > 1
@@ -351,7 +351,7 @@ ivec4 kernelAt(inout Walk w, float z, float wp, ivec2 centreCell, int cap)
 vec2 kernelRange(inout Walk w, ivec4 k)
 {
     w.fetches += 4;
-    return mssmRange(pc.atlasSize, pc.levels, w.mssmBase, w.origin + k.xy, w.origin + k.zw);
+    return mssmRange(pc.atlasSize, pc.levels, w.mssmOrigin + k.xy, w.mssmOrigin + k.zw);
 }
 
 void walkKernel(inout Walk w, ivec4 k, int levels)
@@ -372,7 +372,7 @@ void walkKernel(inout Walk w, ivec4 k, int levels)
         if (any(greaterThan(node.xy, k.zw))) continue;  // beyond the kernel
         int level = node.z;
         ivec2 last = min(node.xy + (1 << level) - 1, k.zw);
-        vec2 depths = mssmNode(atlasSize, w.mssmBase + level, w.origin + node.xy);
+        vec2 depths = mssmNode(atlasSize, level, w.mssmOrigin + node.xy);
         ++w.fetches;
         vec2 reference = referenceRange(w, node.xy, min(last + 1, ivec2(w.faceTexels - 1)));
         // Fig. 6 cases 4 and 5: every sample behind the receiver, or every one in front.
@@ -405,7 +405,7 @@ Walk startWalk(ShadowReceiver r, vec3 p, LightPlane light)
     w.faceTexels = int(shadowFaceTexels());
     w.origin = ivec2(int(r.face % 3u), int(r.face / 3u)) * w.faceTexels;
     w.layer = 0;
-    w.mssmBase = 0;
+    w.mssmOrigin = w.origin;
     w.sum = 0.0;
     w.fetches = 0;
 #if LAYERS > 1
@@ -469,7 +469,7 @@ float layerVisibility(ShadowReceiver r, vec3 p, LightPlane light, int layer, ino
 {
     w = startWalk(r, p, light);
     w.layer = layer;
-    w.mssmBase = layer * pc.levels;
+    w.mssmOrigin = w.origin + ivec2(layer * pc.atlasSize.x, 0);
     ivec4 k;
     float v = receiverKernel(w, k);
     kernelTexels = max(kernelTexels, kernelSide(k));
@@ -493,9 +493,11 @@ float layerVisibility(ShadowReceiver r, vec3 p, LightPlane light, int layer, ino
 
 // The whole per-receiver visibility (light.area > 0); `walked`: a kernel did not decide.
 // With LAYERS 2 the light is hidden by the union of what either layer hides: each
-// layer's area exactly (radial integration) less their overlap, which the light samples
-// estimate (light_samples.glsl). Where one layer hides nothing, or the two hide disjoint
-// parts, that is exact; the samples' error enters only where both hide the same part.
+// layer's area exactly (radial integration) less their overlap, the second's area times
+// the fraction of the light samples it hides that the first hides too
+// (light_samples.glsl). Where the second hides nothing, nothing the first hides, or only
+// what the first hides (a closed caster's far side behind its near side), that is
+// exact; the samples' error enters only where the two overlap in part.
 float backprojectionVisibility(ShadowReceiver r, vec3 p, LightPlane light, out float kernelTexels, out int fetches,
                                out bool walked)
 {
@@ -510,10 +512,11 @@ float backprojectionVisibility(ShadowReceiver r, vec3 p, LightPlane light, out f
         LightSamples first = w.hidden;
         float v2 = layerVisibility(r, p, light, 1, kernelTexels, fetches, walked, w);
         LightSamples on = lightSamplesOn(light.halfSize, light.disk);
-        float overlap = float(lightSamplesCountBoth(first, w.hidden, on)) / float(max(lightSamplesCount(on), 1u));
+        uint both = lightSamplesCountBoth(first, w.hidden, on), second = lightSamplesCountBoth(w.hidden, on, on);
         float hidden1 = 1.0 - clamp(v, 0.0, 1.0), hidden2 = 1.0 - clamp(v2, 0.0, 1.0);
         // The overlap is at most the lesser layer's hidden part.
-        v = clamp(1.0 - (hidden1 + hidden2 - min(overlap, min(hidden1, hidden2))), 0.0, 1.0);
+        float overlap = min(hidden2 * float(both) / float(max(second, 1u)), hidden1);
+        v = clamp(1.0 - (hidden1 + hidden2 - overlap), 0.0, 1.0);
     }
 #endif
     return v;

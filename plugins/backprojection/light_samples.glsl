@@ -106,11 +106,4 @@ uint lightSamplesCountBoth(LightSamples a, LightSamples b, LightSamples on)
     return n;
 }
 
-uint lightSamplesCount(LightSamples s)
-{
-    uint n = 0u;
-    [[unroll]] for (int i = 0; i < LIGHT_SAMPLE_WORDS; ++i) n += uint(bitCount(s.bits[i]));
-    return n;
-}
-
 #endif

@@ -14,7 +14,9 @@
 // One RG32F storage image, the levels stacked downwards (level l's node for atlas cell c
 // at (c.x, l * atlas height + c.y)): an image is not bound by a device's largest storage
 // buffer range (lavapipe: 128 MiB, which a 1024-texel cube atlas's 7 levels exceed), only
-// by its largest 2-D image side (backprojection.cpp checks both).
+// by its largest 2-D image side (backprojection.cpp checks both). A second depth layer's
+// MSSM (visibility.comp LAYERS) lies right of the first's, one atlas width along: its
+// readers offset the cells they ask for, its builder (mssm.comp) the nodes it writes.
 //
 // The including shader defines MSSM_BINDING and MSSM_QUALIFIER first.
 #ifndef PENUMBRA_BACKPROJECTION_MSSM_GLSL
@@ -42,10 +44,8 @@ ivec2 mssmFaceLast(ivec2 cell, int faceTexels)
 #ifndef MSSM_WRITES
 // The range of depths over the cells [lo, hi] (inclusive, one face) at the level whose
 // nodes are no wider than the narrower side: at most 2 x 2 fetches for a square, and a
-// few more along the longer side of a rectangle. `levels`: how many one map's MSSM
-// holds; `base`: the image's level where it starts (a second depth layer's MSSM follows
-// the first's: visibility.comp LAYERS).
-vec2 mssmRange(ivec2 atlasSize, int levels, int base, ivec2 lo, ivec2 hi)
+// few more along the longer side of a rectangle. `levels`: how many the buffer holds.
+vec2 mssmRange(ivec2 atlasSize, int levels, ivec2 lo, ivec2 hi)
 {
     ivec2 extent = max(hi - lo + 1, ivec2(1));
     int level = min(findMSB(min(extent.x, extent.y)), levels - 1);
@@ -55,7 +55,7 @@ vec2 mssmRange(ivec2 atlasSize, int levels, int base, ivec2 lo, ivec2 hi)
     for (int j = 0; j < count.y; ++j)
         for (int i = 0; i < count.x; ++i) {
             ivec2 node = max(min(lo + ivec2(i, j) * step, hi - step + 1), lo);
-            vec2 v = mssmNode(atlasSize, base + level, node);
+            vec2 v = mssmNode(atlasSize, level, node);
             range = vec2(min(range.x, v.x), max(range.y, v.y));
         }
     return range;

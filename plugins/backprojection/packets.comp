@@ -228,7 +228,7 @@ int packetClass(Walk lead, ivec4 k, int walkers, inout int fetches)
     // each, so its band is the packet's depth range; ours have planes, which move the
     // band across the kernel with the receivers' slope, so the band is the walkers'
     // spread at one place (packetReferenceSpread) where it meets the kernel's range.
-    vec2 kernelDepths = mssmRange(pc.atlasSize, pc.levels, 0, lead.origin + k.xy, lead.origin + k.zw);
+    vec2 kernelDepths = mssmRange(pc.atlasSize, pc.levels, lead.origin + k.xy, lead.origin + k.zw);
     fetches += 4;
     ivec2 far = min(k.zw + 1, ivec2(lead.faceTexels - 1));
     vec2 packetDepths = packetReferenceRange(lead, k.xy, far);

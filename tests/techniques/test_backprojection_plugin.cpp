@@ -831,8 +831,8 @@ double stackedGroundError(const test::RenderedFrame& frame, const std::vector<fl
 // cube at 2 over a plate of half side 0.6 at 1, which the centre does not see and the
 // sub-lights' centres do: the second layer is the cube's own bottom, the plate a third.
 // Against the ray-traced reference (1,024 samples), over the ground beside the stack
-// (measured: hidden plate 0.0244 / 0.0050 / 0.0244 for one map, two layers, sub-lights;
-// cube over plate 0.0738 / 0.0724 / 0.0265).
+// (measured: hidden plate 0.0244 / 0.0044 / 0.0244 for one map, two layers, sub-lights;
+// cube over plate 0.0738 / 0.0727 / 0.0265).
 TEST_F(BackprojectionTest, TwoLayersAndSubLightsEachWinWhereTheOtherMisses)
 {
     const config::RenderConfig cfg = stackedConfig();
@@ -868,8 +868,8 @@ TEST_F(BackprojectionTest, TwoLayersAndSubLightsEachWinWhereTheOtherMisses)
 
 // The second layer is peeled with the casters' alpha masks: under the hidden-plate
 // scene's top plate, a quad whose half x < 0 is cut away (alpha 0) shadows with its other
-// half only, as the reference's rays see it (measured 0.0183 for one map, 0.0043 for two
-// layers; 0.0145 when the peel ignored the mask).
+// half only, as the reference's rays see it (measured 0.0183 for one map, 0.0039 for two
+// layers; 0.0143 when the peel ignored the mask).
 TEST_F(BackprojectionTest, SecondLayerCutsAlphaMaskedHoles)
 {
     scene::Scene s = stackedScene(false, 0.45f);

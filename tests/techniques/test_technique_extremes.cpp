@@ -1,5 +1,5 @@
-// Every shadow-map technique (hard, PCF, PCSS, VSM, EVSM, ESM, VSSM, backprojection per pixel
-// and in packets) under the same extremes,
+// Every shadow-map technique (hard, PCF, PCSS, VSM, EVSM, ESM, VSSM, backprojection per pixel,
+// in packets and with two depth layers) under the same extremes,
 // end to end through frame::FrameRenderer, with the contract's invariants (every V
 // finite and in [0, 1], 1 without geometry: PluginFrame's checkedVisibility) on every
 // image:
@@ -75,6 +75,13 @@ const TechniqueCase kTechniques[] = {
     {"backprojection_packets",
      "backprojection",
      {{"resolution", 512}, {"packet", "3x3"}, {"coherence", "always"}},
+     "resolution",
+     {128, 256, 512},
+     true},
+    // A depth-peeled second layer: two maps, two walks, their union on the light.
+    {"backprojection_layers",
+     "backprojection",
+     {{"resolution", 512}, {"packet", "1x1"}, {"layers", 2}},
      "resolution",
      {128, 256, 512},
      true},
