@@ -28,6 +28,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <map>
 #include <set>
 #include <string>
@@ -74,6 +75,19 @@ void applyBackprojection(config::LightConfig& light, const BackprojectionSetting
     test::setShadow(light, "backprojection", s.params());
 }
 
+// Runs `attempt`, which must be refused with an error that holds every one of `words`
+// (the parameter it names, and what it says); `what` names the attempt.
+template <class Attempt>
+void expectRefusal(Attempt attempt, std::initializer_list<const char*> words, const std::string& what)
+{
+    try {
+        attempt();
+        ADD_FAILURE() << what << " was accepted";
+    } catch (const std::exception& e) {
+        for (const char* word : words) EXPECT_NE(std::string(e.what()).find(word), std::string::npos) << e.what();
+    }
+}
+
 class BackprojectionTest : public test::TechniqueTest<BackprojectionSettings, applyBackprojection> {
 protected:
     void expectRayCastAgreement(const std::vector<float>& v, const BackprojectionSettings& s, const std::string& label)
@@ -89,6 +103,19 @@ protected:
         cfg.lights[0].shadow.setParam("samples", samples, "test");
         render(cfg, std::move(s));
         return frame->checkedVisibility();
+    }
+    // `s` (its light size for a scene of scale 1) on the default test scene at scales 1e-3
+    // and 1e5: every length is the scene's, so V agrees with rays away from penumbrae.
+    void expectAgreementAtEveryScale(BackprojectionSettings s)
+    {
+        const double lightSize = s.lightSize;
+        for (float scale : {1e-3f, 1e5f}) {
+            config::RenderConfig cfg = test::defaultTestConfig();
+            s.lightSize = lightSize * scale;
+            test::scaleConfig(cfg, scale);
+            const std::vector<float> v = renderWith(cfg, s);
+            expectRayCastAgreement(v, s, fmt::format("scale {}", scale));
+        }
     }
 };
 
@@ -744,12 +771,8 @@ TEST_F(BackprojectionTest, SubLightsSplitOnlyRectangles)
         config::RenderConfig typed = cfg;
         test::setLightType(typed.lights[0], type);
         applyBackprojection(typed.lights[0], s);
-        try {
-            render(typed, config::buildScene(typed.scene));
-            ADD_FAILURE() << scene::lightTypeName(type) << " light split into sub-lights";
-        } catch (const std::exception& e) {
-            EXPECT_NE(std::string(e.what()).find("sub_lights"), std::string::npos) << e.what();
-        }
+        expectRefusal([&] { render(typed, config::buildScene(typed.scene)); }, {"sub_lights"},
+                      fmt::format("a {} light split into sub-lights", scene::lightTypeName(type)));
     }
 }
 
@@ -757,16 +780,11 @@ TEST_F(BackprojectionTest, SubLightsSplitOnlyRectangles)
 // average agrees with rays away from penumbrae (MatchesRayCastAwayFromPenumbrae).
 TEST_F(BackprojectionTest, SubLightsHoldAtEveryScale)
 {
-    for (float scale : {1e-3f, 1e5f}) {
-        config::RenderConfig cfg = test::defaultTestConfig();
-        BackprojectionSettings s;
-        s.lightSize = 0.6 * scale;
-        s.maxKernelTexels = 16.0;
-        s.subLights = 2;
-        test::scaleConfig(cfg, scale);
-        const std::vector<float> v = renderWith(cfg, s);
-        expectRayCastAgreement(v, s, fmt::format("scale {}", scale));
-    }
+    BackprojectionSettings s;
+    s.lightSize = 0.6;
+    s.maxKernelTexels = 16.0;
+    s.subLights = 2;
+    expectAgreementAtEveryScale(s);
 }
 
 // ---------------------------------------------------------------------------------
@@ -938,12 +956,8 @@ TEST_F(BackprojectionTest, SecondLayerIsDrawnOnlyWhenAskedFor)
     for (const auto& [packet, sub] : {std::pair{"2x2", 1}, std::pair{"1x1", 2}}) {
         s.packet = packet;
         s.subLights = sub;
-        try {
-            renderWith(cfg, s, stackedScene(false, 0.45f));
-            ADD_FAILURE() << "two layers with packet " << packet << " and sub_lights " << sub;
-        } catch (const std::exception& e) {
-            EXPECT_NE(std::string(e.what()).find("layers"), std::string::npos) << e.what();
-        }
+        expectRefusal([&] { renderWith(cfg, s, stackedScene(false, 0.45f)); }, {"layers"},
+                      fmt::format("two layers with packet {} and sub_lights {}", packet, sub));
     }
 }
 
@@ -951,16 +965,11 @@ TEST_F(BackprojectionTest, SecondLayerIsDrawnOnlyWhenAskedFor)
 // 1e-3 and 1e5 two layers agree with rays away from penumbrae as one does.
 TEST_F(BackprojectionTest, TwoLayersHoldAtEveryScale)
 {
-    for (float scale : {1e-3f, 1e5f}) {
-        config::RenderConfig cfg = test::defaultTestConfig();
-        BackprojectionSettings s;
-        s.lightSize = 0.6 * scale;
-        s.maxKernelTexels = 16.0;
-        s.layers = 2;
-        test::scaleConfig(cfg, scale);
-        const std::vector<float> v = renderWith(cfg, s);
-        expectRayCastAgreement(v, s, fmt::format("scale {}", scale));
-    }
+    BackprojectionSettings s;
+    s.lightSize = 0.6;
+    s.maxKernelTexels = 16.0;
+    s.layers = 2;
+    expectAgreementAtEveryScale(s);
 }
 
 namespace {
@@ -1005,13 +1014,8 @@ TEST_F(BackprojectionTest, CpuDeviceRefusesKernelsPastTheLoopLimit)
     s.lightSize = 0.6;
     s.maxKernelTexels = 256.0;
     applyBackprojection(cfg.lights[0], s);
-    try {
-        render(cfg, config::buildScene(cfg.scene));
-        FAIL() << "a 256-texel kernel cap was accepted on a CPU device";
-    } catch (const std::exception& e) {
-        EXPECT_NE(std::string(e.what()).find("max_kernel"), std::string::npos) << e.what();
-        EXPECT_NE(std::string(e.what()).find("65,535"), std::string::npos) << e.what();
-    }
+    expectRefusal([&] { render(cfg, config::buildScene(cfg.scene)); }, {"max_kernel", "65,535"},
+                  "a 256-texel kernel cap on a CPU device");
 }
 
 // At the largest cap a CPU device allows (104 texels) every walk runs to its end: on the
@@ -1056,13 +1060,8 @@ TEST_F(BackprojectionTest, TwoLayersWalkToTheirEndAtTheirCpuCap)
     s.lightSize = 1.5;
     s.layers = 2;
     s.maxKernelTexels = 74.0;
-    try {
-        renderWith(cfg, s);
-        ADD_FAILURE() << "a 74-texel kernel cap with two layers was accepted on a CPU device";
-    } catch (const std::exception& e) {
-        EXPECT_NE(std::string(e.what()).find("max_kernel"), std::string::npos) << e.what();
-        EXPECT_NE(std::string(e.what()).find("2 layers"), std::string::npos) << e.what();
-    }
+    expectRefusal([&] { renderWith(cfg, s); }, {"max_kernel", "2 layers"},
+                  "a 74-texel kernel cap with two layers on a CPU device");
     s.maxKernelTexels = 73.0;
     s.traversal = "flat";
     applyBackprojection(cfg.lights[0], s);
@@ -1085,13 +1084,8 @@ TEST_F(BackprojectionTest, MssmTallerThanTheLargestImageIsRefused)
     s.resolution = 2048;
     s.maxKernelTexels = 64.0;
     applyBackprojection(cfg.lights[0], s);
-    try {
-        render(cfg, config::buildScene(cfg.scene));
-        FAIL() << "a 2048-texel cube atlas's MSSM was accepted";
-    } catch (const std::exception& e) {
-        EXPECT_NE(std::string(e.what()).find("resolution: 2048"), std::string::npos) << e.what();
-        EXPECT_NE(std::string(e.what()).find("largest image"), std::string::npos) << e.what();
-    }
+    expectRefusal([&] { render(cfg, config::buildScene(cfg.scene)); }, {"resolution: 2048", "largest image"},
+                  "a 2048-texel cube atlas's MSSM");
 }
 
 // ---------------------------------------------------------------------------------
