@@ -776,15 +776,20 @@ TEST_F(BackprojectionTest, SubLightsSplitOnlyRectangles)
     }
 }
 
-// Sub-lights are placed in the light's own units: at scene scales 1e-3 and 1e5 the
-// average agrees with rays away from penumbrae (MatchesRayCastAwayFromPenumbrae).
-TEST_F(BackprojectionTest, SubLightsHoldAtEveryScale)
+// Sub-lights are placed in the light's own units, and peeling compares depths along the
+// light relative to the map's range: at scene scales 1e-3 and 1e5 both agree with rays
+// away from penumbrae (MatchesRayCastAwayFromPenumbrae).
+TEST_F(BackprojectionTest, SubLightsAndTwoLayersHoldAtEveryScale)
 {
-    BackprojectionSettings s;
-    s.lightSize = 0.6;
-    s.maxKernelTexels = 16.0;
-    s.subLights = 2;
-    expectAgreementAtEveryScale(s);
+    for (const auto& [subLights, layers] : {std::pair{2, 1}, std::pair{1, 2}}) {
+        SCOPED_TRACE(fmt::format("sub_lights {}, layers {}", subLights, layers));
+        BackprojectionSettings s;
+        s.lightSize = 0.6;
+        s.maxKernelTexels = 16.0;
+        s.subLights = subLights;
+        s.layers = layers;
+        expectAgreementAtEveryScale(s);
+    }
 }
 
 // ---------------------------------------------------------------------------------
@@ -959,17 +964,6 @@ TEST_F(BackprojectionTest, SecondLayerIsDrawnOnlyWhenAskedFor)
         expectRefusal([&] { renderWith(cfg, s, stackedScene(false, 0.45f)); }, {"layers"},
                       fmt::format("two layers with packet {} and sub_lights {}", packet, sub));
     }
-}
-
-// Peeling compares depths along the light, relative to the map's range: at scene scales
-// 1e-3 and 1e5 two layers agree with rays away from penumbrae as one does.
-TEST_F(BackprojectionTest, TwoLayersHoldAtEveryScale)
-{
-    BackprojectionSettings s;
-    s.lightSize = 0.6;
-    s.maxKernelTexels = 16.0;
-    s.layers = 2;
-    expectAgreementAtEveryScale(s);
 }
 
 namespace {
