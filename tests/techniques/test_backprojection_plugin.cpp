@@ -117,6 +117,20 @@ protected:
             expectRayCastAgreement(v, s, fmt::format("scale {}", scale));
         }
     }
+    // The flat walk of `s` on `cfg` (the most loop iterations a walk runs), checking that a
+    // tenth of the pixels or more have kernels at the cap `s.maxKernelTexels`.
+    std::vector<float> flatWalkAtTheCap(const config::RenderConfig& cfg, BackprojectionSettings s)
+    {
+        s.traversal = "flat";
+        config::RenderConfig flat = cfg;
+        applyBackprojection(flat.lights[0], s);
+        render(flat, config::buildScene(flat.scene), {"light0.backprojection.kernel"});
+        const std::vector<float> v = frame->checkedVisibility();
+        const std::vector<float> kernel = frame->renderer.readImage("light0.backprojection.kernel").values;
+        EXPECT_GT(std::ranges::count(kernel, float(s.maxKernelTexels)), ptrdiff_t(v.size() / 10))
+            << "kernels at the cap";
+        return v;
+    }
 };
 
 // A 0.3 x 1 x 0.3 pillar with a plate of the same size 0.2 above its top, under a 1 x 1
@@ -1024,13 +1038,7 @@ TEST_F(BackprojectionTest, WalksAtTheLargestCpuCapRunToTheirEnd)
     BackprojectionSettings s;
     s.lightSize = 1.5;
     s.maxKernelTexels = 104.0;
-    s.traversal = "flat";
-    applyBackprojection(cfg.lights[0], s);
-    render(cfg, config::buildScene(cfg.scene), {"light0.backprojection.kernel"});
-    const std::vector<float> flat = frame->checkedVisibility();
-    const std::vector<float> kernel = frame->renderer.readImage("light0.backprojection.kernel").values;
-    EXPECT_GT(std::ranges::count(kernel, 104.0f), ptrdiff_t(flat.size() / 10)) << "kernels at the cap";
-    s.traversal = "hierarchical";
+    const std::vector<float> flat = flatWalkAtTheCap(cfg, s);
     const std::vector<float> hierarchical = renderWith(cfg, s);
     s.packet = "3x3";
     s.joinEveryPacket = true;
@@ -1057,13 +1065,7 @@ TEST_F(BackprojectionTest, TwoLayersWalkToTheirEndAtTheirCpuCap)
     expectRefusal([&] { renderWith(cfg, s); }, {"max_kernel", "2 layers"},
                   "a 74-texel kernel cap with two layers on a CPU device");
     s.maxKernelTexels = 73.0;
-    s.traversal = "flat";
-    applyBackprojection(cfg.lights[0], s);
-    render(cfg, config::buildScene(cfg.scene), {"light0.backprojection.kernel"});
-    const std::vector<float> flat = frame->checkedVisibility();
-    const std::vector<float> kernel = frame->renderer.readImage("light0.backprojection.kernel").values;
-    EXPECT_GT(std::ranges::count(kernel, 73.0f), ptrdiff_t(flat.size() / 10)) << "kernels at the cap";
-    s.traversal = "hierarchical";
+    const std::vector<float> flat = flatWalkAtTheCap(cfg, s);
     EXPECT_LE(agreement(flat, renderWith(cfg, s)).largest, 2.0f / 65535.0f) << "flat against hierarchical";
 }
 
