@@ -404,7 +404,7 @@ int layersFor(const scene::Light& light, const LightData& whole, const Settings&
                                       s.layers, split));
     }
     const bool rectangle = light.type == scene::LightType::Rect || light.type == scene::LightType::Spot;
-    const bool sized = whole.extent.x > 0.0f && (!rectangle || whole.extent.y > 0.0f);
+    const bool sized = rectangle ? hasRectangle(whole, light.type) : whole.extent.x > 0.0f;
     return sized ? s.layers : 1;
 }
 

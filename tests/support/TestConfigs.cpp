@@ -132,16 +132,22 @@ config::RenderConfig boxOnGroundConfig()
     return cfg;
 }
 
-scene::Scene halfMaskedQuadScene()
+uint32_t addHalfMaskedMaterial(scene::Scene& s)
 {
-    scene::Scene s;
     scene::Texture texture{"half", 4, 1, std::vector<uint8_t>(4 * 4, 200)};
     for (int x = 0; x < 4; ++x) texture.rgba[4 * x + 3] = x < 2 ? 0 : 255;  // alpha
     s.textures.push_back(texture);
-    s.materials.push_back({"masked", {1, 1, 1, 1}, 0, scene::AlphaMode::Mask, 0.5f, true});
+    s.materials.push_back({"masked", {1, 1, 1, 1}, int32_t(s.textures.size() - 1), scene::AlphaMode::Mask, 0.5f, true});
+    return uint32_t(s.materials.size() - 1);
+}
+
+scene::Scene halfMaskedQuadScene()
+{
+    scene::Scene s;
+    const uint32_t masked = addHalfMaskedMaterial(s);
     scene::Mesh ground = scene::makePlane("ground");
     scene::Mesh quad = scene::makePlane("quad");
-    quad.material = 1;
+    quad.material = masked;
     for (scene::Mesh* m : {&ground, &quad}) m->computeBounds();
     s.meshes = {ground, quad};
     const glm::mat4 identity(1.0f);

@@ -76,6 +76,9 @@ config::RenderConfig lookDownRectLightConfig(glm::vec3 cameraPosition, glm::vec3
 // Alpha-masked casters: a 4 x 4 quad at height 2 over a 20 x 20 ground, textured half
 // transparent (x < 0: alpha 0) and half opaque, alpha-masked.
 scene::Scene halfMaskedQuadScene();
+// Adds to `s` the alpha-masked material of halfMaskedQuadScene (a 4 x 1 texture whose half
+// u < 0.5 has alpha 0, cutoff 0.5) and returns its index.
+uint32_t addHalfMaskedMaterial(scene::Scene& s);
 // Its view and light: the camera looks down from above; a directional light slanted by
 // 1/2 in x per unit of height, so the opaque half's shadow falls on x in [1, 3] and light
 // reaches x in (-1, 1) through the transparent half.

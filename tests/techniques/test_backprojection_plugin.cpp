@@ -118,7 +118,8 @@ protected:
         }
     }
     // The flat walk of `s` on `cfg` (the most loop iterations a walk runs), checking that a
-    // tenth of the pixels or more have kernels at the cap `s.maxKernelTexels`.
+    // tenth of the pixels or more have kernels at the cap `s.maxKernelTexels`
+    // (fenceAtTheCap's scene and light do that).
     std::vector<float> flatWalkAtTheCap(const config::RenderConfig& cfg, BackprojectionSettings s)
     {
         s.traversal = "flat";
@@ -175,6 +176,23 @@ config::RenderConfig fenceConfig()
     cfg.width = 320;
     cfg.height = 180;
     return cfg;
+}
+
+// The lattice fence at `width` x `height` under a light of size 1.5, whose kernels reach
+// the cap `capTexels`, with `layers` depth layers.
+struct CapCase {
+    config::RenderConfig cfg;
+    BackprojectionSettings s;
+};
+CapCase fenceAtTheCap(uint32_t width, uint32_t height, double capTexels, int layers)
+{
+    CapCase c{fenceConfig(), {}};
+    c.cfg.width = width;
+    c.cfg.height = height;
+    c.s.lightSize = 1.5;
+    c.s.maxKernelTexels = capTexels;
+    c.s.layers = layers;
+    return c;
 }
 
 const TraversalScene kTraversalScenes[] = {
@@ -542,23 +560,29 @@ struct GroundErrors {
     double away = 0.0;  // RMSE on the ground from there to 0.8 from its axis
 };
 
-GroundErrors pillarGroundErrors(const test::RenderedFrame& frame, const std::vector<float>& v,
-                                const std::vector<float>& reference)
+// RMSE of `v` against `reference` over the ground pixels whose distance from the vertical
+// axis (the larger of |x| and |z|) lies in [from, to); more than `least` of them.
+double groundRmse(const test::RenderedFrame& frame, const std::vector<float>& v, const std::vector<float>& reference,
+                  float from, float to, size_t least, const char* what)
 {
-    double squared[2] = {0.0, 0.0};
-    size_t count[2] = {0, 0};
+    double squared = 0.0;
+    size_t count = 0;
     for (size_t i = 0; i < v.size(); ++i) {
         const glm::vec3 q = frame.position(i);
         const float d = std::max(std::abs(q.x), std::abs(q.z));
-        if (!frame.onGround(i) || d >= 0.8f) continue;
-        const int band = d < 0.2f ? 0 : 1;
-        squared[band] += (double(v[i]) - reference[i]) * (double(v[i]) - reference[i]);
-        ++count[band];
+        if (!frame.onGround(i) || d < from || d >= to) continue;
+        squared += (double(v[i]) - reference[i]) * (double(v[i]) - reference[i]);
+        ++count;
     }
-    EXPECT_GT(count[0], 50u) << "ground pixels at the pillar's foot";
-    EXPECT_GT(count[1], 2000u) << "ground pixels around the pillar";
-    return {std::sqrt(squared[0] / double(std::max<size_t>(count[0], 1))),
-            std::sqrt(squared[1] / double(std::max<size_t>(count[1], 1)))};
+    EXPECT_GT(count, least) << "ground pixels " << what;
+    return std::sqrt(squared / double(std::max<size_t>(count, 1)));
+}
+
+GroundErrors pillarGroundErrors(const test::RenderedFrame& frame, const std::vector<float>& v,
+                                const std::vector<float>& reference)
+{
+    return {groundRmse(frame, v, reference, 0.0f, 0.2f, 50, "at the pillar's foot"),
+            groundRmse(frame, v, reference, 0.2f, 0.8f, 2000, "around the pillar")};
 }
 
 } // namespace
@@ -847,16 +871,7 @@ config::RenderConfig stackedConfig()
 double stackedGroundError(const test::RenderedFrame& frame, const std::vector<float>& v,
                           const std::vector<float>& reference)
 {
-    double squared = 0.0;
-    size_t count = 0;
-    for (size_t i = 0; i < v.size(); ++i) {
-        const glm::vec3 q = frame.position(i);
-        if (!frame.onGround(i) || std::max(std::abs(q.x), std::abs(q.z)) >= 1.6f) continue;
-        squared += (double(v[i]) - reference[i]) * (double(v[i]) - reference[i]);
-        ++count;
-    }
-    EXPECT_GT(count, 3000u) << "ground pixels beside the stack";
-    return std::sqrt(squared / double(std::max<size_t>(count, 1)));
+    return groundRmse(frame, v, reference, 0.0f, 1.6f, 3000, "beside the stack");
 }
 
 } // namespace
@@ -881,18 +896,16 @@ TEST_F(BackprojectionTest, TwoLayersAndSubLightsEachWinWhereTheOtherMisses)
     double errors[2][3] = {};  // [case][one map, two layers, 2 x 2 sub-lights]
     const Case cases[2] = {{"hidden_plate", false, 0.45f}, {"cube_over_plate", true, 0.6f}};
     for (int c = 0; c < 2; ++c) {
-        const std::vector<float> reference = renderReference(cfg, stackedScene(cases[c].box, cases[c].lower), 1024);
+        const scene::Scene stack = stackedScene(cases[c].box, cases[c].lower);
+        const std::vector<float> reference = renderReference(cfg, stack, 1024);
         BackprojectionSettings s;
         s.resolution = 512;
-        errors[c][0] = stackedGroundError(*frame, renderWith(cfg, s, stackedScene(cases[c].box, cases[c].lower)),
-                                          reference);
+        errors[c][0] = stackedGroundError(*frame, renderWith(cfg, s, stack), reference);
         s.layers = 2;
-        errors[c][1] = stackedGroundError(*frame, renderWith(cfg, s, stackedScene(cases[c].box, cases[c].lower)),
-                                          reference);
+        errors[c][1] = stackedGroundError(*frame, renderWith(cfg, s, stack), reference);
         s.layers = 1;
         s.subLights = 2;
-        errors[c][2] = stackedGroundError(*frame, renderWith(cfg, s, stackedScene(cases[c].box, cases[c].lower)),
-                                          reference);
+        errors[c][2] = stackedGroundError(*frame, renderWith(cfg, s, stack), reference);
         RecordProperty(fmt::format("rmse_{}", cases[c].name),
                        fmt::format("one {:.4f} layers {:.4f} sub-lights {:.4f}", errors[c][0], errors[c][1],
                                    errors[c][2]));
@@ -910,11 +923,7 @@ TEST_F(BackprojectionTest, TwoLayersAndSubLightsEachWinWhereTheOtherMisses)
 TEST_F(BackprojectionTest, SecondLayerCutsAlphaMaskedHoles)
 {
     scene::Scene s = stackedScene(false, 0.45f);
-    scene::Texture texture{"half", 4, 1, std::vector<uint8_t>(4 * 4, 200)};
-    for (int x = 0; x < 4; ++x) texture.rgba[4 * x + 3] = x < 2 ? 0 : 255;  // alpha
-    s.textures.push_back(texture);
-    s.materials.push_back({"masked", {1, 1, 1, 1}, 0, scene::AlphaMode::Mask, 0.5f, true});
-    s.meshes.back().material = uint32_t(s.materials.size() - 1);  // the lower plate
+    s.meshes.back().material = test::addHalfMaskedMaterial(s);  // the lower plate
     const config::RenderConfig cfg = stackedConfig();
     const std::vector<float> reference = renderReference(cfg, s, 1024);
     BackprojectionSettings b;
@@ -1032,12 +1041,9 @@ TEST_F(BackprojectionTest, CpuDeviceRefusesKernelsPastTheLoopLimit)
 // limit would not: the flat walk runs the most iterations, the hierarchy the fewest).
 TEST_F(BackprojectionTest, WalksAtTheLargestCpuCapRunToTheirEnd)
 {
-    config::RenderConfig cfg = fenceConfig();
-    cfg.width = 48;
-    cfg.height = 27;
-    BackprojectionSettings s;
-    s.lightSize = 1.5;
-    s.maxKernelTexels = 104.0;
+    CapCase c = fenceAtTheCap(48, 27, 104.0, 1);
+    const config::RenderConfig& cfg = c.cfg;
+    BackprojectionSettings& s = c.s;
     const std::vector<float> flat = flatWalkAtTheCap(cfg, s);
     const std::vector<float> hierarchical = renderWith(cfg, s);
     s.packet = "3x3";
@@ -1055,13 +1061,9 @@ TEST_F(BackprojectionTest, WalksAtTheLargestCpuCapRunToTheirEnd)
 // name, and at 73 both layers' flat walks and the hierarchy give one image on the lattice.
 TEST_F(BackprojectionTest, TwoLayersWalkToTheirEndAtTheirCpuCap)
 {
-    config::RenderConfig cfg = fenceConfig();
-    cfg.width = 32;
-    cfg.height = 18;
-    BackprojectionSettings s;
-    s.lightSize = 1.5;
-    s.layers = 2;
-    s.maxKernelTexels = 74.0;
+    CapCase c = fenceAtTheCap(32, 18, 74.0, 2);
+    const config::RenderConfig& cfg = c.cfg;
+    BackprojectionSettings& s = c.s;
     expectRefusal([&] { renderWith(cfg, s); }, {"max_kernel", "2 layers"},
                   "a 74-texel kernel cap with two layers on a CPU device");
     s.maxKernelTexels = 73.0;

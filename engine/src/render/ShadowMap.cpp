@@ -200,7 +200,7 @@ void ShadowMap::addPeeledDepthPass(graph::RenderGraph& graph, const std::string&
             d.vertexLayout = casters_.positionUvLayout();
             peelMasked_ = gpu::Pipeline(context_, shaders_, d);
         }
-        peelSampler_ = gpu::createSampler(context_, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
+        peelSampler_ = createShadowDepthSampler(context_);
     }
     graph.declareImage({image, atlasWidth(), atlasHeight(), kShadowDepthFormat});
     graph.addPass(image, graph::QueueKind::Graphics)

@@ -133,6 +133,8 @@ const TechniqueCase kTechniques[] = {
     {"vsm_blur", "vsm", R"({"resolution": 512, "blur_radius": 4})"},
     {"vsm_mips", "vsm", R"({"resolution": 512, "filter": "trilinear"})"},
     {"backprojection", "backprojection", R"({"resolution": 512, "light_size": 0.6})"},  // kernels up to its cap
+    // Its depth-peeled second layer: casters behind others from the light are drawn too.
+    {"backprojection_layers", "backprojection", R"({"resolution": 512, "light_size": 0.6, "layers": 2})"},
     {"example", "example", R"({"resolution": 512})"},  // the SDK's example: hard's one compare, declared by hand
 };
 
