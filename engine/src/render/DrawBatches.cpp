@@ -26,6 +26,7 @@ DrawBatches::DrawBatches(std::span<const uint32_t> instanceMesh, std::span<const
     });
     instanceSlot_.assign(instanceMesh.size(), kNoSlot);
     instanceMasked_.assign(instanceMesh.size(), 0);
+    instanceSeeThrough_.assign(instanceMesh.size(), 0);
     slotSegment_.resize(slotInstance_.size());
     for (uint32_t slot = 0; slot < slotInstance_.size(); ++slot) {
         const uint32_t instance = slotInstance_[slot];
@@ -35,6 +36,7 @@ DrawBatches::DrawBatches(std::span<const uint32_t> instanceMesh, std::span<const
         slotSegment_[slot] = uint32_t(segments_.size() - 1);
         instanceSlot_[instance] = slot;
         instanceMasked_[instance] = meshes_[mesh].alphaMasked ? 1 : 0;
+        instanceSeeThrough_[instance] = meshes_[mesh].seeThrough ? 1 : 0;
     }
 }
 
@@ -103,7 +105,7 @@ void DrawBatches::build(DrawFilter filter, const std::vector<uint8_t>* instanceM
     }
 }
 
-void DrawBatches::buildInstances(std::span<const uint32_t> instances, bool alphaMasked, DrawBatch& out) const
+void DrawBatches::buildInstances(std::span<const uint32_t> instances, bool seeThrough, DrawBatch& out) const
 {
     out.commands.clear();
     out.groups.clear();
@@ -111,7 +113,7 @@ void DrawBatches::buildInstances(std::span<const uint32_t> instances, bool alpha
     out.slots.clear();
     for (const uint32_t instance : instances) {
         const uint32_t slot = slotOf(instance);
-        if (slot != kNoSlot && (instanceMasked_[instance] != 0) == alphaMasked) out.slots.push_back(slot);
+        if (slot != kNoSlot && (instanceSeeThrough_[instance] != 0) == seeThrough) out.slots.push_back(slot);
     }
     std::sort(out.slots.begin(), out.slots.end());
     // A run: consecutive slots of one segment (one mesh); a repeated slot starts a new one.

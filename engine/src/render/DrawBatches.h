@@ -34,6 +34,9 @@ struct MeshRange {
     int32_t vertexOffset = 0;
     uint32_t texture = 0;  // the base-colour texture a pass binds for it
     bool alphaMasked = false;
+    // Light passes through it in places: alpha-masked holes, or a translucent (BLEND)
+    // surface. Occlusion culling never lets such an instance hide another.
+    bool seeThrough = false;
 };
 
 // The draws of one SceneGpu::draw / drawInstances, ready to record.
@@ -72,9 +75,9 @@ public:
     // instance, non-zero: drawn), in slot order; `byTexture`: a new group at every
     // texture change, else one group for everything.
     void build(DrawFilter filter, const std::vector<uint8_t>* instanceMask, bool byTexture, DrawBatch& out) const;
-    // The given instances (any order, repeats drawn again) whose alpha-masked flag is
-    // `alphaMasked`, as one group.
-    void buildInstances(std::span<const uint32_t> instances, bool alphaMasked, DrawBatch& out) const;
+    // The given instances (any order, repeats drawn again) whose see-through flag
+    // (MeshRange::seeThrough) is `seeThrough`, as one group.
+    void buildInstances(std::span<const uint32_t> instances, bool seeThrough, DrawBatch& out) const;
 
 private:
     // The slots of one mesh: [firstSlot, firstSlot + count).
@@ -90,7 +93,8 @@ private:
     std::vector<uint32_t> slotInstance_;  // slot -> instance
     std::vector<uint32_t> slotSegment_;   // slot -> index into segments_
     std::vector<uint32_t> instanceSlot_;  // instance -> slot (kNoSlot: no triangles)
-    std::vector<uint8_t> instanceMasked_;  // instance -> alpha-masked
+    std::vector<uint8_t> instanceMasked_;      // instance -> alpha-masked
+    std::vector<uint8_t> instanceSeeThrough_;  // instance -> MeshRange::seeThrough
     bool perInstance_;
 };
 

@@ -100,7 +100,8 @@ SceneGpu::SceneGpu(gpu::Context& context, const scene::Scene& scene, DrawBatchin
         const uint32_t texture =
             material.baseColorTexture == scene::kNoTexture ? defaultTexture : uint32_t(material.baseColorTexture);
         meshRanges.push_back({ranges[m].indexCount, ranges[m].firstIndex, ranges[m].vertexOffset, texture,
-                              material.alphaMode == scene::AlphaMode::Mask});
+                              material.alphaMode == scene::AlphaMode::Mask,
+                              material.alphaMode != scene::AlphaMode::Opaque});
     }
     std::vector<uint32_t> instanceMesh;
     for (const scene::Instance& inst : scene.instances) {
@@ -179,9 +180,9 @@ DrawCounts SceneGpu::draw(VkCommandBuffer cmd, DrawFilter filter,
     return record(cmd, bindTexture);
 }
 
-DrawCounts SceneGpu::drawInstances(VkCommandBuffer cmd, std::span<const uint32_t> instances, bool alphaMasked) const
+DrawCounts SceneGpu::drawInstances(VkCommandBuffer cmd, std::span<const uint32_t> instances, bool seeThrough) const
 {
-    batches_->buildInstances(instances, alphaMasked, *scratch_);
+    batches_->buildInstances(instances, seeThrough, *scratch_);
     return record(cmd, {});
 }
 

@@ -218,10 +218,9 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
     recordLayer(pass, image, bias, maps, nullptr);
 }
 
-void ShadowMap::recordLayer(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
-                            std::span<const ShadowMapPlacement> maps, const std::string* nearerLayer) const
+ShadowFaceDraws ShadowMap::faceDraws(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
+                                     std::span<const ShadowMapPlacement> maps) const
 {
-    VkCommandBuffer cmd = pass.cmd();
     const gpu::Image& target = pass.image(image);
     const uint32_t size = faceTexels();
     for (const ShadowMapPlacement& map : maps) {
@@ -238,21 +237,16 @@ void ShadowMap::recordLayer(const graph::PassContext& pass, const std::string& i
     // and, when only the receivers' lookups read the map, into the texels they can read;
     // the render area, which bounds the clear, is then the union of the faces' scissors.
     // Otherwise it is the whole image.
-    struct FaceDraw {
-        CasterView view;
-        VkViewport viewport;
-        VkRect2D scissor;
-    };
-    std::vector<FaceDraw> faces;
+    ShadowFaceDraws draws;
     const bool readWhole = !readByLookupsOnly_ || pass.isOutput(image);
     int32_t areaX0 = INT32_MAX, areaY0 = INT32_MAX, areaX1 = 0, areaY1 = 0;
     for (const ShadowMapPlacement& map : maps)
         for (uint32_t face = 0; face < map.frusta.size(); ++face) {
             const int32_t x = map.origin.x + int32_t((face % 3) * size), y = map.origin.y + int32_t((face / 3) * size);
-            FaceDraw draw{{map.frusta[face].viewProj, lightIndex_, map.firstView + face, size, footprint_, bias,
-                           compareTapRadius_},
-                          {float(x), float(y), float(size), float(size), 0.0f, 1.0f},
-                          {{x, y}, {size, size}}};
+            ShadowFaceDraw draw{{map.frusta[face].viewProj, lightIndex_, map.firstView + face, size, footprint_, bias,
+                                 compareTapRadius_},
+                                {float(x), float(y), float(size), float(size), 0.0f, 1.0f},
+                                {{x, y}, {size, size}}};
             const std::optional<VkRect2D> read = readWhole ? std::nullopt : casters_.readArea(draw.view);
             if (read) {
                 // The read area in view texels, within the face.
@@ -263,21 +257,31 @@ void ShadowMap::recordLayer(const graph::PassContext& pass, const std::string& i
                 if (x0 == x1 || y0 == y1) continue;  // no receiver reads this face
                 draw.scissor = {{x + x0, y + y0}, {uint32_t(x1 - x0), uint32_t(y1 - y0)}};
             }
-            faces.push_back(draw);
+            draws.faces.push_back(draw);
         }
     if (readWhole) {
         areaX0 = areaY0 = 0;
         areaX1 = int32_t(target.desc().width), areaY1 = int32_t(target.desc().height);
-    } else if (faces.empty()) {
+    } else if (draws.faces.empty()) {
         areaX0 = areaY0 = 0, areaX1 = areaY1 = 1;  // nothing read anywhere: one texel keeps the pass valid
     } else {
-        for (const FaceDraw& face : faces) {
+        for (const ShadowFaceDraw& face : draws.faces) {
             areaX0 = std::min(areaX0, face.scissor.offset.x);
             areaY0 = std::min(areaY0, face.scissor.offset.y);
             areaX1 = std::max(areaX1, face.scissor.offset.x + int32_t(face.scissor.extent.width));
             areaY1 = std::max(areaY1, face.scissor.offset.y + int32_t(face.scissor.extent.height));
         }
     }
+    draws.area = {{areaX0, areaY0}, {uint32_t(areaX1 - areaX0), uint32_t(areaY1 - areaY0)}};
+    return draws;
+}
+
+void ShadowMap::recordLayer(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
+                            std::span<const ShadowMapPlacement> maps, const std::string* nearerLayer) const
+{
+    VkCommandBuffer cmd = pass.cmd();
+    const gpu::Image& target = pass.image(image);
+    const ShadowFaceDraws draws = faceDraws(pass, image, bias, maps);
     VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
     depth.imageView = target.view();
     depth.imageLayout = pass.layout(image);
@@ -285,7 +289,7 @@ void ShadowMap::recordLayer(const graph::PassContext& pass, const std::string& i
     depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
     depth.clearValue.depthStencil = {0.0f, 0};  // reversed-Z: far is 0
     VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
-    info.renderArea = {{areaX0, areaY0}, {uint32_t(areaX1 - areaX0), uint32_t(areaY1 - areaY0)}};
+    info.renderArea = draws.area;
     info.layerCount = 1;
     info.pDepthAttachment = &depth;
     vkCmdBeginRendering(cmd, &info);
@@ -307,7 +311,7 @@ void ShadowMap::recordLayer(const graph::PassContext& pass, const std::string& i
         return d;
     };
     bool solidBound = false;
-    for (const FaceDraw& face : faces) {
+    for (const ShadowFaceDraw& face : draws.faces) {
         const CasterView& view = face.view;
         vkCmdSetViewport(cmd, 0, 1, &face.viewport);
         vkCmdSetScissor(cmd, 0, 1, &face.scissor);

@@ -181,14 +181,15 @@ public:
     {
         const std::span<const uint32_t> instances = owner_.bvh_.leafInstances(node);
         beginQuery();
-        for (const bool alphaMasked : {false, true}) {
-            // Alpha-masked instances are counted but write no depth: their holes must not
-            // occlude.
+        for (const bool seeThrough : {false, true}) {
+            // See-through instances (alpha-masked, translucent) are counted but write no
+            // depth: their holes, and what a translucent surface lets through, must not be
+            // occluded by them (a deep shadow map draws the casters behind a pane).
             const bool masked = t_.view.mask != nullptr;
-            const gpu::Pipeline& p = masked ? (alphaMasked ? owner_.maskLeafCount_ : owner_.maskLeafDepth_)
-                                            : (alphaMasked ? owner_.leafCount_ : owner_.leafDepth_);
+            const gpu::Pipeline& p = masked ? (seeThrough ? owner_.maskLeafCount_ : owner_.maskLeafDepth_)
+                                            : (seeThrough ? owner_.leafCount_ : owner_.leafDepth_);
             use(p, false);
-            owner_.sceneGpu_.drawInstances(cmd_, instances, alphaMasked);
+            owner_.sceneGpu_.drawInstances(cmd_, instances, seeThrough);
         }
         endQuery({Traversal::QueryKind::Leaf, node, 0, 0});
         // The camera keeps what it draws (the G-buffer follows this list); a light view

@@ -41,7 +41,8 @@ void expectCommandsMatchMeshes(const DrawBatches& batches, const DrawBatch& batc
 // Meshes: 0 solid on texture 5, 1 alpha-masked on texture 2, 2 solid on texture 5,
 // 3 without triangles.
 const std::vector<MeshRange> kMeshes = {
-    {36, 0, 0, 5, false}, {6, 36, 24, 2, true}, {12, 42, 28, 5, false}, {0, 54, 36, 5, false}};
+    {36, 0, 0, 5, false, false}, {6, 36, 24, 2, true, true}, {12, 42, 28, 5, false, true}, {0, 54, 36, 5, false, false}};
+// Mesh 1 is alpha-masked, mesh 2 translucent (BLEND): both see-through.
 // Instances 0..7 of meshes:
 const std::vector<uint32_t> kInstanceMesh = {0, 1, 2, 0, 2, 0, 3, 1};
 
@@ -127,13 +128,14 @@ TEST(DrawBatches, DrawInstancesMergesConsecutiveSlotsOfOneMesh)
     DrawBatch b;
     const std::vector<uint32_t> list = {5, 0, 6, 1, 3, 4};
     batches.buildInstances(list, false, b);
-    // Solid: 5, 0, 3 are mesh 0's slots 4, 2, 3 (one run); 4 is mesh 2's slot 6.
-    EXPECT_EQ(drawnInstances(batches, b), (std::vector<uint32_t>{0, 3, 4, 5}));
-    ASSERT_EQ(b.commands.size(), 2u);
+    // Opaque: 5, 0, 3 are mesh 0's slots 4, 2, 3 (one run).
+    EXPECT_EQ(drawnInstances(batches, b), (std::vector<uint32_t>{0, 3, 5}));
+    ASSERT_EQ(b.commands.size(), 1u);
     EXPECT_EQ(b.commands[0].instanceCount, 3u);
     EXPECT_EQ(b.groups.size(), 1u);
+    // See-through: the alpha-masked 1 and the translucent 4 (never occluders).
     batches.buildInstances(list, true, b);
-    EXPECT_EQ(drawnInstances(batches, b), (std::vector<uint32_t>{1}));
+    EXPECT_EQ(drawnInstances(batches, b), (std::vector<uint32_t>{1, 4}));
     // A repeated instance is drawn again, as one draw per listed instance would.
     batches.buildInstances(std::vector<uint32_t>{0, 0}, false, b);
     EXPECT_EQ(b.counts.instances, 2u);

@@ -71,9 +71,10 @@ public:
                     const std::function<void(const gpu::Image& texture)>& bindTexture = {},
                     const std::vector<uint8_t>* instanceMask = nullptr) const;
     // Draws the given instances (any order, no texture binding) with the bound pipeline:
-    // the occlusion-culling passes, which only need positions. Alpha-masked instances are
-    // drawn when `alphaMasked` is true, solid ones otherwise.
-    DrawCounts drawInstances(VkCommandBuffer cmd, std::span<const uint32_t> instances, bool alphaMasked) const;
+    // the occlusion-culling passes, which only need positions. See-through instances
+    // (alpha-masked or translucent materials: light passes them in places, so they must
+    // never occlude) are drawn when `seeThrough` is true, opaque ones otherwise.
+    DrawCounts drawInstances(VkCommandBuffer cmd, std::span<const uint32_t> instances, bool seeThrough) const;
     bool hasAlphaMasked() const;
     bool isAlphaMasked(uint32_t instance) const;
 

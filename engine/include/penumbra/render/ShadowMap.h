@@ -127,6 +127,19 @@ struct ShadowMapPlacement {
     uint32_t firstView = 0;
 };
 
+// One face of a map as a caster pass draws it (ShadowMap::faceDraws): the view the casters
+// are culled for, the face's cell of the atlas as the viewport, and the scissor (the
+// cell, or within it the texels this frame's receivers can read).
+struct ShadowFaceDraw {
+    CasterView view;
+    VkViewport viewport{};
+    VkRect2D scissor{};
+};
+struct ShadowFaceDraws {
+    std::vector<ShadowFaceDraw> faces;  // the faces some receiver reads
+    VkRect2D area{};                    // the union of their scissors, or the whole image
+};
+
 // What a shadow map needs from the technique that owns it. A plugin::TechniqueSetup
 // converts to it, so a technique passes its own setup; the map takes no more than this
 // because render sits below plugin (plugin/Technique.h includes this header, not the
@@ -191,6 +204,14 @@ public:
     // (atlasWidth() x atlasHeight() from its origin) must lie inside the image.
     void recordDepthMaps(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
                          std::span<const ShadowMapPlacement> maps) const;
+
+    // The faces that a caster pass writing `image` (Usage::DepthAttachment or Storage, at
+    // least as large as every map's atlas at its origin) draws for `maps` with `bias`,
+    // with this map's footprint, compare radius and read area (setReadByLookupsOnly), and
+    // the render area: what recordDepthMaps draws, for a technique whose caster pass is
+    // not a depth map (a deep shadow map's fragment lists). Throws when a map does not fit.
+    ShadowFaceDraws faceDraws(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
+                              std::span<const ShadowMapPlacement> maps) const;
 
     // How far, in texels, the technique's lookups for one receiver point reach beyond
     // the texel it projects to (CasterView::footprintTexels; kWholeView for mip chains):

@@ -1,0 +1,339 @@
+// Deep shadow maps (README.md next to this file; Fürst, Mattausch, Scherzer, "Real-Time
+// Deep Shadow Maps"): every caster fragment the light sees goes into a per-texel linked
+// list (fragments.frag), the lists are sorted into transmittance functions and truncated
+// (sort.comp), linked to their neighbours (links.comp), and every G-buffer pixel reads
+// the transmittance at its depth, filtered by PCF or the exponential test
+// (visibility.comp). Translucent (BLEND) casters attenuate by 1 - alpha, opaque and
+// alpha-masked ones (above their cutoff) block: one structure for both.
+#include "penumbra/core/Error.h"
+#include "penumbra/gpu/Barrier.h"
+#include "penumbra/gpu/Context.h"
+#include "penumbra/gpu/Pipeline.h"
+#include "penumbra/gpu/Resources.h"
+#include "penumbra/graph/PassContext.h"
+#include "penumbra/graph/RenderGraph.h"
+#include "penumbra/plugin/Plugin.h"
+#include "penumbra/plugin/ShadowMapParams.h"
+#include "penumbra/plugin/Technique.h"
+#include "penumbra/plugin/VisibilityPass.h"
+#include "penumbra/render/ShadowMap.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <iterator>
+#include <string>
+#include <vector>
+
+namespace penumbra::deep {
+namespace {
+
+using plugin::ParamType;
+
+// Parameter `lookup`, in ParamSpec choice order (visibility.comp LOOKUP).
+enum class Lookup : uint32_t { Linked, BruteForce };
+constexpr const char* kLookupNames[] = {"linked", "brute_force"};
+// Parameter `filter` (visibility.comp EXPONENTIAL).
+enum class Filter : uint32_t { Dsm, Edsm };
+constexpr const char* kFilterNames[] = {"dsm", "edsm"};
+
+constexpr uint32_t kNodeBytes = 24;        // deep_lists.glsl DeepNode
+constexpr uint32_t kSortCapacity = 256;    // deep_lists.glsl DEEP_SORT_CAPACITY
+constexpr uint32_t kComplexityBins = 16;   // deep_counters.glsl DEEP_COMPLEXITY_BINS
+constexpr int kMaxPoolMib = 4096;
+
+const plugin::ParamSpec kParams[] = {
+    plugin::shadowResolutionParam(1024, 8192),
+    {"pool_mib", ParamType::Int, 64, 1, kMaxPoolMib, "MiB",
+     "the fragment pool: 24 bytes a fragment; fragments past it are dropped and counted"},
+    {"epsilon", ParamType::Float, 0.001, 0, 0.5, "",
+     "truncation: a list ends at its first node whose transmittance is at most epsilon (error at most epsilon)"},
+    {"pcf_kernel", ParamType::Int, 1, 1, 7, "texels", "taps per side of the filter box, odd: 1, 3, 5, 7"},
+    {"lookup", ParamType::Enum, double(Lookup::Linked), 0, 0, "",
+     "linked: taps start at their neighbour's links (3.5); brute_force: every tap searches its list from the head",
+     kLookupNames, uint32_t(std::size(kLookupNames))},
+    {"filter", ParamType::Enum, double(Filter::Dsm), 0, 0, "",
+     "dsm: a node shadows what lies behind it fully; edsm: the node just in front by the exponential test",
+     kFilterNames, uint32_t(std::size(kFilterNames))},
+    {"esm_exponent", ParamType::Float, 80, 0, 1e4, "",
+     "filter edsm: c of 1 - e^{-c (t_receiver - t_node)}, t the linear depth along the face in [0, 1]"},
+    {"normal_offset", ParamType::Float, 1.0, 0, 64, "texels",
+     "the receiver's offset along its normal, in texels at the receiver, per texel of the filter's width"},
+};
+
+struct Settings {
+    uint32_t resolution = 1024;
+    uint32_t poolMib = 64;
+    float epsilon = 0.001f;
+    uint32_t pcfKernel = 1;
+    Lookup lookup = Lookup::Linked;
+    Filter filter = Filter::Dsm;
+    float esmExponent = 80.0f;
+    float normalOffsetTexels = 1.0f;
+};
+
+Settings readSettings(const plugin::ParamValues& params)
+{
+    Settings s;
+    const int kernel = params.getInt("pcf_kernel");
+    if (kernel % 2 == 0) {
+        throw ConfigError(fmt::format("deep: pcf_kernel: must be odd (the box is centred on the receiver's texel), "
+                                      "got {}; use {} or {}",
+                                      kernel, kernel - 1, kernel + 1));
+    }
+    s.resolution = uint32_t(params.getInt("resolution"));
+    s.poolMib = uint32_t(params.getInt("pool_mib"));
+    s.epsilon = params.getFloat("epsilon");
+    s.pcfKernel = uint32_t(kernel);
+    s.lookup = Lookup(params.getEnumIndex("lookup"));
+    s.filter = Filter(params.getEnumIndex("filter"));
+    s.esmExponent = params.getFloat("esm_exponent");
+    s.normalOffsetTexels = params.getFloat("normal_offset");
+    return s;
+}
+
+// deep_counters.glsl DeepCounters.
+struct Counters {
+    uint32_t fragments = 0;
+    uint32_t kept = 0;
+    uint32_t overSortCap = 0;
+    uint32_t longest = 0;
+    std::array<uint32_t, kComplexityBins> complexity{};
+};
+static_assert(sizeof(Counters) == 4 * (4 + kComplexityBins));
+
+struct FragmentPush {
+    glm::mat4 viewProj;  // engine/shadow_depth.vert
+    uint32_t capacity;   // fragments.frag
+};
+struct SortPush {
+    float epsilon;
+    uint32_t capacity;
+};
+struct VisibilityPush {
+    float normalOffsetTexels;
+    float esmExponent;
+};
+
+class DeepShadow final : public plugin::Technique {
+public:
+    explicit DeepShadow(const plugin::TechniqueSetup& setup);
+    DeepShadow(const DeepShadow&) = delete;
+    DeepShadow& operator=(const DeepShadow&) = delete;
+
+    void update(const scene::Light& light, const scene::Aabb& sceneBounds) override;
+    void registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io) override;
+
+private:
+    struct Names {
+        std::string heads, nodes, counters, lengths;
+    };
+    void recordFragments(const graph::PassContext& pass, const Names& names) const;
+    uint32_t capacity() const { return uint32_t(std::min<uint64_t>(uint64_t(settings_.poolMib) << 20, UINT32_MAX) / kNodeBytes); }
+
+    gpu::Context& context_;
+    const render::Casters& casters_;
+    const uint32_t lightIndex_;
+    const Settings settings_;
+    render::ShadowMap shadowMap_;
+    gpu::Pipeline fragments_;
+    gpu::Pipeline sort_;
+    gpu::Pipeline links_;
+    gpu::Pipeline visibility_;
+    gpu::Buffer counters_;  // host-visible: last frame's Counters
+    bool warnedOverflow_ = false;
+};
+
+DeepShadow::DeepShadow(const plugin::TechniqueSetup& setup)
+    : context_(setup.context),
+      casters_(setup.casters),
+      lightIndex_(setup.lightIndex),
+      settings_(readSettings(setup.params)),
+      shadowMap_(setup, settings_.resolution, "deep",
+                 settings_.pcfKernel > 1 ? render::kernelGuardTexels(0.5f * float(settings_.pcfKernel), settings_.resolution)
+                                         : 0u)
+{
+    const float width = float(settings_.pcfKernel);
+    // Only the lookups read the lists, within the filter's half width and the normal
+    // offset of the receiver's texel.
+    shadowMap_.setReadByLookupsOnly(true);
+    shadowMap_.setFootprint(0.5f * width + settings_.normalOffsetTexels * width);
+    const std::vector<gpu::ShaderDefine> mapDefines = shadowMap_.shaderDefines();
+
+    gpu::GraphicsPipelineDesc f;
+    f.name = fmt::format("light{}.deep.fragments", lightIndex_);
+    f.vertexShader = "engine/shadow_depth.vert";
+    f.fragmentShader = "fragments.frag";
+    f.defines = {{"ALPHA_MASK", "1"}};
+    f.pushConstantBytes = sizeof(FragmentPush);
+    f.vertexLayout = casters_.positionUvLayout();
+    f.depthWrite = false;
+    f.cullMode = VK_CULL_MODE_NONE;  // both sides of every triangle cast, as in the depth maps
+    fragments_ = gpu::Pipeline(context_, setup.shaders, f);
+
+    const auto compute = [&](const char* name, const char* shader, uint32_t push, std::vector<gpu::ShaderDefine> d) {
+        gpu::ComputePipelineDesc c;
+        c.name = fmt::format("light{}.deep.{}", lightIndex_, name);
+        c.shader = shader;
+        c.defines = std::move(d);
+        c.pushConstantBytes = push;
+        return gpu::Pipeline(context_, setup.shaders, c);
+    };
+    sort_ = compute("sort", "sort.comp", sizeof(SortPush), {});
+    links_ = compute("links", "links.comp", sizeof(uint32_t), {});
+    std::vector<gpu::ShaderDefine> lookup = {{"PCF_KERNEL", std::to_string(settings_.pcfKernel)},
+                                             {"LOOKUP", std::to_string(uint32_t(settings_.lookup))},
+                                             {"EXPONENTIAL", settings_.filter == Filter::Edsm ? "1" : "0"}};
+    std::ranges::copy(mapDefines, std::back_inserter(lookup));
+    visibility_ = compute("visibility", "visibility.comp", sizeof(VisibilityPush), lookup);
+    counters_ = gpu::Buffer(context_, sizeof(Counters), VK_BUFFER_USAGE_TRANSFER_DST_BIT, true,
+                            fmt::format("light{}.deep.counters_readback", lightIndex_));
+    std::memset(counters_.mapped(), 0, sizeof(Counters));
+}
+
+void DeepShadow::update(const scene::Light& light, const scene::Aabb& sceneBounds)
+{
+    // The last frame has finished (the executor waits): its counters are final.
+    Counters last;
+    std::memcpy(&last, counters_.mapped(), sizeof(last));
+    if (last.fragments > capacity() && !warnedOverflow_) {
+        spdlog::warn("deep (light {}): pass 'light{}.deep.fragments' appended {} fragments to a pool of {} ({} MiB): "
+                     "{} were dropped; raise pool_mib",
+                     lightIndex_, lightIndex_, last.fragments, capacity(), settings_.poolMib,
+                     last.fragments - capacity());
+        warnedOverflow_ = true;
+    }
+    shadowMap_.update(light, sceneBounds);
+}
+
+void DeepShadow::recordFragments(const graph::PassContext& pass, const Names& names) const
+{
+    const VkCommandBuffer cmd = pass.cmd();
+    const render::ShadowMapPlacement own{shadowMap_.frusta(), {0, 0}, 0};
+    const render::ShadowFaceDraws draws = shadowMap_.faceDraws(pass, names.heads, {}, {&own, 1});
+    VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    info.renderArea = draws.area;
+    info.layerCount = 1;
+    vkCmdBeginRendering(cmd, &info);
+    casters_.countRenderedTexels(uint64_t(info.renderArea.extent.width) * info.renderArea.extent.height);
+    fragments_.bind(cmd);
+    for (const render::ShadowFaceDraw& face : draws.faces) {
+        vkCmdSetViewport(cmd, 0, 1, &face.viewport);
+        vkCmdSetScissor(cmd, 0, 1, &face.scissor);
+        const FragmentPush push{face.view.viewProj, capacity()};
+        fragments_.pushConstants(cmd, &push, sizeof(push));
+        casters_.draw(cmd, face.view, render::DrawFilter::All, [&](const gpu::Image& texture) {
+            gpu::DescriptorPush()
+                .storageBuffer("Instances", casters_.instanceBuffer())
+                .storageBuffer("Materials", casters_.materialBuffer())
+                .sampledImage("baseColorTexture", texture, casters_.textureSampler())
+                .storageImage("heads", pass.image(names.heads))
+                .storageBuffer("DeepNodes", pass.buffer(names.nodes))
+                .storageBuffer("DeepCounters", pass.buffer(names.counters))
+                .push(context_, cmd, fragments_);
+        });
+    }
+    vkCmdEndRendering(cmd);
+}
+
+void DeepShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io)
+{
+    Names names{io.local("heads"), io.local("nodes"), io.local("counters"), io.local("lengths")};
+    const uint32_t w = shadowMap_.atlasWidth(), h = shadowMap_.atlasHeight();
+    graph.declareImage({names.heads, w, h, VK_FORMAT_R32_UINT});
+    graph.declareImage({names.lengths, w, h, VK_FORMAT_R32_UINT});
+    graph.declareBuffer({names.nodes, VkDeviceSize(capacity()) * kNodeBytes});
+    graph.declareBuffer({names.counters, sizeof(Counters)});
+
+    // Every list empty (the head kDeepNone), every counter 0. The whole atlas: the sort
+    // and links passes walk every texel, also those the fragment pass does not draw.
+    graph.addPass(io.local("clear"), graph::QueueKind::Graphics)
+        .write(names.heads, graph::Usage::TransferDst)
+        .write(names.counters, graph::Usage::TransferDst)
+        .execute([names](graph::PassContext& pass) {
+            const VkClearColorValue none{.uint32 = {0xFFFFFFFFu, 0, 0, 0}};
+            const VkImageSubresourceRange all{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+            vkCmdClearColorImage(pass.cmd(), pass.image(names.heads).handle(), pass.layout(names.heads), &none, 1, &all);
+            vkCmdFillBuffer(pass.cmd(), pass.buffer(names.counters).handle(), 0, VK_WHOLE_SIZE, 0);
+        });
+
+    graph.addPass(io.local("fragments"), graph::QueueKind::Graphics)
+        .read(names.heads, graph::Usage::Storage)
+        .write(names.heads, graph::Usage::Storage)
+        .write(names.nodes, graph::Usage::Storage)
+        .read(names.counters, graph::Usage::Storage)
+        .write(names.counters, graph::Usage::Storage)
+        .execute([this, names](graph::PassContext& pass) { recordFragments(pass, names); });
+
+    graph.addPass(io.local("sort"), graph::QueueKind::Compute)
+        .read(names.heads, graph::Usage::Storage)
+        .read(names.nodes, graph::Usage::Storage)
+        .write(names.nodes, graph::Usage::Storage)
+        .write(names.lengths, graph::Usage::Storage)
+        .read(names.counters, graph::Usage::Storage)
+        .write(names.counters, graph::Usage::Storage)
+        .execute([this, names](graph::PassContext& pass) {
+            sort_.bind(pass.cmd());
+            gpu::DescriptorPush()
+                .storageImage("heads", pass.image(names.heads))
+                .storageImage("lengths", pass.image(names.lengths))
+                .storageBuffer("DeepNodes", pass.buffer(names.nodes))
+                .storageBuffer("DeepCounters", pass.buffer(names.counters))
+                .push(context_, pass.cmd(), sort_);
+            const SortPush push{settings_.epsilon, capacity()};
+            sort_.pushConstants(pass.cmd(), &push, sizeof(push));
+            sort_.dispatchOver(pass.cmd(), pass.image(names.heads));
+        });
+
+    graph.addPass(io.local("links"), graph::QueueKind::Compute)
+        .read(names.heads, graph::Usage::Storage)
+        .read(names.lengths, graph::Usage::Storage)
+        .read(names.nodes, graph::Usage::Storage)
+        .write(names.nodes, graph::Usage::Storage)
+        .execute([this, names](graph::PassContext& pass) {
+            links_.bind(pass.cmd());
+            gpu::DescriptorPush()
+                .storageImage("heads", pass.image(names.heads))
+                .storageImage("lengths", pass.image(names.lengths))
+                .storageBuffer("DeepNodes", pass.buffer(names.nodes))
+                .push(context_, pass.cmd(), links_);
+            const uint32_t faceTexels = shadowMap_.faceTexels();
+            links_.pushConstants(pass.cmd(), &faceTexels, sizeof(faceTexels));
+            links_.dispatchOver(pass.cmd(), pass.image(names.heads));
+        });
+
+    const auto bind = [this, names](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
+        descriptors.storageImage("heads", pass.image(names.heads))
+            .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
+            .storageBuffer("DeepNodes", pass.buffer(names.nodes));
+        const VisibilityPush push{settings_.normalOffsetTexels * float(settings_.pcfKernel), settings_.esmExponent};
+        visibility_.pushConstants(pass.cmd(), &push, sizeof(push));
+    };
+    plugin::addVisibilityPass(graph, io, visibility_, bind)
+        .read(names.heads, graph::Usage::Storage)
+        .read(names.nodes, graph::Usage::Storage)
+        .read(names.lengths, graph::Usage::Storage);
+
+    // The frame's counters, for the next update() and the stats (a side effect: nothing
+    // in the graph reads them).
+    graph.addPass(io.local("counters_readback"), graph::QueueKind::Graphics, true)
+        .read(names.counters, graph::Usage::TransferSrc)
+        .execute([this, names](graph::PassContext& pass) {
+            const VkBufferCopy region{0, 0, sizeof(Counters)};
+            vkCmdCopyBuffer(pass.cmd(), pass.buffer(names.counters).handle(), counters_.handle(), 1, &region);
+            gpu::memoryBarrier(pass.cmd(), {VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT},
+                               {VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT});
+        });
+}
+
+} // namespace
+} // namespace penumbra::deep
+
+PENUMBRA_DEFINE_PLUGIN("deep", "1.0.0",
+                       "deep shadow map: per-texel fragment lists, sorted into transmittance functions, truncated and "
+                       "linked to their neighbours; translucent casters attenuate; PCF over linked lists or EDSM",
+                       penumbra::deep::kParams, penumbra::deep::DeepShadow)

@@ -1,0 +1,46 @@
+#version 460
+// The deep shadow map's fragment pass (§1.3.1, Listing 1.2): every caster fragment the
+// light sees, with no depth test, is appended to its texel's list: a node taken from the
+// pool by an atomic counter, linked in front of the list's head by an atomic exchange.
+// The vertex shader is render::ShadowMap's (engine/shadow_depth.vert with ALPHA_MASK: the
+// texture coordinate and the material).
+//
+// A fragment's alpha: 1 for opaque materials, 1 for alpha-masked ones above their cutoff
+// (below it a hole: no fragment), the material's times its texture's alpha for
+// translucent (BLEND) ones. A fragment of alpha 0 (or NaN) changes no transmittance and
+// takes no node.
+//
+// The pool holds `capacity` nodes. A fragment past it is counted (counters.fragments goes
+// on rising) and not stored: the lists stay well formed, the technique sees by how much
+// the pool fell short (deep.cpp) and grows it.
+#include "common/scene.glsl"
+
+#define DEEP_NODES_BINDING 4
+#define DEEP_NODES_WRITE
+#include "deep_lists.glsl"
+#include "deep_counters.glsl"
+
+layout(location = 0) in vec2 inUv;
+layout(location = 1) flat in uint inMaterial;
+
+layout(std430, binding = 1) readonly buffer Materials { MaterialData materials[]; };
+layout(binding = 2) uniform sampler2D baseColorTexture;
+layout(binding = 3, r32ui) uniform coherent uimage2D heads;
+
+layout(push_constant) uniform Push {
+    layout(offset = 64) uint capacity;  // after the vertex shader's lightViewProj
+} pc;
+
+void main()
+{
+    MaterialData material = materials[inMaterial];
+    float a = material.baseColor.a * texture(baseColorTexture, inUv).a;
+    if (material.alphaMode == ALPHA_MODE_MASK && a < material.alphaCutoff) discard;
+    float alpha = material.alphaMode == ALPHA_MODE_BLEND ? clamp(a, 0.0, 1.0) : 1.0;
+    if (!(alpha > 0.0)) discard;
+    uint node = atomicAdd(counters.fragments, 1u);
+    if (node >= pc.capacity) return;
+    nodes[node].depth = gl_FragCoord.z;
+    nodes[node].transmittance = alpha;
+    nodes[node].next = imageAtomicExchange(heads, ivec2(gl_FragCoord.xy), node);
+}
