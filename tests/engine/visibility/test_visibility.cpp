@@ -136,6 +136,8 @@ const TechniqueCase kTechniques[] = {
     // Its depth-peeled second layer: casters behind others from the light are drawn too.
     {"backprojection_layers", "backprojection", R"({"resolution": 512, "light_size": 0.6, "layers": 2})"},
     {"example", "example", R"({"resolution": 512})"},  // the SDK's example: hard's one compare, declared by hand
+    // Fragment lists: every caster fragment, not the nearest; PCF 3 x 3 over the links.
+    {"deep", "deep", R"({"resolution": 512, "pcf_kernel": 3})"},
 };
 
 void PrintTo(const TechniqueCase& c, std::ostream* os) { *os << c.name; }
@@ -159,6 +161,26 @@ INSTANTIATE_TEST_SUITE_P(Visibility, CullingPerTechnique,
                              return std::string(std::get<0>(info.param).name) + "_" +
                                     scene::lightTypeName(std::get<1>(info.param));
                          });
+
+// A translucent (BLEND) roof over the default scene's boxes, between them and the light:
+// light-space occlusion culling must not let it hide the boxes (a deep shadow map draws
+// every fragment behind it; the boxes darken the ground under the roof's 0.7).
+TEST_F(VisibilityCulling, ATranslucentCasterHidesNothingBehindIt)
+{
+    config::RenderConfig cfg = smallDefault(scene::LightType::Spot, "deep", {{"resolution", 512}});
+    scene::Scene scene = config::buildScene(cfg);
+    scene.materials.push_back({"glass", {1.0f, 1.0f, 1.0f, 0.3f}, scene::kNoTexture, scene::AlphaMode::Blend, 0.5f, true});
+    scene::Mesh roof = scene::makePlane("roof");
+    roof.material = uint32_t(scene.materials.size() - 1);
+    const glm::vec3 light = cfg.lights[0].light.position;
+    test::addInstance(scene, test::addMesh(scene, roof), "roof",
+                      glm::scale(glm::translate(glm::mat4(1.0f), {light.x, 0.8f * light.y, light.z}),
+                                 glm::vec3(40.0f, 1.0f, 40.0f)));
+    scene.updateTransforms();
+    const CulledFrame all = render(scene, cfg, CullingMode::None);
+    ASSERT_GT(countBelow(all.visibility, 0.5f), cfg.width * cfg.height / 50) << "the boxes' shadows under the roof";
+    expectEveryModeMatches(scene, cfg);
+}
 
 // A tall box behind the camera, outside its frustum, shadows the ground the camera looks
 // at: its shadow must survive every mode (it is drawn because it covers masked texels,

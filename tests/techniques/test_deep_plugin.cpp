@@ -1,0 +1,276 @@
+// The deep shadow map plugin (plugins/deep) end to end: translucent panes against the
+// closed form 0.7^n, an opaque scene against the hard plugin, the linked lookup against
+// the brute-force one, truncation within its epsilon, a faint fragment in front of an
+// opaque one, a pool too small for the frame, and parameter errors.
+#include "PluginFrame.h"
+#include "TestConfigs.h"
+#include "TestContext.h"
+#include "TestPaths.h"
+
+#include "penumbra/config/Config.h"
+#include "penumbra/core/Error.h"
+#include "penumbra/scene/Generators.h"
+
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+using namespace penumbra;
+
+namespace {
+
+class DeepPlugin : public test::PluginGpuTest {
+protected:
+    std::vector<float> renderDeep(config::RenderConfig cfg, scene::Scene scene, const nlohmann::json& params)
+    {
+        test::setShadow(cfg.lights[0], "deep", params);
+        render(cfg, std::move(scene));
+        return frame->checkedVisibility();
+    }
+};
+
+float maxDifference(const std::vector<float>& a, const std::vector<float>& b)
+{
+    float worst = 0.0f;
+    for (size_t i = 0; i < a.size(); ++i) worst = std::max(worst, std::abs(a[i] - b[i]));
+    return worst;
+}
+
+// Panes of `alpha` ([-1, 1]² at the given heights) over a 20 x 20 ground, and `opaque`
+// plates the same size at their heights.
+scene::Scene panesScene(const std::vector<float>& heights, float alpha, const std::vector<float>& opaque = {})
+{
+    scene::Scene s = test::planeScene();
+    s.materials.push_back({"glass", {1.0f, 1.0f, 1.0f, alpha}, scene::kNoTexture, scene::AlphaMode::Blend, 0.5f, true});
+    scene::Mesh pane = scene::makePlane("pane");
+    pane.material = uint32_t(s.materials.size() - 1);
+    const uint32_t translucent = test::addMesh(s, pane);
+    pane.material = 0;
+    const uint32_t plate = test::addMesh(s, pane);
+    const auto place = [](float h) {
+        return glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(0, h, 0)), glm::vec3(2, 1, 2));
+    };
+    for (float h : heights) test::addInstance(s, translucent, fmt::format("pane{}", h), place(h));
+    for (float h : opaque) test::addInstance(s, plate, fmt::format("plate{}", h), place(h));
+    s.updateTransforms();
+    return s;
+}
+
+// A camera looking down on the ground beside the panes, and a light of `type` up and to
+// the side, so that the panes' shadows fall on the ground in view.
+config::RenderConfig panesConfig(scene::LightType type)
+{
+    config::RenderConfig cfg = test::defaultTestConfig();
+    cfg.width = 96;
+    cfg.height = 72;
+    cfg.camera.position = {-2.0f, 7.0f, 0.001f};
+    cfg.camera.target = {-2.0f, 0.0f, 0.0f};
+    cfg.camera.up = {0.0f, 0.0f, -1.0f};
+    cfg.camera.fovYDeg = 40.0f;
+    cfg.camera.nearWorld = 0.05f;
+    cfg.lights.resize(1);
+    scene::Light& light = cfg.lights[0].light;
+    light = scene::Light{};
+    light.type = type;
+    light.position = {3.0f, 4.0f, 0.0f};
+    const glm::vec3 towardsShadow = glm::normalize(glm::vec3(-2.0f, 0.0f, 0.0f) - light.position);
+    light.direction = towardsShadow;
+    light.outerConeDeg = 50.0f;
+    light.innerConeDeg = 45.0f;
+    light.intensity = type == scene::LightType::Directional ? 3.0f : 40.0f;
+    return cfg;
+}
+
+// The panes a ground point's ray to the light crosses, or -1 within `band` (world units)
+// of a pane's edge: a texel straddles it there, and the normal offset moves the lookup
+// by a few texels on a ground lit at 60 degrees.
+int panesCrossed(const scene::Light& light, const glm::vec3& p, const std::vector<float>& heights, double band)
+{
+    int crossed = 0;
+    for (float h : heights) {
+        // The ray p + t d reaches height h at t = h / d.y.
+        const glm::dvec3 d = light.type == scene::LightType::Directional ? -glm::dvec3(light.direction)
+                                                                           : glm::dvec3(light.position) - glm::dvec3(p);
+        const glm::dvec3 at = glm::dvec3(p) + d * ((double(h) - p.y) / d.y);
+        const double inside = 1.0 - std::max(std::abs(at.x), std::abs(at.z));
+        if (std::abs(inside) < band) return -1;
+        crossed += inside > 0.0 ? 1 : 0;
+    }
+    return crossed;
+}
+
+// Behind n panes of alpha 0.3 the light is 0.7^n (the reference's closed form), for one,
+// two and five panes, through a spot light's map, a directional light's and a point
+// light's cube faces.
+TEST_F(DeepPlugin, TranslucentPanesAttenuateByOneMinusAlphaEach)
+{
+    const std::vector<std::vector<float>> stacks = {{1.0f}, {1.0f, 1.5f}, {1.0f, 1.25f, 1.5f, 1.75f, 2.0f}};
+    for (const scene::LightType type : {scene::LightType::Spot, scene::LightType::Directional, scene::LightType::Point}) {
+        for (const std::vector<float>& heights : stacks) {
+            SCOPED_TRACE(fmt::format("{} light, {} pane(s)", scene::lightTypeName(type), heights.size()));
+            const config::RenderConfig cfg = panesConfig(type);
+            const std::vector<float> v = renderDeep(cfg, panesScene(heights, 0.3f), {{"resolution", 512}});
+            std::vector<size_t> counted(heights.size() + 1, 0);
+            for (size_t i = 0; i < v.size(); ++i) {
+                if (!frame->onGround(i)) continue;
+                const int crossed = panesCrossed(cfg.lights[0].light, frame->position(i), heights, 0.15);
+                if (crossed < 0) continue;
+                const glm::vec3 q = frame->position(i);
+                ASSERT_NEAR(v[i], std::pow(0.7, crossed), 1e-4) << "pixel " << i << ", " << crossed << " pane(s) at " << q.x << " " << q.y << " " << q.z;
+                ++counted[size_t(crossed)];
+            }
+            EXPECT_GT(counted.front(), 30u) << "lit pixels";
+            EXPECT_GT(counted.back(), 30u) << "pixels behind every pane";
+        }
+    }
+}
+
+// Without translucent casters every list ends at its first node (transmittance 0), and
+// the lookup is the hard plugin's compare: the same image as `hard` with the same
+// receiver bias (normal offset, no rasterizer bias), bit for bit, with and without PCF,
+// through one face and through the cube atlas (its guard band too).
+TEST_F(DeepPlugin, OpaqueSceneGivesTheHardPluginsImage)
+{
+    for (const scene::LightType type : {scene::LightType::Spot, scene::LightType::Directional, scene::LightType::Point}) {
+        for (const int kernel : {1, 3}) {
+            SCOPED_TRACE(fmt::format("{} light, {} x {} taps", scene::lightTypeName(type), kernel, kernel));
+            config::RenderConfig cfg = test::defaultTestConfig();
+            cfg.width = 160;
+            cfg.height = 90;
+            test::setLightType(cfg.lights[0], type);
+            test::setShadow(cfg.lights[0], "hard",
+                            {{"resolution", 512}, {"bias_mode", "normal_offset"}, {"depth_bias", 0}, {"slope_bias", 0},
+                             {"filter", kernel > 1 ? "pcf" : "none"}, {"pcf_kernel", kernel}, {"normal_offset", 1.0}});
+            render(cfg, config::buildScene(cfg.scene));
+            const std::vector<float> hard = frame->checkedVisibility();
+            const std::vector<float> deep =
+                renderDeep(cfg, config::buildScene(cfg.scene), {{"resolution", 512}, {"pcf_kernel", kernel}});
+            size_t shadowed = 0;
+            for (float v : hard) shadowed += v < 0.5f ? 1 : 0;
+            EXPECT_GT(shadowed, 200u);
+            EXPECT_EQ(maxDifference(hard, deep), 0.0f);
+        }
+    }
+}
+
+// A small hair model (2,000 strands) under a spot light and a point light (links stop
+// at the cube faces' edges).
+config::RenderConfig hairConfig(scene::LightType type)
+{
+    config::RenderConfig cfg = config::loadConfig(test::sourceDir() / "config/hair.json");
+    cfg.width = 120;
+    cfg.height = 90;
+    cfg.scene.params = {{"strands", "2000"}};
+    if (type == scene::LightType::Point) cfg.lights[0].light.type = type;
+    return cfg;
+}
+
+// The links only choose where each tap's walk starts: every tap ends at the same node as
+// a search from its list's head, so the images are equal bit for bit.
+TEST_F(DeepPlugin, LinkedLookupGivesTheBruteForceImage)
+{
+    for (const scene::LightType type : {scene::LightType::Spot, scene::LightType::Point}) {
+        const config::RenderConfig cfg = hairConfig(type);
+        for (const int kernel : {3, 5, 7}) {
+            SCOPED_TRACE(fmt::format("{} light, {} x {} taps", scene::lightTypeName(type), kernel, kernel));
+            const nlohmann::json params = {{"resolution", 256}, {"pcf_kernel", kernel}};
+            nlohmann::json brute = params;
+            brute["lookup"] = "brute_force";
+            const std::vector<float> linked = renderDeep(cfg, config::buildScene(cfg.scene), params);
+            const std::vector<float> searched = renderDeep(cfg, config::buildScene(cfg.scene), brute);
+            size_t fractional = 0;
+            for (float v : linked) fractional += v > 0.01f && v < 0.99f ? 1 : 0;
+            EXPECT_GT(fractional, 500u);
+            EXPECT_EQ(maxDifference(linked, searched), 0.0f);
+        }
+    }
+}
+
+// Truncation at epsilon: behind n panes of alpha 0.3 the list ends at the first node k
+// with 0.7^k <= epsilon, so V = 0.7^min(n, k), within epsilon of 0.7^n. On the hair no
+// pixel moves by more than epsilon (plus V's 16-bit rounding).
+TEST_F(DeepPlugin, TruncationErrorStaysWithinEpsilon)
+{
+    const std::vector<float> heights = {1.0f, 1.25f, 1.5f, 1.75f, 2.0f};
+    const config::RenderConfig panes = panesConfig(scene::LightType::Spot);
+    for (const double epsilon : {0.0, 0.2, 0.3, 0.45}) {
+        SCOPED_TRACE(fmt::format("panes, epsilon {}", epsilon));
+        const std::vector<float> v =
+            renderDeep(panes, panesScene(heights, 0.3f), {{"resolution", 512}, {"epsilon", epsilon}});
+        int k = 1;
+        while (std::pow(0.7, k) > epsilon && k < 5) ++k;
+        size_t behindAll = 0;
+        for (size_t i = 0; i < v.size(); ++i) {
+            if (!frame->onGround(i)) continue;
+            const int crossed = panesCrossed(panes.lights[0].light, frame->position(i), heights, 0.15);
+            if (crossed < 0) continue;
+            ASSERT_NEAR(v[i], std::pow(0.7, std::min(crossed, k)), 1e-4) << "pixel " << i << ", " << crossed;
+            ASSERT_LE(std::abs(v[i] - std::pow(0.7, crossed)), epsilon + 1e-4) << "pixel " << i;
+            behindAll += crossed == 5 ? 1 : 0;
+        }
+        EXPECT_GT(behindAll, 30u);
+    }
+    const config::RenderConfig hair = hairConfig(scene::LightType::Spot);
+    const std::vector<float> exact = renderDeep(hair, config::buildScene(hair.scene), {{"resolution", 256}, {"epsilon", 0}});
+    for (const double epsilon : {0.001, 0.01, 0.1}) {
+        SCOPED_TRACE(fmt::format("hair, epsilon {}", epsilon));
+        const std::vector<float> cut =
+            renderDeep(hair, config::buildScene(hair.scene), {{"resolution", 256}, {"epsilon", epsilon}});
+        EXPECT_LE(maxDifference(exact, cut), epsilon + 2e-5);
+    }
+}
+
+// A faint translucent layer (alpha 0.005) over an opaque plate, cut at epsilon 0.01: the
+// paper's rule (stop where one more node changes the product by less than epsilon) would
+// stop after the faint layer and light the ground under the plate (V = 0.995); the bound
+// on the remaining transmittance keeps the plate.
+TEST_F(DeepPlugin, AFaintLayerDoesNotHideAnOpaqueCasterBehindIt)
+{
+    const config::RenderConfig cfg = panesConfig(scene::LightType::Spot);
+    const std::vector<float> v =
+        renderDeep(cfg, panesScene({2.0f}, 0.005f, {1.0f}), {{"resolution", 512}, {"epsilon", 0.01}});
+    size_t under = 0;
+    for (size_t i = 0; i < v.size(); ++i) {
+        if (!frame->onGround(i) || panesCrossed(cfg.lights[0].light, frame->position(i), {1.0f}, 0.15) != 1) continue;
+        ASSERT_EQ(v[i], 0.0f) << "pixel " << i;
+        ++under;
+    }
+    EXPECT_GT(under, 30u);
+}
+
+// A pool too small for the hair (1 MiB: 43,690 fragments) drops fragments: the frame
+// still renders, V stays within the contract, and it is lighter than with every fragment.
+TEST_F(DeepPlugin, ATooSmallPoolDropsFragmentsWithoutCrashing)
+{
+    const config::RenderConfig cfg = hairConfig(scene::LightType::Spot);
+    const std::vector<float> full = renderDeep(cfg, config::buildScene(cfg.scene), {{"resolution", 512}});
+    const std::vector<float> starved =
+        renderDeep(cfg, config::buildScene(cfg.scene), {{"resolution", 512}, {"pool_mib", 1}});
+    double sumFull = 0.0, sumStarved = 0.0;
+    for (size_t i = 0; i < full.size(); ++i) sumFull += full[i], sumStarved += starved[i];
+    EXPECT_GT(sumStarved, sumFull + 10.0);
+}
+
+TEST_F(DeepPlugin, RefusesBadParametersByName)
+{
+    test::expectRefusalsNameTheParameter("deep", {{"pcf_kernel", 9}, {"pool_mib", 0}, {"epsilon", -0.1},
+                                                  {"lookup", "binary"}, {"filter", "vsm"}});
+    // In range, but a box of 4 taps has no centre texel: refused when the light's
+    // technique is created, before anything renders.
+    const config::RenderConfig cfg = panesConfig(scene::LightType::Spot);
+    try {
+        renderDeep(cfg, panesScene({1.0f}, 0.3f), {{"pcf_kernel", 4}});
+        FAIL() << "rendered with pcf_kernel 4";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("pcf_kernel"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("odd"), std::string::npos) << e.what();
+    }
+}
+
+} // namespace
