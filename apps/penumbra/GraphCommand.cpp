@@ -75,6 +75,9 @@ int runGraph(const GraphFlags& flags)
         text += fmt::format("device memory for transient resources: {} allocated, {} without aliasing ({:.1f}% saved)\n",
                             mebibytes(allocated), mebibytes(unaliased), saved);
         text += cullingSection(timings.culling, run.config.culling);
+        std::vector<std::string> techniques;
+        for (size_t l = 0; l < renderer.lightCount(); ++l) techniques.push_back(renderer.techniqueName(l));
+        text += techniqueFiguresText(timings.techniques, techniques);
         // Every image a pass writes, culled passes' too: requesting one keeps its passes.
         text += fmt::format("debug images (penumbra render --debug-image NAME): {}\n",
                             fmt::join(renderer.imageNames(), ", "));

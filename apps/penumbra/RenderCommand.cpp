@@ -147,7 +147,12 @@ int runRender(const RenderFlags& flags)
                              summarizeFloor(floorMeasured, resolved.lights.size()), anyLightShadowed(renderer));
         printTimings(frameSummary, warmup, &comparison);
     }
-    if (flags.stats) printCulling(medianCulling(measured), config::cullingModeName(run.config.culling));
+    if (flags.stats) {
+        printCulling(medianCulling(measured), config::cullingModeName(run.config.culling));
+        std::vector<std::string> techniques;
+        for (size_t l = 0; l < renderer.lightCount(); ++l) techniques.push_back(renderer.techniqueName(l));
+        std::fputs(techniqueFiguresText(medianTechniqueFigures(measured), techniques).c_str(), stdout);
+    }
 
     if (outputPerFrame(flags.output)) {
         spdlog::info("wrote {} frames: {} ... {}", run.config.frames, framePath(flags.output, 0),
@@ -186,8 +191,9 @@ Command addRenderCommand(CLI::App& app)
                   "Print the median GPU and CPU ms of every pass, and each as a multiple of the floor (the scene "
                   "drawn once forward)");
     cmd->add_flag("--stats", flags->stats,
-                  "Print the median per-frame culling figures: receivers, casters and triangles drawn, nodes "
-                  "visited, queries issued, ms of each step");
+                  "Print the median per-frame culling figures (receivers, casters and triangles drawn, nodes "
+                  "visited, queries issued, ms of each step) and each light's technique figures (a deep shadow "
+                  "map's fragments, pool and depth complexity)");
     cmd->add_option("--culling", flags->culling, "Caster culling mode (overrides the config)")
         ->check(CLI::IsMember({"none", "frustum", "light-occlusion", "receiver-mask"}));
     cmd->add_option("--debug-image", flags->debugImage,

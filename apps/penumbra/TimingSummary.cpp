@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 
 namespace penumbra::app {
@@ -134,6 +135,44 @@ void printCulling(const visibility::CullingStats& s, std::string_view mode)
         else
             fmt::print("  {:<39}{:.2f}\n", figure.label, s.*figure.ms);
     }
+}
+
+std::vector<std::vector<plugin::TechniqueFigure>> medianTechniqueFigures(const std::vector<frame::FrameTimings>& frames)
+{
+    std::vector<std::vector<plugin::TechniqueFigure>> out;
+    if (frames.empty()) return out;
+    out = frames.back().techniques;
+    for (size_t light = 0; light < out.size(); ++light) {
+        for (plugin::TechniqueFigure& figure : out[light]) {
+            std::vector<double> v;
+            for (const frame::FrameTimings& f : frames) {
+                double value = 0.0;
+                if (light < f.techniques.size())
+                    for (const plugin::TechniqueFigure& g : f.techniques[light])
+                        if (g.name == figure.name) value = g.value;
+                v.push_back(value);
+            }
+            figure.value = median(std::move(v));
+        }
+    }
+    return out;
+}
+
+std::string techniqueFiguresText(const std::vector<std::vector<plugin::TechniqueFigure>>& figures,
+                                 const std::vector<std::string>& techniques)
+{
+    std::string text;
+    for (size_t light = 0; light < figures.size(); ++light) {
+        if (figures[light].empty()) continue;
+        text += fmt::format("light {} ({}) figures (median per frame)\n", light,
+                            light < techniques.size() ? techniques[light] : std::string("?"));
+        for (const plugin::TechniqueFigure& f : figures[light])
+            text += fmt::format("  {:<39}{}{}{}\n", f.name,
+                                f.value == std::floor(f.value) && std::abs(f.value) < 1e15 ? fmt::format("{:.0f}", f.value)
+                                                                                            : fmt::format("{:.3f}", f.value),
+                                f.unit.empty() ? "" : " ", f.unit);
+    }
+    return text;
 }
 
 } // namespace penumbra::app

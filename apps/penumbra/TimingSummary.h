@@ -67,4 +67,13 @@ visibility::CullingStats medianCulling(const std::vector<frame::FrameTimings>& f
 // The lines `render --stats` prints on stdout.
 void printCulling(const visibility::CullingStats& stats, std::string_view mode);
 
+// Per light, the median over the frames of each figure its technique reported
+// (plugin::Technique::figures), by name; a figure missing from a frame counts as 0 there.
+std::vector<std::vector<plugin::TechniqueFigure>> medianTechniqueFigures(const std::vector<frame::FrameTimings>& frames);
+// What `render --stats` and `graph` print of them: per light with figures, a heading
+// naming the light and its technique (`techniques`: the renderer's techniqueName), then
+// one line per figure.
+std::string techniqueFiguresText(const std::vector<std::vector<plugin::TechniqueFigure>>& figures,
+                                 const std::vector<std::string>& techniques);
+
 } // namespace penumbra::app

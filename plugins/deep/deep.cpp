@@ -44,12 +44,17 @@ constexpr const char* kFilterNames[] = {"dsm", "edsm"};
 constexpr uint32_t kNodeBytes = 24;        // deep_lists.glsl DeepNode
 constexpr uint32_t kSortCapacity = 256;    // deep_lists.glsl DEEP_SORT_CAPACITY
 constexpr uint32_t kComplexityBins = 16;   // deep_counters.glsl DEEP_COMPLEXITY_BINS
-constexpr int kMaxPoolMib = 4096;
+constexpr int kMaxPoolMib = 4096;  // 178,956,970 nodes: the counters (uint32) cannot wrap first
+
+// Nodes in a pool of `mib` MiB.
+uint32_t nodesIn(uint32_t mib) { return uint32_t((uint64_t(mib) << 20) / kNodeBytes); }
 
 const plugin::ParamSpec kParams[] = {
     plugin::shadowResolutionParam(1024, 8192),
     {"pool_mib", ParamType::Int, 64, 1, kMaxPoolMib, "MiB",
-     "the fragment pool: 24 bytes a fragment; fragments past it are dropped and counted"},
+     "the fragment pool at the start: 24 bytes a fragment; a frame that needs more grows it and is drawn again"},
+    {"max_pool_mib", ParamType::Int, 1024, 1, kMaxPoolMib, "MiB",
+     "the largest the pool grows to; fragments past it are dropped, counted and warned about"},
     {"epsilon", ParamType::Float, 0.001, 0, 0.5, "",
      "truncation: a list ends at its first node whose transmittance is at most epsilon (error at most epsilon)"},
     {"pcf_kernel", ParamType::Int, 1, 1, 7, "texels", "taps per side of the filter box, odd: 1, 3, 5, 7"},
@@ -68,6 +73,7 @@ const plugin::ParamSpec kParams[] = {
 struct Settings {
     uint32_t resolution = 1024;
     uint32_t poolMib = 64;
+    uint32_t maxPoolMib = 1024;
     float epsilon = 0.001f;
     uint32_t pcfKernel = 1;
     Lookup lookup = Lookup::Linked;
@@ -87,6 +93,12 @@ Settings readSettings(const plugin::ParamValues& params)
     }
     s.resolution = uint32_t(params.getInt("resolution"));
     s.poolMib = uint32_t(params.getInt("pool_mib"));
+    s.maxPoolMib = uint32_t(params.getInt("max_pool_mib"));
+    if (s.maxPoolMib < s.poolMib) {
+        throw ConfigError(fmt::format("deep: max_pool_mib: the pool grows from pool_mib = {} MiB up to max_pool_mib, "
+                                      "which is {} MiB: set it to at least {}",
+                                      s.poolMib, s.maxPoolMib, s.poolMib));
+    }
     s.epsilon = params.getFloat("epsilon");
     s.pcfKernel = uint32_t(kernel);
     s.lookup = Lookup(params.getEnumIndex("lookup"));
@@ -127,13 +139,16 @@ public:
 
     void update(const scene::Light& light, const scene::Aabb& sceneBounds) override;
     void registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io) override;
+    std::vector<plugin::TechniqueFigure> figures() const override;
+    bool grewForLastFrame() override;
 
 private:
     struct Names {
         std::string heads, nodes, counters, lengths;
     };
     void recordFragments(const graph::PassContext& pass, const Names& names) const;
-    uint32_t capacity() const { return uint32_t(std::min<uint64_t>(uint64_t(settings_.poolMib) << 20, UINT32_MAX) / kNodeBytes); }
+    uint32_t capacity() const { return capacity_; }
+    Counters lastCounters() const;
 
     gpu::Context& context_;
     const render::Casters& casters_;
@@ -145,6 +160,7 @@ private:
     gpu::Pipeline links_;
     gpu::Pipeline visibility_;
     gpu::Buffer counters_;  // host-visible: last frame's Counters
+    uint32_t capacity_ = 0;  // nodes in the pool: pool_mib's, grown up to max_pool_mib's
     bool warnedOverflow_ = false;
 };
 
@@ -190,6 +206,7 @@ DeepShadow::DeepShadow(const plugin::TechniqueSetup& setup)
                                              {"EXPONENTIAL", settings_.filter == Filter::Edsm ? "1" : "0"}};
     std::ranges::copy(mapDefines, std::back_inserter(lookup));
     visibility_ = compute("visibility", "visibility.comp", sizeof(VisibilityPush), lookup);
+    capacity_ = nodesIn(settings_.poolMib);
     counters_ = gpu::Buffer(context_, sizeof(Counters), VK_BUFFER_USAGE_TRANSFER_DST_BIT, true,
                             fmt::format("light{}.deep.counters_readback", lightIndex_));
     std::memset(counters_.mapped(), 0, sizeof(Counters));
@@ -197,17 +214,65 @@ DeepShadow::DeepShadow(const plugin::TechniqueSetup& setup)
 
 void DeepShadow::update(const scene::Light& light, const scene::Aabb& sceneBounds)
 {
-    // The last frame has finished (the executor waits): its counters are final.
+    shadowMap_.update(light, sceneBounds);
+}
+
+// The last frame has finished (the executor waits for it): its counters are final.
+Counters DeepShadow::lastCounters() const
+{
     Counters last;
     std::memcpy(&last, counters_.mapped(), sizeof(last));
-    if (last.fragments > capacity() && !warnedOverflow_) {
-        spdlog::warn("deep (light {}): pass 'light{}.deep.fragments' appended {} fragments to a pool of {} ({} MiB): "
-                     "{} were dropped; raise pool_mib",
-                     lightIndex_, lightIndex_, last.fragments, capacity(), settings_.poolMib,
-                     last.fragments - capacity());
+    return last;
+}
+
+bool DeepShadow::grewForLastFrame()
+{
+    const Counters last = lastCounters();
+    if (last.fragments <= capacity_) return false;
+    const uint32_t most = nodesIn(settings_.maxPoolMib);
+    if (capacity_ < most) {
+        // A quarter more than the frame asked for, in whole MiB: a light or camera that
+        // moves a little does not grow it again at once.
+        const uint64_t wanted = uint64_t(last.fragments) + last.fragments / 4;
+        const uint32_t mib = uint32_t(std::min<uint64_t>((wanted * kNodeBytes + (1u << 20) - 1) >> 20, settings_.maxPoolMib));
+        spdlog::info("deep (light {}): pass 'light{}.deep.fragments' appended {} fragments to a pool of {}: the pool "
+                     "grows to {} MiB and the frame is drawn again",
+                     lightIndex_, lightIndex_, last.fragments, capacity_, mib);
+        capacity_ = nodesIn(mib);
+        return true;
+    }
+    if (!warnedOverflow_) {
+        spdlog::warn("deep (light {}): pass 'light{}.deep.fragments' appended {} fragments to a pool of {} "
+                     "(max_pool_mib = {}): {} were dropped and their texels are lit too much; raise max_pool_mib",
+                     lightIndex_, lightIndex_, last.fragments, capacity_, settings_.maxPoolMib,
+                     last.fragments - capacity_);
         warnedOverflow_ = true;
     }
-    shadowMap_.update(light, sceneBounds);
+    return false;
+}
+
+std::vector<plugin::TechniqueFigure> DeepShadow::figures() const
+{
+    const Counters last = lastCounters();
+    const double mib = 1.0 / double(1u << 20);
+    const uint32_t stored = std::min(last.fragments, capacity_);
+    std::vector<plugin::TechniqueFigure> f = {
+        {"fragments", double(last.fragments), ""},
+        {"dropped_fragments", double(last.fragments - stored), ""},
+        {"pool_mib", double(capacity_) * kNodeBytes * mib, "MiB"},
+        {"pool_used_mib", double(stored) * kNodeBytes * mib, "MiB"},
+        {"nodes_kept", double(last.kept), ""},
+        {"over_sort_capacity", double(last.overSortCap), ""},
+        {"longest_list", double(last.longest), ""},
+    };
+    // Depth complexity: texels by fragment count, bin b holding 2^b .. 2^(b+1) - 1.
+    for (uint32_t b = 0; b < kComplexityBins; ++b) {
+        if (last.complexity[b] == 0) continue;
+        const std::string range = b == 0 ? "1" : b + 1 == kComplexityBins ? fmt::format("{}+", 1u << b)
+                                                                          : fmt::format("{}-{}", 1u << b, (2u << b) - 1);
+        f.push_back({fmt::format("texels_with_{}_fragments", range), double(last.complexity[b]), "texels"});
+    }
+    return f;
 }
 
 void DeepShadow::recordFragments(const graph::PassContext& pass, const Names& names) const

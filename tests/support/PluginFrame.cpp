@@ -12,7 +12,7 @@ RenderedFrame::RenderedFrame(gpu::Context& context, plugin::PluginRegistry& reg,
     : registry(reg), config(cfg), scene(std::move(s)), renderer(context, scene, config, reg)
 {
     for (const std::string& image : debugImages) renderer.requestImage(image);
-    renderer.renderFrame();
+    timings = renderer.renderFrame();
     positions = renderer.readPositions();
     normals = renderer.readNormals();
 }

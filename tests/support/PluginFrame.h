@@ -54,6 +54,7 @@ struct RenderedFrame {
     frame::FrameRenderer renderer;
     std::vector<float> positions;
     std::vector<float> normals;
+    frame::FrameTimings timings;  // the frame's (the techniques' figures, redraws)
 };
 
 // A GPU test with a plugin registry; frames are destroyed before the registry unloads

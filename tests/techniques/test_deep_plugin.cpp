@@ -244,14 +244,44 @@ TEST_F(DeepPlugin, AFaintLayerDoesNotHideAnOpaqueCasterBehindIt)
     EXPECT_GT(under, 30u);
 }
 
-// A pool too small for the hair (1 MiB: 43,690 fragments) drops fragments: the frame
-// still renders, V stays within the contract, and it is lighter than with every fragment.
-TEST_F(DeepPlugin, ATooSmallPoolDropsFragmentsWithoutCrashing)
+// The figure `name` of light 0's technique in the last frame; fails when it is missing.
+double figure(const test::RenderedFrame& f, const std::string& name)
+{
+    if (!f.timings.techniques.empty())
+        for (const plugin::TechniqueFigure& figure : f.timings.techniques[0])
+            if (figure.name == name) return figure.value;
+    ADD_FAILURE() << "no figure " << name;
+    return 0.0;
+}
+
+// A pool too small for the hair (1 MiB: 43,690 fragments) grows: the frame is drawn
+// again with a pool that holds every fragment, and equals the frame of a pool large
+// enough from the start. Capped at 1 MiB, the fragments past it are dropped and counted:
+// the frame still renders, V stays within the contract, and the hair's shadow is lighter.
+TEST_F(DeepPlugin, APoolTooSmallGrowsOrDropsAndCountsFragments)
 {
     const config::RenderConfig cfg = hairConfig(scene::LightType::Spot);
     const std::vector<float> full = renderDeep(cfg, config::buildScene(cfg.scene), {{"resolution", 512}});
+    EXPECT_EQ(frame->timings.redraws, 0u);
+    const double fragments = figure(*frame, "fragments");
+    EXPECT_GT(fragments, 43690.0 * 2);
+    EXPECT_EQ(figure(*frame, "dropped_fragments"), 0.0);
+    EXPECT_NEAR(figure(*frame, "pool_used_mib"), fragments * 24.0 / (1 << 20), 1e-6);
+    double histogram = 0.0;
+    for (const plugin::TechniqueFigure& f : frame->timings.techniques[0])
+        if (f.name.starts_with("texels_with_")) histogram += f.value;
+    EXPECT_GT(histogram, 1000.0);
+
+    const std::vector<float> grown = renderDeep(cfg, config::buildScene(cfg.scene), {{"resolution", 512}, {"pool_mib", 1}});
+    EXPECT_EQ(frame->timings.redraws, 1u);
+    EXPECT_EQ(figure(*frame, "dropped_fragments"), 0.0);
+    EXPECT_GE(figure(*frame, "pool_mib"), fragments * 24.0 / (1 << 20));
+    EXPECT_EQ(maxDifference(full, grown), 0.0f);
+
     const std::vector<float> starved =
-        renderDeep(cfg, config::buildScene(cfg.scene), {{"resolution", 512}, {"pool_mib", 1}});
+        renderDeep(cfg, config::buildScene(cfg.scene), {{"resolution", 512}, {"pool_mib", 1}, {"max_pool_mib", 1}});
+    EXPECT_EQ(frame->timings.redraws, 0u);
+    EXPECT_EQ(figure(*frame, "dropped_fragments"), fragments - 43690.0);
     double sumFull = 0.0, sumStarved = 0.0;
     for (size_t i = 0; i < full.size(); ++i) sumFull += full[i], sumStarved += starved[i];
     EXPECT_GT(sumStarved, sumFull + 10.0);
@@ -259,18 +289,23 @@ TEST_F(DeepPlugin, ATooSmallPoolDropsFragmentsWithoutCrashing)
 
 TEST_F(DeepPlugin, RefusesBadParametersByName)
 {
-    test::expectRefusalsNameTheParameter("deep", {{"pcf_kernel", 9}, {"pool_mib", 0}, {"epsilon", -0.1},
-                                                  {"lookup", "binary"}, {"filter", "vsm"}});
+    test::expectRefusalsNameTheParameter("deep", {{"pcf_kernel", 9}, {"pool_mib", 0}, {"max_pool_mib", 5000},
+                                                  {"epsilon", -0.1}, {"lookup", "binary"}, {"filter", "vsm"}});
     // In range, but a box of 4 taps has no centre texel: refused when the light's
     // technique is created, before anything renders.
     const config::RenderConfig cfg = panesConfig(scene::LightType::Spot);
-    try {
-        renderDeep(cfg, panesScene({1.0f}, 0.3f), {{"pcf_kernel", 4}});
-        FAIL() << "rendered with pcf_kernel 4";
-    } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find("pcf_kernel"), std::string::npos) << e.what();
-        EXPECT_NE(std::string(e.what()).find("odd"), std::string::npos) << e.what();
-    }
+    const auto expectRefusal = [&](const nlohmann::json& params, const std::string& name, const std::string& why) {
+        try {
+            renderDeep(cfg, panesScene({1.0f}, 0.3f), params);
+            ADD_FAILURE() << "rendered with " << params.dump();
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+        }
+    };
+    expectRefusal({{"pcf_kernel", 4}}, "pcf_kernel", "odd");
+    // A cap below the starting pool.
+    expectRefusal({{"pool_mib", 64}, {"max_pool_mib", 32}}, "max_pool_mib", "at least 64");
 }
 
 } // namespace

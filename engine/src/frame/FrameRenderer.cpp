@@ -233,6 +233,7 @@ void FrameRenderer::buildGraph()
         g.markOutput(kGNormal);
         for (const LightSlot& slot : lights_)
             if (!slot.unshadowed) g.markOutput(slot.visibility);
+        for (const std::string& name : requestedImages_) g.markOutput(name);
         g.compile();
         return;
     }
@@ -332,8 +333,22 @@ FrameTimings FrameRenderer::renderFrame()
             if (lights_[i].instance) lights_[i].instance->update(currentLights_[i], scene_.bounds());
     }
     executor_.execute(*graph_);
+    for (uint32_t redraw = 0; redraw < kMaxRedraws; ++redraw) {
+        bool grew = false;
+        for (LightSlot& slot : lights_)
+            if (slot.instance && slot.instance->grewForLastFrame()) grew = true;
+        if (!grew) break;
+        buildGraph();
+        sceneGpu_.beginFrame();
+        visibility_->beginFrame(cameraViewProj_);
+        executor_.execute(*graph_);
+        ++timings.redraws;
+    }
     timings.passes = executor_.collectTimings();
     timings.culling = visibility_->stats();
+    timings.techniques.resize(lights_.size());
+    for (size_t i = 0; i < lights_.size(); ++i)
+        if (lights_[i].instance) timings.techniques[i] = lights_[i].instance->figures();
     timings.frameCpuMs = core::msSince(frameStart);
     return timings;
 }
@@ -430,6 +445,8 @@ void FrameRenderer::requestImage(const std::string& name)
     }
     // An output is kept with its writers, and stays readable after the frame.
     graph_->markOutput(name);
+    if (std::find(requestedImages_.begin(), requestedImages_.end(), name) == requestedImages_.end())
+        requestedImages_.push_back(name);
 }
 
 metrics::DebugImageValues FrameRenderer::readImage(const std::string& name) const

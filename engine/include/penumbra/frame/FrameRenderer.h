@@ -36,10 +36,17 @@ namespace penumbra::frame {
 
 using PassTiming = graph::PassTiming;
 
+// The most times renderFrame() draws a frame again for techniques that grew their
+// resources (plugin::Technique::grewForLastFrame).
+inline constexpr uint32_t kMaxRedraws = 4;
+
 struct FrameTimings {
-    std::vector<PassTiming> passes;    // the executed passes, in execution order
-    double frameCpuMs = 0.0;           // record + submit + wait (+ host passes), wall clock
+    std::vector<PassTiming> passes;    // the executed passes (of the last draw), in execution order
+    double frameCpuMs = 0.0;           // record + submit + wait (+ host passes), wall clock, every draw
     visibility::CullingStats culling;  // the visibility service's figures for the frame
+    // Per light (empty for a light without technique): its technique's figures.
+    std::vector<std::vector<plugin::TechniqueFigure>> techniques;
+    uint32_t redraws = 0;  // draws after the first (a technique grew its resources)
 };
 
 class FrameRenderer {
@@ -63,7 +70,9 @@ public:
                 const std::vector<uint32_t>& movedInstances);
 
     // Runs one frame (GraphExecutor::execute: one submission, or one per stretch of GPU
-    // passes between host passes) and waits for it; returns the time of every pass.
+    // passes between host passes) and waits for it; returns the time of every pass. When
+    // a technique grew a resource the frame did not fit in (Technique::grewForLastFrame),
+    // the graph is declared again and the frame drawn again, up to kMaxRedraws times.
     FrameTimings renderFrame();
 
     uint32_t width() const { return width_; }
@@ -168,6 +177,7 @@ private:
     std::vector<LightSlot> lights_;
     std::vector<scene::Light> currentLights_;  // as the last update() left them
     std::vector<std::string> warnings_;
+    std::vector<std::string> requestedImages_;  // marked outputs again when the graph is declared again
     std::unique_ptr<graph::RenderGraph> graph_;
     graph::GraphExecutor executor_;
     mutable std::unique_ptr<plugin::GBufferExport> gbufferExport_;  // made at the first read-back

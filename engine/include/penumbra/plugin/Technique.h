@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <vector>
 
 namespace penumbra::gpu {
 class Context;
@@ -62,6 +63,15 @@ struct LightPassIo {
     std::string local(std::string_view name) const { return prefix + std::string(name); }
 };
 
+// One figure of a technique's last frame (memory it used, work it did, what it had to
+// drop): `render --stats`, `bench` and `graph` print them beside the engine's own.
+struct TechniqueFigure {
+    std::string name;  // "fragments", "pool_used_mib"
+    double value = 0.0;
+    std::string unit;  // "", "MiB", "texels"
+    bool operator==(const TechniqueFigure&) const = default;
+};
+
 class Technique {
 public:
     virtual ~Technique() = default;
@@ -82,6 +92,17 @@ public:
     // the frame's graph. Called once per graph build; the callbacks run every frame and
     // read the state that update() left.
     virtual void registerPasses(graph::RenderGraph& graph, const LightPassIo& io) = 0;
+
+    // The figures of the frame that ran last, read after it finished. Default: none.
+    virtual std::vector<TechniqueFigure> figures() const { return {}; }
+
+    // Called after every frame, once it finished: true when the technique found a
+    // resource too small for the frame (its results are incomplete) and grew it. The
+    // renderer then declares the frame's graph again (registerPasses is called anew, with
+    // the new sizes) and draws the frame again, at most frame::kMaxRedraws times in one
+    // renderFrame(). A technique past its own limit reports that in its figures and
+    // returns false. Default: false.
+    virtual bool grewForLastFrame() { return false; }
 };
 
 } // namespace penumbra::plugin
