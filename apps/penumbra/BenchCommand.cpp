@@ -401,6 +401,7 @@ BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& v
                                     summarizeFloor(floorMeasured, config.lights.size()), anyLightShadowed(renderer));
     result.culling = config::cullingModeName(config.culling);
     result.cullingStats = medianCulling(measured);
+    const std::vector<std::vector<plugin::TechniqueFigure>> figures = medianTechniqueFigures(measured);
     for (size_t l = 0; l < config.lights.size(); ++l) {
         BenchLight light;
         light.index = l;
@@ -414,6 +415,7 @@ BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& v
         light.contextLabel = choicesText(variant, l, false);
         const std::string prefix = renderer.shadowPassPrefix(l);
         light.timing = summarizeTimings(measured, prefix, hostPasses);
+        if (l < figures.size()) light.figures = figures[l];
         for (const graph::TransientMemory& m : memory) {
             if (m.name.rfind(prefix, 0) == 0) light.memory.push_back(m);
         }

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cctype>
 #include <map>
 #include <numeric>
@@ -147,6 +148,13 @@ std::string csvLine(const std::vector<std::string>& fields)
     return line + "\r\n";
 }
 
+json figuresJson(const std::vector<plugin::TechniqueFigure>& figures)
+{
+    json out = json::array();
+    for (const plugin::TechniqueFigure& f : figures) out.push_back({{"name", f.name}, {"value", f.value}, {"unit", f.unit}});
+    return out;
+}
+
 json lightJson(const BenchLight& l)
 {
     json memory = json::array();
@@ -160,7 +168,8 @@ json lightJson(const BenchLight& l)
             {"timing", timingJson(l.timing)},
             {"memory", {{"bytes", l.memoryBytes()}, {"resources", std::move(memory)}}},
             {"visibility", metrics::toJson(l.visibility)},
-            {"pareto_front", l.paretoFront}};
+            {"pareto_front", l.paretoFront},
+            {"figures", figuresJson(l.figures)}};
 }
 
 std::string bytesText(uint64_t bytes)
@@ -327,6 +336,24 @@ std::string summaryMarkdown(const BenchRun& run)
                               all.rmse, l->visibility.region(metrics::Region::Penumbra).rmse, all.mae, all.maxAbsError,
                               all.percentAbove(0), all.percentAbove(1), l->visibility.ssim, l->paretoFront ? "✓" : "");
         }
+    }
+    std::string figures;
+    for (const BenchVariant& v : run.variants)
+        for (const BenchLight& l : v.lights) {
+            if (l.figures.empty()) continue;
+            std::vector<std::string> items;
+            for (const plugin::TechniqueFigure& f : l.figures)
+                items.push_back(fmt::format("{} {}{}{}", f.name,
+                                            f.value == std::floor(f.value) ? fmt::format("{:.0f}", f.value)
+                                                                           : fmt::format("{:.3f}", f.value),
+                                            f.unit.empty() ? "" : " ", f.unit));
+            figures += fmt::format("| {} | {} | {} | {} |\n", cell(v.label.empty() ? "(no sweep)" : v.label),
+                                   cell(l.name), cell(l.technique), cell(fmt::format("{}", fmt::join(items, ", "))));
+        }
+    if (!figures.empty()) {
+        md += "\n## Technique figures\n\nWhat each technique reports of its frames (medians per frame): memory it "
+              "used, work it did, what it dropped.\n\n| variant | light | technique | figures |\n|---|---|---|---|\n";
+        md += figures;
     }
     md += "\n## Against the floor\n\n";
     md += fmt::format("The frame's passes as multiples of the floor's (the config's scene drawn once forward, "

@@ -33,6 +33,8 @@ struct BenchLight {
     std::vector<graph::TransientMemory> memory;  // the transient resources of those passes
     metrics::VisibilityComparison visibility;    // against the reference
     bool paretoFront = false;  // not dominated in (timing.workMs, RMSE) within its panel
+    // The technique's own figures (plugin::Technique::figures), medians per frame.
+    std::vector<plugin::TechniqueFigure> figures;
 
     uint64_t memoryBytes() const;
 };

@@ -68,7 +68,13 @@ const plugin::ParamSpec kParams[] = {
      "filter edsm: c of 1 - e^{-c (t_receiver - t_node)}, t the linear depth along the face in [0, 1]"},
     {"normal_offset", ParamType::Float, 1.0, 0, 64, "texels",
      "the receiver's offset along its normal, in texels at the receiver, per texel of the filter's width"},
+    {"debug_depth", ParamType::Float, 0.5, 0, 1, "",
+     "debug image transmittance: the linear depth along the face (0 near, 1 far) it reads each list at"},
 };
+
+// The debug images (debug.comp), R32F over the atlas.
+constexpr const char* kDebugImages[] = {"depth_complexity", "list_length", "transmittance"};
+constexpr const char* kDebugBindings[] = {"complexityOut", "lengthOut", "transmittanceOut"};
 
 struct Settings {
     uint32_t resolution = 1024;
@@ -80,6 +86,7 @@ struct Settings {
     Filter filter = Filter::Dsm;
     float esmExponent = 80.0f;
     float normalOffsetTexels = 1.0f;
+    float debugDepth = 0.5f;
 };
 
 Settings readSettings(const plugin::ParamValues& params)
@@ -105,6 +112,7 @@ Settings readSettings(const plugin::ParamValues& params)
     s.filter = Filter(params.getEnumIndex("filter"));
     s.esmExponent = params.getFloat("esm_exponent");
     s.normalOffsetTexels = params.getFloat("normal_offset");
+    s.debugDepth = params.getFloat("debug_depth");
     return s;
 }
 
@@ -159,6 +167,7 @@ private:
     gpu::Pipeline sort_;
     gpu::Pipeline links_;
     gpu::Pipeline visibility_;
+    gpu::Pipeline debug_;
     gpu::Buffer counters_;  // host-visible: last frame's Counters
     uint32_t capacity_ = 0;  // nodes in the pool: pool_mib's, grown up to max_pool_mib's
     bool warnedOverflow_ = false;
@@ -206,6 +215,7 @@ DeepShadow::DeepShadow(const plugin::TechniqueSetup& setup)
                                              {"EXPONENTIAL", settings_.filter == Filter::Edsm ? "1" : "0"}};
     std::ranges::copy(mapDefines, std::back_inserter(lookup));
     visibility_ = compute("visibility", "visibility.comp", sizeof(VisibilityPush), lookup);
+    debug_ = compute("debug_views", "debug.comp", sizeof(float), mapDefines);
     capacity_ = nodesIn(settings_.poolMib);
     counters_ = gpu::Buffer(context_, sizeof(Counters), VK_BUFFER_USAGE_TRANSFER_DST_BIT, true,
                             fmt::format("light{}.deep.counters_readback", lightIndex_));
@@ -382,6 +392,30 @@ void DeepShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
         .read(names.heads, graph::Usage::Storage)
         .read(names.nodes, graph::Usage::Storage)
         .read(names.lengths, graph::Usage::Storage);
+
+    // The debug views: nothing reads their images, so the graph culls the pass unless one
+    // of them is requested (FrameRenderer::requestImage, render --debug-image).
+    graph::PassBuilder debug = graph.addPass(io.local("debug_views"), graph::QueueKind::Compute);
+    debug.read(names.heads, graph::Usage::Storage)
+        .read(names.lengths, graph::Usage::Storage)
+        .read(names.nodes, graph::Usage::Storage);
+    for (const char* image : kDebugImages) {
+        graph.declareImage({io.local(image), w, h, VK_FORMAT_R32_SFLOAT});
+        debug.write(io.local(image), graph::Usage::Storage);
+    }
+    debug.execute([this, names, io](graph::PassContext& pass) {
+        debug_.bind(pass.cmd());
+        gpu::DescriptorPush descriptors;
+        descriptors.storageImage("heads", pass.image(names.heads))
+            .storageImage("lengths", pass.image(names.lengths))
+            .storageBuffer("DeepNodes", pass.buffer(names.nodes))
+            .storageBuffer("shadowMapBuffer", shadowMap_.buffer());
+        for (size_t i = 0; i < std::size(kDebugImages); ++i)
+            descriptors.storageImage(kDebugBindings[i], pass.image(io.local(kDebugImages[i])));
+        descriptors.push(context_, pass.cmd(), debug_);
+        debug_.pushConstants(pass.cmd(), &settings_.debugDepth, sizeof(float));
+        debug_.dispatchOver(pass.cmd(), pass.image(names.heads));
+    });
 
     // The frame's counters, for the next update() and the stats (a side effect: nothing
     // in the graph reads them).

@@ -1574,6 +1574,41 @@ TEST_F(Cli, BenchCountsAHostPassAsTheTechniquesTime)
     EXPECT_TRUE(nlohmann::json::parse(rows[0].at("pass_ms")).contains("light0.reference.trace"));
 }
 
+// A technique's own figures (plugin::Technique::figures: a deep shadow map's fragments,
+// pool and depth complexity) in `render --stats`, `graph` and the bench's results and
+// summary.
+TEST_F(Cli, TechniqueFiguresAreReportedEverywhere)
+{
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << R"({
+        "scene": {"generator": "hair", "params": {"strands": 500}},
+        "camera": {"position": [0.75, 0.6, 0.95], "target": [0, 0.42, 0], "near": 0.005},
+        "lights": [{"type": "spot", "position": [0.9, 1.6, 0.5], "target": [0, 0.3, 0], "outer_cone_deg": 30,
+                    "shadow": {"technique": "deep", "resolution": 128, "pool_mib": 1}}],
+        "output": {"width": 48, "height": 36},
+        "sweep": [{"path": "/lights/0/shadow/pcf_kernel", "labels": ["1", "3"], "values": [1, 3]}]})";
+    const fs::path png = dir / "out.png";
+    CliResult r = run(fmt::format("render '{}' -o '{}' --frames 2 --stats --validation", cfg.string(), png.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    for (const char* line : {"light 0 (deep) figures (median per frame)", "fragments", "dropped_fragments ",
+                             "pool_used_mib", "texels_with_1_fragments"})
+        EXPECT_NE(r.out.find(line), std::string::npos) << line << "\n" << r.out;
+    r = run(fmt::format("graph '{}'", cfg.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("light 0 (deep) figures"), std::string::npos) << r.out;
+    const fs::path out = dir / "bench";
+    r = run(fmt::format("bench '{}' --reference-set samples=1 --reference-set cache=false --frames 1 --warmup 0 -o '{}' "
+                        "--summary '{}'",
+                        cfg.string(), out.string(), (dir / "summary.md").string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const nlohmann::json light = nlohmann::json::parse(slurp(out / "results.json"))["variants"][1]["lights"][0];
+    std::map<std::string, double> figures;
+    for (const nlohmann::json& f : light["figures"]) figures[f["name"]] = f["value"];
+    EXPECT_GT(figures["fragments"], 0.0);
+    EXPECT_EQ(figures["dropped_fragments"], 0.0);
+    EXPECT_NE(slurp(dir / "summary.md").find("## Technique figures"), std::string::npos);
+}
+
 TEST_F(Cli, BenchInterruptedWritesNothing)
 {
     const fs::path cfg = dir / "cfg.json";

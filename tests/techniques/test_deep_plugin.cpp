@@ -9,6 +9,7 @@
 
 #include "penumbra/config/Config.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/metrics/DebugImage.h"
 #include "penumbra/scene/Generators.h"
 
 #include <gtest/gtest.h>
@@ -285,6 +286,41 @@ TEST_F(DeepPlugin, APoolTooSmallGrowsOrDropsAndCountsFragments)
     double sumFull = 0.0, sumStarved = 0.0;
     for (size_t i = 0; i < full.size(); ++i) sumFull += full[i], sumStarved += starved[i];
     EXPECT_GT(sumStarved, sumFull + 10.0);
+}
+
+// The debug images agree with the figures and with each other: the depth complexity sums
+// to the fragments appended, no list keeps more than reached it, every texel that a
+// fragment reached keeps at least one, and the transmittance at the far plane is 0 under
+// the ground (an opaque receiver that also casts) and 1 where no caster is.
+TEST_F(DeepPlugin, DebugImagesCountTheListsAndReadThem)
+{
+    config::RenderConfig cfg = hairConfig(scene::LightType::Spot);
+    test::setShadow(cfg.lights[0], "deep", {{"resolution", 256}, {"debug_depth", 1.0}});
+    const std::vector<std::string> images = {"light0.deep.depth_complexity", "light0.deep.list_length",
+                                             "light0.deep.transmittance"};
+    render(cfg, config::buildScene(cfg.scene), images);
+    const metrics::DebugImageValues complexity = frame->renderer.readImage(images[0]);
+    const metrics::DebugImageValues length = frame->renderer.readImage(images[1]);
+    const metrics::DebugImageValues transmittance = frame->renderer.readImage(images[2]);
+    ASSERT_EQ(complexity.width, 256u);
+    double fragments = 0.0;
+    size_t empty = 0, opaque = 0;
+    for (size_t i = 0; i < complexity.values.size(); ++i) {
+        fragments += complexity.values[i];
+        ASSERT_LE(length.values[i], complexity.values[i]) << i;
+        ASSERT_EQ(length.values[i] > 0.0f, complexity.values[i] > 0.0f) << i;
+        ASSERT_GE(transmittance.values[i], 0.0f);
+        ASSERT_LE(transmittance.values[i], 1.0f);
+        if (complexity.values[i] == 0.0f) {
+            ++empty;
+            ASSERT_EQ(transmittance.values[i], 1.0f) << i;
+        }
+        opaque += transmittance.values[i] == 0.0f ? 1 : 0;
+    }
+    EXPECT_EQ(fragments, figure(*frame, "fragments"));
+    EXPECT_GT(opaque, 1000u);
+    EXPECT_GT(empty, 1000u) << "texels beyond the ground";
+    EXPECT_GT(figure(*frame, "longest_list"), 8.0);
 }
 
 TEST_F(DeepPlugin, RefusesBadParametersByName)
