@@ -152,7 +152,7 @@ public:
 
 private:
     struct Names {
-        std::string heads, nodes, counters, lengths;
+        std::string heads, nodes, counters, lengths, opaque;
     };
     void recordFragments(const graph::PassContext& pass, const Names& names) const;
     uint32_t capacity() const { return capacity_; }
@@ -170,6 +170,7 @@ private:
     gpu::Pipeline debug_;
     gpu::Buffer counters_;  // host-visible: last frame's Counters
     uint32_t capacity_ = 0;  // nodes in the pool: pool_mib's, grown up to max_pool_mib's
+    uint32_t deviceMaxMib_ = 0;  // the largest pool the device binds
     bool warnedOverflow_ = false;
 };
 
@@ -196,6 +197,10 @@ DeepShadow::DeepShadow(const plugin::TechniqueSetup& setup)
     f.defines = {{"ALPHA_MASK", "1"}};
     f.pushConstantBytes = sizeof(FragmentPush);
     f.vertexLayout = casters_.positionUvLayout();
+    // Tested against the opaque casters' depth (early fragment tests, no write): what
+    // lies behind the nearest opaque surface never reaches the shader.
+    f.depthFormat = render::kShadowDepthFormat;
+    f.depthCompare = VK_COMPARE_OP_GREATER_OR_EQUAL;
     f.depthWrite = false;
     f.cullMode = VK_CULL_MODE_NONE;  // both sides of every triangle cast, as in the depth maps
     fragments_ = gpu::Pipeline(context_, setup.shaders, f);
@@ -216,6 +221,14 @@ DeepShadow::DeepShadow(const plugin::TechniqueSetup& setup)
     std::ranges::copy(mapDefines, std::back_inserter(lookup));
     visibility_ = compute("visibility", "visibility.comp", sizeof(VisibilityPush), lookup);
     debug_ = compute("debug_views", "debug.comp", sizeof(float), mapDefines);
+    // The pool is one storage buffer: the device binds at most maxStorageBufferRange bytes
+    // of it (lavapipe: 128 MiB, 5,592,405 nodes).
+    deviceMaxMib_ = uint32_t(std::min<uint64_t>(context_.properties().limits.maxStorageBufferRange >> 20, kMaxPoolMib));
+    if (settings_.poolMib > deviceMaxMib_) {
+        throw ConfigError(fmt::format("deep: pool_mib: {} MiB is more than this device binds as one storage buffer "
+                                      "({} MiB, maxStorageBufferRange); set pool_mib to at most {}",
+                                      settings_.poolMib, deviceMaxMib_, deviceMaxMib_));
+    }
     capacity_ = nodesIn(settings_.poolMib);
     counters_ = gpu::Buffer(context_, sizeof(Counters), VK_BUFFER_USAGE_TRANSFER_DST_BIT, true,
                             fmt::format("light{}.deep.counters_readback", lightIndex_));
@@ -239,12 +252,13 @@ bool DeepShadow::grewForLastFrame()
 {
     const Counters last = lastCounters();
     if (last.fragments <= capacity_) return false;
-    const uint32_t most = nodesIn(settings_.maxPoolMib);
+    const uint32_t maxMib = std::min(settings_.maxPoolMib, deviceMaxMib_);
+    const uint32_t most = nodesIn(maxMib);
     if (capacity_ < most) {
         // A quarter more than the frame asked for, in whole MiB: a light or camera that
         // moves a little does not grow it again at once.
         const uint64_t wanted = uint64_t(last.fragments) + last.fragments / 4;
-        const uint32_t mib = uint32_t(std::min<uint64_t>((wanted * kNodeBytes + (1u << 20) - 1) >> 20, settings_.maxPoolMib));
+        const uint32_t mib = uint32_t(std::min<uint64_t>((wanted * kNodeBytes + (1u << 20) - 1) >> 20, maxMib));
         spdlog::info("deep (light {}): pass 'light{}.deep.fragments' appended {} fragments to a pool of {}: the pool "
                      "grows to {} MiB and the frame is drawn again",
                      lightIndex_, lightIndex_, last.fragments, capacity_, mib);
@@ -253,9 +267,11 @@ bool DeepShadow::grewForLastFrame()
     }
     if (!warnedOverflow_) {
         spdlog::warn("deep (light {}): pass 'light{}.deep.fragments' appended {} fragments to a pool of {} "
-                     "(max_pool_mib = {}): {} were dropped and their texels are lit too much; raise max_pool_mib",
-                     lightIndex_, lightIndex_, last.fragments, capacity_, settings_.maxPoolMib,
-                     last.fragments - capacity_);
+                     "({} MiB: {}): {} were dropped and their texels are lit too much; {}",
+                     lightIndex_, lightIndex_, last.fragments, capacity_, maxMib,
+                     maxMib < settings_.maxPoolMib ? "the most this device binds" : "max_pool_mib",
+                     last.fragments - capacity_,
+                     maxMib < settings_.maxPoolMib ? "lower the resolution" : "raise max_pool_mib");
         warnedOverflow_ = true;
     }
     return false;
@@ -290,9 +306,15 @@ void DeepShadow::recordFragments(const graph::PassContext& pass, const Names& na
     const VkCommandBuffer cmd = pass.cmd();
     const render::ShadowMapPlacement own{shadowMap_.frusta(), {0, 0}, 0};
     const render::ShadowFaceDraws draws = shadowMap_.faceDraws(pass, names.heads, {}, {&own, 1});
+    VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    depth.imageView = pass.image(names.opaque).view();
+    depth.imageLayout = pass.layout(names.opaque);
+    depth.loadOp = VK_ATTACHMENT_LOAD_OP_LOAD;
+    depth.storeOp = VK_ATTACHMENT_STORE_OP_NONE;
     VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
     info.renderArea = draws.area;
     info.layerCount = 1;
+    info.pDepthAttachment = &depth;
     vkCmdBeginRendering(cmd, &info);
     casters_.countRenderedTexels(uint64_t(info.renderArea.extent.width) * info.renderArea.extent.height);
     fragments_.bind(cmd);
@@ -317,7 +339,11 @@ void DeepShadow::recordFragments(const graph::PassContext& pass, const Names& na
 
 void DeepShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io)
 {
-    Names names{io.local("heads"), io.local("nodes"), io.local("counters"), io.local("lengths")};
+    Names names{io.local("heads"), io.local("nodes"), io.local("counters"), io.local("lengths"),
+                io.local("opaque_depth")};
+    // The nearest surface of the casters that let no light through, drawn with the lists'
+    // own depths (no bias): the fragment pass keeps only what is in front of it or on it.
+    shadowMap_.addOpaqueDepthPass(graph, names.opaque, {});
     const uint32_t w = shadowMap_.atlasWidth(), h = shadowMap_.atlasHeight();
     graph.declareImage({names.heads, w, h, VK_FORMAT_R32_UINT});
     graph.declareImage({names.lengths, w, h, VK_FORMAT_R32_UINT});
@@ -337,6 +363,7 @@ void DeepShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
         });
 
     graph.addPass(io.local("fragments"), graph::QueueKind::Graphics)
+        .read(names.opaque, graph::Usage::DepthAttachment)
         .read(names.heads, graph::Usage::Storage)
         .write(names.heads, graph::Usage::Storage)
         .write(names.nodes, graph::Usage::Storage)

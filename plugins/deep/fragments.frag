@@ -10,6 +10,12 @@
 // translucent (BLEND) ones. A fragment of alpha 0 (or NaN) changes no transmittance and
 // takes no node.
 //
+// Early fragment tests against the opaque casters' depth (render::ShadowMap's
+// addOpaqueDepthPass, no depth write): a fragment behind the nearest surface that lets no
+// light through could only multiply a transmittance of 0, and never runs this shader;
+// that surface's own fragment passes (equal depth) and ends the list. So a texel of an
+// opaque scene holds one node, and hair behind a head none.
+//
 // The pool holds `capacity` nodes. A fragment past it is counted (counters.fragments goes
 // on rising) and not stored: the lists stay well formed, the technique sees by how much
 // the pool fell short (deep.cpp) and grows it.
@@ -19,6 +25,8 @@
 #define DEEP_NODES_WRITE
 #include "deep_lists.glsl"
 #include "deep_counters.glsl"
+
+layout(early_fragment_tests) in;
 
 layout(location = 0) in vec2 inUv;
 layout(location = 1) flat in uint inMaterial;

@@ -1,5 +1,5 @@
 // Every shadow-map technique (hard, PCF, PCSS, VSM, EVSM, ESM, VSSM, backprojection per pixel,
-// in packets and with two depth layers) under the same extremes,
+// in packets and with two depth layers, deep shadow maps) under the same extremes,
 // end to end through frame::FrameRenderer, with the contract's invariants (every V
 // finite and in [0, 1], 1 without geometry: PluginFrame's checkedVisibility) on every
 // image:
@@ -13,7 +13,7 @@
 //     knob rises.
 // Light size 0, huge lights, blockers touching their receiver, grazing light and scene
 // scales 1e-3 and 1e5 are covered per technique in test_hard_plugin.cpp,
-// test_pcss_plugin.cpp, test_vsm_plugin.cpp and test_vssm_plugin.cpp.
+// test_pcss_plugin.cpp, test_vsm_plugin.cpp, test_vssm_plugin.cpp and test_deep_plugin.cpp.
 #include "ExactVisibility.h"
 #include "PluginFrame.h"
 #include "TestConfigs.h"
@@ -85,6 +85,12 @@ const TechniqueCase kTechniques[] = {
      "resolution",
      {128, 256, 512},
      true},
+    // Deep shadow maps: every fragment in front of the opaque casters in per-texel lists (a
+    // point light's hard shadows in an opaque scene), one tap and PCF 3 x 3 over the
+    // neighbour links. Up to 1024: a 2048-texel cube atlas holds 25M texels, more nodes
+    // than lavapipe binds in one storage buffer (128 MiB, 5.6M nodes).
+    {"deep", "deep", {{"resolution", 1024}}, "resolution", {256, 512, 1024}},
+    {"deep_pcf", "deep", {{"resolution", 1024}, {"pcf_kernel", 3}}, "resolution", {256, 512, 1024}},
 };
 
 void applyTechnique(config::LightConfig& light, const TechniqueCase& t)

@@ -85,7 +85,8 @@ void DrawBatches::build(DrawFilter filter, const std::vector<uint8_t>* instanceM
     out.counts = {};
     for (const Segment& segment : segments_) {
         const MeshRange& mesh = meshes_[segment.mesh];
-        if ((filter == DrawFilter::Solid && mesh.alphaMasked) || (filter == DrawFilter::AlphaMasked && !mesh.alphaMasked))
+        if ((filter == DrawFilter::Solid && mesh.alphaMasked) || (filter == DrawFilter::AlphaMasked && !mesh.alphaMasked) ||
+            (filter == DrawFilter::Opaque && mesh.seeThrough))
             continue;
         if (!instanceMask) {
             emitRun(segment.firstSlot, segment.count, mesh, byTexture, out);

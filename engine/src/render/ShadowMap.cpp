@@ -185,6 +185,18 @@ void ShadowMap::addDepthPass(graph::RenderGraph& graph, const std::string& image
         });
 }
 
+void ShadowMap::addOpaqueDepthPass(graph::RenderGraph& graph, const std::string& image, ShadowDepthBias bias,
+                                   uint32_t firstView) const
+{
+    graph.declareImage({image, atlasWidth(), atlasHeight(), kShadowDepthFormat});
+    graph.addPass(image, graph::QueueKind::Graphics)
+        .write(image, graph::Usage::DepthAttachment)
+        .execute([this, image, bias, firstView](graph::PassContext& pass) {
+            const ShadowMapPlacement own{frusta_, {0, 0}, firstView};
+            recordLayer(pass, image, bias, {&own, 1}, nullptr, DrawFilter::Opaque);
+        });
+}
+
 void ShadowMap::addPeeledDepthPass(graph::RenderGraph& graph, const std::string& image,
                                    const std::string& nearerLayer, ShadowDepthBias bias, uint32_t firstView)
 {
@@ -277,7 +289,8 @@ ShadowFaceDraws ShadowMap::faceDraws(const graph::PassContext& pass, const std::
 }
 
 void ShadowMap::recordLayer(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
-                            std::span<const ShadowMapPlacement> maps, const std::string* nearerLayer) const
+                            std::span<const ShadowMapPlacement> maps, const std::string* nearerLayer,
+                            DrawFilter unmasked) const
 {
     VkCommandBuffer cmd = pass.cmd();
     const gpu::Image& target = pass.image(image);
@@ -322,7 +335,7 @@ void ShadowMap::recordLayer(const graph::PassContext& pass, const std::string& i
             solidBound = true;
         }
         solid.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));
-        casters_.draw(cmd, view, DrawFilter::Solid);
+        casters_.draw(cmd, view, unmasked);
         if (!masked) continue;
         cutout.bind(cmd);
         cutout.pushConstants(cmd, &view.viewProj, sizeof(glm::mat4));

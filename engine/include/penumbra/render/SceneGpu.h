@@ -20,8 +20,9 @@ namespace penumbra::render {
 // Which draws a pass wants. Alpha-masked materials need a fragment shader that samples
 // alpha; everything else can be drawn depth-only. Blended materials are drawn as opaque
 // surfaces by the G-buffer and hard shadows (their translucency is the deep-shadow
-// technique's subject).
-enum class DrawFilter { All, Solid, AlphaMasked };
+// technique's subject): Solid is every material that is not alpha-masked, Opaque leaves
+// the blended (translucent) ones out too.
+enum class DrawFilter { All, Solid, AlphaMasked, Opaque };
 
 // What one call of SceneGpu::draw or drawInstances drew: instances and triangles (as
 // many as one draw per instance would), and the vkCmdDraw* calls that took.

@@ -183,6 +183,12 @@ public:
     // with several maps of one light (sub-lights) gives each its own culled views.
     void addDepthPass(graph::RenderGraph& graph, const std::string& image, ShadowDepthBias bias,
                       uint32_t firstView = 0) const;
+    // The same pass for the casters that block all the light that reaches them: opaque
+    // ones, and alpha-masked ones where they are not cut. Translucent (BLEND) casters are
+    // left out (addDepthPass draws them as opaque): the nearest surface no light passes,
+    // behind which a deep shadow map need not store anything.
+    void addOpaqueDepthPass(graph::RenderGraph& graph, const std::string& image, ShadowDepthBias bias,
+                            uint32_t firstView = 0) const;
 
     // Depth peeling (Everitt 2001; the multi-layer shadow maps of Bavoil et al. 2008 and
     // Schwarz and Stamminger 2007): declares the transient depth image `image`, like
@@ -275,7 +281,8 @@ private:
     // Draws `maps` into `image`; with `nearerLayer`, the peeling pipelines draw only what
     // lies behind it.
     void recordLayer(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
-                     std::span<const ShadowMapPlacement> maps, const std::string* nearerLayer) const;
+                     std::span<const ShadowMapPlacement> maps, const std::string* nearerLayer,
+                     DrawFilter unmasked = DrawFilter::Solid) const;
 
     const gpu::ShaderCompiler& shaders_;
     gpu::GraphicsPipelineDesc depthDesc_;  // the solid casters' pipeline, which the others extend
