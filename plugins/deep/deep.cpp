@@ -37,6 +37,11 @@ using plugin::ParamType;
 // Parameter `lookup`, in ParamSpec choice order (visibility.comp LOOKUP).
 enum class Lookup : uint32_t { Linked, BruteForce };
 constexpr const char* kLookupNames[] = {"linked", "brute_force"};
+// Parameter `bias_mode`: a depth bias on every stored fragment (fragments.frag, the
+// rasterizer's constant and slope-scaled formula), or the receiver moved along its normal
+// (visibility.comp SHADOW_RECEIVER_BIAS 1).
+enum class BiasMode : uint32_t { Slope, NormalOffset };
+constexpr const char* kBiasModeNames[] = {"slope", "normal_offset"};
 // Parameter `filter` (visibility.comp EXPONENTIAL).
 enum class Filter : uint32_t { Dsm, Edsm };
 constexpr const char* kFilterNames[] = {"dsm", "edsm"};
@@ -66,8 +71,16 @@ const plugin::ParamSpec kParams[] = {
      kFilterNames, uint32_t(std::size(kFilterNames))},
     {"esm_exponent", ParamType::Float, 80, 0, 1e4, "",
      "filter edsm: c of 1 - e^{-c (t_receiver - t_node)}, t the linear depth along the face in [0, 1]"},
+    {"bias_mode", ParamType::Enum, double(BiasMode::Slope), 0, 0, "",
+     "slope: every stored fragment moved away from the light by depth_bias and slope_bias (the hard plugin's "
+     "default); normal_offset: the receiver moved along its normal instead",
+     kBiasModeNames, uint32_t(std::size(kBiasModeNames))},
+    plugin::kShadowDepthBiasParam,
+    {"slope_bias", ParamType::Float, 2, 0, 1000, "",
+     "bias_mode slope: times the fragment's depth slope, per texel of the filter's width"},
     {"normal_offset", ParamType::Float, 1.0, 0, 64, "texels",
-     "the receiver's offset along its normal, in texels at the receiver, per texel of the filter's width"},
+     "bias_mode normal_offset: the receiver's offset along its normal, in texels at the receiver, per texel of the "
+     "filter's width"},
     {"debug_depth", ParamType::Float, 0.5, 0, 1, "",
      "debug image transmittance: the linear depth along the face (0 near, 1 far) it reads each list at"},
 };
@@ -85,6 +98,9 @@ struct Settings {
     Lookup lookup = Lookup::Linked;
     Filter filter = Filter::Dsm;
     float esmExponent = 80.0f;
+    BiasMode biasMode = BiasMode::Slope;
+    float depthBias = 4.0f;
+    float slopeBias = 2.0f;
     float normalOffsetTexels = 1.0f;
     float debugDepth = 0.5f;
 };
@@ -111,6 +127,9 @@ Settings readSettings(const plugin::ParamValues& params)
     s.lookup = Lookup(params.getEnumIndex("lookup"));
     s.filter = Filter(params.getEnumIndex("filter"));
     s.esmExponent = params.getFloat("esm_exponent");
+    s.biasMode = BiasMode(params.getEnumIndex("bias_mode"));
+    s.depthBias = params.getFloat("depth_bias");
+    s.slopeBias = params.getFloat("slope_bias");
     s.normalOffsetTexels = params.getFloat("normal_offset");
     s.debugDepth = params.getFloat("debug_depth");
     return s;
@@ -129,6 +148,8 @@ static_assert(sizeof(Counters) == 4 * (4 + kComplexityBins));
 struct FragmentPush {
     glm::mat4 viewProj;  // engine/shadow_depth.vert
     uint32_t capacity;   // fragments.frag
+    float depthBias;     // in r, the depth format's resolution at the fragment
+    float slopeBias;     // times the fragment's depth slope
 };
 struct SortPush {
     float epsilon;
@@ -187,7 +208,8 @@ DeepShadow::DeepShadow(const plugin::TechniqueSetup& setup)
     // Only the lookups read the lists, within the filter's half width and the normal
     // offset of the receiver's texel.
     shadowMap_.setReadByLookupsOnly(true);
-    shadowMap_.setFootprint(0.5f * width + settings_.normalOffsetTexels * width);
+    const bool normalOffset = settings_.biasMode == BiasMode::NormalOffset;
+    shadowMap_.setFootprint(0.5f * width + (normalOffset ? settings_.normalOffsetTexels * width : 0.0f));
     const std::vector<gpu::ShaderDefine> mapDefines = shadowMap_.shaderDefines();
 
     gpu::GraphicsPipelineDesc f;
@@ -217,7 +239,8 @@ DeepShadow::DeepShadow(const plugin::TechniqueSetup& setup)
     links_ = compute("links", "links.comp", sizeof(uint32_t), {});
     std::vector<gpu::ShaderDefine> lookup = {{"PCF_KERNEL", std::to_string(settings_.pcfKernel)},
                                              {"LOOKUP", std::to_string(uint32_t(settings_.lookup))},
-                                             {"EXPONENTIAL", settings_.filter == Filter::Edsm ? "1" : "0"}};
+                                             {"EXPONENTIAL", settings_.filter == Filter::Edsm ? "1" : "0"},
+                                             {"RECEIVER_BIAS", normalOffset ? "1" : "0"}};
     std::ranges::copy(mapDefines, std::back_inserter(lookup));
     visibility_ = compute("visibility", "visibility.comp", sizeof(VisibilityPush), lookup);
     debug_ = compute("debug_views", "debug.comp", sizeof(float), mapDefines);
@@ -318,10 +341,12 @@ void DeepShadow::recordFragments(const graph::PassContext& pass, const Names& na
     vkCmdBeginRendering(cmd, &info);
     casters_.countRenderedTexels(uint64_t(info.renderArea.extent.width) * info.renderArea.extent.height);
     fragments_.bind(cmd);
+    const bool slope = settings_.biasMode == BiasMode::Slope;
     for (const render::ShadowFaceDraw& face : draws.faces) {
         vkCmdSetViewport(cmd, 0, 1, &face.viewport);
         vkCmdSetScissor(cmd, 0, 1, &face.scissor);
-        const FragmentPush push{face.view.viewProj, capacity()};
+        const FragmentPush push{face.view.viewProj, capacity(), slope ? settings_.depthBias : 0.0f,
+                                slope ? settings_.slopeBias * float(settings_.pcfKernel) : 0.0f};
         fragments_.pushConstants(cmd, &push, sizeof(push));
         casters_.draw(cmd, face.view, render::DrawFilter::All, [&](const gpu::Image& texture) {
             gpu::DescriptorPush()
@@ -412,7 +437,8 @@ void DeepShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
         descriptors.storageImage("heads", pass.image(names.heads))
             .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
             .storageBuffer("DeepNodes", pass.buffer(names.nodes));
-        const VisibilityPush push{settings_.normalOffsetTexels * float(settings_.pcfKernel), settings_.esmExponent};
+        const float offset = settings_.biasMode == BiasMode::NormalOffset ? settings_.normalOffsetTexels : 0.0f;
+        const VisibilityPush push{offset * float(settings_.pcfKernel), settings_.esmExponent};
         visibility_.pushConstants(pass.cmd(), &push, sizeof(push));
     };
     plugin::addVisibilityPass(graph, io, visibility_, bind)

@@ -37,10 +37,30 @@ layout(binding = 3, r32ui) uniform coherent uimage2D heads;
 
 layout(push_constant) uniform Push {
     layout(offset = 64) uint capacity;  // after the vertex shader's lightViewProj
+    float depthBias;  // in r: the resolution of a 32-bit float depth at the fragment
+    float slopeBias;  // times the fragment's depth slope
 } pc;
+
+// The rasterizer's depth bias for a floating-point depth format (Vulkan, "Depth Bias"),
+// away from the light (reversed-Z: smaller): m slopeBias + r depthBias, with m the
+// fragment's largest depth slope in x or y (exact: depth is linear across a triangle in
+// the viewport) and r = 2^(e - 23) for the exponent e of its depth (the spec takes the
+// triangle's largest; the fragment's own differs only where a triangle spans a power of
+// two). Applied here, not by the rasterizer, so that the early depth test compares the
+// fragment's own depth with the opaque casters' and the stored depth carries the bias on
+// any device (whether FragCoord.z includes the rasterizer's bias is not specified).
+float biasedDepth(float z)
+{
+    int e;
+    frexp(max(z, 1e-30), e);  // z = m 2^e, m in [0.5, 1): the IEEE exponent is e - 1
+    float r = exp2(float(e - 24));
+    float slope = max(abs(dFdx(z)), abs(dFdy(z)));
+    return max(z - (slope * pc.slopeBias + r * pc.depthBias), 0.0);
+}
 
 void main()
 {
+    float depth = biasedDepth(gl_FragCoord.z);  // before any discard: derivatives need the whole quad
     MaterialData material = materials[inMaterial];
     float a = material.baseColor.a * texture(baseColorTexture, inUv).a;
     if (material.alphaMode == ALPHA_MODE_MASK && a < material.alphaCutoff) discard;
@@ -48,7 +68,7 @@ void main()
     if (!(alpha > 0.0)) discard;
     uint node = atomicAdd(counters.fragments, 1u);
     if (node >= pc.capacity) return;
-    nodes[node].depth = gl_FragCoord.z;
+    nodes[node].depth = depth;
     nodes[node].transmittance = alpha;
     nodes[node].next = imageAtomicExchange(heads, ivec2(gl_FragCoord.xy), node);
 }

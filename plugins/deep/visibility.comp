@@ -1,6 +1,6 @@
 #version 460
 // The deep shadow map lookup (§1.3.4, deferred: once per G-buffer pixel): the receiver is
-// projected into the light's atlas (common/shadow_receiver.glsl, normal offset bias) and
+// projected into the light's atlas (common/shadow_receiver.glsl) and
 // the transmittance at its depth read from its texel's sorted list; V is that, filtered.
 //
 // Defines (deep.cpp visibilityDefines):
@@ -10,6 +10,8 @@
 //                tap starts at the node its neighbour's links point to (up the first
 //                column, then along each row) and walks prev or next from there;
 //                1 brute force: every tap searches its own list from its head
+//   RECEIVER_BIAS 0: the stored depths carry the bias (bias_mode slope); 1: the receiver
+//                moves along its normal (bias_mode normal_offset)
 //   EXPONENTIAL  0 DSM: a node darkens a receiver behind it fully;
 //                1 EDSM: the node nearest in front of the receiver darkens it by the
 //                exponential shadow test 1 - e^{-c (t_r - t_n)} (t: linear depth along the
@@ -35,8 +37,11 @@ layout(local_size_x = 64, local_size_y = 1) in;
 layout(binding = 1, r32ui) uniform readonly uimage2D heads;
 layout(binding = 2, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
 
+#ifndef RECEIVER_BIAS
+#define RECEIVER_BIAS 1
+#endif
 #define SHADOW_MAP_BINDING 3
-#define SHADOW_RECEIVER_BIAS 1
+#define SHADOW_RECEIVER_BIAS RECEIVER_BIAS
 #include "common/shadow_receiver.glsl"
 
 #define DEEP_NODES_BINDING 7
