@@ -42,9 +42,9 @@ constexpr const char* kLookupNames[] = {"linked", "brute_force"};
 // (visibility.comp SHADOW_RECEIVER_BIAS 1).
 enum class BiasMode : uint32_t { Slope, NormalOffset };
 constexpr const char* kBiasModeNames[] = {"slope", "normal_offset"};
-// Parameter `filter` (visibility.comp EXPONENTIAL).
-enum class Filter : uint32_t { Dsm, Edsm };
-constexpr const char* kFilterNames[] = {"dsm", "edsm"};
+// Parameter `filter` (visibility.comp FILTER).
+enum class Filter : uint32_t { Dsm, Edsm, FirstFragment };
+constexpr const char* kFilterNames[] = {"dsm", "edsm", "first_fragment"};
 
 constexpr uint32_t kNodeBytes = 24;        // deep_lists.glsl DeepNode
 constexpr uint32_t kSortCapacity = 256;    // deep_lists.glsl DEEP_SORT_CAPACITY
@@ -67,7 +67,9 @@ const plugin::ParamSpec kParams[] = {
      "linked: taps start at their neighbour's links (3.5); brute_force: every tap searches its list from the head",
      kLookupNames, uint32_t(std::size(kLookupNames))},
     {"filter", ParamType::Enum, double(Filter::Dsm), 0, 0, "",
-     "dsm: a node shadows what lies behind it fully; edsm: the node just in front by the exponential test",
+     "dsm: a node shadows what lies behind it fully; edsm: the node just in front by the exponential test; "
+     "first_fragment: a binary compare with each list's first node (a shadow map built from the lists, for "
+     "measuring)",
      kFilterNames, uint32_t(std::size(kFilterNames))},
     {"esm_exponent", ParamType::Float, 80, 0, 1e4, "",
      "filter edsm: c of 1 - e^{-c (t_receiver - t_node)}, t the linear depth along the face in [0, 1]"},
@@ -176,6 +178,11 @@ private:
         std::string heads, nodes, counters, lengths, opaque;
     };
     void recordFragments(const graph::PassContext& pass, const Names& names) const;
+    void addLinksPass(graph::RenderGraph& graph, const Names& names, const std::string& name);
+    bool usesLinks() const
+    {
+        return settings_.pcfKernel > 1 && settings_.lookup == Lookup::Linked && settings_.filter != Filter::FirstFragment;
+    }
     uint32_t capacity() const { return capacity_; }
     Counters lastCounters() const;
 
@@ -204,12 +211,26 @@ DeepShadow::DeepShadow(const plugin::TechniqueSetup& setup)
                  settings_.pcfKernel > 1 ? render::kernelGuardTexels(0.5f * float(settings_.pcfKernel), settings_.resolution)
                                          : 0u)
 {
+    // The pool is one storage buffer: the device binds at most maxStorageBufferRange bytes
+    // of it (lavapipe: 128 MiB, 5,592,405 nodes).
+    deviceMaxMib_ = uint32_t(std::min<uint64_t>(context_.properties().limits.maxStorageBufferRange >> 20, kMaxPoolMib));
+    if (settings_.poolMib > deviceMaxMib_) {
+        throw ConfigError(fmt::format("deep: pool_mib: {} MiB is more than this device binds as one storage buffer "
+                                      "({} MiB, maxStorageBufferRange); set pool_mib to at most {}",
+                                      settings_.poolMib, deviceMaxMib_, deviceMaxMib_));
+    }
     const float width = float(settings_.pcfKernel);
     // Only the lookups read the lists, within the filter's half width and the normal
     // offset of the receiver's texel.
     shadowMap_.setReadByLookupsOnly(true);
     const bool normalOffset = settings_.biasMode == BiasMode::NormalOffset;
     shadowMap_.setFootprint(0.5f * width + (normalOffset ? settings_.normalOffsetTexels * width : 0.0f));
+    // With the bias in the stored depths every tap compares a list with the receiver's own
+    // depth, within (k - 1) / 2 texels of its texel: a fragment behind every receiver that
+    // reads its texel changes no transmittance, and receiver-mask culling may skip its
+    // caster (render/Casters.h compareTapRadius). The culling sees no bias (the shader adds
+    // it), so it keeps a little more than it could.
+    if (!normalOffset) shadowMap_.setOwnDepthCompare(int32_t(settings_.pcfKernel - 1) / 2);
     const std::vector<gpu::ShaderDefine> mapDefines = shadowMap_.shaderDefines();
 
     gpu::GraphicsPipelineDesc f;
@@ -236,22 +257,14 @@ DeepShadow::DeepShadow(const plugin::TechniqueSetup& setup)
         return gpu::Pipeline(context_, setup.shaders, c);
     };
     sort_ = compute("sort", "sort.comp", sizeof(SortPush), {});
-    links_ = compute("links", "links.comp", sizeof(uint32_t), {});
+    if (usesLinks()) links_ = compute("links", "links.comp", sizeof(uint32_t), {});
     std::vector<gpu::ShaderDefine> lookup = {{"PCF_KERNEL", std::to_string(settings_.pcfKernel)},
                                              {"LOOKUP", std::to_string(uint32_t(settings_.lookup))},
-                                             {"EXPONENTIAL", settings_.filter == Filter::Edsm ? "1" : "0"},
+                                             {"FILTER", std::to_string(uint32_t(settings_.filter))},
                                              {"RECEIVER_BIAS", normalOffset ? "1" : "0"}};
     std::ranges::copy(mapDefines, std::back_inserter(lookup));
     visibility_ = compute("visibility", "visibility.comp", sizeof(VisibilityPush), lookup);
     debug_ = compute("debug_views", "debug.comp", sizeof(float), mapDefines);
-    // The pool is one storage buffer: the device binds at most maxStorageBufferRange bytes
-    // of it (lavapipe: 128 MiB, 5,592,405 nodes).
-    deviceMaxMib_ = uint32_t(std::min<uint64_t>(context_.properties().limits.maxStorageBufferRange >> 20, kMaxPoolMib));
-    if (settings_.poolMib > deviceMaxMib_) {
-        throw ConfigError(fmt::format("deep: pool_mib: {} MiB is more than this device binds as one storage buffer "
-                                      "({} MiB, maxStorageBufferRange); set pool_mib to at most {}",
-                                      settings_.poolMib, deviceMaxMib_, deviceMaxMib_));
-    }
     capacity_ = nodesIn(settings_.poolMib);
     counters_ = gpu::Buffer(context_, sizeof(Counters), VK_BUFFER_USAGE_TRANSFER_DST_BIT, true,
                             fmt::format("light{}.deep.counters_readback", lightIndex_));
@@ -362,6 +375,26 @@ void DeepShadow::recordFragments(const graph::PassContext& pass, const Names& na
     vkCmdEndRendering(cmd);
 }
 
+void DeepShadow::addLinksPass(graph::RenderGraph& graph, const Names& names, const std::string& name)
+{
+    graph.addPass(name, graph::QueueKind::Compute)
+        .read(names.heads, graph::Usage::Storage)
+        .read(names.lengths, graph::Usage::Storage)
+        .read(names.nodes, graph::Usage::Storage)
+        .write(names.nodes, graph::Usage::Storage)
+        .execute([this, names](graph::PassContext& pass) {
+            links_.bind(pass.cmd());
+            gpu::DescriptorPush()
+                .storageImage("heads", pass.image(names.heads))
+                .storageImage("lengths", pass.image(names.lengths))
+                .storageBuffer("DeepNodes", pass.buffer(names.nodes))
+                .push(context_, pass.cmd(), links_);
+            const uint32_t faceTexels = shadowMap_.faceTexels();
+            links_.pushConstants(pass.cmd(), &faceTexels, sizeof(faceTexels));
+            links_.dispatchOver(pass.cmd(), pass.image(names.heads));
+        });
+}
+
 void DeepShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io)
 {
     Names names{io.local("heads"), io.local("nodes"), io.local("counters"), io.local("lengths"),
@@ -416,22 +449,9 @@ void DeepShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
             sort_.dispatchOver(pass.cmd(), pass.image(names.heads));
         });
 
-    graph.addPass(io.local("links"), graph::QueueKind::Compute)
-        .read(names.heads, graph::Usage::Storage)
-        .read(names.lengths, graph::Usage::Storage)
-        .read(names.nodes, graph::Usage::Storage)
-        .write(names.nodes, graph::Usage::Storage)
-        .execute([this, names](graph::PassContext& pass) {
-            links_.bind(pass.cmd());
-            gpu::DescriptorPush()
-                .storageImage("heads", pass.image(names.heads))
-                .storageImage("lengths", pass.image(names.lengths))
-                .storageBuffer("DeepNodes", pass.buffer(names.nodes))
-                .push(context_, pass.cmd(), links_);
-            const uint32_t faceTexels = shadowMap_.faceTexels();
-            links_.pushConstants(pass.cmd(), &faceTexels, sizeof(faceTexels));
-            links_.dispatchOver(pass.cmd(), pass.image(names.heads));
-        });
+    // Links only where the lookup follows them: PCF over the links (one tap, the brute
+    // force and the first fragment walk no neighbour's list).
+    if (usesLinks()) addLinksPass(graph, names, io.local("links"));
 
     const auto bind = [this, names](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
         descriptors.storageImage("heads", pass.image(names.heads))

@@ -12,10 +12,13 @@
 //                1 brute force: every tap searches its own list from its head
 //   RECEIVER_BIAS 0: the stored depths carry the bias (bias_mode slope); 1: the receiver
 //                moves along its normal (bias_mode normal_offset)
-//   EXPONENTIAL  0 DSM: a node darkens a receiver behind it fully;
+//   FILTER       0 DSM: a node darkens a receiver behind it fully;
 //                1 EDSM: the node nearest in front of the receiver darkens it by the
 //                exponential shadow test 1 - e^{-c (t_r - t_n)} (t: linear depth along the
-//                face, c: esmExponent), the rest fully
+//                face, c: esmExponent), the rest fully;
+//                2 first fragment: each tap compares with its list's first node only, a
+//                binary shadow map made from the lists (Table 1.1's "SM": the cost of
+//                building the structure without the cost of walking it)
 #define GBUFFER_BINDING 4  // gDepth, gNormal, GBufferCamera: plugin::bindGBuffer
 #include "common/gbuffer.glsl"
 #include "common/visibility.glsl"
@@ -26,9 +29,12 @@
 #ifndef LOOKUP
 #define LOOKUP 0
 #endif
-#ifndef EXPONENTIAL
-#define EXPONENTIAL 0
+#ifndef FILTER
+#define FILTER 0
 #endif
+#define FILTER_DSM 0
+#define FILTER_EDSM 1
+#define FILTER_FIRST_FRAGMENT 2
 #define LOOKUP_LINKED 0
 #define LOOKUP_BRUTE_FORCE 1
 
@@ -49,13 +55,13 @@ layout(binding = 2, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
 
 layout(push_constant) uniform Push {
     float normalOffsetTexels;
-    float esmExponent;  // EXPONENTIAL 1
+    float esmExponent;  // FILTER 1
 } pc;
 
 // The transmittance a tap reads where the receiver's search ended at `node`.
 float tapTransmittance(uint node, float receiverLinear, vec4 range)
 {
-#if EXPONENTIAL
+#if FILTER == FILTER_EDSM
     if (node == kDeepNone) return 1.0;
     float before = deepTransmittance(nodes[node].prev);
     float gap = max(receiverLinear - shadowLinearDepthInRange(range, nodes[node].depth), 0.0);
@@ -81,7 +87,13 @@ float filteredTransmittance(ShadowReceiver r)
     float receiverLinear = shadowLinearDepthInRange(range, r.depth);
     uint steps = 0u;
     float sum = 0.0;
-#if LOOKUP == LOOKUP_BRUTE_FORCE
+#if FILTER == FILTER_FIRST_FRAGMENT
+    for (int y = -h; y <= h; ++y)
+        for (int x = -h; x <= h; ++x) {
+            uint head = imageLoad(heads, tapTexel(r, ivec2(x, y))).r;
+            sum += head != kDeepNone && nodes[head].depth > r.depth ? 0.0 : 1.0;
+        }
+#elif LOOKUP == LOOKUP_BRUTE_FORCE
     for (int y = -h; y <= h; ++y)
         for (int x = -h; x <= h; ++x) {
             ivec2 t = tapTexel(r, ivec2(x, y));

@@ -36,6 +36,12 @@ namespace {
 
 class DeepPlugin : public test::PluginGpuTest {
 protected:
+    bool hasPass(const std::string& name)
+    {
+        for (const graph::CompiledPass& p : frame->renderer.compiledGraph().passes)
+            if (p.name == name) return true;
+        return false;
+    }
     std::vector<float> renderDeep(config::RenderConfig cfg, scene::Scene scene, const nlohmann::json& params)
     {
         test::setShadow(cfg.lights[0], "deep", params);
@@ -196,6 +202,12 @@ TEST_F(DeepPlugin, OpaqueSceneGivesTheHardPluginsImage)
             for (float v : hard) shadowed += v < 0.5f ? 1 : 0;
             EXPECT_GT(shadowed, 200u);
             EXPECT_EQ(maxDifference(hard, deep), 0.0f);
+            // Each list's first node alone (Table 1.1's "SM") is the same binary map here.
+            const std::vector<float> first =
+                renderDeep(cfg, config::buildScene(cfg.scene),
+                           {{"resolution", 512}, {"pcf_kernel", kernel}, {"bias_mode", "normal_offset"},
+                            {"filter", "first_fragment"}});
+            EXPECT_EQ(maxDifference(deep, first), 0.0f);
             // Behind the opaque casters' depth nothing is stored: one fragment a texel, but
             // where two surfaces lie at exactly its depth (a box's foot on the ground), and
             // the sort keeps one node of those.
@@ -246,7 +258,9 @@ TEST_F(DeepPlugin, LinkedLookupGivesTheBruteForceImage)
             nlohmann::json brute = params;
             brute["lookup"] = "brute_force";
             const std::vector<float> linked = renderDeep(cfg, config::buildScene(cfg.scene), params);
+            EXPECT_TRUE(hasPass("light0.deep.links"));
             const std::vector<float> searched = renderDeep(cfg, config::buildScene(cfg.scene), brute);
+            EXPECT_FALSE(hasPass("light0.deep.links")) << "nothing follows the links";
             size_t fractional = 0;
             for (float v : linked) fractional += v > 0.01f && v < 0.99f ? 1 : 0;
             EXPECT_GT(fractional, 500u);
