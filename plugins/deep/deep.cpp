@@ -110,12 +110,7 @@ struct Settings {
 Settings readSettings(const plugin::ParamValues& params)
 {
     Settings s;
-    const int kernel = params.getInt("pcf_kernel");
-    if (kernel % 2 == 0) {
-        throw ConfigError(fmt::format("deep: pcf_kernel: must be odd (the box is centred on the receiver's texel), "
-                                      "got {}; use {} or {}",
-                                      kernel, kernel - 1, kernel + 1));
-    }
+    const int kernel = plugin::oddKernelParam(params, "pcf_kernel", "deep");
     s.resolution = uint32_t(params.getInt("resolution"));
     s.poolMib = uint32_t(params.getInt("pool_mib"));
     s.maxPoolMib = uint32_t(params.getInt("max_pool_mib"));

@@ -16,4 +16,15 @@ float lightSizeOverride(const ParamValues& params, std::string_view technique)
     return size;
 }
 
+int oddKernelParam(const ParamValues& params, std::string_view name, std::string_view technique)
+{
+    const int kernel = params.getInt(name);
+    if (kernel % 2 == 0) {
+        throw ConfigError(fmt::format("{}: {}: must be odd (the box is centred on the receiver's texel), got {}; "
+                                      "use {} or {}",
+                                      technique, name, kernel, kernel - 1, kernel + 1));
+    }
+    return kernel;
+}
+
 } // namespace penumbra::plugin

@@ -174,26 +174,26 @@ void ShadowMap::update(const scene::Light& light, const scene::Aabb& sceneBounds
 void ShadowMap::addDepthPass(graph::RenderGraph& graph, const std::string& image, ShadowDepthBias bias,
                              uint32_t firstView) const
 {
-    // Transient: written and read within the frame, so the graph may alias its memory
-    // with other lights' maps.
-    graph.declareImage({image, atlasWidth(), atlasHeight(), kShadowDepthFormat});
-    graph.addPass(image, graph::QueueKind::Graphics)
-        .write(image, graph::Usage::DepthAttachment)
-        .execute([this, image, bias, firstView](graph::PassContext& pass) {
-            const ShadowMapPlacement own{frusta_, {0, 0}, firstView};
-            recordDepthMaps(pass, image, bias, {&own, 1});
-        });
+    addMapPass(graph, image, bias, firstView, DrawFilter::Solid);
 }
 
 void ShadowMap::addOpaqueDepthPass(graph::RenderGraph& graph, const std::string& image, ShadowDepthBias bias,
                                    uint32_t firstView) const
 {
+    addMapPass(graph, image, bias, firstView, DrawFilter::Opaque);
+}
+
+void ShadowMap::addMapPass(graph::RenderGraph& graph, const std::string& image, ShadowDepthBias bias,
+                           uint32_t firstView, DrawFilter unmasked) const
+{
+    // Transient: written and read within the frame, so the graph may alias its memory
+    // with other lights' maps.
     graph.declareImage({image, atlasWidth(), atlasHeight(), kShadowDepthFormat});
     graph.addPass(image, graph::QueueKind::Graphics)
         .write(image, graph::Usage::DepthAttachment)
-        .execute([this, image, bias, firstView](graph::PassContext& pass) {
+        .execute([this, image, bias, firstView, unmasked](graph::PassContext& pass) {
             const ShadowMapPlacement own{frusta_, {0, 0}, firstView};
-            recordLayer(pass, image, bias, {&own, 1}, nullptr, DrawFilter::Opaque);
+            recordLayer(pass, image, bias, {&own, 1}, nullptr, unmasked);
         });
 }
 

@@ -44,4 +44,9 @@ inline float kernelLimitTexels(float fraction, uint32_t faceTexels) { return fra
 // them (-0.5 was taken as -1 before).
 float lightSizeOverride(const ParamValues& params, std::string_view technique);
 
+// An Int parameter `name` that sizes a box of taps centred on the receiver's texel (PCF):
+// its value, which must be odd; an even one (no centre texel) throws
+// penumbra::ConfigError naming `technique`'s parameter and the odd values beside it.
+int oddKernelParam(const ParamValues& params, std::string_view name, std::string_view technique);
+
 } // namespace penumbra::plugin

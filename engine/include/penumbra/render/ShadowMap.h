@@ -278,8 +278,12 @@ private:
     const uint32_t guard_;  // 0 for one face
     const scene::LightType lightType_;  // as created
     bool typeCompiledIn_ = false;          // shaderDefines() was asked for
+    // addDepthPass and addOpaqueDepthPass: the casters without alpha mask that `unmasked`
+    // selects (Solid, Opaque), and the alpha-masked ones.
+    void addMapPass(graph::RenderGraph& graph, const std::string& image, ShadowDepthBias bias, uint32_t firstView,
+                    DrawFilter unmasked) const;
     // Draws `maps` into `image`; with `nearerLayer`, the peeling pipelines draw only what
-    // lies behind it.
+    // lies behind it; `unmasked` selects the casters without alpha mask (Solid, Opaque).
     void recordLayer(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
                      std::span<const ShadowMapPlacement> maps, const std::string* nearerLayer,
                      DrawFilter unmasked = DrawFilter::Solid) const;
