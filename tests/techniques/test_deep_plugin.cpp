@@ -18,6 +18,7 @@
 #include <gtest/gtest.h>
 
 #include <fmt/format.h>
+#include <glm/gtc/constants.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <algorithm>
@@ -471,6 +472,62 @@ TEST_F(DeepPlugin, ErrorAgainstTheReference)
     }
     std::cout << table;
     fs::remove_all(scratch);
+}
+
+// Contact and grazing light. A translucent pane standing on the ground (x = 0, y in
+// [0, 2], z in [-1, 1]) under a light to its side: the ground behind it gets 0.7 right up
+// to its foot (here from 0.02 of the pane's height on): the bias (slope-scaled, on the
+// stored depths) stays far below the gap between a ground point and the pane's fragment.
+// The bare ground lit at 80 and 87 degrees from its normal shadows no pixel of itself
+// (acne would give V near 0), with both bias modes.
+TEST_F(DeepPlugin, ContactAndGrazingLight)
+{
+    scene::Scene standing = test::planeScene();
+    standing.materials.push_back(
+        {"glass", {1.0f, 1.0f, 1.0f, 0.3f}, scene::kNoTexture, scene::AlphaMode::Blend, 0.5f, true});
+    scene::Mesh pane = scene::makePlane("pane");
+    pane.material = uint32_t(standing.materials.size() - 1);
+    // Rotating -90 degrees about z takes the plane's normal +Y to +X.
+    test::addInstance(standing, test::addMesh(standing, pane), "pane",
+                      glm::translate(glm::mat4(1.0f), {0.0f, 1.0f, 0.0f}) *
+                          glm::rotate(glm::mat4(1.0f), -0.5f * glm::pi<float>(), {0.0f, 0.0f, 1.0f}) *
+                          glm::scale(glm::mat4(1.0f), {2.0f, 1.0f, 2.0f}));
+    standing.updateTransforms();
+    config::RenderConfig cfg = panesConfig(scene::LightType::Spot);
+    cfg.camera.position = {0.6f, 3.0f, 0.001f};
+    cfg.camera.target = {0.6f, 0.0f, 0.0f};
+    scene::Light& light = cfg.lights[0].light;
+    light.position = {-3.0f, 3.0f, 0.0f};
+    light.direction = glm::normalize(glm::vec3(1.0f, 0.0f, 0.0f) - light.position);
+    const std::vector<float> v = renderDeep(cfg, std::move(standing), {{"resolution", 1024}});
+    size_t behind = 0;
+    for (size_t i = 0; i < v.size(); ++i) {
+        const glm::vec3 p = frame->position(i);
+        // The ray to the light crosses x = 0 at height 3 x / (x + 3), at z (3 z) / (x + 3).
+        const float z = 3.0f * p.z / (p.x + 3.0f);
+        if (!frame->onGround(i) || p.x < 0.02f || p.x > 1.2f || std::abs(z) > 0.95f) continue;
+        ASSERT_NEAR(v[i], 0.7f, 1e-4) << "pixel " << i << " at x " << p.x;
+        ++behind;
+    }
+    EXPECT_GT(behind, 300u);
+
+    for (const float degrees : {80.0f, 87.0f}) {
+        for (const char* bias : {"slope", "normal_offset"}) {
+            SCOPED_TRACE(fmt::format("{} degrees, {}", degrees, bias));
+            config::RenderConfig grazing = panesConfig(scene::LightType::Directional);
+            const float a = glm::radians(degrees);
+            grazing.lights[0].light.direction = -glm::vec3(std::sin(a), std::cos(a), 0.0f);
+            const std::vector<float> lit =
+                renderDeep(grazing, test::planeScene(), {{"resolution", 1024}, {"bias_mode", bias}, {"pcf_kernel", 3}});
+            size_t ground = 0;
+            for (size_t i = 0; i < lit.size(); ++i) {
+                if (!frame->onGround(i)) continue;
+                ASSERT_GT(lit[i], 0.99f) << "pixel " << i;
+                ++ground;
+            }
+            EXPECT_GT(ground, lit.size() / 2);
+        }
+    }
 }
 
 TEST_F(DeepPlugin, RefusesBadParametersByName)
