@@ -5,7 +5,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cctype>
 #include <map>
 #include <numeric>
@@ -343,10 +342,7 @@ std::string summaryMarkdown(const BenchRun& run)
             if (l.figures.empty()) continue;
             std::vector<std::string> items;
             for (const plugin::TechniqueFigure& f : l.figures)
-                items.push_back(fmt::format("{} {}{}{}", f.name,
-                                            f.value == std::floor(f.value) ? fmt::format("{:.0f}", f.value)
-                                                                           : fmt::format("{:.3f}", f.value),
-                                            f.unit.empty() ? "" : " ", f.unit));
+                items.push_back(fmt::format("{} {}", f.name, figureValueText(f)));
             figures += fmt::format("| {} | {} | {} | {} |\n", cell(v.label.empty() ? "(no sweep)" : v.label),
                                    cell(l.name), cell(l.technique), cell(fmt::format("{}", fmt::join(items, ", "))));
         }

@@ -158,6 +158,13 @@ std::vector<std::vector<plugin::TechniqueFigure>> medianTechniqueFigures(const s
     return out;
 }
 
+std::string figureValueText(const plugin::TechniqueFigure& f)
+{
+    const bool whole = f.value == std::floor(f.value) && std::abs(f.value) < 1e15;
+    return fmt::format("{}{}{}", whole ? fmt::format("{:.0f}", f.value) : fmt::format("{:.3f}", f.value),
+                       f.unit.empty() ? "" : " ", f.unit);
+}
+
 std::string techniqueFiguresText(const std::vector<std::vector<plugin::TechniqueFigure>>& figures,
                                  const std::vector<std::string>& techniques)
 {
@@ -167,10 +174,7 @@ std::string techniqueFiguresText(const std::vector<std::vector<plugin::Technique
         text += fmt::format("light {} ({}) figures (median per frame)\n", light,
                             light < techniques.size() ? techniques[light] : std::string("?"));
         for (const plugin::TechniqueFigure& f : figures[light])
-            text += fmt::format("  {:<39}{}{}{}\n", f.name,
-                                f.value == std::floor(f.value) && std::abs(f.value) < 1e15 ? fmt::format("{:.0f}", f.value)
-                                                                                            : fmt::format("{:.3f}", f.value),
-                                f.unit.empty() ? "" : " ", f.unit);
+            text += fmt::format("  {:<39}{}\n", f.name, figureValueText(f));
     }
     return text;
 }

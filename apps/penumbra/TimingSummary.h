@@ -70,6 +70,9 @@ void printCulling(const visibility::CullingStats& stats, std::string_view mode);
 // Per light, the median over the frames of each figure its technique reported
 // (plugin::Technique::figures), by name; a figure missing from a frame counts as 0 there.
 std::vector<std::vector<plugin::TechniqueFigure>> medianTechniqueFigures(const std::vector<frame::FrameTimings>& frames);
+// One figure's value and unit as the printouts write it: "1622306", "37.132 MiB" (whole
+// values without decimals, others with three).
+std::string figureValueText(const plugin::TechniqueFigure& figure);
 // What `render --stats` and `graph` print of them: per light with figures, a heading
 // naming the light and its technique (`techniques`: the renderer's techniqueName), then
 // one line per figure.

@@ -38,9 +38,8 @@ void main()
     uint packed = imageLoad(lengths, texel).r;
     uint kept = packed & 0xFFFFu;
     vec4 range = shadowMapData.faces[shadowFaceOfTexel(texel)].depthRange;
-    uint steps = 0u;
     uint head = kept == 0u ? kDeepNone : imageLoad(heads, texel).r;
-    float tau = deepTransmittance(deepSeek(head, kDeepNone, ndcOfLinearDepth(range, pc.debugDepth), steps));
+    float tau = deepTransmittance(deepSeek(head, kDeepNone, ndcOfLinearDepth(range, pc.debugDepth)));
     imageStore(complexityOut, texel, vec4(float(packed >> 16)));
     imageStore(lengthOut, texel, vec4(float(kept)));
     imageStore(transmittanceOut, texel, vec4(tau));

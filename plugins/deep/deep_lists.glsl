@@ -45,27 +45,22 @@ layout(std430, binding = DEEP_NODES_BINDING) readonly buffer DeepNodes { DeepNod
 // light than `ref` (reversed-Z: depth > ref), whose transmittance is the light that
 // reaches the receiver; kDeepNone when no node is nearer (all the light). The walk
 // starts at `guess` (a node of this list: a neighbour's link, §1.3.5) and moves along
-// next or prev; kDeepNone starts at `head`. `steps` counts the nodes visited (the
-// brute-force and linked lookups' cost). Bounded by the longest list the sort keeps.
-uint deepSeek(uint head, uint guess, float ref, inout uint steps)
+// next or prev; kDeepNone starts at `head`. Bounded by the longest list the sort keeps.
+uint deepSeek(uint head, uint guess, float ref)
 {
     uint n = guess == kDeepNone ? head : guess;
     if (n == kDeepNone) return kDeepNone;
-    ++steps;
     if (nodes[n].depth > ref) {
         for (int i = 0; i < DEEP_SORT_CAPACITY; ++i) {
             uint next = nodes[n].next;
             if (next == kDeepNone || !(nodes[next].depth > ref)) break;
             n = next;
-            ++steps;
         }
         return n;
     }
     for (int i = 0; i < DEEP_SORT_CAPACITY; ++i) {
         n = nodes[n].prev;
-        if (n == kDeepNone) break;
-        ++steps;
-        if (nodes[n].depth > ref) break;
+        if (n == kDeepNone || nodes[n].depth > ref) break;
     }
     return n;
 }

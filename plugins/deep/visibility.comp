@@ -85,7 +85,6 @@ float filteredTransmittance(ShadowReceiver r)
     const int h = (PCF_KERNEL - 1) / 2;
     vec4 range = shadowMapData.faces[r.face].depthRange;
     float receiverLinear = shadowLinearDepthInRange(range, r.depth);
-    uint steps = 0u;
     float sum = 0.0;
 #if FILTER == FILTER_FIRST_FRAGMENT
     for (int y = -h; y <= h; ++y)
@@ -97,7 +96,7 @@ float filteredTransmittance(ShadowReceiver r)
     for (int y = -h; y <= h; ++y)
         for (int x = -h; x <= h; ++x) {
             ivec2 t = tapTexel(r, ivec2(x, y));
-            uint node = deepSeek(imageLoad(heads, t).r, kDeepNone, r.depth, steps);
+            uint node = deepSeek(imageLoad(heads, t).r, kDeepNone, r.depth);
             sum += tapTransmittance(node, receiverLinear, range);
         }
 #else
@@ -106,12 +105,12 @@ float filteredTransmittance(ShadowReceiver r)
     // at its neighbour's node; one whose neighbour found no node nearer than the
     // receiver starts at its own head.
     ivec2 columnTexel = tapTexel(r, ivec2(-h, -h));
-    uint columnNode = deepSeek(imageLoad(heads, columnTexel).r, kDeepNone, r.depth, steps);
+    uint columnNode = deepSeek(imageLoad(heads, columnTexel).r, kDeepNone, r.depth);
     for (int y = -h; y <= h; ++y) {
         if (y > -h) {
             ivec2 t = tapTexel(r, ivec2(-h, y));
             uint guess = t == columnTexel ? columnNode : (columnNode == kDeepNone ? kDeepNone : nodes[columnNode].upper);
-            columnNode = deepSeek(imageLoad(heads, t).r, guess, r.depth, steps);
+            columnNode = deepSeek(imageLoad(heads, t).r, guess, r.depth);
             columnTexel = t;
         }
         sum += tapTransmittance(columnNode, receiverLinear, range);
@@ -120,7 +119,7 @@ float filteredTransmittance(ShadowReceiver r)
         for (int x = -h + 1; x <= h; ++x) {
             ivec2 t = tapTexel(r, ivec2(x, y));
             uint guess = t == rowTexel ? rowNode : (rowNode == kDeepNone ? kDeepNone : nodes[rowNode].right);
-            rowNode = deepSeek(imageLoad(heads, t).r, guess, r.depth, steps);
+            rowNode = deepSeek(imageLoad(heads, t).r, guess, r.depth);
             rowTexel = t;
             sum += tapTransmittance(rowNode, receiverLinear, range);
         }
