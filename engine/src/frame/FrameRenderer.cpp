@@ -250,6 +250,8 @@ bool FrameRenderer::registerTechnique(size_t light)
         io.prefix = shadowPassPrefix(light);
         io.gbuffer = gbufferIo();
         io.visibility = slot.visibility;
+        io.bindImage = [this](std::string_view name, const gpu::Image& image) { executor_.bindImage(name, image); };
+        io.bindBuffer = [this](std::string_view name, const gpu::Buffer& buffer) { executor_.bindBuffer(name, buffer); };
         std::string failure;
         try {
             slot.instance->registerPasses(g, io);

@@ -225,9 +225,9 @@ void ShadowMap::addPeeledDepthPass(graph::RenderGraph& graph, const std::string&
 }
 
 void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
-                                std::span<const ShadowMapPlacement> maps) const
+                                std::span<const ShadowMapPlacement> maps, MapClear clear) const
 {
-    recordLayer(pass, image, bias, maps, nullptr);
+    recordLayer(pass, image, bias, maps, nullptr, DrawFilter::Solid, clear);
 }
 
 ShadowFaceDraws ShadowMap::faceDraws(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
@@ -290,23 +290,50 @@ ShadowFaceDraws ShadowMap::faceDraws(const graph::PassContext& pass, const std::
 
 void ShadowMap::recordLayer(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
                             std::span<const ShadowMapPlacement> maps, const std::string* nearerLayer,
-                            DrawFilter unmasked) const
+                            DrawFilter unmasked, MapClear clear) const
 {
     VkCommandBuffer cmd = pass.cmd();
     const gpu::Image& target = pass.image(image);
-    const ShadowFaceDraws draws = faceDraws(pass, image, bias, maps);
+    ShadowFaceDraws draws = faceDraws(pass, image, bias, maps);
+    if (draws.faces.empty() && clear == MapClear::EachFace) return;  // nothing to draw, nothing to keep from harm
     VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
     depth.imageView = target.view();
     depth.imageLayout = pass.layout(image);
-    depth.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    depth.loadOp = clear == MapClear::Image ? VK_ATTACHMENT_LOAD_OP_CLEAR : VK_ATTACHMENT_LOAD_OP_LOAD;
     depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
     depth.clearValue.depthStencil = {0.0f, 0};  // reversed-Z: far is 0
+    if (clear == MapClear::EachFace) {
+        // The texels outside the faces keep what they hold: the render area is the faces'
+        // union, and each face's scissor is cleared on its own below.
+        int32_t x0 = INT32_MAX, y0 = INT32_MAX, x1 = 0, y1 = 0;
+        for (const ShadowFaceDraw& face : draws.faces) {
+            x0 = std::min(x0, face.scissor.offset.x);
+            y0 = std::min(y0, face.scissor.offset.y);
+            x1 = std::max(x1, face.scissor.offset.x + int32_t(face.scissor.extent.width));
+            y1 = std::max(y1, face.scissor.offset.y + int32_t(face.scissor.extent.height));
+        }
+        draws.area = {{x0, y0}, {uint32_t(x1 - x0), uint32_t(y1 - y0)}};
+    }
     VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
     info.renderArea = draws.area;
     info.layerCount = 1;
     info.pDepthAttachment = &depth;
     vkCmdBeginRendering(cmd, &info);
-    casters_.countRenderedTexels(uint64_t(info.renderArea.extent.width) * info.renderArea.extent.height);
+    if (clear == MapClear::EachFace) {
+        uint64_t texels = 0;
+        std::vector<VkClearRect> rects;
+        rects.reserve(draws.faces.size());
+        for (const ShadowFaceDraw& face : draws.faces) {
+            rects.push_back({face.scissor, 0, 1});
+            texels += uint64_t(face.scissor.extent.width) * face.scissor.extent.height;
+        }
+        VkClearAttachment attachment{VK_IMAGE_ASPECT_DEPTH_BIT, 0, {}};
+        attachment.clearValue.depthStencil = {0.0f, 0};
+        vkCmdClearAttachments(cmd, 1, &attachment, uint32_t(rects.size()), rects.data());
+        casters_.countRenderedTexels(texels);
+    } else {
+        casters_.countRenderedTexels(uint64_t(info.renderArea.extent.width) * info.renderArea.extent.height);
+    }
 
     // Reversed-Z: "away from the light" is towards smaller depth, so every bias term is
     // negated; a negative clamp bounds the bias from below (Vulkan: max(bias, clamp)).

@@ -37,8 +37,10 @@ namespace penumbra::frame {
 using PassTiming = graph::PassTiming;
 
 // The most times renderFrame() draws a frame again for techniques that grew their
-// resources (plugin::Technique::grewForLastFrame).
-inline constexpr uint32_t kMaxRedraws = 4;
+// resources or refined what they store for this view (plugin::Technique::grewForLastFrame):
+// a deep shadow map's pool grows in one redraw, an adaptive shadow map settles a still
+// view in one redraw per quadtree level it adds.
+inline constexpr uint32_t kMaxRedraws = 16;
 
 struct FrameTimings {
     std::vector<PassTiming> passes;    // the executed passes (of the last draw), in execution order

@@ -12,13 +12,16 @@
 #include "penumbra/scene/Scene.h"
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <string>
 #include <vector>
 
 namespace penumbra::gpu {
+class Buffer;
 class Context;
-}
+class Image;
+} // namespace penumbra::gpu
 
 namespace penumbra::plugin {
 
@@ -61,6 +64,14 @@ struct LightPassIo {
     std::string visibility;
 
     std::string local(std::string_view name) const { return prefix + std::string(name); }
+
+    // Resources the technique keeps from frame to frame (a persistent atlas, a table its
+    // passes update): declared with imported = true (an image with the initialLayout the
+    // technique keeps it in between frames) and bound here to the technique's own object,
+    // which must live as long as the technique. Passes then read and write them with the
+    // graph's barriers, like any other resource.
+    std::function<void(std::string_view name, const gpu::Image& image)> bindImage;
+    std::function<void(std::string_view name, const gpu::Buffer& buffer)> bindBuffer;
 };
 
 // One figure of a technique's last frame (memory it used, work it did, what it had to
@@ -97,7 +108,9 @@ public:
     virtual std::vector<TechniqueFigure> figures() const { return {}; }
 
     // Called after every frame, once it finished: true when the technique found a
-    // resource too small for the frame (its results are incomplete) and grew it. The
+    // resource too small for the frame (its results are incomplete) and grew it, or found
+    // what it stores for this view still short of what it can store (an adaptive shadow
+    // map's quadtree, which a still view refines level by level). The
     // renderer then declares the frame's graph again (registerPasses is called anew, with
     // the new sizes) and draws the frame again, at most frame::kMaxRedraws times in one
     // renderFrame(). A technique past its own limit reports that in its figures and

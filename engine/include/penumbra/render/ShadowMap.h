@@ -140,6 +140,12 @@ struct ShadowFaceDraws {
     VkRect2D area{};                    // the union of their scissors, or the whole image
 };
 
+// What a depth pass clears (ShadowMap::recordDepthMaps): the whole image (or, when only
+// the lookups read it, the union of the texels they read), or only each face it draws,
+// the rest of the image keeping what it holds (a persistent atlas of tiles drawn a few at
+// a time: the adaptive shadow map's).
+enum class MapClear { Image, EachFace };
+
 // What a shadow map needs from the technique that owns it. A plugin::TechniqueSetup
 // converts to it, so a technique passes its own setup; the map takes no more than this
 // because render sits below plugin (plugin/Technique.h includes this header, not the
@@ -208,8 +214,10 @@ public:
     // that packs the maps of several views of the light's shape into one image with the
     // pipelines created once (the reference's rasterised light samples). Each map's atlas
     // (atlasWidth() x atlasHeight() from its origin) must lie inside the image.
+    // MapClear::EachFace clears and draws only the maps' faces and keeps every other texel
+    // (no maps: records nothing).
     void recordDepthMaps(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
-                         std::span<const ShadowMapPlacement> maps) const;
+                         std::span<const ShadowMapPlacement> maps, MapClear clear = MapClear::Image) const;
 
     // The faces that a caster pass writing `image` (Usage::DepthAttachment or Storage, at
     // least as large as every map's atlas at its origin) draws for `maps` with `bias`,
@@ -286,7 +294,7 @@ private:
     // lies behind it; `unmasked` selects the casters without alpha mask (Solid, Opaque).
     void recordLayer(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
                      std::span<const ShadowMapPlacement> maps, const std::string* nearerLayer,
-                     DrawFilter unmasked = DrawFilter::Solid) const;
+                     DrawFilter unmasked = DrawFilter::Solid, MapClear clear = MapClear::Image) const;
 
     const gpu::ShaderCompiler& shaders_;
     gpu::GraphicsPipelineDesc depthDesc_;  // the solid casters' pipeline, which the others extend

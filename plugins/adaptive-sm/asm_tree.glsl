@@ -1,0 +1,73 @@
+// The adaptive shadow map's quadtree as its shaders read it (plugins/adaptive-sm/
+// tile_tree.h is the CPU side). A node at level L, cell (x, y) covers the light view's uv
+// square [x, x + 1) / 2^L x [y, y + 1) / 2^L with one ASM_TILE² tile of reversed-Z depth
+// in the atlas (slot s at column s % ASM_ATLAS_COLUMNS, row s / ASM_ATLAS_COLUMNS); its
+// children split the cell in quadrants q = qx + 2 qy. The root is node 0. A lookup walks
+// from the root to the finest resident node over its point.
+//
+// The including shader defines ASM_TILE, ASM_ATLAS_COLUMNS, ASM_MAX_LEVEL and
+// ASM_NODES_BINDING (the node table), and ASM_RANGES_BINDING for the depth ranges (with
+// ASM_RANGES_WRITABLE when it writes them).
+#ifndef PENUMBRA_ASM_TREE_GLSL
+#define PENUMBRA_ASM_TREE_GLSL
+
+struct AsmNode {
+    ivec4 children;  // slot per quadrant, -1: none
+    uint level;
+    uint x;
+    uint y;
+    uint resident;
+};
+
+layout(std430, binding = ASM_NODES_BINDING) readonly buffer AsmNodes {
+    AsmNode nodes[];
+} asmTree;
+
+#ifdef ASM_RANGES_BINDING
+// Per node: x, y the min and max depth of its own tile, z, w of its tile and every
+// resident descendant's (the thesis' min-max depth culling).
+#ifdef ASM_RANGES_WRITABLE
+layout(std430, binding = ASM_RANGES_BINDING) coherent buffer AsmRanges {
+#else
+layout(std430, binding = ASM_RANGES_BINDING) readonly buffer AsmRanges {
+#endif
+    vec4 ranges[];
+} asmRanges;
+#endif
+
+// The uv of `uv` inside node `node`'s cell: [0, 1)² when the cell holds it. The scale is a
+// power of two and the cell's corner an integer, so this is exact up to uv's own rounding.
+vec2 asmCellUv(int node, vec2 uv)
+{
+    AsmNode n = asmTree.nodes[node];
+    return uv * exp2(float(n.level)) - vec2(n.x, n.y);
+}
+
+// The finest resident node whose cell holds uv (uv in [0, 1]²).
+int asmFinestNode(vec2 uv)
+{
+    int node = 0;
+    for (int i = 0; i < ASM_MAX_LEVEL; ++i) {
+        vec2 local = asmCellUv(node, uv);
+        int quadrant = int(local.x >= 0.5) + 2 * int(local.y >= 0.5);
+        int child = asmTree.nodes[node].children[quadrant];
+        if (child < 0) break;
+        node = child;
+    }
+    return node;
+}
+
+// The atlas texel of node `node` at cell uv `local` (clamped into the tile).
+ivec2 asmAtlasTexel(int node, vec2 local)
+{
+    ivec2 texel = clamp(ivec2(floor(local * float(ASM_TILE))), ivec2(0), ivec2(ASM_TILE - 1));
+    return ivec2(node % ASM_ATLAS_COLUMNS, node / ASM_ATLAS_COLUMNS) * ASM_TILE + texel;
+}
+
+// World-independent size of one texel of `node`, in light-view uv.
+float asmTexelUv(int node)
+{
+    return exp2(-float(asmTree.nodes[node].level)) / float(ASM_TILE);
+}
+
+#endif
