@@ -69,8 +69,9 @@ const plugin::ParamSpec kParams[] = {
      "while any cell asks"},
     {"analyze_stride", ParamType::Int, 8, 1, 64, "",
      "one G-buffer pixel in this many is analyzed per frame, in a pattern that moves every frame (the thesis: 8)"},
-    {"texels_per_pixel", ParamType::Float, 1, 0.125, 16, "",
-     "refine while a shadow edge's texel is wider than 1 / texels_per_pixel eye pixels"},
+    {"texels_per_pixel", ParamType::Float, 2, 0.125, 16, "",
+     "refine while a shadow edge's texel is wider than 1 / texels_per_pixel eye pixels (2: Nyquist, as the thesis "
+     "states it; 1: the thesis' test)"},
     {"min_benefit", ParamType::Int, 1, 1, 1e9, "pixels", "analyzed edge pixels a new tile must resolve at least"},
     {"settle_rounds", ParamType::Int, 8, 0, 15, "",
      "a frame is drawn again (at most this many times) while refinement still finds work, so a still image shows "
@@ -93,7 +94,7 @@ struct Settings {
     uint32_t maxLevel = 12;
     float refineMs = 20.0f;
     uint32_t analyzeStride = 8;
-    float texelsPerPixel = 1.0f;
+    float texelsPerPixel = 2.0f;
     uint32_t minBenefit = 1;
     uint32_t settleRounds = 8;
     bool depthCulling = true;
@@ -227,14 +228,22 @@ private:
     uint64_t frame_ = 0;          // draws so far (the analysis pattern moves with it)
     bool analysisPending_ = false;  // the last draw analyzed; its counts are not read yet
     bool resetPending_ = true;    // the tree was reset: the counts refer to old nodes
-    std::vector<uint32_t> drawnThisFrame_;
+    std::vector<uint32_t> drawnThisFrame_;  // this draw's tiles
     uint32_t settleRound_ = 0;
-    // Figures of the last draw.
-    RefineStep lastStep_;
-    uint32_t lastInvalidated_ = 0;
+    bool frameStarts_ = true;  // the next draw is a frame's first (not a settling redraw)
     uint32_t invalidatedSinceDraw_ = 0;
-    double lastTileRecordMs_ = 0.0;
     uint64_t resets_ = 0;
+    // Figures of the last frame, over all its draws.
+    struct FrameFigures {
+        uint32_t draws = 0;
+        uint32_t drawn = 0;
+        uint32_t created = 0;
+        uint32_t invalidated = 0;
+        uint32_t evicted = 0;
+        uint32_t asking = 0;    // the last draw's step
+        uint32_t deferred = 0;  // the last draw's step
+        double stepCpuMs = 0.0;
+    } last_;
 };
 
 AdaptiveShadowMap::AdaptiveShadowMap(const plugin::TechniqueSetup& setup)
@@ -444,13 +453,23 @@ void AdaptiveShadowMap::readLastAnalysis()
 void AdaptiveShadowMap::refineAndRecordTiles(const graph::PassContext& pass, const Names& names)
 {
     const auto start = std::chrono::steady_clock::now();
+    if (frameStarts_) {
+        last_ = {};
+        frameStarts_ = false;
+    }
     readLastAnalysis();
     ++frame_;
     resetPending_ = false;
-    lastStep_ = tree_.refine({settings_.refineMs, tileCostMs(), settings_.minBenefit});
-    lastInvalidated_ = invalidatedSinceDraw_;
-    invalidatedSinceDraw_ = 0;
+    const RefineStep step = tree_.refine({settings_.refineMs, tileCostMs(), settings_.minBenefit});
     drawnThisFrame_ = tree_.takePending();
+    ++last_.draws;
+    last_.drawn += uint32_t(drawnThisFrame_.size());
+    last_.created += uint32_t(step.created.size());
+    last_.invalidated += invalidatedSinceDraw_;
+    invalidatedSinceDraw_ = 0;
+    last_.evicted += step.evicted;
+    last_.asking = step.candidates;
+    last_.deferred = step.deferred;
     std::ranges::sort(drawnThisFrame_);
 
     // Upload the tree, the tile list and the bottom-up order; clear the analysis counts.
@@ -485,7 +504,7 @@ void AdaptiveShadowMap::refineAndRecordTiles(const graph::PassContext& pass, con
                               slot});
     }
     shadowMap_.recordDepthMaps(pass, names.atlas, settings_.bias, placements, render::MapClear::EachFace);
-    lastTileRecordMs_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    last_.stepCpuMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
 void AdaptiveShadowMap::recordRanges(const graph::PassContext& pass, const Names& names)
@@ -614,6 +633,7 @@ bool AdaptiveShadowMap::grewForLastFrame()
         return true;
     }
     settleRound_ = 0;
+    frameStarts_ = true;
     return false;
 }
 
@@ -629,18 +649,19 @@ std::vector<plugin::TechniqueFigure> AdaptiveShadowMap::figures() const
         {"tile_memory_mib", double(tree_.resident()) * tileBytes * mib, "MiB"},
         {"atlas_mib", double(layout_.slots) * tileBytes * mib, "MiB"},
         {"table_mib", tableBytes * mib, "MiB"},
-        {"tiles_drawn", double(drawnThisFrame_.size()), "tiles"},
-        {"tiles_created", double(lastStep_.created.size()), "tiles"},
-        {"tiles_invalidated", double(lastInvalidated_), "tiles"},
-        {"evictions", double(lastStep_.evicted), "tiles"},
+        {"refine_steps", double(last_.draws), ""},
+        {"tiles_drawn", double(last_.drawn), "tiles"},
+        {"tiles_created", double(last_.created), "tiles"},
+        {"tiles_invalidated", double(last_.invalidated), "tiles"},
+        {"evictions", double(last_.evicted), "tiles"},
         {"evictions_total", double(tree_.totalEvictions()), "tiles"},
-        {"cells_asking", double(lastStep_.candidates), ""},
-        {"cells_deferred", double(lastStep_.deferred), ""},
+        {"cells_asking", double(last_.asking), ""},
+        {"cells_deferred", double(last_.deferred), ""},
         {"deepest_level", double(tree_.deepestLevel()), ""},
         {"effective_resolution", double(settings_.tile) * std::ldexp(1.0, int(tree_.deepestLevel())), "texels"},
         {"tile_cost_a", costPerTexelMs_ * 1e6, "ns/texel"},
         {"tile_cost_b", costPerTileMs_, "ms/tile"},
-        {"tile_step_cpu_ms", lastTileRecordMs_, "ms"},
+        {"tile_step_cpu_ms", last_.stepCpuMs, "ms"},
         {"view_resets", double(resets_), ""},
     };
 }

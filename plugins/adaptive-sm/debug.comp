@@ -4,7 +4,8 @@
 //   DEBUG_VIEW 0, screen size:  tile_level: the level of the finest resident node over
 //                               each G-buffer point (-1: no geometry or outside the map)
 //   DEBUG_VIEW 1, light view:   resident_tiles: 1 + the level of the finest resident node
-//                               over each texel, 0 on the tiles' borders;
+//                               over each texel, 0 on the tiles' borders (their first
+//                               row and column: cells of one texel show as border);
 //                               tile_benefit: the analysis's benefit (sampled pixels) of
 //                               the quadrant of that node that holds the texel, this frame
 #define GBUFFER_BINDING 4
@@ -54,9 +55,10 @@ void main()
     vec2 uv = (vec2(pixel) + 0.5) / vec2(size);
     int node = asmFinestNode(uv);
     vec2 local = asmCellUv(node, uv);
-    // One debug texel of the node's cell, in cell uv.
+    // The first debug texel row and column of the node's cell (each border drawn once, by
+    // the cell right of or below it): a cell two debug texels wide keeps its level.
     vec2 border = exp2(float(asmTree.nodes[node].level)) / vec2(size);
-    bool onBorder = any(lessThan(local, border)) || any(greaterThanEqual(local, 1.0 - border));
+    bool onBorder = any(lessThan(local, border));
     imageStore(residentTiles, pixel, vec4(onBorder ? 0.0 : float(asmTree.nodes[node].level) + 1.0));
     uint quadrant = uint(local.x >= 0.5) + 2u * uint(local.y >= 0.5);
     imageStore(tileBenefit, pixel, vec4(float(analysis.counts[uint(node) * 6u + 2u + quadrant])));
