@@ -1,7 +1,9 @@
 // Adaptive shadow maps (Fernando, Fernandez, Bala, Greenberg 2001; Fernando's thesis
 // 2002, ch. 2; README.md next to this file): the light view as a quadtree of fixed-size
 // depth tiles in one atlas of exactly memory_mib MiB, refined where the eye sees shadow
-// edges under-sampled, progressively, inside a per-frame time budget.
+// edges under-sampled, progressively, inside a per-frame time budget. One quadtree for a
+// spot or directional light's view, six (render::ShadowMap's cube faces, from the light's
+// centre) for point, rect and disk lights.
 //
 // Every frame (one draw of the render graph), in pass order:
 //   tiles     (graphics)  the CPU step: last frame's analysis -> LRU and benefits ->
@@ -53,7 +55,7 @@ namespace {
 
 using plugin::ParamType;
 
-constexpr uint32_t kDebugLightTexels = 512;  // resident_tiles, tile_benefit: the light view
+constexpr uint32_t kDebugLightTexels = 512;  // resident_tiles, tile_benefit: the light view's height
 constexpr uint32_t kTileBytesPerTexel = 4;   // D32_SFLOAT
 
 const plugin::ParamSpec kParams[] = {
@@ -221,7 +223,7 @@ private:
     gpu::Sampler depthSampler_;
     double costPerTexelMs_ = 0.0;  // a
     double costPerTileMs_ = 0.0;   // b
-    glm::mat4 lightViewProj_{0.0f};
+    std::vector<glm::mat4> lightViewProj_;  // per face, as the tiles were drawn
     std::vector<scene::Aabb> instanceBounds_;  // as the tiles last saw them
 
     // The frame's state.
@@ -258,22 +260,18 @@ AdaptiveShadowMap::AdaptiveShadowMap(const plugin::TechniqueSetup& setup)
       layout_(atlasLayout(settings_, context_.properties().limits.maxImageDimension2D)),
       tree_([&] {
           try {
-              return TileTree(layout_.slots, settings_.baseLevel, settings_.maxLevel);
+              return TileTree(layout_.slots, settings_.baseLevel, settings_.maxLevel, shadowMap_.faceCount());
           } catch (const std::invalid_argument& e) {
               throw ConfigError(fmt::format("adaptive-sm: base_level: {} MiB of {}² tiles: {}", settings_.memoryMib,
                                             settings_.tile, e.what()));
           }
       }())
 {
-    if (setup.light.type != scene::LightType::Spot && setup.light.type != scene::LightType::Directional)
-        throw ConfigError(fmt::format("adaptive-sm: a {} light is not supported: the quadtree covers one light view "
-                                      "(spot and directional lights); use hard or pcss for cube maps",
-                                      scene::lightTypeName(setup.light.type)));
     // Tiles persist across frames, so their casters must not depend on this frame's
     // camera: every caster in a tile's frustum that light-space culling keeps (the
     // receiver mask covers the whole view: no receiver-dependent culling).
     shadowMap_.setFootprint(render::CasterView::kWholeView);
-    lightViewProj_ = shadowMap_.frusta().front().viewProj;
+    for (const render::LightFrustum& f : shadowMap_.frusta()) lightViewProj_.push_back(f.viewProj);
 
     const std::string name = fmt::format("light{}.adaptive-sm", lightIndex_);
     atlas_ = gpu::Image(context_, {layout_.columns * settings_.tile, layout_.rows * settings_.tile,
@@ -398,11 +396,12 @@ void AdaptiveShadowMap::calibrateTileCost(const gpu::ShaderCompiler& shaders)
 void AdaptiveShadowMap::update(const scene::Light& light, const scene::Aabb& sceneBounds)
 {
     shadowMap_.update(light, sceneBounds);
-    // Every tile is a crop of this view: a new view (the light moved, or shadow focusing
-    // refitted it) makes them all stale.
-    const glm::mat4& viewProj = shadowMap_.frusta().front().viewProj;
+    // Every tile is a crop of its face's view: a new view (the light moved, or shadow
+    // focusing refitted it) makes them all stale.
+    std::vector<glm::mat4> viewProj;
+    for (const render::LightFrustum& f : shadowMap_.frusta()) viewProj.push_back(f.viewProj);
     if (viewProj != lightViewProj_) {
-        lightViewProj_ = viewProj;
+        lightViewProj_ = std::move(viewProj);
         tree_.reset();
         ++resets_;
         resetPending_ = true;
@@ -410,15 +409,17 @@ void AdaptiveShadowMap::update(const scene::Light& light, const scene::Aabb& sce
 }
 
 // A moved caster changes the depths only where it was and where it is now, as the light
-// sees them: the tiles over those two boxes' projections are drawn again.
+// sees them: the tiles over those two boxes' projections are drawn again, face by face.
 void AdaptiveShadowMap::instancesMoved(std::span<const uint32_t> instances)
 {
-    const auto project = [&](const scene::Aabb& box, glm::vec2& lo, glm::vec2& hi) {
+    // The uv bounds of `box` in face `face`, grown into lo / hi; a box reaching behind the
+    // face's plane covers all of it.
+    const auto project = [&](uint32_t face, const scene::Aabb& box, glm::vec2& lo, glm::vec2& hi) {
         for (int corner = 0; corner < 8; ++corner) {
             const glm::vec3 p((corner & 1) ? box.max.x : box.min.x, (corner & 2) ? box.max.y : box.min.y,
                               (corner & 4) ? box.max.z : box.min.z);
-            const glm::vec4 clip = lightViewProj_ * glm::vec4(p, 1.0f);
-            if (!(clip.w > 0.0f)) {  // behind a spot light's plane: anywhere in its view
+            const glm::vec4 clip = lightViewProj_[face] * glm::vec4(p, 1.0f);
+            if (!(clip.w > 0.0f)) {
                 lo = glm::vec2(0.0f);
                 hi = glm::vec2(1.0f);
                 return;
@@ -430,12 +431,17 @@ void AdaptiveShadowMap::instancesMoved(std::span<const uint32_t> instances)
     };
     for (uint32_t i : instances) {
         if (i >= scene_.instances.size() || i >= instanceBounds_.size()) continue;
-        glm::vec2 lo(1e30f), hi(-1e30f);
-        if (instanceBounds_[i].min.x <= instanceBounds_[i].max.x) project(instanceBounds_[i], lo, hi);
-        project(scene_.instances[i].worldBounds, lo, hi);
-        instanceBounds_[i] = scene_.instances[i].worldBounds;
-        if (!(lo.x <= hi.x && lo.y <= hi.y)) continue;
-        invalidatedSinceDraw_ += tree_.invalidate(lo.x, lo.y, hi.x, hi.y);
+        const scene::Aabb& was = instanceBounds_[i];
+        const scene::Aabb& now = scene_.instances[i].worldBounds;
+        for (uint32_t face = 0; face < lightViewProj_.size(); ++face) {
+            glm::vec2 lo(1e30f), hi(-1e30f);
+            if (was.min.x <= was.max.x) project(face, was, lo, hi);
+            if (now.min.x <= now.max.x) project(face, now, lo, hi);
+            // Outside the face (or NaN): nothing of it to draw again.
+            if (!(lo.x <= 1.0f && lo.y <= 1.0f && hi.x >= 0.0f && hi.y >= 0.0f)) continue;
+            invalidatedSinceDraw_ += tree_.invalidate(face, lo.x, lo.y, hi.x, hi.y);
+        }
+        instanceBounds_[i] = now;
     }
 }
 
@@ -487,9 +493,9 @@ void AdaptiveShadowMap::refineAndRecordTiles(const graph::PassContext& pass, con
     // slots keep their tiles).
     std::vector<render::LightFrustum> frusta;
     frusta.reserve(drawnThisFrame_.size());
-    const render::LightFrustum& light = shadowMap_.frusta().front();
     for (uint32_t slot : drawnThisFrame_) {
         const GpuNode& n = tree_.table()[slot];
+        const render::LightFrustum& light = shadowMap_.frusta()[n.face];
         render::LightFrustum f = light;
         f.proj = cellCrop(n.level, n.x, n.y) * light.proj;
         f.viewProj = cellCrop(n.level, n.x, n.y) * light.viewProj;
@@ -592,8 +598,11 @@ void AdaptiveShadowMap::registerPasses(graph::RenderGraph& graph, const plugin::
     const std::string level = io.local("tile_level"), resident = io.local("resident_tiles"),
                       benefit = io.local("tile_benefit");
     graph.declareImage({level, width_, height_, VK_FORMAT_R32_SFLOAT});
-    graph.declareImage({resident, kDebugLightTexels, kDebugLightTexels, VK_FORMAT_R32_SFLOAT});
-    graph.declareImage({benefit, kDebugLightTexels, kDebugLightTexels, VK_FORMAT_R32_SFLOAT});
+    // One face at 512², or the six cube faces at 256² each in 3 x 2 cells.
+    const bool cube = shadowMap_.faceCount() > 1;
+    const uint32_t lightWidth = cube ? 3 * kDebugLightTexels / 2 : kDebugLightTexels;
+    graph.declareImage({resident, lightWidth, kDebugLightTexels, VK_FORMAT_R32_SFLOAT});
+    graph.declareImage({benefit, lightWidth, kDebugLightTexels, VK_FORMAT_R32_SFLOAT});
     graph::PassBuilder screen = graph.addPass(io.local("debug_screen"), graph::QueueKind::Compute);
     plugin::readGBuffer(screen, io.gbuffer);
     screen.read(names.atlas, graph::Usage::Sampled)

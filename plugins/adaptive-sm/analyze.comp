@@ -45,7 +45,7 @@ layout(push_constant) uniform Push {
 
 // The uv of the neighbour `pixel + axis` or `pixel - axis`, whichever lies nearer to `uv`
 // in the light view; false when neither has geometry in front of the light.
-bool neighbourStep(ivec2 pixel, ivec2 axis, vec2 uv, out vec2 stepUv)
+bool neighbourStep(ivec2 pixel, ivec2 axis, uint face, vec2 uv, out vec2 stepUv)
 {
     stepUv = vec2(0.0);
     float best = 1e30;
@@ -57,7 +57,7 @@ bool neighbourStep(ivec2 pixel, ivec2 axis, vec2 uv, out vec2 stepUv)
         vec4 p = gbufferPosition(q);
         vec3 uvDepth;
         float w;
-        if (p.w == 0.0 || !shadowProject(0u, p.xyz, uvDepth, w)) continue;
+        if (p.w == 0.0 || !shadowProject(face, p.xyz, uvDepth, w)) continue;
         vec2 d = uvDepth.xy - uv;
         if (dot(d, d) < best) {
             best = dot(d, d);
@@ -81,7 +81,7 @@ void main()
     ShadowReceiver r;
     if (!makeShadowReceiver(pixel, position.xyz, 0.0, r)) return;
 
-    int node = asmFinestNode(r.uv);
+    int node = asmFinestNode(r.face, r.uv);
     vec2 local = asmCellUv(node, r.uv);
     uint base = uint(node) * 6u;
     atomicAdd(analysis.counts[base], 1u);
@@ -97,7 +97,8 @@ void main()
 
     if (asmTree.nodes[node].level >= uint(ASM_MAX_LEVEL)) return;
     vec2 du, dv;
-    if (!neighbourStep(pixel, ivec2(1, 0), r.uv, du) || !neighbourStep(pixel, ivec2(0, 1), r.uv, dv)) return;
+    if (!neighbourStep(pixel, ivec2(1, 0), r.face, r.uv, du) || !neighbourStep(pixel, ivec2(0, 1), r.face, r.uv, dv))
+        return;
     float pixelSide = sqrt(abs(du.x * dv.y - du.y * dv.x));
     if (asmTexelUv(node) * pc.texelsPerPixel <= pixelSide) return;
     uint quadrant = uint(local.x >= 0.5) + 2u * uint(local.y >= 0.5);

@@ -1,9 +1,10 @@
-// The adaptive shadow map's quadtree as its shaders read it (plugins/adaptive-sm/
-// tile_tree.h is the CPU side). A node at level L, cell (x, y) covers the light view's uv
+// The adaptive shadow map's quadtrees as its shaders read them (plugins/adaptive-sm/
+// tile_tree.h is the CPU side): one per light view (face f of render::ShadowMap: one, or
+// six cube faces), its root node f. A node at level L, cell (x, y) covers its face's uv
 // square [x, x + 1) / 2^L x [y, y + 1) / 2^L with one ASM_TILE² tile of reversed-Z depth
 // in the atlas (slot s at column s % ASM_ATLAS_COLUMNS, row s / ASM_ATLAS_COLUMNS); its
-// children split the cell in quadrants q = qx + 2 qy. The root is node 0. A lookup walks
-// from the root to the finest resident node over its point.
+// children split the cell in quadrants q = qx + 2 qy. A lookup walks from its face's root
+// to the finest resident node over its point.
 //
 // The including shader defines ASM_TILE, ASM_ATLAS_COLUMNS, ASM_MAX_LEVEL and
 // ASM_NODES_BINDING (the node table), and ASM_RANGES_BINDING for the depth ranges (with
@@ -16,7 +17,7 @@ struct AsmNode {
     uint level;
     uint x;
     uint y;
-    uint resident;
+    uint face;  // 0xffffffff: a free slot, never reached from a root
 };
 
 layout(std430, binding = ASM_NODES_BINDING) readonly buffer AsmNodes {
@@ -43,10 +44,10 @@ vec2 asmCellUv(int node, vec2 uv)
     return uv * exp2(float(n.level)) - vec2(n.x, n.y);
 }
 
-// The finest resident node whose cell holds uv (uv in [0, 1]²).
-int asmFinestNode(vec2 uv)
+// The finest resident node of `face` whose cell holds uv (uv in [0, 1]²).
+int asmFinestNode(uint face, vec2 uv)
 {
-    int node = 0;
+    int node = int(face);
     for (int i = 0; i < ASM_MAX_LEVEL; ++i) {
         vec2 local = asmCellUv(node, uv);
         int quadrant = int(local.x >= 0.5) + 2 * int(local.y >= 0.5);

@@ -3,7 +3,8 @@
 // unless one is requested).
 //   DEBUG_VIEW 0, screen size:  tile_level: the level of the finest resident node over
 //                               each G-buffer point (-1: no geometry or outside the map)
-//   DEBUG_VIEW 1, light view:   resident_tiles: 1 + the level of the finest resident node
+//   DEBUG_VIEW 1, light view (cube maps: the six faces in 3 x 2 cells of 256²):
+//                               resident_tiles: 1 + the level of the finest resident node
 //                               over each texel, 0 on the tiles' borders (their first
 //                               row and column: cells of one texel show as border);
 //                               tile_benefit: the analysis's benefit (sampled pixels) of
@@ -47,13 +48,18 @@ void main()
     vec4 position = gbufferPosition(pixel);
     ShadowReceiver r;
     bool inMap = position.w != 0.0 && makeShadowReceiver(pixel, position.xyz, 0.0, r);
-    float level = inMap ? float(asmTree.nodes[asmFinestNode(r.uv)].level) : -1.0;
+    float level = inMap ? float(asmTree.nodes[asmFinestNode(r.face, r.uv)].level) : -1.0;
     imageStore(tileLevel, pixel, vec4(level));
 #else
-    ivec2 size = imageSize(residentTiles);
-    if (any(greaterThanEqual(pixel, size))) return;
-    vec2 uv = (vec2(pixel) + 0.5) / vec2(size);
-    int node = asmFinestNode(uv);
+    ivec2 image = imageSize(residentTiles);
+    if (any(greaterThanEqual(pixel, image))) return;
+    // One face, or six cube faces in 3 x 2 cells as render::ShadowMap packs them.
+    ivec2 cells = shadowFaceCount() == 6u ? ivec2(3, 2) : ivec2(1);
+    ivec2 size = image / cells;
+    ivec2 cell = pixel / size;
+    uint face = uint(cell.x + 3 * cell.y);
+    vec2 uv = (vec2(pixel - cell * size) + 0.5) / vec2(size);
+    int node = asmFinestNode(face, uv);
     vec2 local = asmCellUv(node, uv);
     // The first debug texel row and column of the node's cell (each border drawn once, by
     // the cell right of or below it): a cell two debug texels wide keeps its level.

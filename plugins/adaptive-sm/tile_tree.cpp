@@ -22,15 +22,16 @@ constexpr uint32_t kUnanalyzed = std::numeric_limits<uint32_t>::max();
 
 } // namespace
 
-TileTree::TileTree(uint32_t slots, uint32_t baseLevel, uint32_t maxLevel) : baseLevel_(baseLevel), maxLevel_(maxLevel)
+TileTree::TileTree(uint32_t slots, uint32_t baseLevel, uint32_t maxLevel, uint32_t faces)
+    : baseLevel_(baseLevel), maxLevel_(maxLevel), faces_(faces)
 {
     if (maxLevel >= kMaxLevels || baseLevel > maxLevel)
         throw std::invalid_argument("levels: base " + std::to_string(baseLevel) + " and max " +
                                     std::to_string(maxLevel) + " must satisfy base <= max < " + std::to_string(kMaxLevels));
-    if (nodesUpToLevel(baseLevel) > slots)
-        throw std::invalid_argument("levels 0 .. " + std::to_string(baseLevel) + " take " +
-                                    std::to_string(nodesUpToLevel(baseLevel)) + " tiles, the atlas holds " +
-                                    std::to_string(slots));
+    if (faces == 0 || uint64_t(faces) * nodesUpToLevel(baseLevel) > slots)
+        throw std::invalid_argument("levels 0 .. " + std::to_string(baseLevel) + " of " + std::to_string(faces) +
+                                    " light view(s) take " + std::to_string(uint64_t(faces) * nodesUpToLevel(baseLevel)) +
+                                    " tiles, the atlas holds " + std::to_string(slots));
     table_.resize(slots);
     nodes_.resize(slots);
     reset();
@@ -44,16 +45,20 @@ void TileTree::reset()
     for (uint32_t s = slots(); s-- > 0;) free_.push_back(s);  // slot 0 first
     pending_.clear();
     resident_ = 0;
-    // Level by level, so that every parent exists before its children.
-    const uint32_t root = free_.back();
-    free_.pop_back();
-    table_[root] = GpuNode{};
-    table_[root].resident = 1;
-    nodes_[root].lastUsed = lastAnalyzed_;
-    nodes_[root].edges = kUnanalyzed;
-    ++resident_;
-    pending_.push_back(root);
-    std::vector<uint32_t> level{root};
+    // The roots (slot f for face f), then level by level, so that every parent exists
+    // before its children.
+    std::vector<uint32_t> level;
+    for (uint32_t f = 0; f < faces_; ++f) {
+        const uint32_t root = free_.back();
+        free_.pop_back();
+        table_[root] = GpuNode{};
+        table_[root].face = f;
+        nodes_[root].lastUsed = lastAnalyzed_;
+        nodes_[root].edges = kUnanalyzed;
+        ++resident_;
+        pending_.push_back(root);
+        level.push_back(root);
+    }
     for (uint32_t l = 0; l < baseLevel_; ++l) {
         std::vector<uint32_t> next;
         for (uint32_t parent : level)
@@ -74,7 +79,7 @@ uint32_t TileTree::create(int32_t parent, uint32_t quadrant, uint32_t slot)
     n.level = p.level + 1;
     n.x = 2 * p.x + (quadrant & 1u);
     n.y = 2 * p.y + (quadrant >> 1);
-    n.resident = 1;
+    n.face = p.face;
     table_[uint32_t(parent)].children[quadrant] = int32_t(slot);
     nodes_[slot] = Node{parent, lastAnalyzed_, kUnanalyzed, {}};
     ++resident_;
@@ -106,7 +111,7 @@ void TileTree::recordAnalysis(std::span<const NodeAnalysis> analysis, uint64_t f
     lastAnalyzed_ = frame;
     const size_t n = std::min(analysis.size(), table_.size());
     for (size_t s = 0; s < n; ++s) {
-        if (!table_[s].resident) continue;
+        if (!table_[s].resident()) continue;
         Node& node = nodes_[s];
         node.edges = analysis[s].edges;
         node.benefit = analysis[s].benefit;
@@ -122,7 +127,7 @@ int32_t TileTree::leastRecentlyUsedLeaf(uint64_t before) const
     int32_t best = kNoNode;
     for (uint32_t s = 0; s < slots(); ++s) {
         const GpuNode& n = table_[s];
-        if (!n.resident || n.level <= baseLevel_ || nodes_[s].lastUsed >= before || !isLeaf(s)) continue;
+        if (!n.resident() || n.level <= baseLevel_ || nodes_[s].lastUsed >= before || !isLeaf(s)) continue;
         if (best == kNoNode) {
             best = int32_t(s);
             continue;
@@ -140,7 +145,7 @@ int32_t TileTree::weakestLeaf(int32_t keep) const
     int32_t best = kNoNode;
     for (uint32_t s = 0; s < slots(); ++s) {
         const GpuNode& n = table_[s];
-        if (!n.resident || n.level <= baseLevel_ || int32_t(s) == keep || !isLeaf(s)) continue;
+        if (!n.resident() || n.level <= baseLevel_ || int32_t(s) == keep || !isLeaf(s)) continue;
         if (best == kNoNode || nodes_[s].edges < nodes_[uint32_t(best)].edges) best = int32_t(s);
     }
     return best;
@@ -157,7 +162,7 @@ RefineStep TileTree::refine(const RefineBudget& budget)
     std::vector<Candidate> candidates;
     for (uint32_t s = 0; s < slots(); ++s) {
         const GpuNode& n = table_[s];
-        if (!n.resident || n.level >= maxLevel_) continue;
+        if (!n.resident() || n.level >= maxLevel_) continue;
         for (uint32_t q = 0; q < 4; ++q)
             if (n.children[q] == kNoNode && nodes_[s].benefit[q] >= std::max(budget.minBenefit, 1u))
                 candidates.push_back({s, q, nodes_[s].benefit[q], n.level});
@@ -186,7 +191,7 @@ RefineStep TileTree::refine(const RefineBudget& budget)
             break;
         }
         const GpuNode& p = table_[c.parent];
-        if (!p.resident || p.level != parents[i].level || p.x != parents[i].x || p.y != parents[i].y ||
+        if (!p.resident() || p.face != parents[i].face || p.level != parents[i].level || p.x != parents[i].x || p.y != parents[i].y ||
             p.children[c.quadrant] != kNoNode)
             continue;
         int32_t slot = kNoNode;
@@ -221,7 +226,7 @@ bool TileTree::wantsMore(uint32_t minBenefit) const
     uint32_t best = 0;
     for (uint32_t s = 0; s < slots(); ++s) {
         const GpuNode& n = table_[s];
-        if (!n.resident || n.level >= maxLevel_) continue;
+        if (!n.resident() || n.level >= maxLevel_) continue;
         for (uint32_t q = 0; q < 4; ++q)
             if (n.children[q] == kNoNode && nodes_[s].benefit[q] >= std::max(minBenefit, 1u))
                 best = std::max(best, nodes_[s].benefit[q]);
@@ -232,12 +237,12 @@ bool TileTree::wantsMore(uint32_t minBenefit) const
     return weakest != kNoNode && nodes_[uint32_t(weakest)].edges < best;
 }
 
-uint32_t TileTree::invalidate(float loU, float loV, float hiU, float hiV)
+uint32_t TileTree::invalidate(uint32_t face, float loU, float loV, float hiU, float hiV)
 {
     uint32_t count = 0;
     for (uint32_t s = 0; s < slots(); ++s) {
         const GpuNode& n = table_[s];
-        if (!n.resident) continue;
+        if (n.face != face) continue;
         const float size = std::ldexp(1.0f, -int(n.level));
         const float u0 = float(n.x) * size, v0 = float(n.y) * size;
         if (u0 > hiU || u0 + size < loU || v0 > hiV || v0 + size < loV) continue;
@@ -263,7 +268,7 @@ void TileTree::bottomUpOrder(std::vector<uint32_t>& order, std::array<uint32_t, 
         levelStart[i] = uint32_t(order.size());
         if (level == kMaxLevels) continue;
         for (uint32_t s = 0; s < slots(); ++s)
-            if (table_[s].resident && table_[s].level == level) order.push_back(s);
+            if (table_[s].resident() && table_[s].level == level) order.push_back(s);
     }
     levelStart[kMaxLevels] = uint32_t(order.size());
 }
@@ -272,7 +277,7 @@ uint32_t TileTree::deepestLevel() const
 {
     uint32_t deepest = 0;
     for (const GpuNode& n : table_)
-        if (n.resident) deepest = std::max(deepest, n.level);
+        if (n.resident()) deepest = std::max(deepest, n.level);
     return deepest;
 }
 

@@ -5,12 +5,14 @@
 // technique (adaptive_sm.cpp) feeds it the GPU analysis of the last frame and uploads
 // its table (asm_tree.glsl reads it).
 //
-// A node at level L, cell (x, y) covers [x, x + 1) / 2^L x [y, y + 1) / 2^L of the light
-// view's uv square and holds one tile of tile x tile depth texels; its four cells
-// (quadrant q = qx + 2 qy) may each hold a child at level L + 1. Node index = atlas slot:
-// the tree never holds more nodes than the atlas has slots, which is how the memory
-// budget is honoured exactly. Levels 0 .. baseLevel are always resident (the thesis'
-// starting map, 512² in its walkthrough).
+// One quadtree per light view (face): one for spot and directional lights, six for the
+// cube faces of point, rect and disk lights; face f's root is slot f. A node of face f at
+// level L, cell (x, y) covers [x, x + 1) / 2^L x [y, y + 1) / 2^L of that face's uv square
+// and holds one tile of tile x tile depth texels; its four cells (quadrant q = qx + 2 qy)
+// may each hold a child at level L + 1. Node index = atlas slot: the trees never hold more
+// nodes than the atlas has slots, which is how the memory budget is honoured exactly.
+// Levels 0 .. baseLevel are always resident (the thesis' starting map, 512² in its
+// walkthrough).
 #include <array>
 #include <cstdint>
 #include <span>
@@ -20,6 +22,7 @@ namespace penumbra::adaptive_sm {
 
 inline constexpr int32_t kNoNode = -1;
 inline constexpr uint32_t kMaxLevels = 16;  // levels 0 .. 15: 2^15 tiles across
+inline constexpr uint32_t kFreeSlot = 0xffffffffu;  // GpuNode::face of a slot that holds no node
 
 // One node as the shaders read it (std430; asm_tree.glsl AsmNode).
 struct GpuNode {
@@ -27,7 +30,8 @@ struct GpuNode {
     uint32_t level = 0;
     uint32_t x = 0;
     uint32_t y = 0;
-    uint32_t resident = 0;  // 0: a free slot (never reached from the root)
+    uint32_t face = kFreeSlot;  // the light view (cube face) it belongs to; kFreeSlot: no node
+    bool resident() const { return face != kFreeSlot; }
 };
 static_assert(sizeof(GpuNode) == 32);
 
@@ -59,9 +63,10 @@ struct RefineStep {
 
 class TileTree {
 public:
-    // `slots`: tiles the atlas holds; throws std::invalid_argument when levels 0 ..
-    // baseLevel do not fit in them or maxLevel is out of [baseLevel, kMaxLevels).
-    TileTree(uint32_t slots, uint32_t baseLevel, uint32_t maxLevel);
+    // `slots`: tiles the atlas holds; `faces`: 1 or 6 light views. Throws
+    // std::invalid_argument when levels 0 .. baseLevel of every face do not fit in the slots
+    // or maxLevel is out of [baseLevel, kMaxLevels).
+    TileTree(uint32_t slots, uint32_t baseLevel, uint32_t maxLevel, uint32_t faces = 1);
 
     // Forgets every node above the base levels and marks the base for rendering (the
     // light moved, or the first frame).
@@ -79,13 +84,13 @@ public:
     // that serves the fewest edge pixels, and only when the new node's benefit is greater.
     RefineStep refine(const RefineBudget& budget);
 
-    // Marks every resident node whose cell overlaps the uv rectangle [lo, hi] for
+    // Marks every resident node of `face` whose cell overlaps the uv rectangle [lo, hi] for
     // rendering again (a caster moved there). Returns how many.
-    uint32_t invalidate(float loU, float loV, float hiU, float hiV);
+    uint32_t invalidate(uint32_t face, float loU, float loV, float hiU, float hiV);
     // Nodes to render this frame (created or invalidated), and clears the list.
     std::vector<uint32_t> takePending();
 
-    // The table the shaders walk (index = slot; the root is slot 0).
+    // The table the shaders walk (index = slot; face f's root is slot f).
     const std::vector<GpuNode>& table() const { return table_; }
     // Resident nodes, deepest level first (the order in which subtree depth ranges are
     // combined bottom-up), and where each level starts in that list (levelStart[l] ..
@@ -93,6 +98,7 @@ public:
     void bottomUpOrder(std::vector<uint32_t>& order, std::array<uint32_t, kMaxLevels + 1>& levelStart) const;
 
     uint32_t slots() const { return uint32_t(table_.size()); }
+    uint32_t faces() const { return faces_; }
     uint32_t resident() const { return resident_; }
     uint32_t deepestLevel() const;
     uint32_t baseLevel() const { return baseLevel_; }
@@ -118,6 +124,7 @@ private:
 
     uint32_t baseLevel_ = 0;
     uint32_t maxLevel_ = 0;
+    uint32_t faces_ = 1;
     std::vector<GpuNode> table_;
     std::vector<Node> nodes_;
     std::vector<uint32_t> free_;  // free slots, taken from the back

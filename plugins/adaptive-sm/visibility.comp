@@ -52,9 +52,9 @@ float asmTap(int node, vec2 local, float depth)
 
 // One compare at light-view uv: the walk from the root, stopped early by the depth
 // ranges where they decide.
-float asmCompare(vec2 uv, float depth)
+float asmCompare(uint face, vec2 uv, float depth)
 {
-    int node = 0;
+    int node = int(face);
     for (int i = 0; i < ASM_MAX_LEVEL; ++i) {
 #if ASM_DEPTH_CULLING
         vec4 range = asmRanges.ranges[node];
@@ -72,10 +72,11 @@ float asmCompare(vec2 uv, float depth)
 float filteredVisibility(ShadowReceiver r)
 {
 #if PCF_KERNEL == 1
-    return asmCompare(r.uv, r.depth);
+    return asmCompare(r.face, r.uv, r.depth);
 #else
-    // Percentage-closer filtering at the finest node's resolution.
-    int centre = asmFinestNode(r.uv);
+    // Percentage-closer filtering at the finest node's resolution. Taps beyond a cube
+    // face's edge read its edge (the tile trees have no guard band).
+    int centre = asmFinestNode(r.face, r.uv);
     vec2 local = asmCellUv(centre, r.uv);
     float step = asmTexelUv(centre);
     const int h = (PCF_KERNEL - 1) / 2;
@@ -85,7 +86,7 @@ float filteredVisibility(ShadowReceiver r)
             vec2 tap = local + vec2(x, y) / float(ASM_TILE);
             bool inside = all(greaterThanEqual(tap, vec2(0.0))) && all(lessThan(tap, vec2(1.0)));
             lit += inside ? asmTap(centre, tap, r.depth)
-                          : asmCompare(clamp(r.uv + vec2(x, y) * step, vec2(0.0), vec2(1.0)), r.depth);
+                          : asmCompare(r.face, clamp(r.uv + vec2(x, y) * step, vec2(0.0), vec2(1.0)), r.depth);
         }
     return lit / float(PCF_KERNEL * PCF_KERNEL);
 #endif

@@ -39,24 +39,30 @@ void expectConsistent(const TileTree& tree)
 {
     const auto& t = tree.table();
     std::set<uint32_t> reached;
-    std::vector<uint32_t> stack{0};
+    std::vector<uint32_t> stack;
+    for (uint32_t f = 0; f < tree.faces(); ++f) {
+        EXPECT_EQ(t[f].face, f);
+        EXPECT_EQ(t[f].level, 0u);
+        stack.push_back(f);
+    }
     while (!stack.empty()) {
         const uint32_t s = stack.back();
         stack.pop_back();
-        ASSERT_TRUE(t[s].resident) << "slot " << s;
+        ASSERT_TRUE(t[s].resident()) << "slot " << s;
         ASSERT_TRUE(reached.insert(s).second) << "slot " << s << " reached twice";
         for (uint32_t q = 0; q < 4; ++q) {
             const int32_t c = t[s].children[q];
             if (c == kNoNode) continue;
             ASSERT_LT(uint32_t(c), tree.slots());
             EXPECT_EQ(t[uint32_t(c)].level, t[s].level + 1);
+            EXPECT_EQ(t[uint32_t(c)].face, t[s].face);
             EXPECT_EQ(t[uint32_t(c)].x, 2 * t[s].x + (q & 1));
             EXPECT_EQ(t[uint32_t(c)].y, 2 * t[s].y + (q >> 1));
             stack.push_back(uint32_t(c));
         }
     }
     uint32_t resident = 0;
-    for (const GpuNode& n : t) resident += n.resident;
+    for (const GpuNode& n : t) resident += n.resident() ? 1 : 0;
     EXPECT_EQ(reached.size(), resident);
     EXPECT_EQ(tree.resident(), resident);
     EXPECT_LE(resident, tree.slots());
@@ -141,7 +147,7 @@ TEST(AsmTileTree, EvictsTheLeastRecentlyUsedLeavesChildrenBeforeParents)
     EXPECT_EQ(step.evicted, 2u);
     EXPECT_EQ(tree.totalEvictions(), before + 2);
     EXPECT_EQ(tree.table()[1].children[0], kNoNode);
-    EXPECT_TRUE(tree.table()[other].resident);
+    EXPECT_TRUE(tree.table()[other].resident());
     EXPECT_EQ(tree.table()[2].children[0], int32_t(other));
     std::set<uint32_t> reused(step.created.begin(), step.created.end());
     EXPECT_EQ(reused, (std::set<uint32_t>{child, grandchild}));
@@ -177,7 +183,7 @@ TEST(AsmTileTree, ReplacesANodeInUseOnlyForAGreaterBenefit)
     EXPECT_EQ(tree.table()[1].children[0], kNoNode);
     EXPECT_EQ(tree.table()[2].children[0], int32_t(step.created[0]));
     // Base nodes are never removed, even unused.
-    for (uint32_t s = 0; s < 5; ++s) EXPECT_TRUE(tree.table()[s].resident);
+    for (uint32_t s = 0; s < 5; ++s) EXPECT_TRUE(tree.table()[s].resident());
     expectConsistent(tree);
 }
 
@@ -186,7 +192,7 @@ TEST(AsmTileTree, InvalidatesOnlyTheCellsABoxTouches)
     TileTree tree(64, 2, 8);
     tree.takePending();
     // A box inside the level-2 cell (1, 2): uv [0.25, 0.5) x [0.5, 0.75).
-    const uint32_t hit = tree.invalidate(0.3f, 0.55f, 0.4f, 0.7f);
+    const uint32_t hit = tree.invalidate(0, 0.3f, 0.55f, 0.4f, 0.7f);
     std::vector<uint32_t> pending = tree.takePending();
     EXPECT_EQ(hit, 3u);  // the root, its quadrant 2 and the level-2 cell
     ASSERT_EQ(pending.size(), 3u);
@@ -196,7 +202,7 @@ TEST(AsmTileTree, InvalidatesOnlyTheCellsABoxTouches)
         EXPECT_TRUE(n.x * size <= 0.4f && (n.x + 1) * size >= 0.3f && n.y * size <= 0.7f && (n.y + 1) * size >= 0.55f);
     }
     // Over the whole view: every node.
-    EXPECT_EQ(tree.invalidate(0.0f, 0.0f, 1.0f, 1.0f), 21u);
+    EXPECT_EQ(tree.invalidate(0, 0.0f, 0.0f, 1.0f, 1.0f), 21u);
 }
 
 TEST(AsmTileTree, BottomUpOrderListsTheDeepestLevelFirst)
@@ -221,6 +227,29 @@ TEST(AsmTileTree, BottomUpOrderListsTheDeepestLevelFirst)
     EXPECT_EQ(order.back(), 0u);  // the root last
 }
 
+// Six cube faces: six roots in slots 0 .. 5, each with its own base levels; a box on one
+// face invalidates that face's cells only.
+TEST(AsmTileTree, CubeFacesHaveATreeEach)
+{
+    EXPECT_THROW(TileTree(29, 1, 8, 6), std::invalid_argument);  // 6 x 5 tiles
+    TileTree tree(64, 1, 8, 6);
+    EXPECT_EQ(tree.resident(), 30u);
+    expectConsistent(tree);
+    tree.takePending();
+    EXPECT_EQ(tree.invalidate(4, 0.0f, 0.0f, 1.0f, 1.0f), 5u);
+    for (uint32_t s : tree.takePending()) EXPECT_EQ(tree.table()[s].face, 4u);
+    // A child of face 3's quadrant 1 is face 3's.
+    std::vector<NodeAnalysis> a(tree.slots());
+    const int32_t q1 = tree.table()[3].children[1];
+    ask(a, uint32_t(q1), 2, 5);
+    tree.recordAnalysis(a, 1);
+    const RefineStep step = tree.refine({10.0, 1.0, 1});
+    ASSERT_EQ(step.created.size(), 1u);
+    EXPECT_EQ(tree.table()[step.created[0]].face, 3u);
+    EXPECT_EQ(tree.table()[step.created[0]].level, 2u);
+    expectConsistent(tree);
+}
+
 // Random analyses over many steps: the tree stays consistent, within its slots, and never
 // drops a base node.
 TEST(AsmTileTree, StaysConsistentWithinItsSlotsOverRandomSteps)
@@ -232,7 +261,7 @@ TEST(AsmTileTree, StaysConsistentWithinItsSlotsOverRandomSteps)
         for (uint64_t frame = 1; frame <= 200; ++frame) {
             std::vector<NodeAnalysis> a(tree.slots());
             for (uint32_t s = 0; s < tree.slots(); ++s) {
-                if (!tree.table()[s].resident || rng() % 3 == 0) continue;
+                if (!tree.table()[s].resident() || rng() % 3 == 0) continue;
                 a[s].used = 1 + rng() % 50;
                 a[s].edges = rng() % (a[s].used + 1);
                 for (uint32_t q = 0; q < 4; ++q) a[s].benefit[q] = rng() % 4 == 0 ? rng() % 40 : 0;
@@ -241,7 +270,7 @@ TEST(AsmTileTree, StaysConsistentWithinItsSlotsOverRandomSteps)
             const RefineStep step = tree.refine({double(rng() % 5), 1.0, 1});
             EXPECT_LE(step.created.size(), 5u);
             expectConsistent(tree);
-            for (uint32_t s = 0; s < 5; ++s) ASSERT_TRUE(tree.table()[s].resident && tree.table()[s].level <= 1);
+            for (uint32_t s = 0; s < 5; ++s) ASSERT_TRUE(tree.table()[s].resident() && tree.table()[s].level <= 1);
             if (frame % 50 == 0) tree.reset();
         }
     }

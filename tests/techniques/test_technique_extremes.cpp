@@ -91,6 +91,10 @@ const TechniqueCase kTechniques[] = {
     // than lavapipe binds in one storage buffer (128 MiB, 5.6M nodes).
     {"deep", "deep", {{"resolution", 1024}}, "resolution", {256, 512, 1024}},
     {"deep_pcf", "deep", {{"resolution", 1024}, {"pcf_kernel", 3}}, "resolution", {256, 512, 1024}},
+    // Adaptive shadow maps: a quadtree of 128² tiles per cube face refined where the view
+    // sees shadow edges under-sampled, the knob its deepest level (2: a uniform 512² map).
+    {"adaptive_sm", "adaptive-sm", {}, "max_level", {2, 4, 6, 8}},
+    {"adaptive_sm_pcf", "adaptive-sm", {{"pcf_kernel", 3}}, "max_level", {2, 4, 6, 8}},
 };
 
 void applyTechnique(config::LightConfig& light, const TechniqueCase& t)

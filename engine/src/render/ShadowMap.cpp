@@ -239,9 +239,12 @@ ShadowFaceDraws ShadowMap::faceDraws(const graph::PassContext& pass, const std::
         if (map.frusta.size() > faceCount_)
             throw Error(fmt::format("{}: a map of {} faces does not fit this shadow map's {} face(s)", name_,
                                     map.frusta.size(), faceCount_));
-        if (map.origin.x < 0 || map.origin.y < 0 ||
-            uint64_t(map.origin.x) + atlasWidth() > target.desc().width ||
-            uint64_t(map.origin.y) + atlasHeight() > target.desc().height)
+        // The cells of the faces it draws (a map of fewer faces than the atlas holds needs
+        // only theirs: an adaptive shadow map's tile, one face of a cube).
+        const uint64_t width = uint64_t(std::min<size_t>(map.frusta.size(), 3)) * size;
+        const uint64_t height = uint64_t(map.frusta.size() > 3 ? 2 : 1) * size;
+        if (map.origin.x < 0 || map.origin.y < 0 || uint64_t(map.origin.x) + width > target.desc().width ||
+            uint64_t(map.origin.y) + height > target.desc().height)
             throw Error(fmt::format("{}: a map at ({}, {}) does not fit in '{}' ({} x {})", name_, map.origin.x,
                                     map.origin.y, image, target.desc().width, target.desc().height));
     }

@@ -138,6 +138,10 @@ const TechniqueCase kTechniques[] = {
     {"example", "example", R"({"resolution": 512})"},  // the SDK's example: hard's one compare, declared by hand
     // Fragment lists: every caster fragment, not the nearest; PCF 3 x 3 over the links.
     {"deep", "deep", R"({"resolution": 512, "pcf_kernel": 3})"},
+    // Tiles kept from frame to frame, each drawn with its own cropped view: every caster
+    // in it that light-space culling keeps (no receiver-dependent culling), PCF 3 x 3 across
+    // tile borders.
+    {"adaptive_sm", "adaptive-sm", R"({"pcf_kernel": 3})"},
 };
 
 void PrintTo(const TechniqueCase& c, std::ostream* os) { *os << c.name; }

@@ -212,8 +212,10 @@ public:
     // of the image (of the texels the receivers read: setReadByLookupsOnly) and the casters of every map of `maps` into its atlas at its
     // origin, with `bias`: the depth pass of addDepthPass for one map, and for a technique
     // that packs the maps of several views of the light's shape into one image with the
-    // pipelines created once (the reference's rasterised light samples). Each map's atlas
-    // (atlasWidth() x atlasHeight() from its origin) must lie inside the image.
+    // pipelines created once (the reference's rasterised light samples). The cells of the
+    // faces each map draws (face f at (f % 3, f / 3) faceTexels() from its origin) must
+    // lie inside the image: a map of one frustum takes one cell (an adaptive shadow map's
+    // tile of a cube face).
     // MapClear::EachFace clears and draws only the maps' faces and keeps every other texel
     // (no maps: records nothing).
     void recordDepthMaps(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
