@@ -44,6 +44,7 @@ struct BenchFlags {
     std::string summary;               // --summary FILE.md; empty: none
     uint32_t frames = 10;              // measured frames per variant
     uint32_t warmup = 1;               // untimed frames before them
+    bool animate = false;              // --animate: frame k of a variant is posed at frame k
     ReferenceFlags reference;
     RunFlags run;                      // --set and the size, every variant
     DeviceFlags device;
@@ -356,10 +357,13 @@ struct BenchSession {
 BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& variant, size_t index)
 {
     config::PreparedRun run = config::prepareRun(variant.config, session.options);
-    run.poseAtFrame(0);  // an animated config is measured at its first frame, as `render` shows it
+    // An animated config is measured at its first frame, as `render` shows it, unless the
+    // run walks along its animation (--animate).
+    const bool walk = session.flags.animate && config::animated(run.config);
+    run.poseAtFrame(0);
     const config::RenderConfig& config = run.config;
     const scene::Scene& scene = run.scene;
-    const std::vector<const ReferenceVisibility*> references = session.references.lookUp(config, scene, session.progress);
+    std::vector<const ReferenceVisibility*> references = session.references.lookUp(config, scene, session.progress);
 
     frame::FrameRenderer renderer(session.context, scene, config, session.plugins);
     for (const std::string& warning : renderer.warnings()) {
@@ -371,18 +375,41 @@ BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& v
     // both are measured side by side.
     frame::FloorRenderer floor(session.context, scene, config);
     std::vector<frame::FrameTimings> measured, floorMeasured;
+    // Walking: every measured frame's visibility and its pose's reference, stacked frame
+    // under frame, so that the errors are over the whole path.
+    std::vector<std::vector<float>> pathVisibility(config.lights.size()), pathReference(config.lights.size());
+    std::vector<metrics::PixelMask> pathMask(config.lights.size());
     for (uint32_t frame = 0; frame < session.flags.warmup + session.flags.frames; ++frame) {
+        if (walk && frame > 0) {
+            const std::vector<uint32_t> moved = run.poseAtFrame(frame);
+            renderer.update(config, scene, moved);
+            floor.update(config, scene, moved);
+        }
         frame::FrameTimings timings = renderer.renderFrame();
         frame::FrameTimings floorTimings = floor.renderFrame();
         if (frame >= session.flags.warmup) {
             measured.push_back(std::move(timings));
             floorMeasured.push_back(std::move(floorTimings));
+            if (walk) {
+                const FrameImages posed = captureFrame(renderer);
+                references = session.references.lookUp(config, scene, session.progress);
+                for (size_t l = 0; l < config.lights.size(); ++l) {
+                    const ReferenceVisibility& r = *references[l];
+                    pathVisibility[l].insert(pathVisibility[l].end(), posed.visibility[l].begin(), posed.visibility[l].end());
+                    pathReference[l].insert(pathReference[l].end(), r.visibility.begin(), r.visibility.end());
+                    pathMask[l].width = r.mask.width;
+                    pathMask[l].height += r.mask.height;
+                    pathMask[l].covered.insert(pathMask[l].covered.end(), r.mask.covered.begin(), r.mask.covered.end());
+                }
+            }
         }
         session.progress.frameDone();
         InterruptHandler::check();
     }
     const FrameImages images = captureFrame(renderer);
-    const std::vector<graph::TransientMemory> memory = renderer.executor().transientMemory();
+    // The passes' transient resources and the techniques' persistent ones (imported).
+    std::vector<graph::TransientMemory> memory = renderer.executor().transientMemory();
+    std::ranges::copy(renderer.executor().importedMemory(), std::back_inserter(memory));
     std::set<std::string, std::less<>> hostPasses;  // their cost is CPU time
     for (const graph::CompiledPass& pass : renderer.executor().compiled()->passes) {
         if (pass.queue == graph::QueueKind::Host) hostPasses.insert(pass.name);
@@ -419,9 +446,16 @@ BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& v
         for (const graph::TransientMemory& m : memory) {
             if (m.name.rfind(prefix, 0) == 0) light.memory.push_back(m);
         }
-        const ReferenceVisibility& reference = *references[l];
-        light.visibility = metrics::compareVisibility({images.width, images.height, images.visibility[l]},
-                                                      {images.width, images.height, reference.visibility}, &reference.mask);
+        if (walk) {
+            const uint32_t height = images.height * uint32_t(measured.size());
+            light.visibility = metrics::compareVisibility({images.width, height, pathVisibility[l]},
+                                                          {images.width, height, pathReference[l]}, &pathMask[l]);
+        } else {
+            const ReferenceVisibility& reference = *references[l];
+            light.visibility = metrics::compareVisibility({images.width, images.height, images.visibility[l]},
+                                                          {images.width, images.height, reference.visibility},
+                                                          &reference.mask);
+        }
         result.lights.push_back(std::move(light));
     }
     return result;
@@ -480,6 +514,7 @@ int runBench(const BenchFlags& flags)
     run.device = deviceJson(context.deviceInfo());
     run.frames = flags.frames;
     run.warmup = flags.warmup;
+    run.animated = flags.animate;
     run.reference = flags.reference.technique;
     run.referenceParams = reference.params;
     if (!variants.empty()) run.notes = variants.front().config.notes;  // a sweep of /notes: the first variant's
@@ -544,6 +579,10 @@ Command addBenchCommand(CLI::App& app, std::vector<std::string> commandLine)
     cmd->add_option("--warmup", flags->warmup, "Untimed frames before the measured ones, per variant")
         ->check(CLI::Range(0u, 100000u))
         ->capture_default_str();
+    cmd->add_flag("--animate", flags->animate,
+                  "Walk an animated config along its animation: frame k of each variant (warm-up frames first) is "
+                  "posed at time k / fps, and the errors are over every measured frame, each against the reference "
+                  "of its own pose (without: every frame shows frame 0)");
     addReferenceFlags(*cmd, flags->reference);
     addSizeFlags(*cmd, flags->run, "every variant");
     addParamOverrideFlag(*cmd, flags->run.settings);

@@ -290,6 +290,7 @@ json resultsJson(const BenchRun& run)
             {"device", run.device},
             {"frames", run.frames},
             {"warmup", run.warmup},
+            {"animated", run.animated},
             {"reference", {{"technique", run.reference}, {"params", run.referenceParams}, {"renders", run.referenceRenders}}},
             {"variants", std::move(variants)},
             {"warnings", run.warnings}};
@@ -303,10 +304,14 @@ std::string summaryMarkdown(const BenchRun& run)
     md += fmt::format("- machine: {}, {} hardware threads, {} {}\n", run.machine.value("cpu", "unknown CPU"),
                       run.machine.value("cpu_threads", 0u), run.machine.value("os", "unknown OS"), run.machine.value("arch", ""));
     md += fmt::format("- date: {}\n", run.date);
-    md += fmt::format("- frames: {} measured after {} warm-up, per variant; times are medians\n", run.frames, run.warmup);
+    md += fmt::format("- frames: {} measured after {} warm-up, per variant{}; times are medians\n", run.frames, run.warmup,
+                      run.animated ? ", walking the animation (frame k at k / fps; the errors over every measured "
+                                     "frame, each against its own pose's reference)"
+                                   : "");
     md += fmt::format("- reference: `{}` `{}`\n\n", run.reference, run.referenceParams.dump());
     md += fmt::format("ms is the time of the light's shadow passes: on the GPU (timestamp queries), and on the CPU "
-                      "for host passes; memory is the transient memory of those passes; the errors compare the "
+                      "for host passes; memory is that of those passes' resources: transient ones, and a "
+                      "technique's own kept from frame to frame (an adaptive shadow map's atlas); the errors compare the "
                       "light's visibility image with the reference's over the pixels that show geometry the light "
                       "reaches (a spot light: inside its outer cone; penumbra: "
                       "where the reference is above {} and below {}). A ✓ marks the Pareto front: no other variant "
@@ -320,20 +325,26 @@ std::string summaryMarkdown(const BenchRun& run)
     }
     for (const TradeoffPanel& panel : tradeoffPanels(run)) {
         md += fmt::format("\n## {}\n\n", panel.title);
-        md += fmt::format("| technique | variant | ms | memory | RMSE | RMSE penumbra | MAE | max | > {} | > {} | SSIM | "
-                          "front |\n",
-                          thresholdText(0), thresholdText(1));
-        md += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|:-:|\n";
+        std::string above, aboveRule;
+        for (size_t t = 0; t < metrics::kErrorThresholds.size(); ++t) {
+            above += fmt::format("> {} | ", thresholdText(t));
+            aboveRule += "---:|";
+        }
+        md += fmt::format("| technique | variant | ms | memory | RMSE | RMSE penumbra | MAE | max | {}SSIM | front |\n", above);
+        md += fmt::format("|---|---|---:|---:|---:|---:|---:|---:|{}---:|:-:|\n", aboveRule);
         std::vector<const BenchLight*> rows;
         for (const TradeoffPanel::Member& m : panel.members) rows.push_back(&run.variants[m.variant].lights[m.light]);
         std::stable_sort(rows.begin(), rows.end(),
                          [](const BenchLight* a, const BenchLight* b) { return a->timing.workMs < b->timing.workMs; });
         for (const BenchLight* l : rows) {
             const metrics::ErrorStats& all = l->visibility.all;
-            md += fmt::format("| {} | {} | {:.3f} | {} | {:.4f} | {:.4f} | {:.4f} | {:.3f} | {:.2f}% | {:.2f}% | {:.4f} | {} |\n",
+            std::string percents;
+            for (size_t t = 0; t < metrics::kErrorThresholds.size(); ++t)
+                percents += fmt::format("{:.2f}% | ", all.percentAbove(t));
+            md += fmt::format("| {} | {} | {:.3f} | {} | {:.4f} | {:.4f} | {:.4f} | {:.3f} | {}{:.4f} | {} |\n",
                               cell(l->technique), cell(l->techniqueLabel), l->timing.workMs, bytesText(l->memoryBytes()),
                               all.rmse, l->visibility.region(metrics::Region::Penumbra).rmse, all.mae, all.maxAbsError,
-                              all.percentAbove(0), all.percentAbove(1), l->visibility.ssim, l->paretoFront ? "✓" : "");
+                              percents, l->visibility.ssim, l->paretoFront ? "✓" : "");
         }
     }
     std::string figures;

@@ -62,6 +62,7 @@ struct BenchRun {
     nlohmann::json device;             // {"name", "type", "vulkan", "driver"}
     uint32_t frames = 0;
     uint32_t warmup = 0;
+    bool animated = false;             // --animate: the frames walk the animation
     std::string reference;             // the reference technique
     nlohmann::json referenceParams;
     size_t referenceRenders = 0;       // one per distinct (scene, camera, light) at most

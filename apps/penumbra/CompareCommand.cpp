@@ -111,14 +111,17 @@ std::string percent(double value) { return fmt::format("{:.2f}%", value); }
 void printStatsRow(const std::string& label, const metrics::ErrorStats& s)
 {
     const std::string where = s.pixels > 0 ? fmt::format("({}, {})", s.maxX, s.maxY) : "-";
-    fmt::print("  {:<9} {:>9} {:>9.5f} {:>9.5f} {:>9.5f} {:>12} {:>8} {:>8}\n", label, s.pixels, s.rmse, s.mae,
-               s.maxAbsError, where, percent(s.percentAbove(0)), percent(s.percentAbove(1)));
+    std::string above;
+    for (size_t t = 0; t < metrics::kErrorThresholds.size(); ++t) above += fmt::format(" {:>8}", percent(s.percentAbove(t)));
+    fmt::print("  {:<9} {:>9} {:>9.5f} {:>9.5f} {:>9.5f} {:>12}{}\n", label, s.pixels, s.rmse, s.mae, s.maxAbsError, where,
+               above);
 }
 
 void printStatsHeader()
 {
-    fmt::print("  {:<9} {:>9} {:>9} {:>9} {:>9} {:>12} {:>8} {:>8}\n", "region", "pixels", "RMSE", "MAE", "max", "max at",
-               fmt::format(">{}", metrics::kErrorThresholds[0]), fmt::format(">{}", metrics::kErrorThresholds[1]));
+    std::string above;
+    for (double t : metrics::kErrorThresholds) above += fmt::format(" {:>8}", fmt::format(">{}", t));
+    fmt::print("  {:<9} {:>9} {:>9} {:>9} {:>9} {:>12}{}\n", "region", "pixels", "RMSE", "MAE", "max", "max at", above);
 }
 
 void printTable(const json& doc, const std::vector<metrics::VisibilityComparison>& lights,

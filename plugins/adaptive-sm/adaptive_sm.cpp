@@ -57,6 +57,7 @@ using plugin::ParamType;
 
 constexpr uint32_t kDebugLightTexels = 512;  // resident_tiles, tile_benefit: the light view's height
 constexpr uint32_t kTileBytesPerTexel = 4;   // D32_SFLOAT
+constexpr uint32_t kPageLevel = 6;           // the page table: 64² cells a face (asm_tree.glsl)
 
 const plugin::ParamSpec kParams[] = {
     {"memory_mib", ParamType::Int, 16, 1, 1024, "MiB",
@@ -214,6 +215,9 @@ private:
     gpu::Buffer nodeTable_;   // host-visible: GpuNode per slot, written by the CPU step
     gpu::Buffer tileList_;    // host-visible: the slots drawn this frame
     gpu::Buffer order_;       // host-visible: levelStart[kMaxLevels + 1], then the bottom-up slots
+    gpu::Buffer pageTable_;   // host-visible: the walks' starting nodes (TileTree::pageTable)
+    uint32_t pageLevel_ = 0;
+    std::vector<int32_t> pages_;
     gpu::Pipeline visibility_;
     gpu::Pipeline analyze_;
     gpu::Pipeline tileRange_;
@@ -289,6 +293,9 @@ AdaptiveShadowMap::AdaptiveShadowMap(const plugin::TechniqueSetup& setup)
     nodeTable_ = gpu::Buffer(context_, sizeof(GpuNode) * layout_.slots, storage, true, name + ".nodes");
     tileList_ = gpu::Buffer(context_, sizeof(uint32_t) * layout_.slots, storage, true, name + ".tile_list");
     order_ = gpu::Buffer(context_, sizeof(uint32_t) * (kMaxLevels + 1 + layout_.slots), storage, true, name + ".order");
+    pageLevel_ = std::min(settings_.maxLevel, kPageLevel);
+    pageTable_ = gpu::Buffer(context_, sizeof(int32_t) * shadowMap_.faceCount() << (2 * pageLevel_), storage, true,
+                             name + ".pages");
     depthSampler_ = render::createShadowDepthSampler(context_);
     instanceBounds_.reserve(scene_.instances.size());
     for (const scene::Instance& instance : scene_.instances) instanceBounds_.push_back(instance.worldBounds);
@@ -322,7 +329,8 @@ std::vector<gpu::ShaderDefine> AdaptiveShadowMap::treeDefines() const
 {
     return {{"ASM_TILE", std::to_string(settings_.tile)},
             {"ASM_ATLAS_COLUMNS", std::to_string(layout_.columns)},
-            {"ASM_MAX_LEVEL", std::to_string(settings_.maxLevel)}};
+            {"ASM_MAX_LEVEL", std::to_string(settings_.maxLevel)},
+            {"ASM_PAGE_LEVEL", std::to_string(pageLevel_)}};
 }
 
 // The thesis' hardware calibration: the cost of a tile is a N + b (N its texels), a the
@@ -488,6 +496,8 @@ void AdaptiveShadowMap::refineAndRecordTiles(const graph::PassContext& pass, con
     std::memcpy(orderOut, levelStart.data(), sizeof(levelStart));
     std::memcpy(orderOut + levelStart.size(), order.data(), sizeof(uint32_t) * order.size());
     std::memset(analysis_.mapped(), 0, analysis_.size());
+    tree_.pageTable(pageLevel_, pages_);
+    std::memcpy(pageTable_.mapped(), pages_.data(), sizeof(int32_t) * pages_.size());
 
     // Each tile: the light view cropped to its cell, drawn into its slot (the other
     // slots keep their tiles).
@@ -573,11 +583,13 @@ void AdaptiveShadowMap::registerPasses(graph::RenderGraph& graph, const plugin::
             descriptors.sampledImage("atlas", pass.image(names.atlas), depthSampler_, pass.layout(names.atlas))
                 .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
                 .storageBuffer("AsmNodes", nodeTable_)
+                .storageBuffer("AsmPages", pageTable_)
                 .storageBuffer("AsmAnalysis", pass.buffer(names.analysis))
                 .push(context_, cmd, analyze_);
             const AnalyzePush push{uint32_t(frame_), settings_.analyzeStride, settings_.texelsPerPixel};
             analyze_.pushConstants(cmd, &push, sizeof(push));
-            analyze_.dispatchOver(cmd, width_, height_);
+            // One invocation per analyzed pixel (analyze.comp maps it to its pixel).
+            analyze_.dispatchOver(cmd, (width_ + settings_.analyzeStride - 1) / settings_.analyzeStride, height_);
             gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT},
                                {VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT});
             analysisPending_ = true;
@@ -587,6 +599,7 @@ void AdaptiveShadowMap::registerPasses(graph::RenderGraph& graph, const plugin::
         descriptors.sampledImage("atlas", pass.image(names.atlas), depthSampler_, pass.layout(names.atlas))
             .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
             .storageBuffer("AsmNodes", nodeTable_)
+            .storageBuffer("AsmPages", pageTable_)
             .storageBuffer("AsmRanges", pass.buffer(names.ranges));
     };
     plugin::addVisibilityPass(graph, io, visibility_, bind)
@@ -614,6 +627,7 @@ void AdaptiveShadowMap::registerPasses(graph::RenderGraph& graph, const plugin::
             descriptors.storageImage("tileLevel", pass.image(level))
                 .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
                 .storageBuffer("AsmNodes", nodeTable_)
+                .storageBuffer("AsmPages", pageTable_)
                 .push(context_, pass.cmd(), debugScreen_);
             debugScreen_.dispatchOver(pass.cmd(), pass.image(level));
         });
@@ -628,6 +642,7 @@ void AdaptiveShadowMap::registerPasses(graph::RenderGraph& graph, const plugin::
                 .storageImage("tileBenefit", pass.image(benefit))
                 .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
                 .storageBuffer("AsmNodes", nodeTable_)
+                .storageBuffer("AsmPages", pageTable_)
                 .storageBuffer("AsmAnalysis", pass.buffer(names.analysis))
                 .push(context_, pass.cmd(), debugLight_);
             debugLight_.dispatchOver(pass.cmd(), pass.image(resident));
@@ -651,7 +666,7 @@ std::vector<plugin::TechniqueFigure> AdaptiveShadowMap::figures() const
     const double mib = 1.0 / double(1u << 20);
     const double tileBytes = double(settings_.tile) * settings_.tile * kTileBytesPerTexel;
     const double tableBytes = double(nodeTable_.size() + ranges_.size() + analysis_.size() + tileList_.size() +
-                                     order_.size());
+                                     order_.size() + pageTable_.size());
     return {
         {"resident_tiles", double(tree_.resident()), "tiles"},
         {"atlas_slots", double(layout_.slots), "tiles"},

@@ -1,7 +1,7 @@
 #version 460
 // The adaptive shadow map's analysis (thesis ch. 2, "Creating nodes", "Sampling"), on the
-// GPU: one G-buffer pixel in ASM stride (a pattern that moves every frame, so that a
-// still view sees every pixel in `stride` frames) is projected into the light view and
+// GPU: one G-buffer pixel in `stride` (a pattern that moves every frame, so that a still
+// view sees every pixel in `stride` frames) is projected into the light view and
 // walked to the finest resident node over it. Per node it counts
 //   used     the pixels whose lookup ends there (they keep it and its ancestors alive),
 //   edges    those of them on a shadow edge at the node's resolution: the 3 x 3 compares
@@ -19,6 +19,7 @@
 #define ASM_TILE 128
 #define ASM_ATLAS_COLUMNS 16
 #define ASM_MAX_LEVEL 10
+#define ASM_PAGE_LEVEL 6
 #endif
 
 layout(local_size_x = 64, local_size_y = 1) in;
@@ -30,6 +31,7 @@ layout(binding = 1) uniform sampler2D atlas;
 #include "common/shadow_receiver.glsl"
 
 #define ASM_NODES_BINDING 8
+#define ASM_PAGES_BINDING 11
 #include "asm_tree.glsl"
 
 // tile_tree.h NodeAnalysis: used, edges, benefit[4] per node.
@@ -70,10 +72,14 @@ bool neighbourStep(ivec2 pixel, ivec2 axis, uint face, vec2 uv, out vec2 stepUv)
 
 void main()
 {
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    // Invocation (i, y) analyzes pixel (i stride + phase, y), the phase chosen so that
+    // (x + 3 y) % stride == frame % stride: only the sampled pixels run (a lane that
+    // returned at once would still cost its SIMD group the whole path on llvmpipe).
     ivec2 size = gbufferSize();
+    uint y = gl_GlobalInvocationID.y;
+    uint phase = (pc.frame % pc.stride + pc.stride * 3u - (3u * y) % pc.stride) % pc.stride;
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.x * pc.stride + phase, y);
     if (any(greaterThanEqual(pixel, size))) return;
-    if (uint(pixel.x + 3 * pixel.y) % pc.stride != pc.frame % pc.stride) return;
     vec4 position = gbufferPosition(pixel);
     if (position.w == 0.0) return;
     // A surface facing away from the light is dark whatever the map says.

@@ -7,7 +7,8 @@
 // to the finest resident node over its point.
 //
 // The including shader defines ASM_TILE, ASM_ATLAS_COLUMNS, ASM_MAX_LEVEL and
-// ASM_NODES_BINDING (the node table), and ASM_RANGES_BINDING for the depth ranges (with
+// ASM_NODES_BINDING (the node table), ASM_PAGE_LEVEL and ASM_PAGES_BINDING for the page
+// table where it walks the trees, and ASM_RANGES_BINDING for the depth ranges (with
 // ASM_RANGES_WRITABLE when it writes them).
 #ifndef PENUMBRA_ASM_TREE_GLSL
 #define PENUMBRA_ASM_TREE_GLSL
@@ -36,6 +37,23 @@ layout(std430, binding = ASM_RANGES_BINDING) readonly buffer AsmRanges {
 } asmRanges;
 #endif
 
+#ifdef ASM_PAGES_BINDING
+// The page table (adaptive_sm.cpp writes it with the node table): per face, for each cell
+// of level ASM_PAGE_LEVEL (row-major, 2^ASM_PAGE_LEVEL across), the finest resident node
+// whose cell holds that whole cell. A walk starts there instead of at the root: the same
+// path, up to ASM_PAGE_LEVEL steps shorter.
+layout(std430, binding = ASM_PAGES_BINDING) readonly buffer AsmPages {
+    int pages[];
+} asmPages;
+
+int asmPageNode(uint face, vec2 uv)
+{
+    const int side = 1 << ASM_PAGE_LEVEL;
+    ivec2 cell = clamp(ivec2(uv * float(side)), ivec2(0), ivec2(side - 1));
+    return asmPages.pages[int(face) * side * side + cell.y * side + cell.x];
+}
+#endif
+
 // The uv of `uv` inside node `node`'s cell: [0, 1)² when the cell holds it. The scale is a
 // power of two and the cell's corner an integer, so this is exact up to uv's own rounding.
 vec2 asmCellUv(int node, vec2 uv)
@@ -47,7 +65,11 @@ vec2 asmCellUv(int node, vec2 uv)
 // The finest resident node of `face` whose cell holds uv (uv in [0, 1]²).
 int asmFinestNode(uint face, vec2 uv)
 {
+#ifdef ASM_PAGES_BINDING
+    int node = asmPageNode(face, uv);
+#else
     int node = int(face);
+#endif
     for (int i = 0; i < ASM_MAX_LEVEL; ++i) {
         vec2 local = asmCellUv(node, uv);
         int quadrant = int(local.x >= 0.5) + 2 * int(local.y >= 0.5);

@@ -16,6 +16,7 @@
 #define ASM_TILE 128
 #define ASM_ATLAS_COLUMNS 16
 #define ASM_MAX_LEVEL 10
+#define ASM_PAGE_LEVEL 6
 #endif
 #ifndef DEBUG_VIEW
 #define DEBUG_VIEW 0
@@ -28,6 +29,7 @@ layout(local_size_x = 64, local_size_y = 1) in;
 #include "common/shadow_receiver.glsl"
 
 #define ASM_NODES_BINDING 8
+#define ASM_PAGES_BINDING 11
 #include "asm_tree.glsl"
 
 #if DEBUG_VIEW == 0

@@ -273,6 +273,24 @@ void TileTree::bottomUpOrder(std::vector<uint32_t>& order, std::array<uint32_t, 
     levelStart[kMaxLevels] = uint32_t(order.size());
 }
 
+void TileTree::pageTable(uint32_t level, std::vector<int32_t>& pages) const
+{
+    const uint32_t side = 1u << level;
+    pages.resize(size_t(faces_) * side * side);
+    for (uint32_t f = 0; f < faces_; ++f)
+        for (uint32_t cy = 0; cy < side; ++cy)
+            for (uint32_t cx = 0; cx < side; ++cx) {
+                uint32_t node = f;
+                for (uint32_t l = 0; l < level; ++l) {
+                    const uint32_t shift = level - 1 - l;
+                    const int32_t child = table_[node].children[((cx >> shift) & 1u) + 2 * ((cy >> shift) & 1u)];
+                    if (child == kNoNode) break;
+                    node = uint32_t(child);
+                }
+                pages[(size_t(f) * side + cy) * side + cx] = int32_t(node);
+            }
+}
+
 uint32_t TileTree::deepestLevel() const
 {
     uint32_t deepest = 0;

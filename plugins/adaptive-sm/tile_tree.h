@@ -97,6 +97,11 @@ public:
     // levelStart[l + 1] hold level maxLevel - l).
     void bottomUpOrder(std::vector<uint32_t>& order, std::array<uint32_t, kMaxLevels + 1>& levelStart) const;
 
+    // The page table the shaders start their walks from (asm_tree.glsl AsmPages): per face,
+    // for each cell of level `level` (row-major, 2^level across), the finest resident node
+    // whose cell holds that whole cell.
+    void pageTable(uint32_t level, std::vector<int32_t>& pages) const;
+
     uint32_t slots() const { return uint32_t(table_.size()); }
     uint32_t faces() const { return faces_; }
     uint32_t resident() const { return resident_; }

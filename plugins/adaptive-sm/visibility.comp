@@ -30,6 +30,7 @@
 #define ASM_TILE 128
 #define ASM_ATLAS_COLUMNS 16
 #define ASM_MAX_LEVEL 10
+#define ASM_PAGE_LEVEL 6
 #endif
 
 layout(local_size_x = 64, local_size_y = 1) in;
@@ -42,6 +43,7 @@ layout(binding = 2, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
 #include "common/shadow_receiver.glsl"
 
 #define ASM_NODES_BINDING 8
+#define ASM_PAGES_BINDING 11
 #define ASM_RANGES_BINDING 9
 #include "asm_tree.glsl"
 
@@ -54,7 +56,7 @@ float asmTap(int node, vec2 local, float depth)
 // ranges where they decide.
 float asmCompare(uint face, vec2 uv, float depth)
 {
-    int node = int(face);
+    int node = asmPageNode(face, uv);
     for (int i = 0; i < ASM_MAX_LEVEL; ++i) {
 #if ASM_DEPTH_CULLING
         vec4 range = asmRanges.ranges[node];

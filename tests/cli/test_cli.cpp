@@ -1294,6 +1294,7 @@ TEST_F(Cli, BenchMeasuresEveryVariantAgainstOneReferenceRender)
         EXPECT_NEAR(std::stod(row.at("max_abs_error")), std::stod(rmse[i]), kVStep);
         EXPECT_EQ(row.at("pct_above_0.05"), "100");
         EXPECT_EQ(row.at("pct_above_0.2"), "100");
+        EXPECT_EQ(row.at("pct_above_0.5"), "0");  // |ΔV| <= 0.5 everywhere
         EXPECT_EQ(row.at("penumbra_pixels"), row.at("pixels")) << "V_ref = 0.75 everywhere: all penumbra";
         EXPECT_EQ(row.at("umbra_pixels"), "0");
         EXPECT_EQ(row.at("umbra_rmse"), "0");
@@ -1406,9 +1407,9 @@ TEST_F(Cli, BenchSummaryIsAMarkdownTablePerPanel)
     const std::string md = slurp(summary);
     EXPECT_EQ(md.rfind("# Speed–accuracy trade-off\n", 0), 0u) << md;
     for (const char* text : {"\n## light 'key'\n", "\n## fill=0.25 · light 'fill'\n", "\n## fill=0.5 · light 'fill'\n",
-                             "| technique | variant | ms | memory | RMSE | RMSE penumbra | MAE | max | > 0.05 | > 0.2 | SSIM | front |",
-                             "| 0 B | 0.5000 | 0.5000 | 0.5000 | 0.500 | 100.00% | 100.00% | 0.6001 |",
-                             "| 0 B | 0.2500 | 0.2500 | 0.2500 | 0.250 | 100.00% | 100.00% |", "| testgood | fill=0.25 |",
+                             "| technique | variant | ms | memory | RMSE | RMSE penumbra | MAE | max | > 0.05 | > 0.2 | > 0.5 | SSIM | front |",
+                             "| 0 B | 0.5000 | 0.5000 | 0.5000 | 0.500 | 100.00% | 100.00% | 0.00% | 0.6001 |",
+                             "| 0 B | 0.2500 | 0.2500 | 0.2500 | 0.250 | 100.00% | 100.00% | 0.00% |", "| testgood | fill=0.25 |",
                              "| unshadowed | – |", "- reference: `testgood` `{", "- frames: 1 measured after 0 warm-up",
                              "Regenerate with:\n\n```sh\n", "\n## Against the floor\n",
                              "```\n\n## Notes\n\nFirst *note*.\n\nSecond note.\n\n## light 'key'\n",

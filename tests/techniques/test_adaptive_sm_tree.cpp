@@ -250,6 +250,34 @@ TEST(AsmTileTree, CubeFacesHaveATreeEach)
     expectConsistent(tree);
 }
 
+// The page table: each cell of its level names the finest node holding all of it.
+TEST(AsmTileTree, PageTableNamesTheFinestNodeOverEachCell)
+{
+    TileTree tree(64, 1, 8, 2);
+    std::vector<NodeAnalysis> a(tree.slots());
+    const int32_t q3 = tree.table()[1].children[3];  // face 1, level 1, cell (1, 1)
+    ask(a, uint32_t(q3), 0, 5);
+    tree.recordAnalysis(a, 1);
+    const uint32_t deep = tree.refine({10.0, 1.0, 1}).created.at(0);  // face 1, level 2, cell (2, 2)
+    std::vector<int32_t> pages;
+    tree.pageTable(3, pages);  // 8 x 8 cells a face
+    ASSERT_EQ(pages.size(), 2u * 64u);
+    for (uint32_t f = 0; f < 2; ++f)
+        for (uint32_t cy = 0; cy < 8; ++cy)
+            for (uint32_t cx = 0; cx < 8; ++cx) {
+                const GpuNode& n = tree.table()[uint32_t(pages[f * 64 + cy * 8 + cx])];
+                EXPECT_EQ(n.face, f);
+                // The node's cell holds the page cell, and no child of it does.
+                EXPECT_EQ(cx >> (3 - n.level), n.x);
+                EXPECT_EQ(cy >> (3 - n.level), n.y);
+                const bool inDeep = f == 1 && cx / 2 == 2 && cy / 2 == 2;
+                EXPECT_EQ(n.level, inDeep ? 2u : 1u);
+                if (inDeep) {
+                    EXPECT_EQ(uint32_t(pages[f * 64 + cy * 8 + cx]), deep);
+                }
+            }
+}
+
 // Random analyses over many steps: the tree stays consistent, within its slots, and never
 // drops a base node.
 TEST(AsmTileTree, StaysConsistentWithinItsSlotsOverRandomSteps)

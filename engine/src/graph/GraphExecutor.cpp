@@ -670,4 +670,19 @@ VkDeviceSize GraphExecutor::transientBytesWithoutAliasing() const { return resou
 
 std::vector<TransientMemory> GraphExecutor::transientMemory() const { return resources_->transientMemory; }
 
+std::vector<TransientMemory> GraphExecutor::importedMemory() const
+{
+    std::vector<TransientMemory> memory;
+    if (!compiled_) return memory;
+    for (uint32_t r = 0; r < compiled_->resources.size(); ++r) {
+        const CompiledResource& res = compiled_->resources[r];
+        if (!res.imported || res.firstUse < 0) continue;
+        if (res.isImage && r < resources_->images.size() && resources_->images[r])
+            memory.push_back({res.name, resources_->images[r]->memorySize()});
+        else if (!res.isImage && r < resources_->buffers.size() && resources_->buffers[r])
+            memory.push_back({res.name, resources_->buffers[r]->size()});
+    }
+    return memory;
+}
+
 } // namespace penumbra::graph

@@ -92,6 +92,9 @@ public:
     // Each transient resource of the last recorded graph that an executed pass uses, in
     // declaration order (empty before the first record).
     std::vector<TransientMemory> transientMemory() const;
+    // Each imported resource of the last recorded graph that an executed pass uses, with
+    // the memory of the object bound to it (a technique's persistent atlas, its tables).
+    std::vector<TransientMemory> importedMemory() const;
 
 private:
     friend class PassContext;

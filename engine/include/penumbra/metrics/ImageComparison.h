@@ -34,8 +34,10 @@ inline constexpr size_t kRegionCount = 3;
 Region classifyReference(float referenceVisibility);
 const char* regionName(Region region);  // "umbra", "penumbra", "lit"
 
-// A pixel is "wrong by more than t" when |ΔV| > t, for each t here (the 0.05 and 0.2).
-inline constexpr std::array<double, 2> kErrorThresholds{0.05, 0.2};
+// A pixel is "wrong by more than t" when |ΔV| > t, for each t here: 0.05 and 0.2 for soft
+// shadows, 0.5 for hard ones (a pixel on the wrong side of a shadow edge: the adaptive
+// shadow map's "wrong pixels").
+inline constexpr std::array<double, 3> kErrorThresholds{0.05, 0.2, 0.5};
 
 // Error figures over one set of pixels. With pixels == 0 every figure is 0 (never NaN).
 struct ErrorStats {
