@@ -363,7 +363,9 @@ BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& v
     run.poseAtFrame(0);
     const config::RenderConfig& config = run.config;
     const scene::Scene& scene = run.scene;
-    std::vector<const ReferenceVisibility*> references = session.references.lookUp(config, scene, session.progress);
+    // Walking, each measured frame looks up its own pose's reference.
+    std::vector<const ReferenceVisibility*> references;
+    if (!walk) references = session.references.lookUp(config, scene, session.progress);
 
     frame::FrameRenderer renderer(session.context, scene, config, session.plugins);
     for (const std::string& warning : renderer.warnings()) {

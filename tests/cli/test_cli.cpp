@@ -1703,3 +1703,35 @@ TEST_F(Cli, DebugImageRefusesUnknownNamesAndBadMappingsNamingThem)
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_TRUE(has(r.err, "shown linear over [0, 1]")) << r.err;
 }
+
+// --animate: every measured frame is posed at its own time, with a reference render per
+// pose; without it, every frame shows frame 0 and one reference serves them all.
+TEST_F(Cli, BenchAnimateWalksTheAnimationWithAReferencePerPose)
+{
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << fmt::format(
+        R"({{"include": {}, "output": {{"width": 48, "height": 32}},
+            "animation": {{"fps": 2, "tracks": [{{"target": "/camera/position",
+              "keys": [{{"t": 0, "value": [15, 11, 17]}}, {{"t": 2, "value": [-4, 9, 21]}}]}}]}},
+            "sweep": [{{"path": "/lights/0/shadow/resolution", "values": [256]}}]}})",
+        nlohmann::json(penumbra::test::sourceDir().string() + "/config/default.json").dump());
+    const auto bench = [&](const std::string& flags, const fs::path& out) {
+        const CliResult r = run(fmt::format("bench '{}' --frames 3 --warmup 1 --reference-set samples=1 -o '{}' {}",
+                                            cfg.string(), out.string(), flags),
+                                pluginPath());
+        EXPECT_EQ(r.exitCode, 0) << r.err;
+        return r.out;
+    };
+    const std::string still = bench("", dir / "still"), walked = bench("--animate", dir / "walked");
+    EXPECT_TRUE(has(still, "(1 render(s))")) << still;
+    EXPECT_TRUE(has(walked, "(3 render(s))")) << walked;  // the measured frames 1, 2, 3
+    const nlohmann::json a = nlohmann::json::parse(slurp(dir / "still" / "results.json"));
+    const nlohmann::json b = nlohmann::json::parse(slurp(dir / "walked" / "results.json"));
+    EXPECT_EQ(a["animated"], false);
+    EXPECT_EQ(b["animated"], true);
+    // Three frames of pixels against one frame's.
+    const auto pixels = [](const nlohmann::json& j) {
+        return j["variants"][0]["lights"][0]["visibility"]["all"]["pixels"].get<uint64_t>();
+    };
+    EXPECT_GT(pixels(b), 2 * pixels(a));
+}
