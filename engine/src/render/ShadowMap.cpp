@@ -230,6 +230,23 @@ void ShadowMap::recordDepthMaps(const graph::PassContext& pass, const std::strin
     recordLayer(pass, image, bias, maps, nullptr, DrawFilter::Solid, clear);
 }
 
+namespace {
+
+// The smallest rectangle holding every face's scissor (`faces` not empty).
+VkRect2D scissorUnion(const std::vector<ShadowFaceDraw>& faces)
+{
+    int32_t x0 = INT32_MAX, y0 = INT32_MAX, x1 = 0, y1 = 0;
+    for (const ShadowFaceDraw& face : faces) {
+        x0 = std::min(x0, face.scissor.offset.x);
+        y0 = std::min(y0, face.scissor.offset.y);
+        x1 = std::max(x1, face.scissor.offset.x + int32_t(face.scissor.extent.width));
+        y1 = std::max(y1, face.scissor.offset.y + int32_t(face.scissor.extent.height));
+    }
+    return {{x0, y0}, {uint32_t(x1 - x0), uint32_t(y1 - y0)}};
+}
+
+} // namespace
+
 ShadowFaceDraws ShadowMap::faceDraws(const graph::PassContext& pass, const std::string& image, ShadowDepthBias bias,
                                      std::span<const ShadowMapPlacement> maps) const
 {
@@ -254,7 +271,6 @@ ShadowFaceDraws ShadowMap::faceDraws(const graph::PassContext& pass, const std::
     // Otherwise it is the whole image.
     ShadowFaceDraws draws;
     const bool readWhole = !readByLookupsOnly_ || pass.isOutput(image);
-    int32_t areaX0 = INT32_MAX, areaY0 = INT32_MAX, areaX1 = 0, areaY1 = 0;
     for (const ShadowMapPlacement& map : maps)
         for (uint32_t face = 0; face < map.frusta.size(); ++face) {
             const int32_t x = map.origin.x + int32_t((face % 3) * size), y = map.origin.y + int32_t((face / 3) * size);
@@ -274,20 +290,12 @@ ShadowFaceDraws ShadowMap::faceDraws(const graph::PassContext& pass, const std::
             }
             draws.faces.push_back(draw);
         }
-    if (readWhole) {
-        areaX0 = areaY0 = 0;
-        areaX1 = int32_t(target.desc().width), areaY1 = int32_t(target.desc().height);
-    } else if (draws.faces.empty()) {
-        areaX0 = areaY0 = 0, areaX1 = areaY1 = 1;  // nothing read anywhere: one texel keeps the pass valid
-    } else {
-        for (const ShadowFaceDraw& face : draws.faces) {
-            areaX0 = std::min(areaX0, face.scissor.offset.x);
-            areaY0 = std::min(areaY0, face.scissor.offset.y);
-            areaX1 = std::max(areaX1, face.scissor.offset.x + int32_t(face.scissor.extent.width));
-            areaY1 = std::max(areaY1, face.scissor.offset.y + int32_t(face.scissor.extent.height));
-        }
-    }
-    draws.area = {{areaX0, areaY0}, {uint32_t(areaX1 - areaX0), uint32_t(areaY1 - areaY0)}};
+    if (readWhole)
+        draws.area = {{0, 0}, {target.desc().width, target.desc().height}};
+    else if (draws.faces.empty())
+        draws.area = {{0, 0}, {1, 1}};  // nothing read anywhere: one texel keeps the pass valid
+    else
+        draws.area = scissorUnion(draws.faces);
     return draws;
 }
 
@@ -308,14 +316,7 @@ void ShadowMap::recordLayer(const graph::PassContext& pass, const std::string& i
     if (clear == MapClear::EachFace) {
         // The texels outside the faces keep what they hold: the render area is the faces'
         // union, and each face's scissor is cleared on its own below.
-        int32_t x0 = INT32_MAX, y0 = INT32_MAX, x1 = 0, y1 = 0;
-        for (const ShadowFaceDraw& face : draws.faces) {
-            x0 = std::min(x0, face.scissor.offset.x);
-            y0 = std::min(y0, face.scissor.offset.y);
-            x1 = std::max(x1, face.scissor.offset.x + int32_t(face.scissor.extent.width));
-            y1 = std::max(y1, face.scissor.offset.y + int32_t(face.scissor.extent.height));
-        }
-        draws.area = {{x0, y0}, {uint32_t(x1 - x0), uint32_t(y1 - y0)}};
+        draws.area = scissorUnion(draws.faces);
     }
     VkRenderingInfo info{VK_STRUCTURE_TYPE_RENDERING_INFO};
     info.renderArea = draws.area;
