@@ -339,7 +339,9 @@ TEST_F(AdaptiveSm, RefusesWhatItCannotDo)
 }
 
 // Nothing depends on absolute units: the default scene at 1e-3 and 1e5 of its size refines
-// the same tree and shows the same shadows (the pixel footprints and texel sizes are compared
+// the same tree and shows the same shadows. (Not the room: its 2048² and 4096² maps alias
+// the lattice's holes, and at 1e5 the casters' rounding moves which texel centres the bars
+// cover: `hard` differs there on 415 pixels of 14,400, all in the aliased pattern.) (the pixel footprints and texel sizes are compared
 // in light-view uv; the biases are the rasterizer's, relative to depth).
 TEST_F(AdaptiveSm, SameShadowsAtScales1em3And1e5)
 {
