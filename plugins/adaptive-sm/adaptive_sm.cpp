@@ -218,6 +218,7 @@ private:
     gpu::Buffer pageTable_;   // host-visible: the walks' starting nodes (TileTree::pageTable)
     uint32_t pageLevel_ = 0;
     std::vector<int32_t> pages_;
+    uint64_t pagesVersion_ = ~uint64_t(0);  // the tree version pages_ was built from
     gpu::Pipeline visibility_;
     gpu::Pipeline analyze_;
     gpu::Pipeline tileRange_;
@@ -496,8 +497,11 @@ void AdaptiveShadowMap::refineAndRecordTiles(const graph::PassContext& pass, con
     std::memcpy(orderOut, levelStart.data(), sizeof(levelStart));
     std::memcpy(orderOut + levelStart.size(), order.data(), sizeof(uint32_t) * order.size());
     std::memset(analysis_.mapped(), 0, analysis_.size());
-    tree_.pageTable(pageLevel_, pages_);
-    std::memcpy(pageTable_.mapped(), pages_.data(), sizeof(int32_t) * pages_.size());
+    if (tree_.version() != pagesVersion_) {
+        tree_.pageTable(pageLevel_, pages_);
+        std::memcpy(pageTable_.mapped(), pages_.data(), sizeof(int32_t) * pages_.size());
+        pagesVersion_ = tree_.version();
+    }
 
     // Each tile: the light view cropped to its cell, drawn into its slot (the other
     // slots keep their tiles).

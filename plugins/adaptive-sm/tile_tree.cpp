@@ -39,6 +39,7 @@ TileTree::TileTree(uint32_t slots, uint32_t baseLevel, uint32_t maxLevel, uint32
 
 void TileTree::reset()
 {
+    ++version_;
     std::fill(table_.begin(), table_.end(), GpuNode{});
     std::fill(nodes_.begin(), nodes_.end(), Node{});
     free_.clear();
@@ -81,6 +82,7 @@ uint32_t TileTree::create(int32_t parent, uint32_t quadrant, uint32_t slot)
     n.y = 2 * p.y + (quadrant >> 1);
     n.face = p.face;
     table_[uint32_t(parent)].children[quadrant] = int32_t(slot);
+    ++version_;
     nodes_[slot] = Node{parent, lastAnalyzed_, kUnanalyzed, {}};
     ++resident_;
     pending_.push_back(slot);
@@ -99,6 +101,7 @@ void TileTree::remove(uint32_t slot)
     std::erase(pending_, slot);
     --resident_;
     ++totalEvictions_;
+    ++version_;
 }
 
 bool TileTree::isLeaf(uint32_t slot) const

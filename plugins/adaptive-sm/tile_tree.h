@@ -104,6 +104,9 @@ public:
 
     uint32_t slots() const { return uint32_t(table_.size()); }
     uint32_t faces() const { return faces_; }
+    // Changes whenever a node is created or removed: tables derived from the tree (the
+    // page table) need rebuilding only then.
+    uint64_t version() const { return version_; }
     uint32_t resident() const { return resident_; }
     uint32_t deepestLevel() const;
     uint32_t baseLevel() const { return baseLevel_; }
@@ -137,6 +140,7 @@ private:
     uint32_t resident_ = 0;
     uint64_t lastAnalyzed_ = 0;
     uint64_t totalEvictions_ = 0;
+    uint64_t version_ = 0;
 };
 
 } // namespace penumbra::adaptive_sm
