@@ -498,6 +498,13 @@ TEST_F(GraphExecutorTest, ImportedImageReturnsToItsLayoutAndFramesReuseTransient
         }
     }
     EXPECT_EQ(executor.collectTimings().size(), 2u);
+    // The imported image's memory is its owner's: reported apart from the transients.
+    const std::vector<TransientMemory> imported = executor.importedMemory();
+    ASSERT_EQ(imported.size(), 1u);
+    EXPECT_EQ(imported[0].name, "history");
+    EXPECT_EQ(imported[0].bytes, history.memorySize());
+    EXPECT_GT(imported[0].bytes, 0u);
+    for (const TransientMemory& m : executor.transientMemory()) EXPECT_NE(m.name, "history");
 }
 
 TEST_F(GraphExecutorTest, UnboundImportNamesTheResourceAndItsPasses)
