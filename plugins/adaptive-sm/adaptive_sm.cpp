@@ -489,7 +489,8 @@ void AdaptiveShadowMap::refineAndRecordTiles(const graph::PassContext& pass, con
 
     // Upload the tree, the tile list and the bottom-up order; clear the analysis counts.
     std::memcpy(nodeTable_.mapped(), tree_.table().data(), sizeof(GpuNode) * tree_.table().size());
-    std::memcpy(tileList_.mapped(), drawnThisFrame_.data(), sizeof(uint32_t) * drawnThisFrame_.size());
+    if (!drawnThisFrame_.empty())  // data() may be null then, which memcpy must not get
+        std::memcpy(tileList_.mapped(), drawnThisFrame_.data(), sizeof(uint32_t) * drawnThisFrame_.size());
     std::vector<uint32_t> order;
     std::array<uint32_t, kMaxLevels + 1> levelStart{};
     tree_.bottomUpOrder(order, levelStart);
