@@ -218,7 +218,8 @@ private:
     gpu::Buffer pageTable_;   // host-visible: the walks' starting nodes (TileTree::pageTable)
     uint32_t pageLevel_ = 0;
     std::vector<int32_t> pages_;
-    uint64_t pagesVersion_ = ~uint64_t(0);  // the tree version pages_ was built from
+    uint64_t uploadedVersion_ = ~uint64_t(0);  // the tree version the host tables hold
+    bool treeChanged_ = true;                   // this draw's step changed the tree
     gpu::Pipeline visibility_;
     gpu::Pipeline analyze_;
     gpu::Pipeline tileRange_;
@@ -487,21 +488,23 @@ void AdaptiveShadowMap::refineAndRecordTiles(const graph::PassContext& pass, con
     last_.deferred = step.deferred;
     std::ranges::sort(drawnThisFrame_);
 
-    // Upload the tree, the tile list and the bottom-up order; clear the analysis counts.
-    std::memcpy(nodeTable_.mapped(), tree_.table().data(), sizeof(GpuNode) * tree_.table().size());
+    // The tile list and cleared analysis counts every draw; the tables derived from the
+    // tree (nodes, bottom-up order, pages) only when it changed.
     if (!drawnThisFrame_.empty())  // data() may be null then, which memcpy must not get
         std::memcpy(tileList_.mapped(), drawnThisFrame_.data(), sizeof(uint32_t) * drawnThisFrame_.size());
-    std::vector<uint32_t> order;
-    std::array<uint32_t, kMaxLevels + 1> levelStart{};
-    tree_.bottomUpOrder(order, levelStart);
-    auto* orderOut = static_cast<uint32_t*>(order_.mapped());
-    std::memcpy(orderOut, levelStart.data(), sizeof(levelStart));
-    std::memcpy(orderOut + levelStart.size(), order.data(), sizeof(uint32_t) * order.size());
     std::memset(analysis_.mapped(), 0, analysis_.size());
-    if (tree_.version() != pagesVersion_) {
+    treeChanged_ = tree_.version() != uploadedVersion_;
+    if (treeChanged_) {
+        std::memcpy(nodeTable_.mapped(), tree_.table().data(), sizeof(GpuNode) * tree_.table().size());
+        std::vector<uint32_t> order;
+        std::array<uint32_t, kMaxLevels + 1> levelStart{};
+        tree_.bottomUpOrder(order, levelStart);
+        auto* orderOut = static_cast<uint32_t*>(order_.mapped());
+        std::memcpy(orderOut, levelStart.data(), sizeof(levelStart));
+        std::memcpy(orderOut + levelStart.size(), order.data(), sizeof(uint32_t) * order.size());
         tree_.pageTable(pageLevel_, pages_);
         std::memcpy(pageTable_.mapped(), pages_.data(), sizeof(int32_t) * pages_.size());
-        pagesVersion_ = tree_.version();
+        uploadedVersion_ = tree_.version();
     }
 
     // Each tile: the light view cropped to its cell, drawn into its slot (the other
@@ -544,7 +547,8 @@ void AdaptiveShadowMap::recordRanges(const graph::PassContext& pass, const Names
                            {VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                             VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT});
     }
-    // Every frame: evictions change subtrees too.
+    // Subtree ranges change with new tiles and with evictions; otherwise they stand.
+    if (drawnThisFrame_.empty() && !treeChanged_) return;
     subtreeRange_.bind(cmd);
     gpu::DescriptorPush()
         .storageBuffer("AsmNodes", nodeTable_)
