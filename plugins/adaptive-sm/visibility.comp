@@ -8,9 +8,13 @@
 //
 //   PCF_KERNEL           1: one compare; k: a k x k box at the finest node's texel
 //                        spacing. A tap inside that node's tile reads it; a tap that
-//                        leaves the tile walks the tree again from its own point and reads
-//                        whatever node is finest there (the neighbour, or a coarser one):
-//                        no seam at tile borders.
+//                        leaves the tile walks the tree again from its own point, down to
+//                        the finest node there that is no finer than the centre's (the
+//                        neighbour, or a coarser one): no seam at tile borders. A finer
+//                        neighbour is not read: its tile's bias covers its own texel, not
+//                        the centre's tap spacing, and a sloped receiver compared one
+//                        coarse texel away fails against it (a dark line along the border
+//                        of a refined region).
 //   ASM_DEPTH_CULLING    1: the walk stops at the first node whose subtree depth range
 //                        decides the compare (receiver >= its max: lit; < its min:
 //                        shadowed), the thesis' min-max depth culling. Exact: the range
@@ -52,12 +56,14 @@ float asmTap(int node, vec2 local, float depth)
     return depth >= texelFetch(atlas, asmAtlasTexel(node, local), 0).r ? 1.0 : 0.0;
 }
 
-// One compare at light-view uv: the walk from the root, stopped early by the depth
-// ranges where they decide.
-float asmCompare(uint face, vec2 uv, float depth)
+// One compare at light-view uv: the walk from the root down to the finest node of level
+// at most maxLevel, stopped early by the depth ranges where they decide (exact at any
+// node: a subtree's range holds its own tile's).
+float asmCompare(uint face, vec2 uv, float depth, uint maxLevel)
 {
     int node = asmPageNode(face, uv);
-    for (int i = 0; i < ASM_MAX_LEVEL; ++i) {
+    if (asmTree.nodes[node].level > maxLevel) node = int(face);
+    for (uint level = asmTree.nodes[node].level; level < maxLevel; ++level) {
 #if ASM_DEPTH_CULLING
         vec4 range = asmRanges.ranges[node];
         if (depth >= range.w) return 1.0;
@@ -65,7 +71,7 @@ float asmCompare(uint face, vec2 uv, float depth)
 #endif
         vec2 local = asmCellUv(node, uv);
         int child = asmTree.nodes[node].children[int(local.x >= 0.5) + 2 * int(local.y >= 0.5)];
-        if (child < 0) return asmTap(node, local, depth);
+        if (child < 0) break;
         node = child;
     }
     return asmTap(node, asmCellUv(node, uv), depth);
@@ -74,11 +80,12 @@ float asmCompare(uint face, vec2 uv, float depth)
 float filteredVisibility(ShadowReceiver r)
 {
 #if PCF_KERNEL == 1
-    return asmCompare(r.face, r.uv, r.depth);
+    return asmCompare(r.face, r.uv, r.depth, uint(ASM_MAX_LEVEL));
 #else
     // Percentage-closer filtering at the finest node's resolution. Taps beyond a cube
     // face's edge read its edge (the tile trees have no guard band).
     int centre = asmFinestNode(r.face, r.uv);
+    uint centreLevel = asmTree.nodes[centre].level;
     vec2 local = asmCellUv(centre, r.uv);
     float step = asmTexelUv(centre);
     const int h = (PCF_KERNEL - 1) / 2;
@@ -88,7 +95,7 @@ float filteredVisibility(ShadowReceiver r)
             vec2 tap = local + vec2(x, y) / float(ASM_TILE);
             bool inside = all(greaterThanEqual(tap, vec2(0.0))) && all(lessThan(tap, vec2(1.0)));
             lit += inside ? asmTap(centre, tap, r.depth)
-                          : asmCompare(r.face, clamp(r.uv + vec2(x, y) * step, vec2(0.0), vec2(1.0)), r.depth);
+                          : asmCompare(r.face, clamp(r.uv + vec2(x, y) * step, vec2(0.0), vec2(1.0)), r.depth, centreLevel);
         }
     return lit / float(PCF_KERNEL * PCF_KERNEL);
 #endif

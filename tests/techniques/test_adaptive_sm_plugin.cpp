@@ -407,3 +407,38 @@ TEST_F(AdaptiveSm, ContactShadowReachesTheFoot)
         EXPECT_LE(differing(v, reference, *frame, 0.5f), size_t(cfg.width * cfg.height) / 400);
     }
 }
+
+// PCF taps that leave the centre's tile read the tree no finer than the centre's level:
+// a finer neighbour's tile carries the bias of its own, smaller texel, and a sloped ground
+// compared one coarse texel away from its own depth failed against it, a dark line of 1/k²
+// along the border of every refined region (issue 43: config/default.json, pcf_kernel 3).
+// Ground pixels whose whole neighbourhood one compare finds lit stay lit under PCF.
+TEST_F(AdaptiveSm, PcfAcrossTheBorderOfARefinedRegionLeavesLitGroundLit)
+{
+    for (const scene::LightType type : {scene::LightType::Spot, scene::LightType::Directional}) {
+        config::RenderConfig cfg = test::defaultTestConfig();
+        test::setLightType(cfg.lights[0], type);
+        const scene::Scene scene = config::buildScene(cfg.scene);
+        const std::vector<float> one = renderAsm(cfg, scene, {{"pcf_kernel", 1}});
+        // Borders to cross: the tree refined past its always-resident levels.
+        EXPECT_GT(figure(frame->timings, "deepest_level"), 2.0);
+        const int w = int(cfg.width), h = int(cfg.height), r = 3;
+        const auto litAround = [&](int x, int y) {
+            for (int dy = -r; dy <= r; ++dy)
+                for (int dx = -r; dx <= r; ++dx) {
+                    const size_t p = size_t(y + dy) * size_t(w) + size_t(x + dx);
+                    if (!frame->onGround(p) || one[p] != 1.0f) return false;
+                }
+            return true;
+        };
+        for (const int kernel : {3, 5}) {
+            SCOPED_TRACE(fmt::format("{}, pcf {}", scene::lightTypeName(type), kernel));
+            const std::vector<float> v = renderAsm(cfg, scene, {{"pcf_kernel", kernel}});
+            size_t darkened = 0;
+            for (int y = r; y < h - r; ++y)
+                for (int x = r; x < w - r; ++x)
+                    if (v[size_t(y) * size_t(w) + size_t(x)] < 1.0f && litAround(x, y)) ++darkened;
+            EXPECT_EQ(darkened, 0u);
+        }
+    }
+}
