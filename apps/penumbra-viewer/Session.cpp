@@ -46,7 +46,7 @@ config::RenderConfig configForGltf(const fs::path& file, const scene::Scene& sce
     // frames enough for `penumbra render` to play it through).
     if (!scene.animations.empty()) {
         c.scene.animation = scene.animations.front().name;
-        c.frames = uint32_t(std::ceil(scene.animations.front().duration() * c.animation.fps)) + 1;
+        c.frames = config::framesToPlay(scene.animations.front().duration(), c.animation.fps);
     }
     if (!fileLights.empty()) {
         c.lightsFromScene = true;

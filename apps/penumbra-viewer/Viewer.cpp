@@ -401,7 +401,7 @@ void Viewer::stopRecording()
     config.animation.tracks.push_back(recordedTarget_);
     // `penumbra render` of the saved config plays the whole path.
     const float duration = session_->duration();
-    config.frames = std::max(config.frames, uint32_t(std::ceil(duration * config.animation.fps)) + 1);
+    config.frames = std::max(config.frames, config::framesToPlay(duration, config.animation.fps));
     message_ = fmt::format("recorded {} camera keys over {:.2f} s ({} frames at {} fps)", recordedPosition_.keys.size(), end,
                            config.frames, config.animation.fps);
     spdlog::info("{}", message_);

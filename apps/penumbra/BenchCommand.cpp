@@ -6,6 +6,7 @@
 #include "FrameCapture.h"
 #include "OutputFolder.h"
 #include "ParetoPlot.h"
+#include "Phase.h"
 #include "ReferenceTechnique.h"
 #include "TimingSummary.h"
 
@@ -229,11 +230,14 @@ std::string choicesText(const config::SweepVariant& variant, size_t light, bool 
 
 // Everything a variant would fail on, for every variant, before the first renders
 // (ConfigCheck.h): each distinct error once, with the variants it is in.
-void checkVariants(const std::vector<config::SweepVariant>& variants, const config::RunOptions& options,
+void checkVariants(const config::SweepVariants& variants, const config::RunOptions& options,
                    plugin::PluginRegistry& plugins)
 {
     ConfigCheck check(options, plugins, variants.size());
-    for (size_t i = 0; i < variants.size(); ++i) check.checkVariant(variants[i], i);
+    for (size_t i = 0; i < variants.size(); ++i) {
+        inPhase(fmt::format("checking sweep variant {} of {}", i + 1, variants.size()),
+                [&] { check.checkVariant(variants, i); });
+    }
     check.checkOverridesUsed();
     std::vector<std::string> errors;
     for (const ConfigCheck::Finding& error : check.errors()) errors.push_back(check.describe(error));
@@ -486,8 +490,8 @@ void printTable(const BenchRun& run)
 int runBench(const BenchFlags& flags)
 {
     if (flags.frames == 0) throw Error("--frames must be at least 1 (the measured frames)");
-    const config::ConfigDocument document = config::loadDocument(flags.config);
-    const std::vector<config::SweepVariant> variants = config::expandSweep(document);
+    const config::ConfigDocument document = inPhase("loading the config", [&] { return config::loadDocument(flags.config); });
+    const config::SweepVariants variants(document);
     config::RunOptions options = runOptions(flags.run);
     options.overridesOfUsedTechniquesOnly = true;
 
@@ -519,14 +523,18 @@ int runBench(const BenchFlags& flags)
     run.animated = flags.animate;
     run.reference = flags.reference.technique;
     run.referenceParams = reference.params;
-    if (!variants.empty()) run.notes = variants.front().config.notes;  // a sweep of /notes: the first variant's
+    run.notes = variants.variant(0).config.notes;  // a sweep of /notes: the first variant's
     try {
         ReferenceCache references(context, plugins, reference);
         Progress progress(variants.size(), flags.warmup + flags.frames);
         BenchSession session{flags, context, plugins, options, references, progress, run.warnings};
         for (size_t i = 0; i < variants.size(); ++i) {
-            progress.startVariant(i, variants[i].label.empty() ? "(no sweep)" : variants[i].label);
-            run.variants.push_back(measureVariant(session, variants[i], i));
+            // Made one at a time: a variant is a copy of the document.
+            inPhase(fmt::format("measuring sweep variant {} of {}", i + 1, variants.size()), [&] {
+                const config::SweepVariant variant = variants.variant(i);
+                progress.startVariant(i, variant.label.empty() ? "(no sweep)" : variant.label);
+                run.variants.push_back(measureVariant(session, variant, i));
+            });
         }
         run.referenceRenders = references.renders();
     } catch (const Interrupted& interrupted) {

@@ -22,10 +22,10 @@ void ConfigCheck::add(std::vector<Finding>& list, std::string message, std::opti
 
 void ConfigCheck::checkConfig(const config::RenderConfig& config, bool print) { checkPlugins(config, std::nullopt, print); }
 
-void ConfigCheck::checkVariant(const config::SweepVariant& variant, size_t index)
+void ConfigCheck::checkVariant(const config::SweepVariants& variants, size_t index)
 {
     try {
-        const config::PreparedRun run = config::prepareRun(variant.config, options_);
+        const config::PreparedRun run = config::prepareRun(variants.variant(index).config, options_);
         for (const config::ParamOverride& o : config::overridesUsedBy(options_.overrides, run.config)) {
             usedOverrides_.push_back(o.where);
         }

@@ -33,8 +33,9 @@ public:
     // The config's own (base) run, prepared already; with `print`, one line per light with
     // the values its technique would get.
     void checkConfig(const config::RenderConfig& config, bool print);
-    // Sweep variant `index`: its run prepared (a ConfigError is one of its errors) and its plugins checked.
-    void checkVariant(const config::SweepVariant& variant, size_t index);
+    // Sweep variant `index`: made (only while it is checked: a variant is a copy of the
+    // document), its run prepared (a ConfigError is one of its errors) and its plugins checked.
+    void checkVariant(const config::SweepVariants& variants, size_t index);
     // After the last variant: every --set that no variant's lights use is an error.
     void checkOverridesUsed();
 

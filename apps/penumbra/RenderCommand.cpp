@@ -1,6 +1,7 @@
 #include "RenderCommand.h"
 
 #include "FloorComparison.h"
+#include "Phase.h"
 #include "TimingSummary.h"
 #include "VisibilityExr.h"
 #include "penumbra/config/Run.h"
@@ -91,7 +92,7 @@ std::string framePath(const std::string& pattern, uint32_t frame)
 
 int runRender(const RenderFlags& flags)
 {
-    config::RenderConfig loaded = config::loadConfig(flags.config);
+    config::RenderConfig loaded = inPhase("loading the config", [&] { return config::loadConfig(flags.config); });
     config::RunOptions options = runOptions(flags.run);
     options.frames = flags.frames;
     if (flags.culling) options.culling = config::parseCullingMode(*flags.culling);
@@ -103,7 +104,7 @@ int runRender(const RenderFlags& flags)
 
     gpu::Context context(contextOptions(flags.device));
     spdlog::info("device: {} ({})", context.deviceInfo().name, context.deviceInfo().type);
-    config::PreparedRun run = config::prepareRun(std::move(loaded), options);
+    config::PreparedRun run = inPhase("loading the scene", [&] { return config::prepareRun(std::move(loaded), options); });
     plugin::PluginRegistry plugins;
     frame::FrameRenderer renderer(context, run.scene, run.config, plugins);
     for (const std::string& warning : renderer.warnings()) spdlog::warn("{}", warning);

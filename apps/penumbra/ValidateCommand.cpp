@@ -1,6 +1,7 @@
 #include "ValidateCommand.h"
 
 #include "ConfigCheck.h"
+#include "Phase.h"
 #include "penumbra/config/Run.h"
 #include "penumbra/config/Sweep.h"
 #include "penumbra/core/Error.h"
@@ -94,14 +95,15 @@ int runValidateGltf(const ValidateFlags& flags)
 // listed once, with the variants it was found in, and the last line counts them.
 int runValidateConfig(const ValidateFlags& flags)
 {
-    const config::ConfigDocument document = config::loadDocument(flags.file);
-    const std::vector<config::SweepVariant> variants = config::expandSweep(document);
-    const bool swept = variants.size() > 1 || !variants.front().label.empty();
+    const config::ConfigDocument document = inPhase("loading the config", [&] { return config::loadDocument(flags.file); });
+    const config::SweepVariants variants(document);
+    const bool swept = variants.swept();
     config::RunOptions options;
     options.overrides = config::parseParamOverrides(flags.settings);
     // A --set is for the variants whose lights use its technique, as `bench` applies it.
     options.overridesOfUsedTechniquesOnly = swept;
-    const config::PreparedRun run = config::prepareRun(config::parseConfig(document), options);
+    const config::PreparedRun run =
+        inPhase("loading the scene", [&] { return config::prepareRun(config::parseConfig(document), options); });
     const config::RenderConfig& base = run.config;
     const scene::Scene& scene = run.scene;
     const config::SceneSource& source = base.scene;
@@ -123,8 +125,9 @@ int runValidateConfig(const ValidateFlags& flags)
     if (swept) {
         fmt::print("sweep: {} variants\n", variants.size());
         for (size_t i = 0; i < variants.size(); ++i) {
-            check.checkVariant(variants[i], i);
-            fmt::print("  variant {}: {}\n", i + 1, variants[i].label);
+            inPhase(fmt::format("checking sweep variant {} of {}", i + 1, variants.size()),
+                    [&] { check.checkVariant(variants, i); });
+            fmt::print("  variant {}: {}\n", i + 1, variants.label(i));
         }
         check.checkOverridesUsed();
     }

@@ -10,6 +10,7 @@
 #include "DevicesCommand.h"
 #include "GenerateCommand.h"
 #include "GraphCommand.h"
+#include "Phase.h"
 #include "PluginsCommand.h"
 #include "RenderCommand.h"
 #include "ValidateCommand.h"
@@ -23,6 +24,8 @@
 
 #include <cstdio>
 #include <exception>
+#include <new>
+#include <string>
 #include <vector>
 
 namespace {
@@ -54,10 +57,20 @@ int runCommandLine(int argc, char** argv)
     }
     if (verbose) spdlog::set_level(spdlog::level::debug);
 
+    std::string running;  // the command's name, for out-of-memory messages
     try {
         for (const app::Command& command : commands) {
-            if (command.cli->parsed()) return command.run();
+            if (!command.cli->parsed()) continue;
+            running = command.cli->get_name();
+            return command.run();
         }
+    } catch (const app::OutOfMemory& e) {
+        fmt::print(stderr, "penumbra: error: {}: {}\n", running, e.what());
+        return 1;
+    } catch (const std::bad_alloc&) {
+        // Outside every inPhase step: what was being allocated is not known.
+        fmt::print(stderr, "penumbra: error: {}: out of memory\n", running);
+        return 1;
     } catch (const penumbra::Error& e) {
         fmt::print(stderr, "penumbra: error: {}\n", e.what());
         return 1;

@@ -1,7 +1,8 @@
 // libFuzzer target: the config reader as `penumbra render/compare/bench CONFIG` runs it.
 // The input is the top-level config file; beside it lie files it may include (the fuzzer
 // finds "include" and their names in config.dict). Each input is read with its includes,
-// its sweep expanded and every variant parsed into a RenderConfig.
+// the first 64 variants of its sweep made and parsed into a RenderConfig, and their
+// animation tracks evaluated at the frames render poses first and last.
 //
 // The contract under test: a config either loads or is refused with a penumbra::Error
 // (the CLI's exit 1, naming the file and JSON path). Any other exception escapes to
@@ -9,18 +10,22 @@
 // reports, hangs (-timeout) and runaway memory (-rss_limit_mb).
 #include "FuzzScratch.h"
 
+#include "penumbra/config/Animation.h"
 #include "penumbra/config/Document.h"
+#include "penumbra/config/RenderConfig.h"
 #include "penumbra/config/Sweep.h"
 #include "penumbra/core/Error.h"
 
 #include <memory>
+#include <string>
 
 namespace {
 
 penumbra::fuzz::ScratchFolder* scratch = nullptr;
 
 // Files an input may include: a complete config, a partial one, one that includes
-// another (a chain), one that includes itself (a cycle) and one that is not JSON.
+// another (a chain), one that includes itself (a cycle), one that is not JSON, and two
+// that fan out.
 void writeIncludes(const penumbra::fuzz::ScratchFolder& folder)
 {
     folder.write("base.json", R"({"scene": {"generator": "box-grid", "params": {"columns": 2, "rows": 2}},
@@ -35,6 +40,26 @@ void writeIncludes(const penumbra::fuzz::ScratchFolder& folder)
     folder.write("broken.json", R"({"scene": )");
     std::filesystem::create_directories(folder.path() / "sub");
     folder.write("sub/up.json", R"({"include": ["../base.json", "../lights.json"]})");
+    // Includes fanning out: each file includes the next 40 times (an input that includes
+    // fan.json 40 times asks for 64,000 loads; config::kMaxConfigFiles stops it).
+    const auto forty = [](const std::string& name) {
+        std::string list;
+        for (int i = 0; i < 40; ++i) list += (i ? ", \"" : "\"") + name + "\"";
+        return "{\"include\": [" + list + "]}";
+    };
+    folder.write("fan.json", forty("fan2.json"));
+    folder.write("fan2.json", forty("base.json"));
+}
+
+// The tracks at the first, second and last frame, as render poses them (frame / fps): a
+// frame rate or key time that passed the reader but breaks the evaluation is a finding.
+void evaluateTracks(const penumbra::config::RenderConfig& config)
+{
+    for (const penumbra::config::AnimationTrack& track : config.animation.tracks) {
+        for (const uint32_t frame : {0u, 1u, config.frames - 1}) {
+            penumbra::config::evaluate(track, float(frame) / config.animation.fps);
+        }
+    }
 }
 
 } // namespace
@@ -52,11 +77,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     const std::filesystem::path file = scratch->write("config.json", data, size);
     try {
         const penumbra::config::ConfigDocument document = penumbra::config::loadDocument(file);
-        // A sweep of up to kMaxSweepCombinations variants is allowed and each is a copy
-        // of the document: memory by design, not a finding. Counting them reads and
-        // checks every entry (and refuses larger products); small sweeps are expanded.
-        if (penumbra::config::sweepCombinations(document) <= 64) penumbra::config::expandSweep(document);
-        else penumbra::config::parseConfig(document);
+        // Variants are made one at a time; reading the sweep checks every entry (and
+        // refuses larger products). The first few variants are made: each is a copy of
+        // the document, and up to kMaxSweepCombinations of them take time, not memory.
+        const penumbra::config::SweepVariants variants(document);
+        for (size_t i = 0; i < variants.size() && i < 64; ++i) evaluateTracks(variants.variant(i).config);
     } catch (const penumbra::Error&) {
         // Refused with a message: the contract.
     }

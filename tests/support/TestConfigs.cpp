@@ -24,6 +24,14 @@ std::filesystem::path gltfFile(const std::string& name)
     return penumbra::test::testDataDir() / "gltf" / name;
 }
 
+std::vector<config::SweepVariant> everyVariant(const config::ConfigDocument& document)
+{
+    const config::SweepVariants variants(document);
+    std::vector<config::SweepVariant> out;
+    for (size_t i = 0; i < variants.size(); ++i) out.push_back(variants.variant(i));
+    return out;
+}
+
 config::RenderConfig defaultTestConfig()
 {
     config::RenderConfig c = config::loadConfig(penumbra::test::sourceDir() / "config/default.json");

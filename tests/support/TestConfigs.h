@@ -11,8 +11,13 @@
 #include <limits>
 #include <ostream>
 #include <string>
+#include <vector>
 
 namespace penumbra::test {
+
+// Every variant of `document`'s sweep, made (config::SweepVariants makes them one at a
+// time; the tests' sweeps are small).
+std::vector<config::SweepVariant> everyVariant(const config::ConfigDocument& document);
 
 // config/default.json at 320 x 180. Small image, full-size shadow map: the tests check
 // the technique, not the output resolution.

@@ -13,6 +13,7 @@
 #include <cassert>
 #include <cctype>
 #include <cmath>
+#include <limits>
 #include <map>
 
 using nlohmann::json;
@@ -116,15 +117,23 @@ glm::vec3 tangentAcross(glm::vec3 tangent, const glm::vec3& direction)
 
 } // namespace
 
-Animation readAnimation(ObjectReader& parent, const std::vector<LightConfig>& lights)
+Animation readAnimation(ObjectReader& parent, const std::vector<LightConfig>& lights, bool playsSceneAnimation)
 {
     Animation animation;
     const json* v = parent.find("animation");
     if (!v) return animation;
     ObjectReader r(*v, parent.locator(), "/animation");
-    animation.fps = float(r.number("fps", animation.fps, 0.0, 10000.0, true));
-    const json& tracks = r.require("tracks");
+    animation.fps = float(r.number("fps", animation.fps, kMinFps, kMaxFps));
+    const json* found = r.find("tracks");
+    static const json kNoTracks = json::array();
+    const json& tracks = found ? *found : kNoTracks;
     if (!tracks.is_array()) r.fail("/animation/tracks", "must be an array of tracks");
+    // Without tracks, fps is the frame rate of the glTF animation the scene plays; with
+    // neither, the object would animate nothing, which is a mistake more often than not.
+    if (tracks.empty() && !playsSceneAnimation) {
+        r.fail("/animation", "has no tracks and /scene plays no glTF animation, so it animates nothing: give "
+                             "\"tracks\", or remove \"animation\"");
+    }
     // Per light ("/lights/<i>"), the first track that aims it: at a target, or along a direction.
     std::map<std::string, size_t> aimingTrack;
     for (size_t i = 0; i < tracks.size(); ++i) {
@@ -157,8 +166,13 @@ Animation readAnimation(ObjectReader& parent, const std::vector<LightConfig>& li
             const std::string kat = fmt::format("{}/keys/{}", at, k);
             ObjectReader key(keys[k], parent.locator(), kat);
             Keyframe frame;
-            frame.timeS = float(key.number("t", 0.0, 0.0, 1e9));
+            frame.timeS = float(key.number("t", 0.0, 0.0, kMaxKeyTimeS));
             if (!key.find("t")) key.fail(kat + "/t", "is required but missing");
+            if (const double frames = double(frame.timeS) * animation.fps; frames > kMaxFrames) {
+                key.fail(kat + "/t", fmt::format("{} s at {} fps is frame {:.0f}; an animation ends within {} frames "
+                                                 "(lower the time or /animation/fps)",
+                                                 frame.timeS, animation.fps, frames, kMaxFrames));
+            }
             const json& value = key.require("value");
             if (size == 1 && value.is_number()) {
                 frame.value = {float(key.checkNumber(value, kat + "/value", -3e38, 3e38, false))};
@@ -182,44 +196,57 @@ Animation readAnimation(ObjectReader& parent, const std::vector<LightConfig>& li
     return animation;
 }
 
+uint32_t framesToPlay(float durationS, float fps)
+{
+    const double frames = std::ceil(double(durationS) * double(fps)) + 1.0;
+    if (!(frames >= 1.0)) return 1u;  // a NaN or negative duration: the rest pose
+    return uint32_t(std::min(frames, double(kMaxFrames)));
+}
+
 std::vector<float> evaluate(const AnimationTrack& track, float timeS)
 {
     assert(!track.keys.empty());  // validation guarantees at least one key
     const std::vector<Keyframe>& k = track.keys;
-    if (k.size() == 1 || timeS <= k.front().timeS) return k.front().value;
+    // Written so that a NaN time takes the first key.
+    if (k.size() == 1 || !(timeS > k.front().timeS)) return k.front().value;
     if (timeS >= k.back().timeS) return k.back().value;
-    // First key after timeS: keys are strictly increasing (validated), so i >= 1.
+    // First key after timeS: keys are strictly increasing (validated), so 1 <= i < size.
     const size_t i = static_cast<size_t>(
         std::upper_bound(k.begin(), k.end(), timeS, [](float t, const Keyframe& key) { return t < key.timeS; }) -
         k.begin());
     const Keyframe& a = k[i - 1];
     const Keyframe& b = k[i];
     if (track.interpolation == Interpolation::Step) return a.value;
-    // Strictly increasing times make the span positive; no division by zero.
-    const float u = (timeS - a.timeS) / (b.timeS - a.timeS);
+    // In double: values reach a float's range, and their differences beyond it. Strictly
+    // increasing times make the span positive, so u is finite, and within [0, 1].
+    const double span = double(b.timeS) - double(a.timeS);
+    const double u = std::clamp((double(timeS) - double(a.timeS)) / span, 0.0, 1.0);
+    const auto toFloat = [](double x) {
+        constexpr double kMax = std::numeric_limits<float>::max();
+        return float(std::clamp(x, -kMax, kMax));
+    };
     std::vector<float> out(a.value.size());
     if (track.interpolation == Interpolation::Linear) {
-        for (size_t c = 0; c < out.size(); ++c) out[c] = a.value[c] + u * (b.value[c] - a.value[c]);
+        for (size_t c = 0; c < out.size(); ++c) out[c] = toFloat(a.value[c] + u * (double(b.value[c]) - a.value[c]));
         return out;
     }
     // Catmull-Rom (uniform in parameter, tangents scaled to the span lengths so that
     // uneven key spacing does not overshoot); the missing neighbour at either end
-    // repeats the end key, giving a one-sided tangent.
+    // repeats the end key, giving a one-sided tangent. Each tangent's span holds the
+    // key span, so it is positive too.
     const Keyframe& p0 = i >= 2 ? k[i - 2] : a;
     const Keyframe& p3 = i + 1 < k.size() ? k[i + 1] : b;
-    const float span = b.timeS - a.timeS;
-    const float u2 = u * u, u3 = u2 * u;
+    const double spanA = double(b.timeS) - double(p0.timeS);
+    const double spanB = double(p3.timeS) - double(a.timeS);
+    const double u2 = u * u, u3 = u2 * u;
     for (size_t c = 0; c < out.size(); ++c) {
-        const float spanA = std::max(b.timeS - p0.timeS, 1e-30f);
-        const float spanB = std::max(p3.timeS - a.timeS, 1e-30f);
-        const float m0 = (b.value[c] - p0.value[c]) / spanA * span;
-        const float m1 = (p3.value[c] - a.value[c]) / spanB * span;
-        out[c] = (2 * u3 - 3 * u2 + 1) * a.value[c] + (u3 - 2 * u2 + u) * m0 + (-2 * u3 + 3 * u2) * b.value[c] +
-                 (u3 - u2) * m1;
+        const double m0 = (double(b.value[c]) - p0.value[c]) / spanA * span;
+        const double m1 = (double(p3.value[c]) - a.value[c]) / spanB * span;
+        out[c] = toFloat((2 * u3 - 3 * u2 + 1) * a.value[c] + (u3 - 2 * u2 + u) * m0 + (-2 * u3 + 3 * u2) * b.value[c] +
+                         (u3 - u2) * m1);
     }
     return out;
 }
-
 
 void applyAnimation(const Animation& animation, float timeS, RenderConfig& config, scene::Scene& scene)
 {

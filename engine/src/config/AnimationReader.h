@@ -1,7 +1,7 @@
 #pragma once
 // Reading "animation" of a config (config/Animation.cpp): fps and tracks, each target
-// checked against the config's lights (a value the light has, aimed one way only) and
-// each key's value against its target.
+// checked against the config's lights (a value the light has, aimed one way only), each
+// key's value against its target and each key's time against fps (Animation.h's limits).
 #include "config/JsonReader.h"
 #include "penumbra/config/Animation.h"
 #include "penumbra/config/RenderConfig.h"
@@ -11,6 +11,8 @@
 namespace penumbra::config {
 
 // The "animation" object of `parent` (the config's root), or no tracks when absent.
-Animation readAnimation(ObjectReader& parent, const std::vector<LightConfig>& lights);
+// Without tracks it is the frame rate of the glTF animation the scene plays
+// (`playsSceneAnimation`), and an error otherwise.
+Animation readAnimation(ObjectReader& parent, const std::vector<LightConfig>& lights, bool playsSceneAnimation);
 
 } // namespace penumbra::config

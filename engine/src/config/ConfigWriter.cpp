@@ -160,7 +160,8 @@ json configJson(const RenderConfig& config, const fs::path& savedAs)
     out["draw_batching"] = config.batchDraws ? "batched" : "per-instance";
     out["output"] = {{"width", config.width}, {"height", config.height}};
     out["frames"] = config.frames;
-    if (!config.animation.empty()) out["animation"] = animationJson(config.animation);
+    // Without tracks, fps is the frame rate of the glTF animation the scene plays.
+    if (!config.animation.empty() || !config.scene.animation.empty()) out["animation"] = animationJson(config.animation);
     if (!config.notes.empty()) out["notes"] = config.notes;
     return out;
 }

@@ -2,6 +2,7 @@
 
 #include "penumbra/core/Error.h"
 
+#include "config/ConfigJson.h"
 #include "core/Text.h"
 
 #include <fmt/format.h>
@@ -16,71 +17,17 @@ namespace fs = std::filesystem;
 namespace penumbra::config {
 namespace {
 
-// Records, for every JSON path in `value`, that it came from `file`.
+// Records, for every JSON path in `value` down through its objects, that it came from
+// `file`. Arrays are not entered: merging replaces an array whole, so all of it comes
+// from one file, and the origins stay as many as the objects' keys however long the
+// arrays (400,000 animation keys) are.
 void recordOrigin(const json& value, const std::string& pointer, const std::string& file,
                   std::map<std::string, std::string>& origin)
 {
     origin[pointer] = file;
-    if (value.is_object()) {
-        for (auto it = value.begin(); it != value.end(); ++it) recordOrigin(*it, pointer + "/" + it.key(), file, origin);
-    } else if (value.is_array()) {
-        for (size_t i = 0; i < value.size(); ++i) recordOrigin(value[i], fmt::format("{}/{}", pointer, i), file, origin);
-    }
+    if (!value.is_object()) return;
+    for (auto it = value.begin(); it != value.end(); ++it) recordOrigin(*it, pointer + "/" + it.key(), file, origin);
 }
-
-// Where the parser is in the document, kept from its callback's events so that an error
-// names the JSON path it occurred at; and the nesting limit, checked as each object or
-// array opens.
-class ParsePlace {
-public:
-    explicit ParsePlace(const fs::path& file) : file_(file) {}
-
-    bool event(nlohmann::json::parse_event_t event, const json& parsed)
-    {
-        using Event = nlohmann::json::parse_event_t;
-        switch (event) {
-        case Event::object_start:
-        case Event::array_start:
-            if (frames_.size() >= size_t(kMaxConfigNesting)) {
-                throw ConfigError(fmt::format("{}: {}: nested deeper than {} levels of objects and arrays (a config "
-                                              "needs a handful)",
-                                              displayPath(file_), pointer(), kMaxConfigNesting));
-            }
-            frames_.push_back({event == Event::array_start, 0, {}});
-            break;
-        case Event::key: frames_.back().key = parsed.get<std::string>(); break;
-        case Event::object_end:
-        case Event::array_end:
-            frames_.pop_back();
-            advance();
-            break;
-        case Event::value: advance(); break;
-        }
-        return true;
-    }
-
-    // The JSON pointer of the value being read.
-    std::string pointer() const
-    {
-        std::string out;
-        for (const Frame& f : frames_) out += f.array ? fmt::format("/{}", f.next) : "/" + f.key;
-        return out.empty() ? "/" : out;
-    }
-
-private:
-    struct Frame {
-        bool array = false;
-        size_t next = 0;  // arrays: the index of the element being read
-        std::string key;  // objects: the key of the value being read
-    };
-    void advance()
-    {
-        if (!frames_.empty() && frames_.back().array) ++frames_.back().next;
-    }
-
-    fs::path file_;
-    std::vector<Frame> frames_;
-};
 
 json readJson(const fs::path& file)
 {
@@ -99,25 +46,7 @@ json readJson(const fs::path& file)
     }
     std::ifstream in(file, std::ios::binary);
     if (!in) throw ConfigError(fmt::format("{}: cannot open config file for reading", displayPath(file)));
-    ParsePlace place(file);
-    try {
-        return json::parse(in, [&place](int, nlohmann::json::parse_event_t event, json& parsed) {
-            return place.event(event, parsed);
-        });
-    } catch (const json::parse_error& e) {
-        // nlohmann's message carries line and column: "parse error at line 3, column 5: ...".
-        std::string what = e.what();
-        if (auto pos = what.find("parse error"); pos != std::string::npos) what = what.substr(pos);
-        throw ConfigError(fmt::format("{}: malformed JSON: {}", displayPath(file), what));
-    } catch (const json::out_of_range& e) {
-        // 406: "number overflow parsing '1e309'": a number no double holds.
-        std::string what = e.what();
-        if (auto pos = what.find("] "); pos != std::string::npos) what = what.substr(pos + 2);
-        throw ConfigError(fmt::format("{}: {}: {} (a number must lie within a double's range, about ±1.8e308)",
-                                      displayPath(file), place.pointer(), what));
-    } catch (const json::exception& e) {
-        throw ConfigError(fmt::format("{}: {}: cannot read the JSON: {}", displayPath(file), place.pointer(), e.what()));
-    }
+    return parseConfigJson(in, file);
 }
 
 // `path` made absolute and normal, for include-cycle checks; a ConfigError when the file
@@ -130,9 +59,47 @@ fs::path canonicalFor(const fs::path& path, const std::string& where)
     return canonical;
 }
 
-ConfigDocument loadWithIncludes(const fs::path& file, std::vector<fs::path>& chain)
+// The files a config has loaded so far with its includes, and the include chain that
+// leads to the one being loaded.
+struct IncludeWalk {
+    std::vector<fs::path> chain;  // canonical paths, the config first
+    size_t files = 0;
+    uintmax_t bytes = 0;
+
+    std::string chainText() const
+    {
+        std::string text;
+        for (const fs::path& p : chain) text += (text.empty() ? "" : " -> ") + displayPath(p.filename());
+        return text;
+    }
+
+    // Counts `file` (included at `at`, empty for the config itself) against the limits on
+    // the files and bytes one config loads: a few files each including the next many
+    // times would otherwise load exponentially many.
+    void count(const fs::path& file, const std::string& at)
+    {
+        if (++files > kMaxConfigFiles) {
+            throw ConfigError(fmt::format("{}{} would be file {} of this config; a config loads at most {} files with "
+                                          "its includes (include chain: {})",
+                                          at, displayPath(file), files, kMaxConfigFiles, chainText()));
+        }
+        std::error_code ec;
+        // A file that is not a regular one, or is beyond the limit alone, is refused by
+        // readJson, which says so.
+        if (const uintmax_t size = fs::file_size(file, ec); !ec && size <= kMaxConfigBytes) bytes += size;
+        if (bytes > kMaxConfigBytes) {
+            throw ConfigError(fmt::format("{}{}: the config and its includes come to {} bytes with this file; they hold "
+                                          "at most {} MiB together (include chain: {})",
+                                          at, displayPath(file), bytes, kMaxConfigBytes >> 20, chainText()));
+        }
+    }
+};
+
+ConfigDocument loadWithIncludes(const fs::path& file, IncludeWalk& walk, const std::string& includedAt)
 {
-    const fs::path canonical = canonicalFor(file, "");
+    std::vector<fs::path>& chain = walk.chain;
+    const fs::path canonical = canonicalFor(file, includedAt);
+    walk.count(file, includedAt);
     ConfigDocument doc;
     doc.file = file;
     json own = readJson(file);
@@ -164,7 +131,7 @@ ConfigDocument loadWithIncludes(const fs::path& file, std::vector<fs::path>& cha
                 throw ConfigError(fmt::format("{}included file {}: {}", at, ec ? "cannot be opened" : "not found",
                                               ec ? fmt::format("{}: {}", displayPath(path), ec.message()) : displayPath(path)));
             }
-            ConfigDocument included = loadWithIncludes(path, chain);
+            ConfigDocument included = loadWithIncludes(path, walk, at);
             doc.json.merge_patch(included.json);
             for (auto& [pointer, origin] : included.origin) doc.origin[pointer] = origin;
         }
@@ -199,8 +166,8 @@ std::string ConfigDocument::fileFor(const std::string& pointer) const
 
 ConfigDocument loadDocument(const fs::path& file)
 {
-    std::vector<fs::path> chain;
-    return loadWithIncludes(file, chain);
+    IncludeWalk walk;
+    return loadWithIncludes(file, walk, "");
 }
 
 } // namespace penumbra::config

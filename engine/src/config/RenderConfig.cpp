@@ -242,7 +242,7 @@ RenderConfig parseConfig(const ConfigDocument& document)
     RenderConfig config;
     config.file = document.file;
     ObjectReader r(document.json, locator, "");
-    r.find("sweep");  // expanded by expandSweep(); the base run ignores it
+    r.find("sweep");  // made into variants by SweepVariants; the base run ignores it
     // Editors read "$schema" (config/schema/penumbra-config.schema.json); the engine has
     // its own checks.
     if (const json* schema = r.find("$schema"); schema && !schema->is_string()) {
@@ -288,8 +288,8 @@ RenderConfig parseConfig(const ConfigDocument& document)
         config.height = o.integer("height", config.height, 1, 16384);
         o.finish();
     }
-    config.frames = r.integer("frames", config.frames, 1, 1000000);
-    config.animation = readAnimation(r, config.lights);
+    config.frames = r.integer("frames", config.frames, 1, kMaxFrames);
+    config.animation = readAnimation(r, config.lights, !config.scene.animation.empty());
     if (const json* notes = r.find("notes")) {
         if (!notes->is_array()) r.fail("/notes", fmt::format("must be an array of Markdown paragraphs (strings), got {}", notes->dump()));
         for (size_t i = 0; i < notes->size(); ++i) {

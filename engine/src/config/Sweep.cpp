@@ -5,22 +5,26 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cassert>
 #include <cctype>
 #include <utility>
 
 using nlohmann::json;
 
 namespace penumbra::config {
-namespace {
 
 // One sweep entry: the JSON pointers it sets together and the values it takes.
-struct SweepAxis {
+struct SweepVariants::Axis {
     std::vector<json::json_pointer> paths;
     std::vector<std::string> pathTexts;
     std::vector<json> values;          // per value: one JSON value per path
     std::vector<std::string> labels;   // per value: "labels"[i], or the value as JSON
     bool labelled = false;             // "labels" was given
 };
+
+namespace {
+
+using SweepAxis = SweepVariants::Axis;
 
 json::json_pointer readSweepPointer(const json& text, const ObjectReader& r, const std::string& at)
 {
@@ -134,74 +138,92 @@ void setSwept(json& doc, const json::json_pointer& pointer, const json& value, c
     doc[pointer] = value;
 }
 
-// The document's sweep entries, read and checked, and the number of variants they make
-// (at most kMaxSweepCombinations). No "sweep": no entries, one variant.
-std::pair<std::vector<SweepAxis>, size_t> readSweepAxes(const ConfigDocument& document, const Locator& locator)
+// "<path>+<path>=<label>": how a variant's label shows the value it takes of `axis`.
+std::string axisLabel(const SweepAxis& axis, size_t pick)
 {
-    auto it = document.json.find("sweep");
-    if (it == document.json.end()) return {{}, 1};
-    const json& sweep = *it;
-    if (!sweep.is_array() || sweep.empty()) locator.fail("/sweep", "must be a non-empty array of {\"path\", \"values\"}");
-    std::vector<SweepAxis> axes;
-    size_t combinations = 1;
-    for (size_t i = 0; i < sweep.size(); ++i) {
-        const std::string at = fmt::format("/sweep/{}", i);
-        axes.push_back(readSweepAxis(sweep[i], locator, at));
-        combinations *= axes.back().values.size();
-        if (combinations > kMaxSweepCombinations)
-            locator.fail(at + "/values", fmt::format("the sweep has more than {} combinations", kMaxSweepCombinations));
-    }
-    return {std::move(axes), combinations};
+    return fmt::format("{}={}", fmt::join(axis.pathTexts, "+"), axis.labels[pick]);
 }
 
 } // namespace
 
-size_t sweepCombinations(const ConfigDocument& document)
-{
-    return readSweepAxes(document, Locator(document)).second;
-}
-
-std::vector<SweepVariant> expandSweep(const ConfigDocument& document)
+SweepVariants::SweepVariants(const ConfigDocument& document) : document_(document)
 {
     const Locator locator(document);
-    const auto [axes, combinations] = readSweepAxes(document, locator);
-    if (axes.empty()) return {{"", {}, parseConfig(document)}};
-    std::vector<SweepVariant> variants;
-    for (size_t c = 0; c < combinations; ++c) {
-        // The first entry varies slowest. Entries are applied in order, so a later one may
-        // set a value inside one that an earlier entry replaced (a technique's parameter
-        // inside a swept "shadow" object).
-        std::vector<size_t> picks(axes.size());
-        for (size_t a = axes.size(), rest = c; a-- > 0; rest /= axes[a].values.size()) picks[a] = rest % axes[a].values.size();
-        ConfigDocument variant = document;
-        variant.json.erase("sweep");
-        SweepVariant out;
-        std::vector<std::string> label;
-        for (size_t a = 0; a < axes.size(); ++a) {
-            const SweepAxis& axis = axes[a];
-            const size_t pick = picks[a];
-            const bool several = axis.paths.size() > 1;
-            for (size_t k = 0; k < axis.paths.size(); ++k) {
-                const std::string& text = axis.pathTexts[k];
-                const std::string at = several ? fmt::format("/sweep/{}/paths/{}", a, k) : fmt::format("/sweep/{}/path", a);
-                setSwept(variant.json, axis.paths[k], several ? axis.values[pick][k] : axis.values[pick], locator, at,
-                         fmt::format("{}", fmt::join(label, ", ")));
-                // The value replaced whatever was there, including where its parts came from.
-                for (auto o = variant.origin.lower_bound(text); o != variant.origin.end() && o->first.rfind(text, 0) == 0;) {
-                    const bool inside = o->first.size() == text.size() || o->first[text.size()] == '/';
-                    o = inside ? variant.origin.erase(o) : std::next(o);
-                }
-                variant.origin[text] = several ? fmt::format("{} (/sweep/{}/values/{}/{})", document.file.string(), a, pick, k)
-                                               : fmt::format("{} (/sweep/{}/values/{})", document.file.string(), a, pick);
-            }
-            label.push_back(fmt::format("{}={}", fmt::join(axis.pathTexts, "+"), axis.labels[pick]));
-            out.choices.push_back({axis.pathTexts, pick, axis.labels[pick], axis.labelled});
+    auto it = document.json.find("sweep");
+    if (it == document.json.end()) return;
+    const json& sweep = *it;
+    if (!sweep.is_array() || sweep.empty()) locator.fail("/sweep", "must be a non-empty array of {\"path\", \"values\"}");
+    // The product is checked entry by entry, so that it never overflows and nothing is
+    // read past the entry that takes it beyond the limit.
+    std::vector<std::string> factors;
+    for (size_t i = 0; i < sweep.size(); ++i) {
+        const std::string at = fmt::format("/sweep/{}", i);
+        axes_.push_back(readSweepAxis(sweep[i], locator, at));
+        size_ *= axes_.back().values.size();
+        factors.push_back(std::to_string(axes_.back().values.size()));
+        if (size_ > kMaxSweepCombinations) {
+            locator.fail(at + "/values", fmt::format("the sweep has more than {} combinations: its entries up to this one "
+                                                     "make {} = {} variants",
+                                                     kMaxSweepCombinations, fmt::join(factors, " x "), size_));
         }
-        out.label = fmt::format("{}", fmt::join(label, ", "));
-        out.config = parseConfig(variant);
-        variants.push_back(std::move(out));
     }
-    return variants;
+}
+
+SweepVariants::~SweepVariants() = default;
+
+bool SweepVariants::swept() const { return !axes_.empty(); }
+
+std::vector<size_t> SweepVariants::picks(size_t index) const
+{
+    assert(index < size_);
+    // The first entry varies slowest.
+    std::vector<size_t> picks(axes_.size());
+    for (size_t a = axes_.size(), rest = index; a-- > 0; rest /= axes_[a].values.size()) picks[a] = rest % axes_[a].values.size();
+    return picks;
+}
+
+std::string SweepVariants::label(size_t index) const
+{
+    const std::vector<size_t> pick = picks(index);
+    std::vector<std::string> label;
+    for (size_t a = 0; a < axes_.size(); ++a) label.push_back(axisLabel(axes_[a], pick[a]));
+    return fmt::format("{}", fmt::join(label, ", "));
+}
+
+SweepVariant SweepVariants::variant(size_t index) const
+{
+    if (axes_.empty()) return {"", {}, parseConfig(document_)};
+    const Locator locator(document_);
+    // Entries are applied in order, so a later one may set a value inside one that an
+    // earlier entry replaced (a technique's parameter inside a swept "shadow" object).
+    const std::vector<size_t> picks = this->picks(index);
+    ConfigDocument variant = document_;
+    variant.json.erase("sweep");
+    SweepVariant out;
+    std::vector<std::string> label;
+    for (size_t a = 0; a < axes_.size(); ++a) {
+        const SweepAxis& axis = axes_[a];
+        const size_t pick = picks[a];
+        const bool several = axis.paths.size() > 1;
+        for (size_t k = 0; k < axis.paths.size(); ++k) {
+            const std::string& text = axis.pathTexts[k];
+            const std::string at = several ? fmt::format("/sweep/{}/paths/{}", a, k) : fmt::format("/sweep/{}/path", a);
+            setSwept(variant.json, axis.paths[k], several ? axis.values[pick][k] : axis.values[pick], locator, at,
+                     fmt::format("{}", fmt::join(label, ", ")));
+            // The value replaced whatever was there, including where its parts came from.
+            for (auto o = variant.origin.lower_bound(text); o != variant.origin.end() && o->first.rfind(text, 0) == 0;) {
+                const bool inside = o->first.size() == text.size() || o->first[text.size()] == '/';
+                o = inside ? variant.origin.erase(o) : std::next(o);
+            }
+            variant.origin[text] = several ? fmt::format("{} (/sweep/{}/values/{}/{})", document_.file.string(), a, pick, k)
+                                           : fmt::format("{} (/sweep/{}/values/{})", document_.file.string(), a, pick);
+        }
+        label.push_back(axisLabel(axis, pick));
+        out.choices.push_back({axis.pathTexts, pick, axis.labels[pick], axis.labelled});
+    }
+    out.label = fmt::format("{}", fmt::join(label, ", "));
+    out.config = parseConfig(variant);
+    return out;
 }
 
 } // namespace penumbra::config

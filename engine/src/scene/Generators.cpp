@@ -49,6 +49,17 @@ public:
     {
         if (v < lo || v > hi) fail(name, fmt::format("in [{}, {}]", lo, hi), fmt::format("{}", v));
     }
+    // What the parameters multiply to, checked before anything is built: each may lie in
+    // its range while their product exhausts memory (box-field boxes=1000000
+    // face_divisions=64: 49 billion triangles). `formula` names the parameters, `values`
+    // gives their values in the same form.
+    void total(const char* what, uint64_t value, uint64_t limit, const std::string& formula,
+               const std::string& values) const
+    {
+        if (value <= limit) return;
+        throw Error(fmt::format("{}: {} = {} = {} {}; a generated scene holds at most {} {}", generator_, formula, values,
+                                value, what, limit, what));
+    }
 
 private:
     const char* generator_;
@@ -692,6 +703,10 @@ Scene generateBoxGrid(const BoxGridParams& p)
     check.positive("sphere_radius", p.sphereRadius);
     check.count("sphere_segments", p.sphereSegments, 3, 4096);
     check.positive("plane_size", p.planeSize);
+    // Each box 12 triangles; the sphere at most 2 segments × rings, rings = segments / 2.
+    const uint64_t segments = p.sphereSegments;
+    check.total("triangles", uint64_t(p.columns) * p.rows * 12 + segments * segments, kMaxGeneratedTriangles,
+                "columns × rows × 12 + sphere_segments²", fmt::format("{} × {} × 12 + {}²", p.columns, p.rows, segments));
 
     SceneBuilder b("box-grid");
     b.place(b.addMesh(makePlane("ground"), Material{"ground", {0.75f, 0.75f, 0.72f, 1.0f}}), "ground", b.root(),
@@ -795,6 +810,12 @@ Scene generateCity(const CityParams& p)
     check.range("setback_chance", p.setbackChance, 0.0f, 1.0f);
     check.range("car_density", p.carDensity, 0.0f, 1.0f);
     check.range("tree_chance", p.treeChance, 0.0f, 1.0f);
+    // Per block at most 3 tiers a lot, and per kerb slot of its 4 edges a car and a tree
+    // (2 instances).
+    const uint64_t slots = std::max(1u, uint32_t(p.blockSize / kParkingSlot));
+    check.total("instances", uint64_t(p.blocks) * p.blocks * (3 * uint64_t(p.lotsPerSide) * p.lotsPerSide + 12 * slots),
+                kMaxGeneratedInstances, "up to blocks² × (3 lots_per_side² + 12 × block_size / 6 m)",
+                fmt::format("{}² × (3 × {}² + 12 × {})", p.blocks, p.lotsPerSide, slots));
 
     Random rng(p.seed);
     SceneBuilder b("city");
@@ -843,6 +864,9 @@ Scene generateBoxField(const BoxFieldParams& p)
     check.atLeast("max_height", p.maxHeight, "min_height", p.minHeight);
     check.count("face_divisions", p.faceDivisions, 1, 64);
     check.range("margin", p.margin, 0.0f, kFloatMax);
+    const uint64_t d = p.faceDivisions;
+    check.total("triangles", uint64_t(p.boxes) * 12 * d * d, kMaxGeneratedTriangles, "boxes × 12 × face_divisions²",
+                fmt::format("{} × 12 × {}²", p.boxes, d));
 
     Random rng(p.seed);
     SceneBuilder b("box-field");

@@ -1,3 +1,4 @@
+#include "TestConfigs.h"  // support/: everyVariant
 #include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/config/Config.h"
@@ -72,7 +73,7 @@ TEST(Config, EveryShippedConfigLoads)
         if (entry.path().extension() != ".json" || entry.path().parent_path().filename() == "schema") continue;
         SCOPED_TRACE(entry.path().string());
         const config::ConfigDocument doc = config::loadDocument(entry.path());
-        const std::vector<config::SweepVariant> variants = config::expandSweep(doc);
+        const std::vector<config::SweepVariant> variants = test::everyVariant(doc);
         EXPECT_FALSE(variants.empty());
         for (auto v : variants) EXPECT_NO_THROW(config::buildScene(v.config));
         ++count;
@@ -124,7 +125,7 @@ TEST(Config, MissingIncludeIsNamed)
 TEST(Config, SweepExpandsTheCartesianProduct)
 {
     const config::ConfigDocument doc = config::loadDocument(penumbra::test::sourceDir() / "config/sweep-resolution.json");
-    const std::vector<config::SweepVariant> v = config::expandSweep(doc);
+    const std::vector<config::SweepVariant> v = test::everyVariant(doc);
     ASSERT_EQ(v.size(), 8u);
     EXPECT_EQ(*v[0].config.lights[0].shadow.param("resolution"), 512);
     EXPECT_EQ(*v[0].config.lights[0].shadow.param("slope_bias"), 1.0);
@@ -142,26 +143,26 @@ TEST(Config, BadSweepValueNamesTheSweepEntry)
     doc.json = minimal();
     doc.json["sweep"] = json::array({{{"path", "/lights/0/intensity"}, {"values", {1, -5}}}});
     try {
-        config::expandSweep(doc);
+        test::everyVariant(doc);
         FAIL() << "expected ConfigError";
     } catch (const ConfigError& e) {
         EXPECT_NE(std::string(e.what()).find("sweep.json (/sweep/0/values/1): /lights/0/intensity: must be in [0,"),
                   std::string::npos) << e.what();
     }
     doc.json["sweep"] = json::array({{{"path", "/nothing/here"}, {"values", {1}}}});
-    EXPECT_THROW(config::expandSweep(doc), ConfigError);
+    EXPECT_THROW(test::everyVariant(doc), ConfigError);
 }
 
 namespace {
 
-// The message expandSweep throws for `doc` (file "sweep.json").
+// The message making the variants throws for `doc` (file "sweep.json").
 std::string sweepError(const json& doc)
 {
     config::ConfigDocument d;
     d.file = "sweep.json";
     d.json = doc;
     try {
-        config::expandSweep(d);
+        test::everyVariant(d);
     } catch (const ConfigError& e) {
         return e.what();
     }
@@ -174,7 +175,7 @@ std::vector<config::SweepVariant> expand(const json& doc)
     config::ConfigDocument d;
     d.file = "sweep.json";
     d.json = doc;
-    return config::expandSweep(d);
+    return test::everyVariant(d);
 }
 
 bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
@@ -282,34 +283,34 @@ TEST(Config, BadSweepEntriesNameTheirJsonPath)
     }
 }
 
-TEST(Config, SweepCombinationsCountsTheVariantsWithoutMakingThem)
+TEST(Config, SweepVariantsCountsTheVariantsWithoutMakingThem)
 {
     const config::ConfigDocument doc = config::loadDocument(penumbra::test::sourceDir() / "config/sweep-resolution.json");
-    EXPECT_EQ(config::sweepCombinations(doc), config::expandSweep(doc).size());
+    EXPECT_EQ(config::SweepVariants(doc).size(), test::everyVariant(doc).size());
     config::ConfigDocument plain{"plain.json", minimal(), {}};
-    EXPECT_EQ(config::sweepCombinations(plain), 1u);
+    EXPECT_EQ(config::SweepVariants(plain).size(), 1u);
     // 2 x 3 x (paths together) 2; at the limit and one entry past it.
     config::ConfigDocument swept{"sweep.json", minimal(), {}};
     swept.json["sweep"] = json::parse(R"([{"path": "/lights/0/intensity", "values": [1, 2]},
         {"path": "/camera/position", "values": [[0, 5, 10], [0, 6, 10], [0, 7, 10]]},
         {"paths": ["/lights/0/outer_cone_deg", "/camera/target"], "values": [[40, [0, 0, 0]], [50, [1, 0, 0]]]}])");
-    EXPECT_EQ(config::sweepCombinations(swept), 12u);
-    EXPECT_EQ(config::expandSweep(swept).size(), 12u);
+    EXPECT_EQ(config::SweepVariants(swept).size(), 12u);
+    EXPECT_EQ(test::everyVariant(swept).size(), 12u);
     json values = json::array();
     for (size_t i = 0; i < config::kMaxSweepCombinations / 10; ++i) values.push_back(i + 1);
     swept.json["sweep"] = json::array({{{"path", "/lights/0/intensity"}, {"values", values}},
                                        {{"path", "/lights/0/outer_cone_deg"}, {"values", json::array({1, 2, 3, 4, 5, 6, 7, 8, 9, 10})}}});
-    EXPECT_EQ(config::sweepCombinations(swept), config::kMaxSweepCombinations);
+    EXPECT_EQ(config::SweepVariants(swept).size(), config::kMaxSweepCombinations);
     swept.json["sweep"][1]["values"].push_back(11);
     try {
-        config::sweepCombinations(swept);
+        const config::SweepVariants refused(swept);
         ADD_FAILURE() << "more than kMaxSweepCombinations variants are refused";
     } catch (const ConfigError& e) {
         EXPECT_TRUE(has(e.what(), "sweep.json: /sweep/1/values: the sweep has more than 100000 combinations")) << e.what();
     }
-    // A malformed entry is refused as expandSweep refuses it.
+    // A malformed entry is refused before any variant is made.
     swept.json["sweep"] = json::parse(R"([{"path": "lights/0/intensity", "values": [1]}])");
-    EXPECT_THROW(config::sweepCombinations(swept), ConfigError);
+    EXPECT_THROW(config::SweepVariants{swept}, ConfigError);
 }
 
 TEST(Config, TheTradeoffBenchmarkCoversEveryBaselineAtTwoLightSizesOnTwoScenes)
@@ -317,7 +318,7 @@ TEST(Config, TheTradeoffBenchmarkCoversEveryBaselineAtTwoLightSizesOnTwoScenes)
     // config/bench/tradeoff.json (docs/tradeoff.md): every variant parses and builds its
     // scene; its plugins are checked by `penumbra validate` once pcss and vsm exist.
     const config::ConfigDocument doc = config::loadDocument(penumbra::test::sourceDir() / "config/bench/tradeoff.json");
-    const std::vector<config::SweepVariant> variants = config::expandSweep(doc);
+    const std::vector<config::SweepVariant> variants = test::everyVariant(doc);
     ASSERT_EQ(variants.size(), 2u * 2u * 7u);
     std::set<std::string> scenes, techniques, labels;
     std::set<float> sizes;

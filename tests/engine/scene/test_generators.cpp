@@ -189,6 +189,34 @@ TEST(Generators, BadParametersAreNamed)
         << generator;
 }
 
+TEST(Generators, TotalsTheParametersMultiplyToAreCheckedBeforeBuilding)
+{
+    // Each parameter within its range, their product not: refused at once (building it
+    // would take 49 billion triangles), naming the parameters, the total and the limit.
+    const std::string field = errorOf([] { generateScene("box-field", {{"boxes", "1000000"}, {"face_divisions", "64"}}); });
+    EXPECT_NE(field.find("box-field: boxes × 12 × face_divisions² = 1000000 × 12 × 64² = 49152000000 triangles; a "
+                         "generated scene holds at most 32000000 triangles"),
+              std::string::npos)
+        << field;
+    const std::string city = errorOf([] { generateScene("city", {{"blocks", "128"}, {"lots_per_side", "16"}}); });
+    EXPECT_NE(city.find("city: up to blocks² × (3 lots_per_side² + 12 × block_size / 6 m) = 128² × (3 × 16² + 12 × 10)"),
+              std::string::npos)
+        << city;
+    EXPECT_NE(city.find("instances; a generated scene holds at most 4000000 instances"), std::string::npos) << city;
+    // The totals bound what is built: exactly for box-field (and its ground's 2), from
+    // above for box-grid's sphere and the city's instances.
+    const auto triangles = [](const Scene& scene) {
+        uint64_t n = 0;
+        for (const Mesh& mesh : scene.meshes) n += mesh.indices.size() / 3;
+        return n;
+    };
+    EXPECT_EQ(triangles(generateScene("box-field", {{"boxes", "20"}, {"face_divisions", "3"}})), 20u * 12 * 9 + 2);
+    EXPECT_LE(triangles(generateScene("box-grid", {{"sphere_segments", "40"}})), 5u * 5 * 12 + 40 * 40 + 2);
+    EXPECT_LE(generateScene("city", {{"blocks", "2"}, {"car_density", "1"}, {"tree_chance", "1"}, {"setback_chance", "1"}})
+                  .instances.size(),
+              2u * 2 * (3 * 3 * 3 + 12 * 10) + 1);
+}
+
 TEST(ScaleScene, ScalesBoundsExactly)
 {
     for (const auto& [name, scene] : everyGenerator()) {

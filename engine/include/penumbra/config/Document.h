@@ -30,6 +30,11 @@ inline constexpr int kMaxConfigNesting = 64;
 // few KB, and the JSON library holds a file in about ten times its size.
 inline constexpr uintmax_t kMaxConfigBytes = uintmax_t(64) << 20;
 
+// A config loads at most this many files, itself and every include (an include of an
+// include counts too), and at most kMaxConfigBytes in all: six files each including the
+// next 40 times would load 40^5 files. The shipped configs load one or two.
+inline constexpr size_t kMaxConfigFiles = 100;
+
 // Reads `file` and its includes: `"include": "base.json"` or a list, paths relative to
 // the including file, merged in order with RFC 7386 merge-patch semantics (objects merge
 // key by key, everything else - arrays too - is replaced, null removes a key), then the
@@ -38,7 +43,8 @@ inline constexpr uintmax_t kMaxConfigBytes = uintmax_t(64) << 20;
 // path: malformed JSON (with line and column), a number beyond a double's range, nesting
 // beyond kMaxConfigNesting, a file name the file system refuses (too long: shown
 // shortened), a file that is not a regular one (a FIFO, a device) or is beyond
-// kMaxConfigBytes.
+// kMaxConfigBytes, more than kMaxConfigFiles files or kMaxConfigBytes in all (naming the
+// include chain).
 ConfigDocument loadDocument(const std::filesystem::path& file);
 
 // `text` (a path, a JSON pointer) for a message: whole up to 160 characters, else its

@@ -28,15 +28,39 @@ struct SweepVariant {
     std::vector<SweepChoice> choices;  // one per sweep entry, in order; empty without a sweep
     RenderConfig config;
 };
-// The most variants one sweep may make: each is a copy of the document.
+// The most variants one sweep may make. Variants are made one at a time (each is a copy
+// of the document: 10,000 variants of a 1 MB config took 8 GB when all were kept).
 inline constexpr size_t kMaxSweepCombinations = 100000;
 
-// Throws ConfigError naming the entry (and the variant where a path exists in some only).
-std::vector<SweepVariant> expandSweep(const ConfigDocument& document);
+// A config's sweep variants, each made when asked for. Construction reads and checks the
+// entries, not the variants: ConfigError naming the entry for a malformed one, or for
+// entries whose product passes kMaxSweepCombinations (checked entry by entry, before any
+// variant is made). `document` must outlive this.
+class SweepVariants {
+public:
+    explicit SweepVariants(const ConfigDocument& document);
+    ~SweepVariants();
+    SweepVariants(const SweepVariants&) = delete;
+    SweepVariants& operator=(const SweepVariants&) = delete;
 
-// How many variants expandSweep makes (1 without a sweep), without making them: the
-// entries are read and checked as expandSweep does (ConfigError for a malformed entry or
-// more than kMaxSweepCombinations), the variants' paths and configs are not.
-size_t sweepCombinations(const ConfigDocument& document);
+    // How many variants there are: 1 without a sweep.
+    size_t size() const { return size_; }
+    // Whether the document has a sweep (a sweep of one value has one variant too).
+    bool swept() const;
+    // Variant `index` < size(): the document with the entries' values set, parsed. Throws
+    // ConfigError naming the entry (and the variant where a path exists in some only).
+    SweepVariant variant(size_t index) const;
+    // Variant `index`'s label (SweepVariant::label) without making it.
+    std::string label(size_t index) const;
+
+    struct Axis;  // one entry, read (Sweep.cpp)
+
+private:
+    std::vector<size_t> picks(size_t index) const;  // per entry, the index of its value
+
+    const ConfigDocument& document_;
+    std::vector<Axis> axes_;
+    size_t size_ = 1;
+};
 
 } // namespace penumbra::config

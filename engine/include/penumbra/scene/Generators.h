@@ -20,6 +20,14 @@
 
 namespace penumbra::scene {
 
+// The most a generated scene may hold, checked from the parameters before anything is
+// built (the error names the parameters and what they multiply to): triangles stored in
+// its meshes (about 100 bytes each with their vertices: 3 GB) and instances (box-grid,
+// box-field: triangles; city: instances; hair and fence stay far below both at their
+// largest parameters).
+inline constexpr uint64_t kMaxGeneratedTriangles = 32000000;
+inline constexpr uint64_t kMaxGeneratedInstances = 4000000;
+
 // ---- box-grid: the foundation's default scene -------------------------------------
 // A ground plane, a grid of boxes of varied heights and a sphere.
 struct BoxGridParams {
