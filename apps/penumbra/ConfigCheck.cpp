@@ -12,12 +12,13 @@ using nlohmann::json;
 
 namespace penumbra::app {
 
-void ConfigCheck::add(std::vector<Finding>& list, std::string message, std::optional<size_t> variant)
+void ConfigCheck::add(Findings& findings, std::string message, std::optional<size_t> variant)
 {
-    auto found = std::find_if(list.begin(), list.end(), [&](const Finding& f) { return f.message == message; });
-    if (found == list.end()) found = list.insert(list.end(), Finding{std::move(message), false, {}});
-    if (!variant) found->inConfig = true;
-    else if (found->variants.empty() || found->variants.back() != *variant) found->variants.push_back(*variant);
+    const auto [at, added] = findings.index.emplace(message, findings.list.size());
+    if (added) findings.list.push_back(Finding{std::move(message), false, {}});
+    Finding& found = findings.list[at->second];
+    if (!variant) found.inConfig = true;
+    else if (found.variants.empty() || found.variants.back() != *variant) found.variants.push_back(*variant);
 }
 
 void ConfigCheck::checkConfig(const config::RenderConfig& config, bool print) { checkPlugins(config, std::nullopt, print); }

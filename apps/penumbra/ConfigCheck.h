@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 namespace penumbra::app {
@@ -39,22 +40,28 @@ public:
     // After the last variant: every --set that no variant's lights use is an error.
     void checkOverridesUsed();
 
-    const std::vector<Finding>& warnings() const { return warnings_; }
-    const std::vector<Finding>& errors() const { return errors_; }
+    const std::vector<Finding>& warnings() const { return warnings_.list; }
+    const std::vector<Finding>& errors() const { return errors_.list; }
     // The message, and where it was found unless in the config itself: "... (in variants
     // 4, 5 of 6)", "... (in every variant)".
     std::string describe(const Finding& finding) const;
 
 private:
     void checkPlugins(const config::RenderConfig& config, std::optional<size_t> variant, bool print);
-    static void add(std::vector<Finding>& list, std::string message, std::optional<size_t> variant);
+    // Findings in the order found, and each message's place among them: a sweep of 100,000
+    // variants may find as many distinct messages, each looked up once.
+    struct Findings {
+        std::vector<Finding> list;
+        std::unordered_map<std::string, size_t> index;
+    };
+    static void add(Findings& findings, std::string message, std::optional<size_t> variant);
 
     const config::RunOptions& options_;
     plugin::PluginRegistry& registry_;
     size_t variantCount_;
     std::vector<std::string> usedOverrides_;  // ParamOverride::where of those some variant used
-    std::vector<Finding> warnings_;
-    std::vector<Finding> errors_;
+    Findings warnings_;
+    Findings errors_;
 };
 
 } // namespace penumbra::app
