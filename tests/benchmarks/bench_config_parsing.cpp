@@ -8,7 +8,8 @@
 //   cmake --build --preset release --target penumbra_benchmarks
 //   build/release/tests/benchmarks/penumbra_benchmarks --benchmark_filter='Config' --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 //
-// Figures: see README.md ("Limits of a config").
+// Figures: README.md, the paragraph "Problems a run can meet" (2-core CI-class machine:
+// 100,000 keys 174 ms, 10,000 keys 20.7 ms; 100,000 empty objects 30.8 ms, 10,000 2.5 ms).
 #include "penumbra/config/Config.h"
 
 #include <benchmark/benchmark.h>
