@@ -498,6 +498,34 @@ TEST_F(Cli, ValidateMissingGltf)
     EXPECT_NE(r.err.find("nope.glb: glTF file not found"), std::string::npos) << r.err;
 }
 
+// A glTF model whose buffer lies beside its folder (issue 43): refused by default, read
+// once the folder is an allowed root, by --allow-root or the config's scene.allowed_roots.
+TEST_F(Cli, AllowRootLetsAModelReadBesideItsFolder)
+{
+    fs::create_directories(dir / "model");
+    fs::create_directories(dir / "shared");
+    fs::copy_file(penumbra::test::testDataDir() / "gltf" / "quad.bin", dir / "shared" / "quad.bin");
+    nlohmann::json gltf = nlohmann::json::parse(slurp(penumbra::test::testDataDir() / "gltf" / "quad_external.gltf"));
+    gltf["buffers"][0]["uri"] = "../shared/quad.bin";
+    std::ofstream(dir / "model" / "m.gltf") << gltf.dump();
+    const auto config = [&](const std::string& roots) {
+        std::ofstream(dir / "c.json") << R"({"scene": {"gltf": "model/m.gltf")" << roots << R"(},
+            "camera": {"position": [0, 3, 3], "target": [0, 0, 0]},
+            "lights": [{"type": "point", "position": [0, 2, 0], "shadow": {"resolution": 64}}]})";
+        return fmt::format("'{}'", (dir / "c.json").string());
+    };
+    const std::string model = fmt::format("'{}'", (dir / "model" / "m.gltf").string());
+    const std::string shared = fmt::format("'{}'", (dir / "shared").string());
+    for (const std::string& file : {model, config("")}) {
+        const CliResult r = run("validate " + file);
+        EXPECT_EQ(r.exitCode, 1) << r.out;
+        EXPECT_TRUE(has(r.err, "m.gltf: /buffers/0/uri: \"../shared/quad.bin\": names ")) << r.err;
+        EXPECT_EQ(run(fmt::format("validate {} --allow-root {}", file, shared)).exitCode, 0) << file;
+    }
+    const CliResult r = run("validate " + config(R"(, "allowed_roots": ["shared"])"));
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+}
+
 TEST_F(Cli, ValidateConfig)
 {
     CliResult r = run(fmt::format("validate {}", config("default.json")));
@@ -555,6 +583,23 @@ TEST_F(Cli, TheTradeoffBenchmarkValidatesWithEveryPlugin)
         << r.out;
     EXPECT_EQ(r.out.find("warning:"), std::string::npos) << r.out;
     EXPECT_TRUE(r.out.find("config ok") != std::string::npos) << r.out;
+}
+
+TEST_F(Cli, TheGpuCheckBenchHasEveryTechniquePlugin)
+{
+    // .ci/gpu-check.sh benches config/bench/gpu-check.json: one variant per plugin folder
+    // but the reference (the bench's truth), each of which validates.
+    const fs::path file = penumbra::test::sourceDir() / "config/bench/gpu-check.json";
+    const nlohmann::json doc = nlohmann::json::parse(std::ifstream(file));
+    std::set<std::string> benched;
+    for (const nlohmann::json& variant : doc.at("sweep").at(0).at("values")) benched.insert(variant.at("technique"));
+    std::set<std::string> plugins;
+    for (const fs::directory_entry& e : fs::directory_iterator(penumbra::test::sourceDir() / "plugins"))
+        if (e.is_directory() && e.path().filename() != "reference") plugins.insert(e.path().filename().string());
+    EXPECT_EQ(benched, plugins);
+    const CliResult r = run(fmt::format("validate {}", config("bench/gpu-check.json")));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_EQ(r.out.find("warning:"), std::string::npos) << r.out;
 }
 
 TEST_F(Cli, ValidateConfigRefusesAMissingGltf)
@@ -902,6 +947,114 @@ TEST_F(Cli, SetForATechniqueNoLightUsesOrWithBadSyntaxFailsBeforeRendering)
     r = run(fmt::format("validate {} --set hard.size=1", data("gltf/quad.glb")));
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_TRUE(has(r.err, "quad.glb: --set sets technique parameters of a config (.json), not of a glTF file")) << r.err;
+}
+
+// Issue 43: a value of 100 KB (an argument holds at most 128 KiB) or a 1 MB string in a
+// config is shown shortened, and the message still names where it was given.
+TEST_F(Cli, LongValuesAreShownShortenedNamingThePlace)
+{
+    const std::string longArg(100000, 'y');
+    const fs::path cfg = dir / "long.json";
+    std::ofstream(cfg) << R"({"camera": {"position": [0, 5, 10], "target": [0, 0, 0]},
+        "lights": [{"type": "spot", "position": [0, 10, 0], "target": [0, 0, 0],
+                    "shadow": {"technique": "hard", "pcf_kernel": ")"
+                       << std::string(1 << 20, 'k') << R"("}}]})";
+    const struct {
+        std::string args;
+        std::string where;
+    } cases[] = {
+        {fmt::format("validate '{}'", cfg.string()), "long.json: /lights/0/shadow/pcf_kernel: must be an integer"},
+        {fmt::format("validate {} --set hard.pcf_kernel={}", config("default.json"), longArg),
+         "--set hard.pcf_kernel: must be an integer"},
+        {fmt::format("render {} -o '{}/out.png' --culling {}", config("default.json"), dir.string(), longArg), "--culling"},
+        {fmt::format("render {} -o '{}/out.png' --debug-range {}", config("default.json"), dir.string(), longArg),
+         "--debug-range 'yyy"},
+        {fmt::format("generate box-grid -o '{}/g.gltf' --set rows={}", dir.string(), longArg), "rows must be a whole number"},
+    };
+    for (const auto& c : cases) {
+        SCOPED_TRACE(c.where);
+        const CliResult r = run(c.args);
+        EXPECT_NE(r.exitCode, 0);
+        EXPECT_LT(r.err.size(), 4000u) << r.err.substr(0, 400);
+        EXPECT_TRUE(has(r.err, c.where)) << r.err.substr(0, 400);
+    }
+    EXPECT_FALSE(fs::exists(dir / "out.png"));
+}
+
+TEST_F(Cli, AMisspelledShadowKeyGetsADidYouMeanFromTheConfigReader)
+{
+    const fs::path cfg = dir / "typo.json";
+    std::ofstream(cfg) << R"({"camera": {"position": [0, 5, 10], "target": [0, 0, 0]},
+        "lights": [{"type": "spot", "position": [0, 10, 0], "target": [0, 0, 0], "shadow": {"technque": "pcss"}}]})";
+    const CliResult r = run(fmt::format("validate '{}'", cfg.string()));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(has(r.err, "typo.json: /lights/0/shadow/technque: unknown key; did you mean \"technique\"?")) << r.err;
+    EXPECT_FALSE(has(r.err, "plugin 'hard'")) << r.err;
+}
+
+// A device that does not exist fails only once the device is chosen: an error about a
+// --set (or an image name) instead shows that it came first.
+TEST_F(Cli, SetErrorsComeBeforeTheDeviceStarts)
+{
+    const std::string noDevice = "--device no-such-gpu";
+    for (const std::string& command : {fmt::format("render {} -o '{}/out.png'", config("default.json"), dir.string()),
+                                       fmt::format("graph {}", config("default.json")),
+                                       fmt::format("compare {}", config("default.json"))}) {
+        SCOPED_TRACE(command);
+        CliResult r = run(fmt::format("{} {} --set hard.pcf_kernl=3", command, noDevice));
+        EXPECT_EQ(r.exitCode, 1);
+        EXPECT_TRUE(has(r.err, "--set hard.pcf_kernl: plugin 'hard' has no parameter 'pcf_kernl'; did you mean 'pcf_kernel'?"))
+            << r.err;
+        EXPECT_FALSE(has(r.err, "no suitable device")) << r.err;
+        r = run(fmt::format("{} {} --set nosuch.size=1", command, noDevice));
+        EXPECT_EQ(r.exitCode, 1);
+        EXPECT_TRUE(has(r.err, "--set nosuch.size: no light of ")) << r.err;
+        EXPECT_FALSE(has(r.err, "no suitable device")) << r.err;
+    }
+    EXPECT_FALSE(fs::exists(dir / "out.png"));
+}
+
+TEST_F(Cli, RenderCompareAndGraphSayThatTheyIgnoreASweep)
+{
+    const fs::path cfg = dir / "swept.json";
+    std::ofstream(cfg) << R"({"camera": {"position": [0, 5, 10], "target": [0, 0, 0]},
+        "lights": [{"type": "spot", "position": [0, 10, 0], "target": [0, 0, 0]}],
+        "sweep": [{"path": "/lights/0/intensity", "values": [1, 2]}]})";
+    for (const char* command : {"render", "compare", "graph"}) {
+        SCOPED_TRACE(command);
+        const std::string output = std::string(command) == "render" ? fmt::format(" -o '{}/out.png'", dir.string()) : "";
+        // The warning comes while the config is read, before the device (here: none) is chosen.
+        const CliResult r = run(fmt::format("{} '{}'{} --device no-such-gpu", command, cfg.string(), output));
+        EXPECT_TRUE(has(r.err, fmt::format("swept.json: /sweep: {} ignores the sweep and draws the config as written; "
+                                           "`penumbra bench` runs its variants",
+                                           command)))
+            << r.err;
+    }
+}
+
+TEST_F(Cli, TheOutputNameChoosesPngOrJpegAndOtherNamesAreRefused)
+{
+    const fs::path jpg = dir / "out.jpg";
+    CliResult r = run(fmt::format("render {} -o '{}' --width 32 --height 18", config("default.json"), jpg.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const std::string bytes = slurp(jpg);
+    ASSERT_GT(bytes.size(), 3u);
+    EXPECT_EQ(bytes.substr(0, 3), "\xFF\xD8\xFF");  // a JPEG, not PNG bytes under a .jpg name
+    int w = 0, h = 0, n = 0;
+    unsigned char* pixels = stbi_load(jpg.c_str(), &w, &h, &n, 3);
+    ASSERT_NE(pixels, nullptr);
+    EXPECT_EQ(w, 32);
+    EXPECT_EQ(h, 18);
+    stbi_image_free(pixels);
+
+    for (const char* name : {"out.bmp", "out", "f{frame:04}.tif"}) {
+        SCOPED_TRACE(name);
+        r = run(fmt::format("render {} -o '{}/{}' --device no-such-gpu", config("default.json"), dir.string(), name));
+        EXPECT_EQ(r.exitCode, 1);
+        EXPECT_TRUE(has(r.err, "an image is written as .png or .jpg (.jpeg)")) << r.err;
+        EXPECT_FALSE(has(r.err, "no suitable device")) << r.err;
+        EXPECT_FALSE(fs::exists(dir / name));
+    }
 }
 
 // --- compare -----------------------------------------------------------------------------
