@@ -585,6 +585,55 @@ TEST_F(Cli, TheTradeoffBenchmarkValidatesWithEveryPlugin)
     EXPECT_TRUE(r.out.find("config ok") != std::string::npos) << r.out;
 }
 
+// The README's synopsis (the block under "## The `penumbra` command") names every flag
+// that each subcommand's --help offers, and the program's own (-v).
+TEST_F(Cli, TheReadmeSynopsisNamesEveryFlag)
+{
+    const std::string readme = slurp(penumbra::test::sourceDir() / "README.md");
+    const size_t section = readme.find("## The `penumbra` command");
+    ASSERT_NE(section, std::string::npos);
+    const size_t open = readme.find("```\n", section), close = readme.find("```", open + 4);
+    ASSERT_NE(close, std::string::npos);
+    const std::string synopsis = readme.substr(open + 4, close - open - 4);
+    // Each subcommand's lines: from "penumbra NAME" to the next line that starts with "penumbra ".
+    const auto linesOf = [&](const std::string& name) {
+        size_t at = synopsis.find("penumbra " + name);
+        while (at != std::string::npos && std::string(" \n").find(synopsis[at + 9 + name.size()]) == std::string::npos)
+            at = synopsis.find("penumbra " + name, at + 1);
+        if (at == std::string::npos) return std::string();
+        const size_t next = synopsis.find("\npenumbra ", at);
+        return synopsis.substr(at, next == std::string::npos ? std::string::npos : next - at);
+    };
+    const auto flagsOf = [](const std::string& help) {
+        std::set<std::string> flags;
+        std::istringstream lines(help);
+        for (std::string line; std::getline(lines, line);) {
+            std::istringstream words(line);
+            std::string first;
+            words >> first;
+            if (first.rfind("-", 0) == 0 && first != "-h,--help") flags.insert(first);
+        }
+        return flags;
+    };
+    // "-o,--output": either spelling will do.
+    const auto names = [](const std::string& text, const std::string& flag) {
+        std::istringstream spellings(flag);
+        for (std::string spelling; std::getline(spellings, spelling, ',');)
+            if (has(text, spelling + " ") || has(text, spelling + "|") || has(text, spelling + "]")) return true;
+        return false;
+    };
+    for (const std::string name : {"render", "graph", "compare", "bench", "plugins", "generate", "validate", "devices"}) {
+        SCOPED_TRACE(name);
+        const CliResult help = run(name + " --help");
+        ASSERT_EQ(help.exitCode, 0) << help.err;
+        const std::string lines = linesOf(name);
+        ASSERT_FALSE(lines.empty()) << "no synopsis for " << name;
+        for (const std::string& flag : flagsOf(help.out)) EXPECT_TRUE(names(lines, flag)) << flag << " not in\n" << lines;
+    }
+    const CliResult help = run("--help");
+    for (const std::string& flag : flagsOf(help.out)) EXPECT_TRUE(names(synopsis, flag)) << flag;
+}
+
 TEST_F(Cli, TheGpuCheckBenchHasEveryTechniquePlugin)
 {
     // .ci/gpu-check.sh benches config/bench/gpu-check.json: one variant per plugin folder
@@ -682,13 +731,14 @@ const std::string kShadowedPlugins = penumbra::test::shadowedTestPluginDir().str
 std::string pluginPath() { return fmt::format("PENUMBRA_PLUGIN_PATH='{}:{}'", kTestPlugins, kShadowedPlugins); }
 
 
-// A light using testgood with `shadow`'s extra keys, and one whose plugin exists nowhere.
+// A light using testgood with `shadow`'s extra keys, and one whose plugin exists nowhere
+// (optional: "required": false).
 std::string testGoodConfig(const std::string& shadow, const std::string& extra = "")
 {
     return fmt::format(R"({{"camera": {{"position": [0, 5, 10], "target": [0, 0, 0]}},
         "scene": {{"generator": "box-grid", "params": {{"rows": 1, "columns": 1}}}},
         "lights": [{{"name": "key", "type": "point", "position": [0, 4, 0], "shadow": {{"technique": "testgood"{}}}}},
-                   {{"name": "fill", "type": "point", "position": [2, 4, 0], "shadow": {{"technique": "nosuch"}}}}]{}}})",
+                   {{"name": "fill", "type": "point", "position": [2, 4, 0], "shadow": {{"technique": "nosuch", "required": false}}}}]{}}})",
                        shadow, extra);
 }
 
@@ -878,7 +928,8 @@ TEST_F(Cli, ValidateAppliesASetToTheVariantsThatUseItsTechnique)
 {
     // As bench does: light 0 is testgood in one variant, nosuch in the other.
     const fs::path cfg = dir / "cfg.json";
-    std::ofstream(cfg) << testGoodConfig("", R"(, "sweep": [{"path": "/lights/0/shadow/technique", "values": ["testgood", "nosuch"]}])");
+    std::ofstream(cfg) << testGoodConfig(R"(, "required": false)",
+                                         R"(, "sweep": [{"path": "/lights/0/shadow/technique", "values": ["testgood", "nosuch"]}])");
     CliResult r = run(fmt::format("validate '{}' --set testgood.kernel=5", cfg.string()), pluginPath());
     EXPECT_EQ(r.exitCode, 0) << r.err;
     EXPECT_TRUE(has(r.out, "config ok")) << r.out;
@@ -890,6 +941,73 @@ TEST_F(Cli, ValidateAppliesASetToTheVariantsThatUseItsTechnique)
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_TRUE(has(r.err, "--set other.kernel: no light of any sweep variant uses technique 'other'")) << r.err;
     EXPECT_TRUE(r.err.ends_with(": 1 error\n")) << r.err;
+}
+
+// A misspelt technique is an error in validate and render alike, naming where the config
+// says it and the closest plugin name, unless the light says "required": false.
+TEST_F(Cli, AnUnknownTechniqueIsAnErrorUnlessTheLightMayGoWithout)
+{
+    const fs::path cfg = dir / "cfg.json";
+    const auto write = [&](const std::string& shadow) {
+        std::ofstream(cfg, std::ios::trunc) << fmt::format(R"({{"camera": {{"position": [0, 5, 10], "target": [0, 0, 0]}},
+            "lights": [{{"name": "key", "type": "point", "position": [0, 4, 0], "shadow": {}}}]}})", shadow);
+    };
+    write(R"({"technique": "pcsss"})");
+    CliResult r = run(fmt::format("validate '{}'", cfg.string()));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(has(r.err, cfg.string() + ": /lights/0/shadow/technique: light 0 ('key'): technique 'pcsss' cannot be used"))
+        << r.err;
+    EXPECT_TRUE(has(r.err, "did you mean 'pcss'?")) << r.err;
+    EXPECT_TRUE(has(r.err, "plugins there: ")) << r.err;
+    r = run(fmt::format("render '{}' -o '{}' --width 16 --height 16", cfg.string(), (dir / "out.png").string()));
+    EXPECT_EQ(r.exitCode, 1);
+    // In validate's words: render checks the lights' plugins before the device starts.
+    EXPECT_TRUE(has(r.err, "/lights/0/shadow/technique: light 0 ('key'): technique 'pcsss' cannot be used")) << r.err;
+    EXPECT_TRUE(has(r.err, "plugin 'pcsss': no file penumbra-pcsss.so")) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out.png"));
+
+    write(R"({"technique": "pcsss", "required": false})");
+    r = run(fmt::format("validate '{}'", cfg.string()));
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(has(r.out, "warning: light 0 ('key') would render without shadows: plugin 'pcsss'")) << r.out;
+    EXPECT_TRUE(has(r.out, "config ok")) << r.out;
+}
+
+// A plugin whose loading crashes (SIGSEGV in its entry point) kills the plugin scanner, not
+// penumbra: `plugins` lists it as an error (exit 0; --strict 1), render with it exits 1
+// naming the plugin and the signal.
+TEST_F(Cli, APluginThatCrashesWhileLoadingIsReportedNotACrash)
+{
+    fs::create_directories(dir / "plugins");
+    fs::create_symlink(penumbra::test::crashingTestPluginDir() / "penumbra-crashes.so", dir / "plugins" / "penumbra-crashes.so");
+    const std::string env = fmt::format("PENUMBRA_PLUGIN_PATH='{}'", (dir / "plugins").string());
+    CliResult r = run("plugins", env);
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(has(r.out, "error [scan-failed]: plugin 'crashes' (")) << r.out;
+    EXPECT_TRUE(has(r.out, "the plugin scanner died of SIGSEGV")) << r.out;
+    EXPECT_EQ(run("plugins --strict", env).exitCode, 1);
+
+    const fs::path cfg = dir / "cfg.json";
+    std::ofstream(cfg) << R"({"camera": {"position": [0, 5, 10], "target": [0, 0, 0]},
+        "lights": [{"name": "key", "type": "point", "position": [0, 4, 0], "shadow": {"technique": "crashes"}}]})";
+    r = run(fmt::format("render '{}' -o '{}' --width 16 --height 16", cfg.string(), (dir / "out.png").string()), env);
+    EXPECT_EQ(r.exitCode, 1) << r.err;
+    EXPECT_TRUE(has(r.err, "plugin 'crashes' (")) << r.err;
+    EXPECT_TRUE(has(r.err, "the plugin scanner died of SIGSEGV")) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out.png"));
+}
+
+// A plugin scan cache that cannot be read is ignored with a warning, and rewritten.
+TEST_F(Cli, ACorruptPluginScanCacheIsIgnoredWithAWarning)
+{
+    const fs::path cache = dir / "cache" / "penumbra" / fmt::format("plugin-scan-{}.json", PENUMBRA_PLUGIN_ABI_VERSION);
+    fs::create_directories(cache.parent_path());
+    std::ofstream(cache) << "not json";
+    const CliResult r = run("plugins --json", fmt::format("XDG_CACHE_HOME='{}' {}", (dir / "cache").string(), pluginPath()));
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(has(r.err, "warning: " + cache.string() + ": ignoring the plugin scan cache")) << r.err;
+    EXPECT_FALSE(nlohmann::json::parse(r.out)["plugins"].empty());
+    EXPECT_FALSE(nlohmann::json::parse(slurp(cache))["entries"].empty()) << "rewritten";
 }
 
 TEST_F(Cli, ValidateRequiredPluginThatCannotLoadIsAnError)
