@@ -81,6 +81,17 @@ for f in penumbra-example.so example/visibility.comp; do
   [[ -e "$work/plugin-prefix/lib/penumbra/plugins/$f" ]] || fail "the example's install lacks lib/penumbra/plugins/$f"
 done
 
+# Installed files name no folder of the machine they were built on: every run path is
+# relative to the file ($ORIGIN).
+step "installed run paths are relative"
+while IFS= read -r f; do
+  runpath=$(readelf -d "$f" 2>/dev/null | sed -n 's/.*(\(RUNPATH\|RPATH\)).*\[\(.*\)\]/\2/p')
+  IFS=: read -ra entries <<<"$runpath"
+  for e in "${entries[@]}"; do
+    [[ $e == '$ORIGIN'* ]] || fail "$f: run path entry '$e' is not relative to \$ORIGIN"
+  done
+done < <(find "$prefix" "$work/plugin-prefix" -type f \( -name '*.so*' -o -perm -u+x \))
+
 # The installed command finds the installed library (RUNPATH $ORIGIN/../lib) and the
 # shaders installed next to it, not the source tree's. A missing installed shader must
 # therefore be an error that names the prefix.
@@ -120,5 +131,19 @@ EOF
    "$work/example.json" -o "$work/example.png" --width 64 --height 48 >"$work/render.log" 2>&1) \
   || { cat "$work/render.log"; fail "the installed penumbra does not render with the out-of-tree example"; }
 [[ -s "$work/example.png" ]] || fail "no $work/example.png"
+
+# The installed plugin reads its installed shaders, not those of the tree it was built
+# from (which exists here): with a broken installed visibility.comp it cannot render, and
+# the error names the installed file.
+step "the installed example reads its installed shaders"
+installed_shader="$work/plugin-prefix/lib/penumbra/plugins/example/visibility.comp"
+cp "$installed_shader" "$work/visibility.comp"
+echo "this line is no GLSL" >>"$installed_shader"
+if (cd "$work" && PENUMBRA_PLUGIN_PATH="$work/plugin-prefix/lib/penumbra/plugins" "$prefix/bin/penumbra" render \
+      "$work/example.json" -o "$work/example-broken-shader.png" --width 64 --height 48 >"$work/render.log" 2>&1); then
+  fail "the installed example rendered with a broken installed visibility.comp (it reads the source tree)"
+fi
+grep -qF "$installed_shader" "$work/render.log" || { cat "$work/render.log"; fail "the shader error does not name $installed_shader"; }
+cp "$work/visibility.comp" "$installed_shader"
 
 step "ok"

@@ -100,8 +100,8 @@ const char* penumbra_plugin_shader_dir() { return \"${shader_dir_literal}\"; }
     VISIBILITY_INLINES_HIDDEN ON
     # The engine is already loaded when a plugin is; the run path only serves tools such
     # as ldd: installed plugins live in <libdir>/penumbra/plugins, two levels below it.
-    INSTALL_RPATH "$ORIGIN/../.."
-    INSTALL_RPATH_USE_LINK_PATH ON)
+    # Relative only: an installed file names no folder of the machine it was built on.
+    INSTALL_RPATH "$ORIGIN/../..")
 
   set(plugin_dir "${CMAKE_INSTALL_LIBDIR}/penumbra/plugins")
   install(TARGETS ${target} LIBRARY DESTINATION "${plugin_dir}")
