@@ -197,9 +197,8 @@ std::vector<std::string> Session::techniqueNames()
 {
     if (!techniques_) {
         std::vector<std::string> names;
-        for (const plugin::LoadedPlugin* p : plugins_->discoverAll().plugins) {
-            names.emplace_back(p->name());
-        }
+        // Scanned, not loaded: only the techniques a light uses run in the viewer's process.
+        for (const plugin::PluginMetadata* p : plugins_->scanAll().plugins) names.push_back(p->name());
         std::sort(names.begin(), names.end());
         names.insert(names.begin(), std::string(config::kNoShadowTechnique));
         techniques_ = names;
@@ -243,7 +242,7 @@ std::unique_ptr<frame::FrameRenderer> Session::build() const
     for (size_t i = 0; i < strict.lights.size(); ++i) {
         const bool drew = renderer_ && i < renderer_->lightCount() && !renderer_->techniqueName(i).empty();
         const bool chosen = i >= shown_.lights.size() || shown_.lights[i].shadow.technique != strict.lights[i].shadow.technique;
-        strict.lights[i].shadow.required = strict.lights[i].shadow.required || drew || chosen;
+        if (drew || chosen) strict.lights[i].shadow.required = true;
     }
     auto renderer = std::make_unique<frame::FrameRenderer>(context_, run_->scene, strict, newPlugins_ ? *newPlugins_ : *plugins_);
     if (!shownImage_.empty()) {

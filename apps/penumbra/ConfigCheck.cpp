@@ -54,13 +54,19 @@ void ConfigCheck::checkPlugins(const config::RenderConfig& config, std::optional
             if (print) fmt::print("{}: unshadowed (technique \"{}\")\n", who, light.shadow.technique);
             continue;
         }
-        const plugin::LoadedPlugin* loaded = nullptr;
+        // Scanned, not loaded: checking a config runs no plugin code in this process.
+        const plugin::PluginMetadata* scanned = nullptr;
         try {
-            loaded = &registry_.load(light.shadow.technique);
+            scanned = &registry_.scan(light.shadow.technique);
         } catch (const plugin::PluginError& e) {
-            if (light.shadow.required) {
+            // As render decides (frame/FrameRenderer.cpp). A misspelt technique ("pcsss") is
+            // FileMissing, whose message lists the plugins found and the closest name.
+            if (light.shadow.loadFailureStopsTheRun()) {
                 add(errors_,
-                    fmt::format("{}: required technique '{}' cannot be used: {}", who, light.shadow.technique, e.what()),
+                    fmt::format("{}{}: {}technique '{}' cannot be used: {}{}",
+                                light.shadow.techniqueWhere.empty() ? "" : light.shadow.techniqueWhere + ": ", who,
+                                light.shadow.required ? "required " : "", light.shadow.technique, e.what(),
+                                light.shadow.required ? "" : config::kOptionalTechniqueHint),
                     variant);
             } else {
                 add(warnings_, fmt::format("{} would render without shadows: {}", who, e.what()), variant);
@@ -68,7 +74,7 @@ void ConfigCheck::checkPlugins(const config::RenderConfig& config, std::optional
             continue;
         }
         std::vector<std::string> badValues;
-        const plugin::ParamValues values = plugin::resolveParams(*loaded, light.shadow, &badValues);
+        const plugin::ParamValues values = plugin::resolveParams(*scanned, light.shadow, &badValues);
         for (std::string& message : badValues) add(errors_, std::move(message), variant);
         if (print && badValues.empty()) {
             const json current = values.toJson();
@@ -76,7 +82,7 @@ void ConfigCheck::checkPlugins(const config::RenderConfig& config, std::optional
             for (const plugin::ParamSpec& spec : values.specs()) {
                 settings.push_back(fmt::format("{}={}", spec.name, current[spec.name].dump()));
             }
-            fmt::print("{}: plugin {} {} ({}): {}\n", who, loaded->name(), loaded->info->version, loaded->file.string(),
+            fmt::print("{}: plugin {} {} ({}): {}\n", who, scanned->name(), scanned->version(), scanned->file().string(),
                        settings.empty() ? "no parameters" : fmt::format("{}", fmt::join(settings, " ")));
         }
     }

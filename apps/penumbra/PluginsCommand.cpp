@@ -35,32 +35,22 @@ std::string describeValues(const plugin::ParamSpec& spec)
     return out;
 }
 
-json pluginToJson(const plugin::LoadedPlugin& p)
+void printPlugin(const plugin::PluginMetadata& p)
 {
-    json params = json::array();
-    for (uint32_t i = 0; i < p.info->paramCount; ++i) params.push_back(plugin::specToJson(p.info->params[i]));
-    return {{"name", p.info->name},        {"version", p.info->version}, {"summary", p.info->summary},
-            {"file", p.file.string()},     {"abi", p.info->abiVersion},  {"shader_dir", p.shaderDir.string()},
-            {"params", std::move(params)}};
-}
-
-void printPlugin(const plugin::LoadedPlugin& p)
-{
-    fmt::print("{} {}: {}\n", p.info->name, p.info->version, p.info->summary);
-    fmt::print("  file:    {}\n", p.file.string());
-    fmt::print("  shaders: {}\n", p.shaderDir.string());
-    if (p.info->paramCount == 0) {
+    fmt::print("{} {}: {}\n", p.name(), p.version(), p.summary());
+    fmt::print("  file:    {}\n", p.file().string());
+    fmt::print("  shaders: {}\n", p.shaderDir().string());
+    if (p.params().empty()) {
         fmt::print("  no parameters\n");
         return;
     }
     size_t nameWidth = 0, valuesWidth = 0;
-    for (uint32_t i = 0; i < p.info->paramCount; ++i) {
-        nameWidth = std::max(nameWidth, std::string_view(p.info->params[i].name).size());
-        valuesWidth = std::max(valuesWidth, describeValues(p.info->params[i]).size());
+    for (const plugin::ParamSpec& spec : p.params()) {
+        nameWidth = std::max(nameWidth, std::string_view(spec.name).size());
+        valuesWidth = std::max(valuesWidth, describeValues(spec).size());
     }
     fmt::print("  parameters:\n");
-    for (uint32_t i = 0; i < p.info->paramCount; ++i) {
-        const plugin::ParamSpec& spec = p.info->params[i];
+    for (const plugin::ParamSpec& spec : p.params()) {
         fmt::print("    {:<{}}  {:<5}  {:<{}}  {}\n", spec.name, nameWidth, plugin::paramTypeName(spec.type),
                    describeValues(spec), valuesWidth, spec.doc);
     }
@@ -71,24 +61,26 @@ int runPlugins(const PluginsFlags& flags)
     std::vector<fs::path> searchPath(flags.path.begin(), flags.path.end());
     for (fs::path& dir : plugin::defaultPluginSearchPath()) searchPath.push_back(std::move(dir));
     plugin::PluginRegistry registry(searchPath);
-    const plugin::PluginRegistry::Discovery found = registry.discoverAll();
+    // Scanned, each in the plugin scanner's process: nothing of a plugin runs here.
+    const plugin::PluginRegistry::Scan found = registry.scanAll();
 
     if (flags.json) {
         json doc = {{"abi", PENUMBRA_PLUGIN_ABI_VERSION}, {"search_path", json::array()}, {"plugins", json::array()},
                     {"errors", json::array()}};
         for (const fs::path& dir : registry.searchPath()) doc["search_path"].push_back(dir.string());
-        for (const plugin::LoadedPlugin* p : found.plugins) doc["plugins"].push_back(pluginToJson(*p));
+        for (const plugin::PluginMetadata* p : found.plugins) doc["plugins"].push_back(p->toJson());
         for (const plugin::PluginError& e : found.errors) {
             doc["errors"].push_back(
                 {{"file", e.file().string()}, {"kind", plugin::pluginErrorKindName(e.kind())}, {"message", e.what()}});
         }
-        fmt::print("{}\n", doc.dump(2));
+        // Messages quote damaged files' strings (dlerror does), which need not be UTF-8.
+        fmt::print("{}\n", doc.dump(2, ' ', false, json::error_handler_t::replace));
     } else {
         std::vector<std::string> folders;
         for (const fs::path& dir : registry.searchPath()) folders.push_back(dir.string());
         fmt::print("plugin search path: {} (plugin ABI {})\n", folders.empty() ? "empty" : fmt::format("{}", fmt::join(folders, ":")),
                    PENUMBRA_PLUGIN_ABI_VERSION);
-        for (const plugin::LoadedPlugin* p : found.plugins) {
+        for (const plugin::PluginMetadata* p : found.plugins) {
             fmt::print("\n");
             printPlugin(*p);
         }

@@ -115,7 +115,7 @@ int runValidateConfig(const ValidateFlags& flags)
         std::string params;
         for (const config::ShadowParam& p : l.shadow.params) params += fmt::format(" {}={}", p.name, p.value.dump());
         fmt::print("light '{}': {}, intensity {:.4g}, shadow {}{}{}\n", l.name, scene::lightTypeName(l.light.type),
-                   l.light.intensity, l.shadow.technique, l.shadow.required ? " (required)" : "", params);
+                   l.light.intensity, l.shadow.technique, l.shadow.required == true ? " (required)" : "", params);
     }
     plugin::PluginRegistry plugins;
     ConfigCheck check(options, plugins, swept ? variants.size() : 0);

@@ -54,6 +54,12 @@ const std::filesystem::path& shadowedTestPluginDir()
     return path;
 }
 
+const std::filesystem::path& crashingTestPluginDir()
+{
+    static const std::filesystem::path path = PENUMBRA_TEST_CRASHING_PLUGIN_DIR;
+    return path;
+}
+
 const std::filesystem::path& testPluginSourceDir()
 {
     static const std::filesystem::path path = PENUMBRA_TEST_PLUGIN_SOURCE_DIR;

@@ -23,6 +23,9 @@ const std::filesystem::path& buildPluginDir();
 // the same name shadows.
 const std::filesystem::path& testPluginDir();
 const std::filesystem::path& shadowedTestPluginDir();
+// Test plugins whose loading crashes (SIGSEGV in the entry point or a constructor) or
+// hangs: only the plugin scanner may meet them.
+const std::filesystem::path& crashingTestPluginDir();
 // The test plugins' sources (their shaders).
 const std::filesystem::path& testPluginSourceDir();
 

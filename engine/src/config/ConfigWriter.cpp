@@ -74,7 +74,7 @@ json cameraJson(const scene::Camera& camera)
 json shadowJson(const ShadowSettings& shadow)
 {
     json out = {{"technique", shadow.technique}};
-    if (shadow.required) out["required"] = true;
+    if (shadow.required) out["required"] = *shadow.required;
     for (const ShadowParam& param : shadow.params) out[param.name] = param.value;
     return out;
 }

@@ -89,6 +89,7 @@ ShadowSettings readShadow(ObjectReader& light)
     if (!v) return s;
     ObjectReader r(*v, light.locator(), light.path("shadow"));
     s.technique = r.string("technique", s.technique);
+    if (r.find("technique")) s.techniqueWhere = light.locator().where(r.path("technique"));
     const bool nameOk = std::all_of(s.technique.begin(), s.technique.end(), [](char c) {
         return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
     });

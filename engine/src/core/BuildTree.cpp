@@ -8,5 +8,7 @@ const char* buildTreeShaderDir() { return PENUMBRA_DEFAULT_SHADER_DIR; }
 const char* shaderDirFromLibrary() { return PENUMBRA_SHADER_DIR_FROM_LIBRARY; }
 const char* buildTreePluginDir() { return PENUMBRA_BUILD_PLUGIN_DIR; }
 const char* buildTreeLibraryDir() { return PENUMBRA_BUILD_LIBRARY_DIR; }
+const char* buildTreeScanner() { return PENUMBRA_BUILD_SCANNER; }
+const char* scannerFromLibrary() { return PENUMBRA_SCANNER_FROM_LIBRARY; }
 
 } // namespace penumbra::core

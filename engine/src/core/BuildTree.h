@@ -14,5 +14,9 @@ const char* shaderDirFromLibrary();
 // library searches those plugins).
 const char* buildTreePluginDir();
 const char* buildTreeLibraryDir();
+// The build tree's plugin scanner, and an installed one's path relative to the library's
+// folder (../libexec/penumbra/penumbra-plugin-scanner).
+const char* buildTreeScanner();
+const char* scannerFromLibrary();
 
 } // namespace penumbra::core

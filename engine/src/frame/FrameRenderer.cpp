@@ -149,7 +149,7 @@ void FrameRenderer::createTechniques(const config::RenderConfig& config, const s
         const config::LightConfig& lc = config.lights[i];
         LightSlot& slot = lights_[i];
         slot.visibility = fmt::format("light{}.visibility", i);
-        slot.required = lc.shadow.required;
+        slot.required = lc.shadow.registrationFailureStopsTheRun();
         slot.light = lc.light;
         slot.unshadowed = lc.shadow.unshadowed();
         if (slot.unshadowed) {
@@ -160,7 +160,11 @@ void FrameRenderer::createTechniques(const config::RenderConfig& config, const s
         try {
             slot.plugin = &plugins_.load(lc.shadow.technique);
         } catch (const plugin::PluginError& e) {
-            if (slot.required) throw plugin::PluginError(e.kind(), fmt::format("{}: {}", who, e.what()));
+            if (lc.shadow.loadFailureStopsTheRun()) {
+                const std::string where = lc.shadow.techniqueWhere.empty() ? "" : lc.shadow.techniqueWhere + ": ";
+                throw plugin::PluginError(e.kind(), fmt::format("{}{}: {}{}", where, who, e.what(),
+                                                                lc.shadow.required ? "" : config::kOptionalTechniqueHint));
+            }
             dropTechnique(i, e.what());
             continue;
         }

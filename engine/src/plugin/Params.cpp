@@ -2,6 +2,7 @@
 
 #include "core/Text.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/core/ShortText.h"
 #include "penumbra/plugin/PluginRegistry.h"
 
 #include <fmt/format.h>
@@ -33,14 +34,6 @@ std::string expectation(const ParamSpec& spec)
     }
     }
     return "?";
-}
-
-// A value as the user wrote it; non-finite numbers (which JSON cannot hold, but a
-// program can build) as "nan"/"inf" rather than dump()'s "null".
-std::string shown(const json& value)
-{
-    if (value.is_number_float() && !std::isfinite(value.get<double>())) return fmt::format("{}", value.get<double>());
-    return value.dump();
 }
 
 // The value as stored (double; Enum: the choice's index), or nullopt when `value` does
@@ -111,9 +104,10 @@ void ParamValues::set(std::string_view name, const json& value, const std::strin
         const std::string best = core::closestMatch(name, names);
         const std::string known = names.empty() ? "it has none" : fmt::format("it has: {}", fmt::join(names, ", "));
         throw ConfigError(best.empty()
-                              ? fmt::format("{}: plugin '{}' has no parameter '{}' ({})", where, plugin_, name, known)
+                              ? fmt::format("{}: plugin '{}' has no parameter '{}' ({})", where, plugin_,
+                                            core::shortText(name), known)
                               : fmt::format("{}: plugin '{}' has no parameter '{}'; did you mean '{}'? ({})", where, plugin_,
-                                            name, best, known));
+                                            core::shortText(name), best, known));
     }
     const ParamSpec& spec = specs_[index];
     const std::optional<double> converted = convert(spec, value);
@@ -124,7 +118,7 @@ void ParamValues::set(std::string_view name, const json& value, const std::strin
             if (!best.empty()) hint = fmt::format("; did you mean \"{}\"?", best);
         }
         throw ConfigError(fmt::format("{}: must be {} (plugin {}, parameter {}: {}), got {}{}", where, expectation(spec),
-                                      plugin_, spec.name, spec.doc, shown(value), hint));
+                                      plugin_, spec.name, spec.doc, core::shortJson(value), hint));
     }
     values_[index] = *converted;
 }
@@ -178,13 +172,14 @@ json specToJson(const ParamSpec& spec)
     return out;
 }
 
-ParamValues resolveParams(const LoadedPlugin& plugin, const config::ShadowSettings& shadow, std::vector<std::string>* errors)
+namespace {
+
+ParamValues resolveFrom(ParamValues values, const config::ShadowSettings& shadow, std::vector<std::string>* errors)
 {
-    if (shadow.technique != plugin.name()) {
+    if (shadow.technique != values.pluginName()) {
         throw Error(fmt::format("resolveParams: the light's technique is '{}', the plugin is '{}'", shadow.technique,
-                                plugin.name()));
+                                values.pluginName()));
     }
-    ParamValues values = plugin.defaultParams();
     for (const config::ShadowParam& p : shadow.params) {
         try {
             values.set(p.name, p.value, p.where);
@@ -194,6 +189,18 @@ ParamValues resolveParams(const LoadedPlugin& plugin, const config::ShadowSettin
         }
     }
     return values;
+}
+
+} // namespace
+
+ParamValues resolveParams(const LoadedPlugin& plugin, const config::ShadowSettings& shadow, std::vector<std::string>* errors)
+{
+    return resolveFrom(plugin.defaultParams(), shadow, errors);
+}
+
+ParamValues resolveParams(const PluginMetadata& plugin, const config::ShadowSettings& shadow, std::vector<std::string>* errors)
+{
+    return resolveFrom(plugin.defaultParams(), shadow, errors);
 }
 
 } // namespace penumbra::plugin

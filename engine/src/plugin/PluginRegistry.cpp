@@ -4,7 +4,9 @@
 
 #include "core/BuildTree.h"
 #include "core/Text.h"
-#include "gpu/SanitizerSupport.h"
+#include "plugin/PluginLibrary.h"
+#include "plugin/PluginScanner.h"
+#include "plugin/ScanCache.h"
 
 #include <fmt/format.h>
 
@@ -25,6 +27,7 @@ namespace penumbra::plugin {
 namespace {
 
 constexpr const char* kPathVariable = "PENUMBRA_PLUGIN_PATH";
+constexpr const char* kScannerVariable = "PENUMBRA_PLUGIN_SCANNER";
 constexpr std::string_view kFilePrefix = "penumbra-";
 constexpr std::string_view kFileSuffix = ".so";
 
@@ -96,6 +99,12 @@ fs::path engineLibraryDir()
     return fs::path(info.dli_fname).parent_path();
 }
 
+bool isBuildTreeLibrary(const fs::path& library)
+{
+    std::error_code ec;
+    return fs::equivalent(library, core::buildTreeLibraryDir(), ec);
+}
+
 // The engine's own plugins: the build tree's plugins/ for the library the build tree made,
 // <libdir>/penumbra/plugins beside any other copy of it (an install, wherever it was
 // installed to). Never both: an installed engine must not load the plugins of the tree
@@ -104,8 +113,7 @@ fs::path enginePluginDir()
 {
     const fs::path library = engineLibraryDir();
     if (library.empty()) return {};
-    std::error_code ec;
-    if (fs::equivalent(library, core::buildTreeLibraryDir(), ec)) return core::buildTreePluginDir();
+    if (isBuildTreeLibrary(library)) return core::buildTreePluginDir();
     return library / "penumbra" / "plugins";
 }
 
@@ -178,8 +186,16 @@ const char* pluginErrorKindName(PluginErrorKind kind)
     case PluginErrorKind::DuplicateName: return "duplicate-name";
     case PluginErrorKind::NameMismatch: return "name-mismatch";
     case PluginErrorKind::RegistrationFailed: return "registration-failed";
+    case PluginErrorKind::ScanFailed: return "scan-failed";
     }
     return "unknown";
+}
+
+std::optional<PluginErrorKind> pluginErrorKindNamed(std::string_view name)
+{
+    for (int k = 0; k <= int(PluginErrorKind::ScanFailed); ++k)
+        if (name == pluginErrorKindName(PluginErrorKind(k))) return PluginErrorKind(k);
+    return std::nullopt;
 }
 
 std::vector<fs::path> defaultPluginSearchPath()
@@ -202,6 +218,25 @@ std::vector<fs::path> defaultPluginSearchPath()
         if (fs::is_directory(dir, ec)) existing.push_back(std::move(dir));
     }
     return uniqueFolders(std::move(existing));
+}
+
+fs::path defaultPluginScanner()
+{
+    if (const char* env = std::getenv(kScannerVariable); env && *env) return env;
+    // As for the plugin folder: the build tree's scanner for the build tree's library only.
+    const fs::path library = engineLibraryDir();
+    if (!library.empty() && isBuildTreeLibrary(library)) return core::buildTreeScanner();
+    return (library.empty() ? fs::path(core::buildTreeLibraryDir()) : library) / core::scannerFromLibrary();
+}
+
+fs::path defaultScanCacheFile()
+{
+    fs::path folder;
+    // The XDG base directory spec: a relative XDG_CACHE_HOME is invalid and ignored.
+    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && fs::path(xdg).is_absolute()) folder = xdg;
+    else if (const char* home = std::getenv("HOME"); home && fs::path(home).is_absolute()) folder = fs::path(home) / ".cache";
+    else return {};
+    return folder / "penumbra" / fmt::format("plugin-scan-{}.json", PENUMBRA_PLUGIN_ABI_VERSION);
 }
 
 void checkPluginInfo(const PenumbraPluginInfo& info, const fs::path& file)
@@ -236,7 +271,17 @@ void checkPluginInfo(const PenumbraPluginInfo& info, const fs::path& file)
     }
 }
 
-PluginRegistry::PluginRegistry(std::vector<fs::path> searchPath) : searchPath_(uniqueFolders(std::move(searchPath))) {}
+// One file's scan: what it declares, or why it cannot be used.
+struct PluginRegistry::ScanRecord {
+    fs::path canonical;
+    std::optional<PluginMetadata> metadata;
+    std::optional<PluginError> error;
+};
+
+PluginRegistry::PluginRegistry(std::vector<fs::path> searchPath, ScanSettings scanSettings)
+    : searchPath_(uniqueFolders(std::move(searchPath))), scanSettings_(std::move(scanSettings))
+{
+}
 
 PluginRegistry::~PluginRegistry()
 {
@@ -244,10 +289,14 @@ PluginRegistry::~PluginRegistry()
     for (auto it = handles_.rbegin(); it != handles_.rend(); ++it) dlclose(*it);
 }
 
-const LoadedPlugin& PluginRegistry::load(std::string_view name)
+ScanCache& PluginRegistry::cache()
 {
-    for (const auto& plugin : loaded_)
-        if (plugin->name() == name) return *plugin;
+    if (!cache_) cache_ = std::make_unique<ScanCache>(scanSettings_.cacheFile);
+    return *cache_;
+}
+
+fs::path PluginRegistry::locate(std::string_view name) const
+{
     if (!isPluginName(name)) {
         throw PluginError(PluginErrorKind::FileMissing,
                           fmt::format("'{}' is not a plugin name: plugin names use a-z, 0-9, '_' and '-'", name));
@@ -255,8 +304,8 @@ const LoadedPlugin& PluginRegistry::load(std::string_view name)
     for (const fs::path& dir : searchPath_) {
         const fs::path file = dir / pluginFileName(name);
         std::error_code ec;
-        // A dangling link counts as there: loading it says what it is.
-        if (fs::exists(fs::symlink_status(file, ec))) return loadFile(file, name);
+        // A dangling link counts as there: scanning it says what it is.
+        if (fs::exists(fs::symlink_status(file, ec))) return file;
     }
 
     std::vector<std::string> folders, available;
@@ -276,101 +325,102 @@ const LoadedPlugin& PluginRegistry::load(std::string_view name)
                                   found, kPathVariable, searchPathHint()));
 }
 
-const LoadedPlugin& PluginRegistry::loadFile(const fs::path& file, std::string_view expectedName)
+const PluginMetadata& PluginRegistry::scanFile(const fs::path& file, std::string_view expectedName)
 {
     const fs::path canonical = canonicalOrSelf(file);
-    for (const auto& plugin : loaded_)
-        if (canonicalOrSelf(plugin->file) == canonical) return *plugin;
+    for (const auto& record : scans_) {
+        if (record->canonical != canonical) continue;
+        if (record->error) throw *record->error;
+        return *record->metadata;
+    }
+    auto& record = *scans_.emplace_back(std::make_unique<ScanRecord>(ScanRecord{canonical, std::nullopt, std::nullopt}));
     const std::string who = fmt::format("plugin '{}' ({})", expectedName, file.string());
-    // First on the search path wins: a later file for a loaded name is never opened.
-    for (const auto& plugin : loaded_) {
-        if (plugin->name() != expectedName) continue;
-        throw PluginError(PluginErrorKind::DuplicateName,
-                          fmt::format("{}: duplicate plugin name: {} was loaded first for the name '{}' and wins; remove "
-                                      "one of the two files or reorder the search path ({})",
-                                      who, plugin->file.string(), expectedName, searchPathHint()),
-                          file);
-    }
-
-    checkSharedLibraryFile(file, who);
-    dlerror();
-    void* handle = dlopen(file.c_str(), RTLD_NOW | RTLD_LOCAL | gpu::noUnloadDlopenFlag());
-    if (!handle) {
-        const char* why = dlerror();
-        throw PluginError(PluginErrorKind::DependencyMissing,
-                          fmt::format("{}: cannot be loaded: {}. A library it links is missing or incompatible, or it "
-                                      "needs a symbol this engine lacks: check `ldd -r {}`, install the library or add "
-                                      "its folder to LD_LIBRARY_PATH, or rebuild the plugin against this engine",
-                                      who, why ? why : "unknown dlopen error", file.string()),
-                          file);
-    }
-    handles_.push_back(handle);
-
-    dlerror();
-    void* symbol = dlsym(handle, PENUMBRA_PLUGIN_ENTRY_SYMBOL);
-    if (!symbol) {
-        throw PluginError(PluginErrorKind::EntryMissing,
-                          fmt::format("{}: not a Penumbra plugin: no {} symbol; a plugin exports it with "
-                                      "PENUMBRA_PLUGIN_EXPORT (penumbra/plugin/Plugin.h)",
-                                      who, PENUMBRA_PLUGIN_ENTRY_SYMBOL),
-                          file);
-    }
-    const auto entry = reinterpret_cast<PenumbraPluginEntryFn>(symbol);
-    const PenumbraPluginInfo* info = nullptr;
-    auto invalid = [&](const std::string& what) {
-        return PluginError(PluginErrorKind::InvalidInfo, fmt::format("{}: {}: fix the plugin", who, what), file);
-    };
     try {
-        info = entry();
-    } catch (const std::exception& e) {
-        throw invalid(fmt::format("{} threw: {}", PENUMBRA_PLUGIN_ENTRY_SYMBOL, e.what()));
-    } catch (...) {
-        throw invalid(fmt::format("{} threw an exception", PENUMBRA_PLUGIN_ENTRY_SYMBOL));
+        // Reads only: a file the loader would refuse or crash on is named without a scan.
+        checkSharedLibraryFile(file, who);
+        const std::optional<FileIdentity> identity = identityOf(file);
+        std::optional<PluginMetadata> metadata = identity ? cache().find(*identity, file) : std::nullopt;
+        if (!metadata) {
+            metadata = scanInChildProcess(scanSettings_.scanner, file, who, scanSettings_.timeout);
+            if (identity) cache().store(*identity, *metadata);
+        }
+        if (metadata->name() != expectedName) {
+            throw PluginError(PluginErrorKind::NameMismatch,
+                              fmt::format("plugin file {} declares the name '{}', not '{}': rename the file to {} or fix "
+                                          "the name in the plugin",
+                                          file.string(), metadata->name(), expectedName, pluginFileName(metadata->name())),
+                              file);
+        }
+        record.metadata = std::move(metadata);
+        return *record.metadata;
+    } catch (const PluginError& e) {
+        record.error = e;
+        throw;
     }
-    if (!info) throw invalid(fmt::format("{} returned null", PENUMBRA_PLUGIN_ENTRY_SYMBOL));
-    // The one member read before the check: every other member's layout may differ.
-    if (info->abiVersion != PENUMBRA_PLUGIN_ABI_VERSION) {
-        throw PluginError(PluginErrorKind::AbiMismatch,
-                          fmt::format("{}: built for plugin ABI {}, this engine has ABI {}: rebuild the plugin against "
-                                      "this engine",
-                                      who, info->abiVersion, PENUMBRA_PLUGIN_ABI_VERSION),
-                          file);
-    }
-    checkPluginInfo(*info, file);
-    if (info->name != expectedName) {
-        throw PluginError(PluginErrorKind::NameMismatch,
-                          fmt::format("plugin file {} declares the name '{}', not '{}': rename the file to {} or fix the "
-                                      "name in the plugin",
-                                      file.string(), info->name, expectedName, pluginFileName(info->name)),
-                          file);
-    }
-
-    auto plugin = std::make_unique<LoadedPlugin>();
-    plugin->file = file;
-    plugin->info = info;
-    std::error_code ec;
-    if (info->shaderDir && fs::is_directory(info->shaderDir, ec)) plugin->shaderDir = info->shaderDir;
-    else plugin->shaderDir = file.parent_path() / info->name;
-    loaded_.push_back(std::move(plugin));
-    return *loaded_.back();
 }
 
-PluginRegistry::Discovery PluginRegistry::discoverAll()
+void PluginRegistry::checkNotShadowed(const fs::path& file, std::string_view name,
+                                      const std::vector<const PluginMetadata*>& found) const
 {
-    Discovery discovery;
+    for (const PluginMetadata* plugin : found) {
+        if (plugin->name() != name || canonicalOrSelf(plugin->file()) == canonicalOrSelf(file)) continue;
+        throw PluginError(PluginErrorKind::DuplicateName,
+                          fmt::format("plugin '{}' ({}): duplicate plugin name: {} was loaded first for the name '{}' and "
+                                      "wins; remove one of the two files or reorder the search path ({})",
+                                      name, file.string(), plugin->file().string(), name, searchPathHint()),
+                          file);
+    }
+}
+
+const PluginMetadata& PluginRegistry::scan(std::string_view name)
+{
+    const fs::path file = locate(name);
+    struct SaveCache {
+        PluginRegistry& registry;
+        ~SaveCache() { registry.cache().save(); }
+    } save{*this};
+    return scanFile(file, name);
+}
+
+PluginRegistry::Scan PluginRegistry::scanAll()
+{
+    Scan result;
     for (const fs::path& dir : searchPath_) {
         for (const fs::path& file : pluginFiles(dir)) {
+            const std::string name = nameFromFile(file);
             try {
-                const LoadedPlugin& plugin = loadFile(file, nameFromFile(file));
-                if (std::find(discovery.plugins.begin(), discovery.plugins.end(), &plugin) == discovery.plugins.end()) {
-                    discovery.plugins.push_back(&plugin);
+                checkNotShadowed(file, name, result.plugins);
+                const PluginMetadata& plugin = scanFile(file, name);
+                if (std::find(result.plugins.begin(), result.plugins.end(), &plugin) == result.plugins.end()) {
+                    result.plugins.push_back(&plugin);
                 }
             } catch (const PluginError& e) {
-                discovery.errors.push_back(e);
+                result.errors.push_back(e);
             }
         }
     }
-    return discovery;
+    cache().save();
+    return result;
+}
+
+const LoadedPlugin& PluginRegistry::load(std::string_view name)
+{
+    for (const auto& plugin : loaded_)
+        if (plugin->name() == name) return *plugin;
+    const PluginMetadata& scanned = scan(name);
+    const fs::path& file = scanned.file();
+    const std::string who = fmt::format("plugin '{}' ({})", name, file.string());
+    // The scan loaded this file in the scanner without harm; the same checks run again
+    // here, on what this process maps.
+    const PenumbraPluginInfo& info = openPluginLibrary(file, who, handles_);
+    if (info.name != name) {
+        throw PluginError(PluginErrorKind::NameMismatch,
+                          fmt::format("plugin file {} declares the name '{}', not '{}' (it changed since it was scanned)",
+                                      file.string(), info.name, name),
+                          file);
+    }
+    loaded_.push_back(std::make_unique<LoadedPlugin>(LoadedPlugin{file, &info, pluginShaderDir(info, file)}));
+    return *loaded_.back();
 }
 
 std::unique_ptr<Technique> PluginRegistry::create(const LoadedPlugin& plugin, const TechniqueSetup& setup,

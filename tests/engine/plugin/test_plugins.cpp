@@ -8,6 +8,7 @@
 #include "penumbra/config/Config.h"
 #include "penumbra/config/Overrides.h"
 #include "penumbra/graph/RenderGraph.h"
+#include "penumbra/plugin/LibraryFile.h"
 #include "penumbra/plugin/Params.h"
 #include "penumbra/plugin/PluginRegistry.h"
 #include "penumbra/render/Casters.h"
@@ -22,11 +23,13 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstddef>
 #include <cstring>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <map>
@@ -380,7 +383,7 @@ TEST_F(Registry, TruncatedAndEmptyFilesAreNotLibraries)
     std::ofstream(dir / "penumbra-truncated.so", std::ios::binary) << "\x7f" "ELF\x02\x01";
     std::ofstream(dir / "penumbra-empty.so", std::ios::binary);
     PluginRegistry local({dir, kPlugins});
-    const auto discovery = local.discoverAll();
+    const auto discovery = local.scanAll();
     std::map<std::string, std::string> messages;
     for (const PluginError& e : discovery.errors) {
         if (e.file().parent_path() != dir) continue;
@@ -397,7 +400,7 @@ TEST_F(Registry, TruncatedAndEmptyFilesAreNotLibraries)
 // (issue 20): a truncated library or one whose headers point past its end made dlopen
 // die of SIGBUS, a FIFO blocked the read forever, a directory passed `plugins --strict`
 // and failed `render`. Each is not-a-library, the same way for the listing
-// (discoverAll) as for a load by name (render).
+// (scanAll) as for a load by name (render).
 TEST_F(Registry, DamagedLibrariesAndNonFilesAreNotLibrariesEverywhere)
 {
     const fs::path dir = fs::temp_directory_path() / fmt::format("penumbra_damaged_{}", ::getpid());
@@ -448,7 +451,7 @@ TEST_F(Registry, DamagedLibrariesAndNonFilesAreNotLibrariesEverywhere)
 
     PluginRegistry local({dir, kPlugins});
     std::map<std::string, std::string> listed;
-    for (const PluginError& e : local.discoverAll().errors) {
+    for (const PluginError& e : local.scanAll().errors) {
         if (e.file().parent_path() != dir) continue;
         EXPECT_EQ(e.kind(), PluginErrorKind::NotALibrary) << e.what();
         listed[e.file().filename().string()] = e.what();
@@ -520,7 +523,7 @@ TEST_F(Registry, NameMismatchSaysWhichNameTheFileDeclares)
 TEST_F(Registry, DuplicateNameTheFirstOnThePathWins)
 {
     EXPECT_STREQ(registry.load("dup").info->version, "1.0");
-    const auto discovery = registry.discoverAll();
+    const auto discovery = registry.scanAll();
     std::vector<std::string> duplicates;
     for (const PluginError& e : discovery.errors) {
         if (e.kind() != PluginErrorKind::DuplicateName) continue;
@@ -539,14 +542,14 @@ TEST_F(Registry, DuplicateNameTheFirstOnThePathWins)
     expectStillWorks();
 }
 
-TEST(PluginRegistry, DiscoverAllListsEveryFileOnceWithItsKind)
+TEST(PluginRegistry, ScanAllListsEveryFileOnceWithItsKind)
 {
     // A folder given twice is searched once.
     PluginRegistry registry({kPlugins, kShadowedPlugins, kPlugins / "." });
     EXPECT_EQ(registry.searchPath().size(), 2u);
-    const auto discovery = registry.discoverAll();
+    const auto discovery = registry.scanAll();
     std::vector<std::string> names;
-    for (const plugin::LoadedPlugin* p : discovery.plugins) names.emplace_back(p->name());
+    for (const plugin::PluginMetadata* p : discovery.plugins) names.push_back(p->name());
     EXPECT_EQ(names, (std::vector<std::string>{"dup", "testgood", "throws"}));
 
     std::map<std::string, std::string> kinds;
@@ -562,7 +565,7 @@ TEST(PluginRegistry, DiscoverAllListsEveryFileOnceWithItsKind)
     };
     EXPECT_EQ(kinds, expected);
     // Discovering again finds the same (loaded plugins are not loaded twice).
-    const auto again = registry.discoverAll();
+    const auto again = registry.scanAll();
     EXPECT_EQ(again.plugins, discovery.plugins);
     EXPECT_EQ(again.errors.size(), discovery.errors.size());
 }
@@ -606,6 +609,237 @@ TEST(PluginRegistry, TheBuildTreesEngineSearchesTheBuildTreesPluginsAlone)
     } cleanup{installedLayout, !fs::exists(installedLayout)};
     fs::create_directories(installedLayout / "plugins");
     EXPECT_EQ(plugin::defaultPluginSearchPath(), std::vector<fs::path>{penumbra::test::buildPluginDir()});
+}
+
+// --- the dynamic section, and files for another machine ------------------------------
+
+namespace {
+
+std::vector<char> readBytes(const fs::path& file)
+{
+    std::ifstream in(file, std::ios::binary);
+    return std::vector<char>(std::istreambuf_iterator<char>(in), {});
+}
+
+// A folder of its own for one test, removed afterwards.
+struct ScratchFolder {
+    explicit ScratchFolder(const std::string& name)
+        : path(fs::temp_directory_path() / fmt::format("penumbra_{}_{}", name, ::getpid()))
+    {
+        fs::remove_all(path);
+        fs::create_directories(path);
+    }
+    ~ScratchFolder()
+    {
+        std::error_code ec;
+        fs::remove_all(path, ec);
+    }
+    fs::path path;
+};
+
+// The file offset of dynamic entry `tag`'s value in an ELF image; 0 when it has none.
+size_t dynamicValueOffset(const std::vector<char>& elf, int64_t tag)
+{
+    ElfW(Ehdr) header;
+    std::memcpy(&header, elf.data(), sizeof header);
+    for (size_t i = 0; i < header.e_phnum; ++i) {
+        ElfW(Phdr) p;
+        std::memcpy(&p, elf.data() + header.e_phoff + i * sizeof p, sizeof p);
+        if (p.p_type != PT_DYNAMIC) continue;
+        for (size_t at = p.p_offset; at + sizeof(ElfW(Dyn)) <= p.p_offset + p.p_filesz; at += sizeof(ElfW(Dyn))) {
+            ElfW(Dyn) d;
+            std::memcpy(&d, elf.data() + at, sizeof d);
+            if (d.d_tag == tag) return at + offsetof(ElfW(Dyn), d_un);
+        }
+    }
+    return 0;
+}
+
+} // namespace
+
+// Bit flips in the dynamic section made the loader read string and symbol tables, or call
+// finalisers, outside the mapped file (SIGSEGV, and a crash at exit after the PNG was
+// written); a file for another machine or byte order went to dlopen. Each is refused
+// before dlopen, by name.
+TEST(LibraryFile, DamagedDynamicSectionsAndForeignFilesAreNotLibraries)
+{
+    const ScratchFolder dir("dynamic");
+    const std::vector<char> good = readBytes(kPlugins / "penumbra-testgood.so");
+    ASSERT_GT(good.size(), 4096u);
+    std::map<std::string, std::string> expected;  // file -> what its message says
+    const auto write = [&](const std::string& name, const std::vector<char>& bytes, const std::string& what) {
+        std::ofstream(dir.path / name, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+        expected[name] = what;
+    };
+    const auto withDynamic = [&](int64_t tag, uint64_t value) {
+        const size_t at = dynamicValueOffset(good, tag);
+        EXPECT_NE(at, 0u) << "the fixture has no dynamic entry " << tag;
+        std::vector<char> copy = good;
+        std::memcpy(copy.data() + at, &value, sizeof value);
+        return copy;
+    };
+    const uint64_t beyond = uint64_t(good.size()) * 64;  // inside no segment
+    write("strtab.so", withDynamic(DT_STRTAB, beyond), "its dynamic section's string table (DT_STRTAB, DT_STRSZ)");
+    write("strsz.so", withDynamic(DT_STRSZ, good.size()), "string table (DT_STRTAB, DT_STRSZ)");
+    write("symtab.so", withDynamic(DT_SYMTAB, beyond), "its dynamic section's symbol table (DT_SYMTAB)");
+    write("fini.so", withDynamic(DT_FINI_ARRAY, beyond), "finaliser array (DT_FINI_ARRAY, DT_FINI_ARRAYSZ)");
+    write("finisz.so", withDynamic(DT_FINI_ARRAYSZ, good.size()), "finaliser array (DT_FINI_ARRAY, DT_FINI_ARRAYSZ)");
+    write("rela.so", withDynamic(DT_RELA, beyond), "relocations (DT_RELA, DT_RELASZ)");
+    write("needed.so", withDynamic(DT_NEEDED, uint64_t(1) << 40), "a needed library's name (DT_NEEDED)");
+    std::vector<char> copy = good;
+    const uint16_t aarch64 = EM_AARCH64;
+    std::memcpy(copy.data() + offsetof(ElfW(Ehdr), e_machine), &aarch64, sizeof aarch64);
+    write("machine.so", copy, "it is built for another architecture (AArch64), this engine runs on x86-64");
+    copy = good;
+    copy[EI_DATA] = ELFDATA2MSB;
+    write("bigendian.so", copy, "it is a big-endian ELF file, this engine is little-endian");
+    copy = good;
+    copy[EI_CLASS] = ELFCLASS32;
+    write("class32.so", copy, "it is a 32-bit ELF file, this engine is 64-bit");
+
+    for (const auto& [name, what] : expected) {
+        SCOPED_TRACE(name);
+        try {
+            plugin::checkSharedLibraryFile(dir.path / name, name);
+            ADD_FAILURE() << "accepted";
+        } catch (const PluginError& e) {
+            EXPECT_EQ(e.kind(), PluginErrorKind::NotALibrary) << e.what();
+            EXPECT_TRUE(contains(e.what(), name + ": not a shared library: "));
+            EXPECT_TRUE(contains(e.what(), what));
+        }
+    }
+    // The undamaged file passes, and so does every plugin the build made.
+    EXPECT_NO_THROW(plugin::checkSharedLibraryFile(kPlugins / "penumbra-testgood.so", "testgood"));
+    for (const fs::directory_entry& f : fs::directory_iterator(penumbra::test::buildPluginDir())) {
+        if (f.path().extension() != ".so") continue;
+        EXPECT_NO_THROW(plugin::checkSharedLibraryFile(f.path(), "built")) << f.path();
+    }
+}
+
+// --- scanning in a process of its own ------------------------------------------------
+
+namespace {
+
+plugin::ScanSettings scanSettings(const fs::path& cacheFile, std::chrono::milliseconds timeout = std::chrono::seconds(30))
+{
+    plugin::ScanSettings settings;
+    settings.cacheFile = cacheFile;
+    settings.timeout = timeout;
+    return settings;
+}
+
+PluginError errorOf(const std::function<void()>& fn)
+{
+    try {
+        fn();
+    } catch (const PluginError& e) {
+        return e;
+    }
+    ADD_FAILURE() << "no PluginError";
+    return PluginError(PluginErrorKind::FileMissing, "");
+}
+
+} // namespace
+
+// A plugin that kills the process loading it (SIGSEGV in its entry point or in a static
+// constructor) or hangs there: the scanner dies or is stopped, the engine's process lives,
+// and the report names the plugin and the signal. A render that uses it (load) never
+// dlopens it here.
+TEST(PluginScanner, APluginThatCrashesOrHangsKillsOnlyTheScanner)
+{
+    const ScratchFolder dir("scan_crash");
+    const fs::path crashing = penumbra::test::crashingTestPluginDir();
+    PluginRegistry registry({crashing}, scanSettings(dir.path / "cache.json"));
+    const PluginError crashes = errorOf([&] { registry.scan("crashes"); });
+    EXPECT_EQ(crashes.kind(), PluginErrorKind::ScanFailed) << crashes.what();
+    EXPECT_EQ(crashes.file(), crashing / "penumbra-crashes.so");
+    EXPECT_TRUE(contains(crashes.what(), "plugin 'crashes' (" + (crashing / "penumbra-crashes.so").string() +
+                                             "): the plugin scanner died of SIGSEGV (Segmentation fault) while loading it"));
+    const PluginError early = errorOf([&] { registry.load("crashes-early"); });
+    EXPECT_EQ(early.kind(), PluginErrorKind::ScanFailed) << early.what();
+    EXPECT_TRUE(contains(early.what(), "plugin 'crashes-early' (")) << early.what();
+    EXPECT_TRUE(contains(early.what(), "the plugin scanner died of SIGSEGV")) << early.what();
+    const PluginError again = errorOf([&] { registry.load("crashes"); });
+    EXPECT_EQ(std::string(again.what()), crashes.what()) << "a load by name reports the scan";
+    // Nothing failed is cached: a rebuilt plugin is scanned again.
+    EXPECT_FALSE(fs::exists(dir.path / "cache.json"));
+
+    PluginRegistry impatient({crashing}, scanSettings(dir.path / "cache.json", std::chrono::milliseconds(1500)));
+    const PluginError hangs = errorOf([&] { impatient.scan("hangs"); });
+    EXPECT_EQ(hangs.kind(), PluginErrorKind::ScanFailed) << hangs.what();
+    EXPECT_TRUE(contains(hangs.what(), "plugin 'hangs' (")) << hangs.what();
+    EXPECT_TRUE(contains(hangs.what(), "the plugin scanner did not finish loading it within 1.5 s and was stopped"));
+}
+
+// The second scan of an unchanged file comes from the cache (a registry whose scanner
+// cannot even start still lists it); a file whose size or modification time changed is
+// scanned again; a cache that cannot be read is ignored and rewritten.
+TEST(PluginScanner, ScansAreCachedByFileIdentity)
+{
+    const ScratchFolder dir("scan_cache");
+    fs::create_directories(dir.path / "plugins");
+    const fs::path copy = dir.path / "plugins" / "penumbra-testgood.so";
+    fs::copy_file(kPlugins / "penumbra-testgood.so", copy);
+    const fs::path cacheFile = dir.path / "cache" / "scan.json";
+    {
+        PluginRegistry registry({dir.path / "plugins"}, scanSettings(cacheFile));
+        const plugin::PluginMetadata& good = registry.scan("testgood");
+        EXPECT_EQ(good.version(), "1.2.0");
+        EXPECT_EQ(good.defaultParams().toJson(),
+                  json::parse(R"({"enabled": true, "kernel": 5, "fill": 0.5, "bias": 0.01, "mode": "clear"})"));
+    }
+    ASSERT_TRUE(fs::exists(cacheFile));
+    const json cached = json::parse(readBytes(cacheFile));
+    ASSERT_EQ(cached["entries"].size(), 1u);
+    EXPECT_EQ(cached["entries"][0]["file"]["path"], fs::canonical(copy).string());
+
+    plugin::ScanSettings noScanner = scanSettings(cacheFile);
+    noScanner.scanner = dir.path / "no-such-scanner";
+    {
+        PluginRegistry registry({dir.path / "plugins"}, noScanner);
+        const plugin::PluginMetadata& good = registry.scan("testgood");
+        EXPECT_EQ(good.summary(), "test plugin: clears V_l to a constant");
+        EXPECT_EQ(good.file(), copy);
+        EXPECT_EQ(good.params().size(), 5u);
+    }
+    // A new modification time: scanned again, with the scanner that cannot start.
+    fs::last_write_time(copy, fs::last_write_time(copy) + std::chrono::seconds(5));
+    {
+        PluginRegistry registry({dir.path / "plugins"}, noScanner);
+        const PluginError e = errorOf([&] { registry.scan("testgood"); });
+        EXPECT_EQ(e.kind(), PluginErrorKind::ScanFailed);
+        EXPECT_TRUE(contains(e.what(), "the plugin scanner " + noScanner.scanner.string() + " cannot be started"));
+    }
+    // A damaged cache is ignored (a warning) and replaced by a good one.
+    std::ofstream(cacheFile, std::ios::trunc) << "{\"format\": 1, \"entries\": [";
+    {
+        PluginRegistry registry({dir.path / "plugins"}, scanSettings(cacheFile));
+        EXPECT_EQ(registry.scan("testgood").version(), "1.2.0");
+    }
+    EXPECT_EQ(json::parse(readBytes(cacheFile))["entries"].size(), 1u);
+}
+
+// What the scanner hands over is read back as strictly as an entry's info is checked.
+TEST(PluginMetadata, JsonRoundTripsAndDamagedDescriptionsAreInvalidInfo)
+{
+    const PenumbraPluginInfo info{PENUMBRA_PLUGIN_ABI_VERSION, "x", "1", "s", kSpecs, std::size(kSpecs), &createNothing, nullptr};
+    const plugin::PluginMetadata metadata(info, "/p/penumbra-x.so", "/p/x");
+    const json doc = metadata.toJson();
+    const plugin::PluginMetadata back = plugin::PluginMetadata::fromJson(doc, "/p/penumbra-x.so");
+    EXPECT_EQ(back.toJson(), doc);
+    EXPECT_EQ(back.defaultParams().toJson(), specValues().toJson());
+    for (const auto& [change, what] : std::vector<std::pair<std::function<void(json&)>, std::string>>{
+             {[](json& d) { d.erase("name"); }, "'name' is not a string"},
+             {[](json& d) { d["params"][1]["type"] = "complex"; }, "unknown parameter type 'complex'"},
+             {[](json& d) { d["params"][1]["min"] = 9; }, "needs min <= default <= max"},
+             {[](json& d) { d["params"][3]["default"] = "other"; }, "an enum's default is a choice index"},
+         }) {
+        json damaged = doc;
+        change(damaged);
+        const PluginError e = errorOf([&] { plugin::PluginMetadata::fromJson(damaged, "/p/penumbra-x.so"); });
+        EXPECT_EQ(e.kind(), PluginErrorKind::InvalidInfo);
+        EXPECT_TRUE(contains(e.what(), what));
+    }
 }
 
 // --- parameters from config to plugin ------------------------------------------------

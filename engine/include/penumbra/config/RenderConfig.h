@@ -34,14 +34,27 @@ struct ShadowParam {
 // shading takes V = 1 (the baseline a trade-off table compares techniques with).
 inline constexpr std::string_view kNoShadowTechnique = "none";
 
+// Ends the message of a technique that cannot be loaded when the light does not say
+// "required": what to write to go on without it.
+inline constexpr std::string_view kOptionalTechniqueHint =
+    " (set \"required\": false in the light's \"shadow\" to render it unshadowed instead)";
+
 struct ShadowSettings {
     std::string technique = "hard";  // a plugin's name, or kNoShadowTechnique
-    // A required technique that fails to load or register stops the run (exit != 0);
-    // otherwise the light is rendered unshadowed (V = 1) with a warning.
-    bool required = false;
+    // Where the config names the technique ("a.json: /lights/0/shadow/technique"); empty
+    // when no config did (the default, a program's own settings).
+    std::string techniqueWhere;
+    // "required": true: a technique that fails to load or to register stops the run
+    // (exit != 0). Unset: a technique that cannot be loaded (no plugin has the name, a
+    // misspelling; a damaged plugin) stops the run, one that loads but fails to register
+    // (it refuses the light) is dropped with a warning. false: every failure is a warning
+    // and the light renders unshadowed (V = 1).
+    std::optional<bool> required;
     std::vector<ShadowParam> params;
 
     bool unshadowed() const { return technique == kNoShadowTechnique; }
+    bool loadFailureStopsTheRun() const { return required.value_or(true); }
+    bool registrationFailureStopsTheRun() const { return required.value_or(false); }
 
     // The parameter's value as given, or null when the config leaves it at the default.
     const nlohmann::json* param(std::string_view name) const;

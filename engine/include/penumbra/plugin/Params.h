@@ -15,6 +15,7 @@
 namespace penumbra::plugin {
 
 struct LoadedPlugin;
+class PluginMetadata;
 
 class ParamValues {
 public:
@@ -62,6 +63,9 @@ const char* paramTypeName(ParamType type);
 // value; with `errors`, appends every bad value's message there instead (a bad value
 // keeps its default) and throws nothing, so that a check can report them all.
 ParamValues resolveParams(const LoadedPlugin& plugin, const config::ShadowSettings& shadow,
+                          std::vector<std::string>* errors = nullptr);
+// The same from a plugin's scanned description (`validate` checks configs with these).
+ParamValues resolveParams(const PluginMetadata& plugin, const config::ShadowSettings& shadow,
                           std::vector<std::string>* errors = nullptr);
 
 } // namespace penumbra::plugin
