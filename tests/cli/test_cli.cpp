@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -1582,6 +1583,18 @@ TEST_F(Cli, BenchMeasuresEveryVariantAgainstOneReferenceRender)
         }
     }
     EXPECT_GT(std::stoi(rows[0].at("pixels")), 0);
+    // The README's list of the columns names each (a region's column by its name without
+    // the region's prefix).
+    const std::string readme = slurp(penumbra::test::sourceDir() / "README.md");
+    const size_t listStart = readme.find("- `results.csv`:"), listEnd = readme.find("- `results.json`:", listStart);
+    ASSERT_NE(listEnd, std::string::npos);
+    const std::string list = readme.substr(listStart, listEnd - listStart);
+    for (const auto& [column, value] : rows[0]) {
+        std::string name = column;
+        for (const char* region : {"umbra_", "penumbra_", "lit_"})
+            if (name.rfind(region, 0) == 0 && rows[0].count(name.substr(std::strlen(region)))) name = name.substr(std::strlen(region));
+        EXPECT_TRUE(has(list, "`" + name + "`")) << column << " is not in the README's list of results.csv's columns";
+    }
     EXPECT_EQ(rows[2].at("label"), "/lights/0/shadow/fill=0.5");
     EXPECT_EQ(nlohmann::json::parse(rows[2].at("params"))["fill"], 0.5);
     EXPECT_EQ(rows[3].at("params"), "null");
