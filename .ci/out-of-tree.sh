@@ -15,6 +15,8 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 build="$(cd "${1:-$root/build/release}" && pwd)"
 work="$(mktemp -d "${TMPDIR:-/tmp}/penumbra-sdk.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
+# The plugin scan cache (docs/plugins.md) of these runs stays in the temporary folder.
+export XDG_CACHE_HOME="$work/cache"
 prefix="$work/prefix"
 example="$work/example-build"
 
@@ -24,7 +26,7 @@ cache_value() { sed -n "s/^$1:[A-Z]*=//p" "$build/CMakeCache.txt"; }
 
 step "install $build into $prefix"
 cmake --install "$build" --prefix "$prefix" >"$work/install.log" || { cat "$work/install.log"; fail "cmake --install"; }
-for f in bin/penumbra lib/libpenumbra_engine.so include/penumbra/plugin/Plugin.h \
+for f in bin/penumbra libexec/penumbra/penumbra-plugin-scanner lib/libpenumbra_engine.so include/penumbra/plugin/Plugin.h \
          share/penumbra/shaders/common/visibility.glsl lib/cmake/Penumbra/PenumbraConfig.cmake \
          lib/cmake/Penumbra/PenumbraConfigVersion.cmake lib/cmake/Penumbra/PenumbraTargets.cmake \
          lib/cmake/Penumbra/PenumbraPlugin.cmake lib/penumbra/plugins/penumbra-example.so \
@@ -62,6 +64,17 @@ for problem in problems:
     print("out-of-tree:", problem, file=sys.stderr)
 sys.exit(1 if problems else 0)
 PY
+
+# ... through the installed plugin scanner (libexec), never the build tree's: without it,
+# every plugin is reported unscannable naming the installed scanner's path.
+step "the installed penumbra scans with the installed scanner"
+scanner="$prefix/libexec/penumbra/penumbra-plugin-scanner"
+mv "$scanner" "$work/scanner"
+rm -rf "$XDG_CACHE_HOME"
+"$prefix/bin/penumbra" plugins >"$work/no-scanner.txt" 2>&1 || true
+grep -q "libexec/penumbra/penumbra-plugin-scanner cannot be started" "$work/no-scanner.txt" \
+  || { cat "$work/no-scanner.txt"; fail "without its installed scanner the installed penumbra still scanned plugins"; }
+mv "$work/scanner" "$scanner"
 
 step "build plugins/example against $prefix"
 # The engine's compiler and the CI's warning flags: the example is the code people copy.
