@@ -12,8 +12,9 @@
 #
 # Seeds: config/ and tests/data/configs (config); tests/data/gltf, assets/, Debian's
 # assimp-testmodels glTF 2.0 files and small scenes of every generator written with the
-# CLI of the release build when there is one (gltf); a tiny shared object built here
-# and pieces of the build's plugins (plugin_file).
+# CLI of the release build when there is one (gltf); a tiny shared object built here,
+# damaged copies of it (tests/fuzz/damage_elf.py) and pieces of the build's plugins
+# (plugin_file).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 root=$PWD
@@ -64,13 +65,22 @@ else
   echo "fuzz: no release build of the CLI: no generated scenes among the glTF seeds" >&2
 fi
 
-# plugin_file: a tiny shared object (the check's whole path), its truncations and the
-# first pages of the build's plugins.
-printf 'extern "C" int penumbra_plugin_entry() { return 0; }\n' > "$build/tiny.cpp"
+# plugin_file: a tiny shared object (the check's whole path: a constructor and a
+# destructor give it initialiser and finaliser arrays and their relocations), its
+# truncations, one damaged copy per check of the header and the dynamic section
+# (damage_elf.py: a foreign machine, byte order and class; tables, arrays and sizes
+# pointing outside the file) and the first pages of the build's plugins.
+cat > "$build/tiny.cpp" <<'CPP'
+static volatile int state;
+extern "C" int penumbra_plugin_entry() { return state; }
+__attribute__((constructor)) static void loaded() { state = 1; }
+__attribute__((destructor)) static void unloaded() { state = 2; }
+CPP
 c++ -shared -fPIC -nostdlib -O1 -s -Wl,-z,max-page-size=4096 -Wl,-z,noseparate-code \
   -o "$seeds/plugin_file/tiny.so" "$build/tiny.cpp"
 head -c 64 "$seeds/plugin_file/tiny.so" > "$seeds/plugin_file/tiny-header"
 head -c 1024 "$seeds/plugin_file/tiny.so" > "$seeds/plugin_file/tiny-1k"
+python3 "$root/tests/fuzz/damage_elf.py" "$seeds/plugin_file/tiny.so" "$seeds/plugin_file"
 for so in "$root"/build/ci/plugins/penumbra-*.so; do
   [[ -f $so ]] && head -c 8192 "$so" > "$seeds/plugin_file/$(basename "$so").8k"
 done
