@@ -596,6 +596,7 @@ Command addBenchCommand(CLI::App& app, std::vector<std::string> commandLine)
     addReferenceFlags(*cmd, flags->reference);
     addSizeFlags(*cmd, flags->run, "every variant");
     addParamOverrideFlag(*cmd, flags->run.settings);
+    addAllowRootFlag(*cmd, flags->run.allowedRoots);
     addDeviceFlags(*cmd, flags->device);
     return {cmd, [flags] { return runBench(*flags); }};
 }

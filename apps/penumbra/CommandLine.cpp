@@ -43,6 +43,15 @@ void addSizeFlags(CLI::App& cmd, RunFlags& flags, const std::string& overrides)
     cmd.add_option("--width", flags.width, "Output width (overrides " + overrides + ")")->check(CLI::Range(1u, 16384u));
     cmd.add_option("--height", flags.height, "Output height (overrides " + overrides + ")")->check(CLI::Range(1u, 16384u));
 }
+void addAllowRootFlag(CLI::App& cmd, std::vector<std::string>& roots)
+{
+    cmd.add_option("--allow-root", roots,
+                   "Let a glTF scene's buffer and image URIs name files under this folder too, besides the model's own "
+                   "folder (repeatable; adds to the config's scene.allowed_roots)")
+        ->check(CLI::ExistingDirectory)
+        ->allow_extra_args(false);
+}
+
 
 config::RunOptions runOptions(const RunFlags& flags)
 {
@@ -53,6 +62,7 @@ config::RunOptions runOptions(const RunFlags& flags)
     return options;
 }
 
+    options.allowedRoots.assign(flags.allowedRoots.begin(), flags.allowedRoots.end());
 void addReferenceFlags(CLI::App& cmd, ReferenceFlags& flags)
 {
     cmd.add_option("--reference", flags.technique, "The reference technique plugin")->capture_default_str();

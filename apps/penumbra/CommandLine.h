@@ -3,7 +3,8 @@
 // flags and what it runs, declared by one addXCommand per file), and the flags that
 // several commands take, declared once here: the device (--device, --device-type,
 // --validation), technique parameters (--set), the output size (--width, --height) and
-// the reference technique (--reference, --reference-set).
+// the reference technique (--reference, --reference-set), the folders a glTF scene may
+// read (--allow-root).
 #include "penumbra/config/Run.h"
 #include "penumbra/gpu/Context.h"
 
@@ -42,10 +43,14 @@ int validationExitCode(const gpu::Context& context);
 struct RunFlags {
     std::vector<std::string> settings;
     std::optional<uint32_t> width;
+    std::vector<std::string> allowedRoots;  // --allow-root
     std::optional<uint32_t> height;
 };
 void addParamOverrideFlag(CLI::App& cmd, std::vector<std::string>& settings);
 // --width and --height; `overrides` says what they replace ("the config", "every variant").
+// --allow-root DIR (repeatable): a folder besides a glTF model's own whose files its URIs
+// may name (scene::GltfLoadOptions::allowedRoots).
+void addAllowRootFlag(CLI::App& cmd, std::vector<std::string>& roots);
 void addSizeFlags(CLI::App& cmd, RunFlags& flags, const std::string& overrides = "the config");
 // The flags as config::prepareRun takes them (the --set values parsed: ConfigError for a
 // malformed one).

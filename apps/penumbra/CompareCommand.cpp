@@ -284,6 +284,7 @@ Command addCompareCommand(CLI::App& app)
     addSizeFlags(*cmd, flags->run);
     addParamOverrideFlag(*cmd, flags->run.settings);
     addDeviceFlags(*cmd, flags->device);
+    addAllowRootFlag(*cmd, flags->run.allowedRoots);
     return {cmd, [flags] { return runCompare(*flags); }};
 }
 

@@ -111,6 +111,7 @@ Command addGraphCommand(CLI::App& app)
     addSizeFlags(*cmd, flags->run);
     addParamOverrideFlag(*cmd, flags->run.settings);
     addDeviceFlags(*cmd, flags->device);
+    addAllowRootFlag(*cmd, flags->run.allowedRoots);
     return {cmd, [flags] { return runGraph(*flags); }};
 }
 

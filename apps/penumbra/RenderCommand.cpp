@@ -212,3 +212,4 @@ Command addRenderCommand(CLI::App& app)
 }
 
 } // namespace penumbra::app
+    addAllowRootFlag(*cmd, flags->run.allowedRoots);

@@ -24,7 +24,8 @@ struct ValidateFlags {
     std::string file;
     bool weld = false;
     bool verbose = false;
-    std::vector<std::string> settings;  // technique.param=value
+    std::vector<std::string> settings;      // technique.param=value
+    std::vector<std::string> allowedRoots;  // --allow-root
 };
 
 void printLight(const scene::GltfLight& gltfLight)
@@ -67,6 +68,7 @@ int runValidateGltf(const ValidateFlags& flags)
     options.repair.weld = flags.weld;
     options.repair.analyzeTopology = true;
     // The report lists every warning on stdout; logging them on stderr too would say
+    options.allowedRoots.assign(flags.allowedRoots.begin(), flags.allowedRoots.end());
     // everything twice.
     if (!flags.verbose) spdlog::set_level(spdlog::level::err);
     scene::GltfLoadReport report;
@@ -101,6 +103,7 @@ int runValidateConfig(const ValidateFlags& flags)
     config::RunOptions options;
     options.overrides = config::parseParamOverrides(flags.settings);
     // A --set is for the variants whose lights use its technique, as `bench` applies it.
+    options.allowedRoots.assign(flags.allowedRoots.begin(), flags.allowedRoots.end());
     options.overridesOfUsedTechniquesOnly = swept;
     const config::PreparedRun run =
         inPhase("loading the scene", [&] { return config::prepareRun(config::parseConfig(document), options); });
@@ -173,6 +176,7 @@ Command addValidateCommand(CLI::App& app, const bool& verbose)
                 flags->verbose = verbose;
                 return runValidate(*flags);
             }};
+    addAllowRootFlag(*cmd, flags->allowedRoots);
 }
 
 } // namespace penumbra::app

@@ -1,11 +1,15 @@
 // libFuzzer target: the glTF loader as a config's "scene": {"gltf": FILE} runs it. The
 // input is the file: a .glb when it starts with the GLB magic "glTF", else a .gltf (the
-// loader tells them apart by the magic as well). Beside it lie a buffer and an image that
-// its URIs may name (gltf.dict has their names).
+// loader tells them apart by the magic as well), in a folder model/. Beside it lie what
+// its URIs may name (gltf.dict has their names): a buffer and an image, FIFOs named like
+// them (pipe.bin, pipe.png), and a link (link.bin) to secret.bin, a valid buffer outside
+// the model's folder (../secret.bin).
 //
 // The contract under test: a file either loads into a Scene or is refused with a
-// penumbra::Error (AssetError: the file and the JSON path). Any other exception, crash,
-// sanitizer report, hang (-timeout) or runaway memory (-rss_limit_mb) is a finding.
+// penumbra::Error (AssetError: the file and the JSON path), without ever opening
+// secret.bin (watched with inotify) or quoting its bytes in a message. Any other
+// exception, crash, sanitizer report, hang (-timeout: a FIFO opened and read) or runaway
+// memory (-rss_limit_mb) is a finding.
 //
 // The loader's size limits are lowered here (a vertex, triangle and texel count that a
 // small input can reach by its declared sizes): at the defaults a 100-byte file may ask
@@ -18,13 +22,25 @@
 #include "penumbra/scene/GltfLoader.h"
 
 #include <spdlog/spdlog.h>
+#include <sys/inotify.h>
+#include <sys/stat.h>
 
+#include <cstdio>
 #include <cstring>
 #include <vector>
 
 namespace {
 
 penumbra::fuzz::ScratchFolder* scratch = nullptr;
+// What secret.bin starts with: no message may hold it.
+constexpr std::string_view kSecret = "PENUMBRA-FUZZ-SECRET";
+int secretWatch = -1;  // inotify: an event is an open or a read of secret.bin
+
+[[noreturn]] void finding(const std::string& what)
+{
+    std::fprintf(stderr, "penumbra fuzz: %s\n", what.c_str());
+    std::abort();
+}
 
 penumbra::scene::GltfLoadOptions fuzzOptions()
 {
@@ -54,21 +70,41 @@ extern "C" int LLVMFuzzerInitialize(int*, char***)
         std::memcpy(buffer.data() + at, positions, sizeof positions);
         std::memcpy(buffer.data() + at + sizeof positions, indices, sizeof indices);
     }
-    scratch->write("buffer.bin", buffer.data(), buffer.size());
-    penumbra::io::writePng(scratch->path() / "texture.png", 2, 2, std::vector<uint8_t>(16, 200));
+    std::filesystem::create_directory(scratch->path() / "model");
+    scratch->write("model/buffer.bin", buffer.data(), buffer.size());
+    penumbra::io::writePng(scratch->path() / "model" / "texture.png", 2, 2, std::vector<uint8_t>(16, 200));
+    std::vector<uint8_t> secret(kSecret.begin(), kSecret.end());
+    secret.insert(secret.end(), buffer.begin(), buffer.end());
+    const std::filesystem::path secretFile = scratch->write("secret.bin", secret.data(), secret.size());
+    std::filesystem::create_symlink(secretFile, scratch->path() / "model" / "link.bin");
+    for (const char* fifo : {"model/pipe.bin", "model/pipe.png"}) {
+        if (::mkfifo((scratch->path() / fifo).c_str(), 0600) != 0) finding("cannot make the FIFOs");
+    }
+    secretWatch = ::inotify_init1(IN_NONBLOCK | IN_CLOEXEC);
+    if (secretWatch < 0 || ::inotify_add_watch(secretWatch, secretFile.c_str(), IN_OPEN | IN_ACCESS) < 0) {
+        finding("cannot watch secret.bin");
+    }
     return 0;
 }
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
 {
     const bool glb = size >= 4 && std::memcmp(data, "glTF", 4) == 0;
-    const std::filesystem::path file = scratch->write(glb ? "scene.glb" : "scene.gltf", data, size);
+    const std::filesystem::path file = scratch->write(glb ? "model/scene.glb" : "model/scene.gltf", data, size);
     penumbra::scene::GltfLoadReport report;
     try {
         penumbra::scene::loadGltf(file, report, fuzzOptions());
-    } catch (const penumbra::Error&) {
-        // Refused with a message: the contract.
+    } catch (const penumbra::Error& e) {
+        // Refused with a message: the contract, if it quotes nothing of a file outside.
+        if (std::string_view(e.what()).find(kSecret) != std::string_view::npos) finding("a message quotes secret.bin");
     }
+    for (const auto* lines : {&report.warnings, &report.notes}) {
+        for (const std::string& line : *lines) {
+            if (line.find(kSecret) != std::string::npos) finding("a warning quotes secret.bin");
+        }
+    }
+    char events[4096];
+    if (::read(secretWatch, events, sizeof events) > 0) finding("the loader opened secret.bin, outside the model's folder");
     std::error_code ec;
     std::filesystem::remove(file, ec);  // so that a .glb input and a .gltf one never meet
     return 0;

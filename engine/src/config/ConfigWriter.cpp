@@ -34,7 +34,8 @@ json generatorValue(const std::string& text)
     return text;
 }
 
-// The glTF path as the reader resolves it: relative paths against the saved file's folder.
+// A path (the glTF file, an allowed root) as the reader resolves it: relative paths against
+// the saved file's folder.
 std::string scenePath(const fs::path& gltf, const fs::path& savedAs)
 {
     std::error_code ec;
@@ -52,6 +53,11 @@ json sceneJson(const SceneSource& source, const fs::path& savedAs)
     if (source.kind == SceneSource::Kind::Gltf) {
         scene["gltf"] = scenePath(source.gltf, savedAs);
         if (!source.animation.empty()) scene["animation"] = source.animation;
+        if (!source.allowedRoots.empty()) {
+            json roots = json::array();
+            for (const fs::path& root : source.allowedRoots) roots.push_back(scenePath(root, savedAs));
+            scene["allowed_roots"] = roots;
+        }
     } else {
         scene["generator"] = source.generator;
         json params = json::object();

@@ -4,6 +4,7 @@
 #include "config/JsonReader.h"
 #include "penumbra/core/Error.h"
 
+#include "penumbra/core/ShortText.h"
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -16,6 +17,31 @@ namespace penumbra::config {
 namespace {
 
 SceneSource readScene(ObjectReader& parent, const fs::path& configFile)
+// "allowed_roots": folders besides a glTF model's own whose files its URIs may name
+// (GltfLoadOptions::allowedRoots), relative to the config's folder.
+std::vector<fs::path> readAllowedRoots(ObjectReader& r, const fs::path& configFile)
+{
+    std::vector<fs::path> roots;
+    const json* v = r.find("allowed_roots");
+    if (!v) return roots;
+    const std::string at = r.path("allowed_roots");
+    if (!v->is_array()) r.fail(at, fmt::format("must be an array of folder names, got {}", core::shortJson(*v)));
+    for (size_t i = 0; i < v->size(); ++i) {
+        const json& root = (*v)[i];
+        const std::string element = fmt::format("{}/{}", at, i);
+        if (!root.is_string() || root.get_ref<const std::string&>().empty()) {
+            r.fail(element, fmt::format("must be a folder name, got {}", core::shortJson(root)));
+        }
+        source.allowedRoots = readAllowedRoots(r, configFile);
+        fs::path folder = root.get<std::string>();
+        if (folder.is_relative()) folder = configFile.parent_path() / folder;
+        std::error_code ec;
+        if (!fs::is_directory(folder, ec)) r.fail(element, fmt::format("folder not found: {}", displayPath(folder)));
+        roots.push_back(std::move(folder));
+    }
+    return roots;
+}
+
 {
     SceneSource source;
     const json* v = parent.find("scene");

@@ -17,7 +17,9 @@ scene::Scene buildScene(const SceneSource& source, std::vector<scene::GltfLight>
     scene::Scene scene;
     if (source.kind == SceneSource::Kind::Gltf) {
         scene::GltfLoadReport report;
-        scene = scene::loadGltf(source.gltf, report);
+        scene::GltfLoadOptions options;
+        options.allowedRoots = source.allowedRoots;
+        scene = scene::loadGltf(source.gltf, report, options);
         if (scene.instances.empty()) {
             throw ConfigError(fmt::format("{}: the glTF file has no triangles to render", source.gltf.string()));
         }
@@ -87,6 +89,7 @@ PreparedRun prepareRun(RenderConfig config, const RunOptions& options)
 {
     PreparedRun run;
     run.scene = buildScene(config);
+    config.scene.allowedRoots.insert(config.scene.allowedRoots.end(), options.allowedRoots.begin(), options.allowedRoots.end());
     applyParamOverrides(config, options.overridesOfUsedTechniquesOnly ? overridesUsedBy(options.overrides, config)
                                                                        : options.overrides);
     if (options.width) config.width = *options.width;

@@ -1,6 +1,8 @@
 #include "penumbra/scene/GltfLoader.h"
 
 #include "penumbra/core/Error.h"
+#include "penumbra/core/ShortText.h"
+#include "penumbra/io/ReadFile.h"
 #include "scene/gltf/Animations.h"
 #include "scene/gltf/Document.h"
 #include "scene/gltf/Geometry.h"
@@ -9,6 +11,7 @@
 #include "scene/gltf/Materials.h"
 #include "scene/gltf/Nodes.h"
 #include "scene/gltf/Preflight.h"
+#include "scene/gltf/Uri.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -16,7 +19,6 @@
 #include <algorithm>
 #include <array>
 #include <cstring>
-#include <fstream>
 #include <optional>
 #include <sstream>
 
@@ -34,47 +36,6 @@ constexpr std::array<std::string_view, 1> kSupportedExtensions{"KHR_lights_punct
 bool supported(const std::string& extension)
 {
     return std::find(kSupportedExtensions.begin(), kSupportedExtensions.end(), extension) != kSupportedExtensions.end();
-}
-
-// Reads a whole file of at most `budget` bytes, taking its size from the budget;
-// `error` says why not.
-std::vector<unsigned char> readWithin(const fs::path& file, uint64_t& budget, std::string& error)
-{
-    std::error_code ec;
-    if (!fs::exists(file, ec)) {
-        error = "not found";
-        return {};
-    }
-    if (!fs::is_regular_file(file, ec)) {
-        error = "not a regular file";
-        return {};
-    }
-    const uintmax_t size = fs::file_size(file, ec);
-    if (ec) {
-        error = ec.message();
-        return {};
-    }
-    if (size > budget) {
-        error = fmt::format("{} bytes exceed the {} bytes left of the limit on bytes read per glTF file", size, budget);
-        return {};
-    }
-    std::vector<unsigned char> bytes(size);
-    std::ifstream in(file, std::ios::binary);
-    if (!in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(size))) {
-        error = "cannot be read";
-        return {};
-    }
-    budget -= size;
-    return bytes;
-}
-
-// tinygltf's file reader for external buffers and images, within the budget.
-bool readExternalFile(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* budget)
-{
-    std::string error;
-    *out = readWithin(path, *static_cast<uint64_t*>(budget), error);
-    if (!error.empty() && err) *err += error;
-    return error.empty();
 }
 
 bool isGlb(const std::vector<unsigned char>& bytes) { return bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0; }
@@ -131,29 +92,17 @@ void checkVersion(const Document& doc)
     }
 }
 
-std::string describeParseError(const std::string& err, const fs::path& baseDir)
+// tinygltf's error text, one line, shortened: it quotes values whole (a data: URI it
+// cannot decode).
+std::string describeParseError(const std::string& err)
 {
-    std::string text = gltf::oneLine(err);
+    const std::string text = gltf::oneLine(err);
     constexpr std::string_view kJson = "[json.exception.";
-    constexpr std::string_view kNotFound = "File not found : ";
     if (text.rfind(kJson, 0) == 0) {
         const size_t end = text.find("] ");
-        return "malformed JSON: " + (end == std::string::npos ? text : text.substr(end + 2));
+        return "malformed JSON: " + core::shortText(end == std::string::npos ? text : text.substr(end + 2));
     }
-    constexpr std::string_view kReadError = "File read error : ";
-    if (text.rfind(kNotFound, 0) == 0) {
-        std::string name = text.substr(kNotFound.size());
-        name = name.substr(0, name.find(';'));
-        return fmt::format("buffer file '{}' not found (looked in {})", name, baseDir.empty() ? "." : baseDir.string());
-    }
-    if (text.rfind(kReadError, 0) == 0) {
-        const std::string rest = text.substr(kReadError.size());
-        const size_t colon = rest.find(" : ");
-        if (colon != std::string::npos) {
-            return fmt::format("buffer file '{}' cannot be read: {}", rest.substr(0, colon), rest.substr(colon + 3));
-        }
-    }
-    return "cannot parse: " + text;
+    return "cannot parse: " + core::shortText(text);
 }
 
 // The deepest nesting of objects and arrays in JSON text, by one pass over it (strings and
@@ -190,16 +139,22 @@ std::string_view jsonText(const std::vector<unsigned char>& bytes)
     return {data + 20, std::min<size_t>(length, bytes.size() - 20)};
 }
 
-// Parses the file with tinygltf into `model`. Required extensions are checked even
-// when tinygltf fails: a Draco-compressed file fails there for want of the extension.
-void parseModel(const fs::path& file, const GltfLoadOptions& options, gltf::ImageDecoder& images,
-                tinygltf::Model& model, std::vector<std::string>& tinygltfWarnings)
+// Parses the file with tinygltf into `model`, its external files read through `files`.
+// Required extensions are checked even when tinygltf fails: a Draco-compressed file fails
+// there for want of the extension.
+void parseModel(const fs::path& file, const GltfLoadOptions& options, gltf::ExternalFiles& files,
+                gltf::ImageDecoder& images, uint64_t& bytesLeft, tinygltf::Model& model,
+                std::vector<std::string>& tinygltfWarnings)
 {
-    const std::string name = file.string();
-    uint64_t bytesLeft = options.maxBytesRead;
-    std::string readError;
-    const std::vector<unsigned char> bytes = readWithin(file, bytesLeft, readError);
-    if (!readError.empty()) throw AssetError(fmt::format("{}: glTF file {}", name, readError));
+    const std::string name = core::shortText(file.string());
+    std::vector<unsigned char> bytes;
+    try {
+        bytes = io::readRegularFile(file, bytesLeft, "a glTF file");
+    } catch (const io::FileReadError& e) {
+        throw AssetError(
+            fmt::format("{}: {}", name, e.problem() == io::FileReadProblem::NotFound ? "glTF file not found" : e.reason()));
+    }
+    bytesLeft -= bytes.size();
     // tinygltf takes the length as unsigned int.
     if (bytes.size() > std::numeric_limits<unsigned int>::max()) {
         throw AssetError(fmt::format("{}: glTF file of {} bytes; 4 GiB is the most glTF allows", name, bytes.size()));
@@ -213,34 +168,35 @@ void parseModel(const fs::path& file, const GltfLoadOptions& options, gltf::Imag
     // Within the nesting limit nlohmann's parse and the checks on it cannot recurse deep.
     // Parsed once for the preflight and, should tinygltf fail, the glTF 1.0 check.
     const nlohmann::json json = nlohmann::json::parse(jsonText(bytes), nullptr, false);
-    gltf::preflight(name, json, file.parent_path(), options);
+    gltf::preflight(name, json, files, options);
 
     tinygltf::TinyGLTF loader;
-    loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &readExternalFile, &tinygltf::WriteWholeFile,
-                           &bytesLeft});
+    files.install(loader);
     images.model = &model;
     images.maxImageTexels = options.maxImageTexels;
     images.texelsLeft = options.maxTotalTexels;
     images.install(loader);
 
-    const fs::path baseDir = file.parent_path();
     std::string err, warn;
     const auto size = static_cast<unsigned int>(bytes.size());
     const bool ok = isGlb(bytes)
-                        ? loader.LoadBinaryFromMemory(&model, &err, &warn, bytes.data(), size, baseDir.string())
+                        ? loader.LoadBinaryFromMemory(&model, &err, &warn, bytes.data(), size, files.baseDir())
                         : loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(bytes.data()), size,
-                                                     baseDir.string());
+                                                     files.baseDir());
     checkRequiredExtensions(name, model);
     if (!ok) {
         if (!isGlb(bytes)) refuseGltf1Layout(name, json);
-        throw AssetError(fmt::format("{}: {}", name, describeParseError(err, baseDir)));
+        if (const std::string failure = files.firstBufferFailure(); !failure.empty()) {
+            throw AssetError(fmt::format("{}: {}", name, failure));
+        }
+        throw AssetError(fmt::format("{}: {}", name, describeParseError(err)));
     }
     // tinygltf reports some schema violations (a missing required property) in `err`
     // and still succeeds; they are warnings here, like its own.
     for (const std::string* text : {&err, &warn}) {
         std::string line;
         for (std::istringstream lines(*text); std::getline(lines, line);) {
-            if (!line.empty()) tinygltfWarnings.push_back("tinygltf: " + line);
+            if (!line.empty()) tinygltfWarnings.push_back("tinygltf: " + core::shortText(line));
         }
     }
 }
@@ -295,11 +251,13 @@ std::vector<uint32_t> loadMesh(const Document& doc, int index, gltf::MaterialTab
 Scene loadGltf(const fs::path& file, GltfLoadReport& report, const GltfLoadOptions& options)
 {
     report = {};
+    uint64_t bytesLeft = options.maxBytesRead;
+    gltf::ExternalFiles files(file, options.allowedRoots, bytesLeft, options.maxBytesRead);
     gltf::ImageDecoder images;
     tinygltf::Model model;
     std::vector<std::string> tinygltfWarnings;
-    parseModel(file, options, images, model, tinygltfWarnings);
-    const Document doc{model, file.string(), options, report};
+    parseModel(file, options, files, images, bytesLeft, model, tinygltfWarnings);
+    const Document doc{model, core::shortText(file.string()), options, report};
     checkVersion(doc);
     for (const std::string& warning : tinygltfWarnings) doc.warn("", warning);
     noteIgnoredFeatures(doc);
@@ -307,7 +265,7 @@ Scene loadGltf(const fs::path& file, GltfLoadReport& report, const GltfLoadOptio
     Scene scene;
     const gltf::NodeMap nodes = gltf::buildSceneGraph(doc, scene.graph);
     scene.animations = gltf::loadAnimations(doc, nodes);
-    gltf::MaterialTable materials(doc, images, file.parent_path(), scene);
+    gltf::MaterialTable materials(doc, images, files, scene);
     gltf::GeometryBudget budget{options.maxVertices, options.maxTriangles};
     std::vector<std::optional<std::vector<uint32_t>>> meshesOf(model.meshes.size());
     bool anyMesh = false;

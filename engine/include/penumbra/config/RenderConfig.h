@@ -84,6 +84,9 @@ struct SceneSource {
     // generator parses and validates them: scene/Generators.h).
     std::vector<std::pair<std::string, std::string>> params;
     float scale = 1.0f;               // every length times this (1e-3 ... 1e5 are tested)
+    // Kind::Gltf: folders besides the file's own whose files its URIs may name (resolved
+    // against the config's folder; the command line's --allow-root adds to them).
+    std::vector<std::filesystem::path> allowedRoots;
     // Kind::Gltf: the file's animation that plays (its name, or its index as text), empty
     // for none: the scene at rest. Posed by poseScene (config/Run.h) with the config's own
     // tracks.

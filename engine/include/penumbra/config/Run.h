@@ -27,6 +27,9 @@ struct RunOptions {
     std::optional<uint32_t> height;
     std::optional<uint32_t> frames;
     std::optional<CullingMode> culling;
+    // --allow-root: folders a glTF scene's URIs may name, added to the config's
+    // scene.allowed_roots.
+    std::vector<std::filesystem::path> allowedRoots;
 };
 
 // A config ready to render, and its scene.

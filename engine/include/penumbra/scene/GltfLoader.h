@@ -8,8 +8,18 @@
 //
 // Bad input throws AssetError "file: element: what", the element being the JSON
 // pointer of the culprit ("Box.gltf: /accessors/3: count 4294967295 × 12 bytes exceeds
-// buffer view 1 (288 bytes)"). Sizes are checked against the buffers before anything
-// is allocated, and the limits below bound what a file can make the loader allocate.
+// buffer view 1 (288 bytes)"), values it echoes shortened. Sizes are checked against the
+// buffers before anything is allocated, and the limits below bound what a file can make
+// the loader allocate.
+//
+// Buffer and image URIs are RFC 3986 relative references, percent-decoded, resolved
+// against the model's folder with links followed; before any file is opened, a URI is
+// refused ("Box.gltf: /buffers/0/uri: "../x.bin": names /x.bin, outside the model's
+// folder ...") when it has a scheme other than data: (file:, http:), is an absolute path,
+// has a malformed escape or a NUL or control character, or names a file outside the
+// model's own folder and GltfLoadOptions::allowedRoots. So a model reads only its own
+// files, and no message quotes bytes of another. Every file is read as a regular file of
+// bounded size (io/ReadFile.h): a FIFO or a device is refused, never waited on.
 // What is dropped or ignored (points and lines, unknown optional extensions, cameras,
 // skins, morph targets, animation channels that cannot play) is a warning or note in the
 // report, never a silent omission. Animations are read into Scene::animations.
@@ -50,6 +60,10 @@ struct GltfLoadOptions {
     uint64_t maxImageTexels = kMaxGltfImageTexels;
     uint64_t maxTotalTexels = kMaxGltfTotalTexels;
     uint64_t maxBytesRead = kMaxGltfBytesRead;
+    // Folders besides the model's own whose files its URIs may name (a config's
+    // scene.allowed_roots, the command line's --allow-root); relative ones are taken from
+    // the working folder.
+    std::vector<std::filesystem::path> allowedRoots;
     RepairOptions repair;
 };
 

@@ -1,5 +1,7 @@
 #include "scene/gltf/Materials.h"
 
+#include "penumbra/core/ShortText.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -7,8 +9,8 @@
 
 namespace penumbra::scene::gltf {
 
-MaterialTable::MaterialTable(const Document& doc, const ImageDecoder& images, std::filesystem::path baseDir, Scene& scene)
-    : doc_(doc), images_(images), baseDir_(std::move(baseDir)), scene_(scene),
+MaterialTable::MaterialTable(const Document& doc, const ImageDecoder& images, const ExternalFiles& files, Scene& scene)
+    : doc_(doc), images_(images), files_(files), scene_(scene),
       materialOf_(doc.model.materials.size(), -1), textureOf_(doc.model.images.size(), -1)
 {
 }
@@ -103,12 +105,11 @@ std::string MaterialTable::whyNoPixels(int image) const
     const tinygltf::Image& source = doc_.model.images[size_t(image)];
     // tinygltf keeps the uri of an external file it could not load (and only then).
     if (source.uri.empty()) return "has no image data";
-    const std::filesystem::path where = baseDir_.empty() ? std::filesystem::path(".") : baseDir_;
-    std::error_code ec;
-    if (std::filesystem::exists(where / source.uri, ec)) {
-        return fmt::format("texture file '{}' could not be read (in {})", source.uri, where.string());
-    }
-    return fmt::format("texture file '{}' not found (looked in {})", source.uri, where.string());
+    if (std::string failure = files_.failure(fmt::format("/images/{}/uri", image)); !failure.empty()) return failure;
+    // Only a data: URI is never asked for as a file (scene/gltf/Uri.h).
+    return fmt::format("its data: URI \"{}\" is of a media type tinygltf does not decode (it decodes image/png, "
+                       "image/jpeg, image/bmp and image/gif)",
+                       core::shortText(source.uri));
 }
 
 } // namespace penumbra::scene::gltf

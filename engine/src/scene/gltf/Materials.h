@@ -4,8 +4,8 @@
 // the load. glTF material i may land anywhere in Scene::materials (0 stays the default).
 #include "scene/gltf/Document.h"
 #include "scene/gltf/Images.h"
+#include "scene/gltf/Uri.h"
 
-#include <filesystem>
 #include <string_view>
 #include <vector>
 
@@ -13,7 +13,7 @@ namespace penumbra::scene::gltf {
 
 class MaterialTable {
 public:
-    MaterialTable(const Document& doc, const ImageDecoder& images, std::filesystem::path baseDir, Scene& scene);
+    MaterialTable(const Document& doc, const ImageDecoder& images, const ExternalFiles& files, Scene& scene);
 
     // The scene material for glTF material `material` (-1: the default material);
     // `element` is where it is referenced.
@@ -25,7 +25,7 @@ private:
 
     const Document& doc_;
     const ImageDecoder& images_;
-    std::filesystem::path baseDir_;
+    const ExternalFiles& files_;
     Scene& scene_;
     std::vector<int64_t> materialOf_;  // glTF material -> scene material, -1 until converted
     std::vector<int64_t> textureOf_;   // glTF image -> scene texture, -1 until converted

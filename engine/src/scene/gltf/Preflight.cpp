@@ -1,6 +1,7 @@
 #include "scene/gltf/Preflight.h"
 
 #include "penumbra/core/Error.h"
+#include "penumbra/core/ShortText.h"
 #include "scene/gltf/Accessors.h"
 
 #include <fmt/format.h>
@@ -78,30 +79,35 @@ bool fitsItsView(const json& doc, const json& accessors, const json& index)
     return offset <= capacity && count <= (capacity - offset) / element;
 }
 
-void checkBuffers(const std::string& file, const json& doc, const std::filesystem::path& baseDir)
+// Every external file's URI, resolved (and refused when it reaches outside) before any
+// file is opened; a buffer's byteLength against its file's size.
+void checkFileUris(const std::string& file, const json& doc, ExternalFiles& files)
 {
-    const auto buffers = doc.find("buffers");
-    if (buffers == doc.end() || !buffers->is_array()) return;
-    for (size_t i = 0; i < buffers->size(); ++i) {
-        const json& b = (*buffers)[i];
-        if (!b.is_object()) continue;
-        const auto length = b.find("byteLength");
-        const auto uri = b.find("uri");
-        if (length == b.end() || !length->is_number_unsigned() || uri == b.end() || !uri->is_string()) continue;
-        const uint64_t byteLength = length->get<uint64_t>();
-        const std::string& text = uri->get_ref<const std::string&>();
-        const std::string at = fmt::format("/buffers/{}", i);
-        if (const int64_t decoded = dataUriBytes(text); decoded >= 0) {
-            if (byteLength > uint64_t(decoded)) {
-                fail(file, at, fmt::format("byteLength {} exceeds the {} bytes its data URI holds", byteLength, decoded));
+    for (const char* collection : {"buffers", "images"}) {
+        const auto entries = doc.find(collection);
+        if (entries == doc.end() || !entries->is_array()) continue;
+        for (size_t i = 0; i < entries->size(); ++i) {
+            const json& entry = (*entries)[i];
+            const auto uri = entry.is_object() ? entry.find("uri") : entry.end();
+            if (!entry.is_object() || uri == entry.end() || !uri->is_string()) continue;  // tinygltf reports it
+            const std::string at = fmt::format("/{}/{}", collection, i);
+            const std::string& text = uri->get_ref<const std::string&>();
+            const std::filesystem::path path = files.add(at + "/uri", text);
+            const auto length = entry.find("byteLength");
+            if (std::string_view(collection) != "buffers" || length == entry.end() || !length->is_number_unsigned()) continue;
+            const uint64_t byteLength = length->get<uint64_t>();
+            if (path.empty()) {
+                if (const int64_t decoded = dataUriBytes(text); decoded >= 0 && byteLength > uint64_t(decoded)) {
+                    fail(file, at, fmt::format("byteLength {} exceeds the {} bytes its data URI holds", byteLength, decoded));
+                }
+                continue;
             }
-            continue;
-        }
-        if (text.find(':') != std::string::npos || text.find('%') != std::string::npos) continue;  // tinygltf's to resolve
-        std::error_code ec;
-        const uintmax_t size = std::filesystem::file_size(baseDir / text, ec);
-        if (!ec && byteLength > size) {
-            fail(file, at, fmt::format("byteLength {} exceeds the {} bytes of its file '{}'", byteLength, size, text));
+            std::error_code ec;
+            const uintmax_t size = std::filesystem::file_size(path, ec);
+            if (!ec && byteLength > size) {
+                fail(file, at, fmt::format("byteLength {} exceeds the {} bytes of its file '{}'", byteLength, size,
+                                           core::shortText(text)));
+            }
         }
     }
 }
@@ -115,7 +121,7 @@ void checkPrimitives(const std::string& file, const json& doc, const GltfLoadOpt
     const json& accessors = accessorsIt != doc.end() && accessorsIt->is_array() ? *accessorsIt : kNone;
     // The loader's own words for what it finds later (scene/gltf/Accessors.cpp, Geometry.cpp).
     const auto missing = [&](const std::string& at, const json& v) {
-        fail(file, at, fmt::format("accessor {} does not exist ({} accessors)", v.dump(), accessors.size()));
+        fail(file, at, fmt::format("accessor {} does not exist ({} accessors)", core::shortJson(v), accessors.size()));
     };
     for (size_t m = 0; m < meshes->size(); ++m) {
         const json& mesh = (*meshes)[m];
@@ -129,7 +135,7 @@ void checkPrimitives(const std::string& file, const json& doc, const GltfLoadOpt
                 fail(file, at, "has no \"attributes\" object (glTF 2.0 requires one, with POSITION for triangles)");
             }
             for (auto a = attributes->begin(); a != attributes->end(); ++a) {
-                if (!validIndex(*a, accessors.size())) missing(at + "/attributes/" + a.key(), *a);
+                if (!validIndex(*a, accessors.size())) missing(at + "/attributes/" + core::shortText(a.key()), *a);
             }
             if (const auto position = attributes->find("POSITION"); position != attributes->end()) {
                 const uint64_t vertices = accessorCount(accessors, *position);
@@ -157,11 +163,10 @@ void checkPrimitives(const std::string& file, const json& doc, const GltfLoadOpt
 
 } // namespace
 
-void preflight(const std::string& file, const nlohmann::json& doc, const std::filesystem::path& baseDir,
-               const GltfLoadOptions& options)
+void preflight(const std::string& file, const nlohmann::json& doc, ExternalFiles& files, const GltfLoadOptions& options)
 {
     if (!doc.is_object()) return;  // tinygltf reports what it is
-    checkBuffers(file, doc, baseDir);
+    checkFileUris(file, doc, files);
     checkPrimitives(file, doc, options);
 }
 

@@ -4,6 +4,8 @@
 // silently drop, and sizes that the loader's limits refuse anyway, before any buffer is
 // read. Each failure is an AssetError "file: /json/path: what".
 //
+// - /buffers/i/uri, /images/i/uri: every file URI resolved and checked (scene/gltf/Uri.h)
+//   before any file is opened, a URI that reaches outside the model refused;
 // - /buffers/i: a byteLength beyond the bytes its data URI decodes to, or beyond its
 //   external file's size;
 // - /meshes/m/primitives/p: a primitive without `attributes` (required by glTF 2.0;
@@ -13,15 +15,15 @@
 //   triangles, than the limits allow for the whole file (a 1 GB buffer was read whole
 //   before the limit refused it).
 #include "penumbra/scene/GltfLoader.h"
+#include "scene/gltf/Uri.h"
 
 #include <nlohmann/json.hpp>
 
-#include <filesystem>
 #include <string>
 
 namespace penumbra::scene::gltf {
 
-void preflight(const std::string& file, const nlohmann::json& doc, const std::filesystem::path& baseDir,
-               const GltfLoadOptions& options);
+// `files` receives every external file's URI.
+void preflight(const std::string& file, const nlohmann::json& doc, ExternalFiles& files, const GltfLoadOptions& options);
 
 } // namespace penumbra::scene::gltf
