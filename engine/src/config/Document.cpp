@@ -1,14 +1,14 @@
 #include "penumbra/config/Document.h"
 
 #include "penumbra/core/Error.h"
+#include "penumbra/io/ReadFile.h"
 
 #include "config/ConfigJson.h"
-#include "core/Text.h"
 
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <fstream>
+#include <sstream>
 #include <vector>
 
 using nlohmann::json;
@@ -29,23 +29,21 @@ void recordOrigin(const json& value, const std::string& pointer, const std::stri
     for (auto it = value.begin(); it != value.end(); ++it) recordOrigin(*it, pointer + "/" + it.key(), file, origin);
 }
 
-json readJson(const fs::path& file)
+// `file`'s JSON; `includedAt` ("a.json: /include/0: ", empty for the config itself)
+// starts the message of a file that cannot be read.
+json readJson(const fs::path& file, const std::string& includedAt)
 {
-    std::error_code ec;
-    const bool exists = fs::exists(file, ec);
-    if (ec) throw ConfigError(fmt::format("{}: cannot open config file: {}", displayPath(file), ec.message()));
-    if (!exists) throw ConfigError(fmt::format("{}: config file not found", displayPath(file)));
     // A FIFO would block the read forever, a device (/dev/zero, /dev/stdin) read without
-    // end or wait for a terminal: only a regular file (or a link to one) is read.
-    if (const fs::file_type type = fs::status(file, ec).type(); type != fs::file_type::regular)
-        throw ConfigError(fmt::format("{}: is {}, expected a JSON config file (a regular file)", displayPath(file),
-                                      core::fileTypeName(type)));
-    if (const uintmax_t bytes = fs::file_size(file, ec); !ec && bytes > kMaxConfigBytes) {
-        throw ConfigError(fmt::format("{}: is {} bytes; a config file holds at most {} MiB (its scene is a glTF file)",
-                                      displayPath(file), bytes, kMaxConfigBytes >> 20));
+    // end or wait for a terminal, /proc/self/mem fail to read: only a regular file (or a
+    // link to one) of bounded size is read.
+    std::string text;
+    try {
+        text = io::readRegularTextFile(file, kMaxConfigBytes, "a JSON config file");
+    } catch (const io::FileReadError& e) {
+        throw ConfigError(fmt::format("{}{}: {}", includedAt, displayPath(file),
+                                      e.problem() == io::FileReadProblem::NotFound ? "config file not found" : e.reason()));
     }
-    std::ifstream in(file, std::ios::binary);
-    if (!in) throw ConfigError(fmt::format("{}: cannot open config file for reading", displayPath(file)));
+    std::istringstream in(std::move(text));
     return parseConfigJson(in, file);
 }
 
@@ -102,7 +100,7 @@ ConfigDocument loadWithIncludes(const fs::path& file, IncludeWalk& walk, const s
     walk.count(file, includedAt);
     ConfigDocument doc;
     doc.file = file;
-    json own = readJson(file);
+    json own = readJson(file, includedAt);
     if (!own.is_object()) throw ConfigError(fmt::format("{}: /: must be an object, got {}", file.string(), own.type_name()));
     chain.push_back(canonical);
     doc.json = json::object();

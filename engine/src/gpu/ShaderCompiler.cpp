@@ -1,6 +1,8 @@
 #include "penumbra/gpu/ShaderCompiler.h"
 
 #include "penumbra/core/Error.h"
+#include "penumbra/core/ShortText.h"
+#include "penumbra/io/ReadFile.h"
 
 #include "core/BuildTree.h"
 
@@ -12,7 +14,6 @@
 #include <dlfcn.h>
 
 #include <cstdlib>
-#include <fstream>
 #include <memory>
 #include <mutex>
 #include <cctype>
@@ -34,15 +35,16 @@ void ensureGlslang()
     static GlslangProcess process;
 }
 
+// A shader or an #include'd file: the shipped ones are at most a few tens of KB.
+constexpr uint64_t kMaxShaderBytes = uint64_t(4) << 20;
+
 std::string readText(const fs::path& path)
 {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) {
-        throw ShaderCompileError(fmt::format("{}: cannot open shader file", path.string()));
+    try {
+        return io::readRegularTextFile(path, kMaxShaderBytes, "a GLSL shader file");
+    } catch (const io::FileReadError& e) {
+        throw ShaderCompileError(fmt::format("{}: shader file {}", core::shortText(path.string()), e.reason()));
     }
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
 }
 
 EShLanguage toLanguage(VkShaderStageFlagBits stage)
@@ -88,16 +90,28 @@ public:
         }
     }
 
+    // Why #included files that exist could not be read (a FIFO, /proc/self/mem), a line
+    // each: glslang reports such an #include without the reason.
+    const std::string& unreadable() const { return unreadable_; }
+
 private:
     IncludeResult* tryOpen(const fs::path& path)
     {
         std::error_code ec;
-        if (!fs::is_regular_file(path, ec)) return nullptr;
-        auto* text = new std::string(readText(path));
-        return new IncludeResult(fs::weakly_canonical(path).string(), text->data(), text->size(), text);
+        if (!fs::exists(path, ec)) return nullptr;  // the next folder of the search path
+        auto text = std::make_unique<std::string>();
+        try {
+            *text = io::readRegularTextFile(path, kMaxShaderBytes, "a GLSL shader file");
+        } catch (const io::FileReadError& e) {
+            unreadable_ += fmt::format("\n{}: included shader file {}", core::shortText(path.string()), e.reason());
+            return new IncludeResult("", "", 0, nullptr);  // a failed inclusion
+        }
+        const std::string* data = text.get();
+        return new IncludeResult(fs::weakly_canonical(path).string(), data->data(), data->size(), text.release());
     }
 
     const std::vector<fs::path>& searchPath_;
+    std::string unreadable_;
 };
 
 // glslang writes "ERROR: <name>:<line>: <message>"; we rewrite each diagnostic as the
@@ -229,7 +243,8 @@ std::vector<uint32_t> ShaderCompiler::compileSource(const std::string& source, c
     Includer includer(searchPath_);
     const auto messages = static_cast<EShMessages>(EShMsgSpvRules | EShMsgVulkanRules);
     if (!shader.parse(GetDefaultResources(), 460, false, messages, includer)) {
-        throw ShaderCompileError(formatLog(std::string(shader.getInfoLog()) + shader.getInfoDebugLog(), name));
+        throw ShaderCompileError(formatLog(std::string(shader.getInfoLog()) + shader.getInfoDebugLog(), name) +
+                                 includer.unreadable());
     }
     glslang::TProgram program;
     program.addShader(&shader);

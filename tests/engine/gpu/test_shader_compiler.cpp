@@ -1,3 +1,4 @@
+#include "ScratchFolder.h"
 #include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/core/Error.h"
@@ -5,6 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
+#include <fstream>
 #include <regex>
 
 using namespace penumbra;
@@ -97,6 +101,28 @@ TEST(ShaderCompiler, MissingFileIsNamed)
 {
     const std::string what = compileError("nowhere/nothing.comp");
     EXPECT_NE(what.find("nothing.comp: shader file not found"), std::string::npos) << what;
+}
+
+// Shaders and their #includes are read as regular files of bounded size (issue 43): an
+// include that is a FIFO (it blocked the read) or /proc/self/mem (unreadable) is an error
+// at the #include line naming the file, never a hang.
+TEST(ShaderCompiler, IncludesThatAreNotRegularFilesAreNamed)
+{
+    const fs::path dir = penumbra::test::makeScratchFolder("shader");
+    ASSERT_EQ(::mkfifo((dir / "pipe.glsl").c_str(), 0600), 0);
+    fs::create_symlink("/proc/self/mem", dir / "mem.glsl");
+    for (const char* include : {"pipe.glsl", "mem.glsl"}) {
+        SCOPED_TRACE(include);
+        std::ofstream(dir / "main.comp") << "#version 460\n#include \"" << include << "\"\nlayout(local_size_x = 1) in;\nvoid main() {}\n";
+        const std::string what = compileError(dir / "main.comp");
+        EXPECT_NE(what.find("main.comp:2: error:"), std::string::npos) << what;
+        EXPECT_NE(what.find(include), std::string::npos) << what;
+        EXPECT_NE(what.find(std::string(include) == "pipe.glsl" ? "is a FIFO (named pipe)" : "cannot be read"), std::string::npos)
+            << what;
+    }
+    // The shader itself: only a regular file is found.
+    EXPECT_NE(compileError(dir / "pipe.glsl").find("shader file not found"), std::string::npos);
+    fs::remove_all(dir);
 }
 
 TEST(ShaderCompiler, DefinesReachTheSource)
