@@ -3,6 +3,7 @@
 
 #include "config/AnimationReader.h"
 #include "penumbra/config/Config.h"
+#include "penumbra/core/ShortText.h"
 
 #include <fmt/format.h>
 #include <glm/gtc/matrix_transform.hpp>
@@ -37,8 +38,8 @@ size_t targetSize(const std::string& target, const std::vector<LightConfig>& lig
         const bool digits = !index.empty() && index.size() <= 3 &&
                             std::all_of(index.begin(), index.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
         if (!digits || std::stoul(index) >= lights.size()) {
-            why = fmt::format("unknown target \"{}\": light index '{}' is not one of the {} configured lights", target,
-                              index, lights.size());
+            why = fmt::format("unknown target \"{}\": light index '{}' is not one of the {} configured lights",
+                              core::shortText(target), core::shortText(index), lights.size());
             return 0;
         }
         static const std::vector<std::pair<std::string, size_t>> fields = {
@@ -47,7 +48,7 @@ size_t targetSize(const std::string& target, const std::vector<LightConfig>& lig
         if (known == fields.end()) {
             why = fmt::format("unknown target \"{}\": a light's animatable values are position, target, direction, "
                               "intensity and color, got '{}'",
-                              target, field);
+                              core::shortText(target), core::shortText(field));
             return 0;
         }
         // Values a light of its kind does not have would be set and never used.
@@ -74,7 +75,8 @@ size_t targetSize(const std::string& target, const std::vector<LightConfig>& lig
             return 0;
         }
         if (field == "translation" || field == "rotation_deg" || field == "scale") return 3;
-        why = fmt::format("a node's animatable values are translation, rotation_deg and scale, got '{}'", field);
+        why = fmt::format("a node's animatable values are translation, rotation_deg and scale, got '{}'",
+                          core::shortText(field));
         return 0;
     }
     why = "expected /camera/..., /lights/<i>/... or node:<name>/...";
@@ -154,7 +156,7 @@ Animation readAnimation(ObjectReader& parent, const std::vector<LightConfig>& li
             if (other != track.target) {
                 t.fail(at + "/target", fmt::format("\"{}\" cannot be animated: /animation/tracks/{} animates \"{}\"; a "
                                                    "light follows either a target or a direction",
-                                                   track.target, first, other));
+                                                   core::shortText(track.target), first, core::shortText(other)));
             }
         }
         const std::string interp = t.choice("interpolation", "linear", {"step", "linear", "smooth"});
@@ -181,7 +183,8 @@ Animation readAnimation(ObjectReader& parent, const std::vector<LightConfig>& li
                 if (isDirectionTrack(track.target)) checkDirectionKey(track, x, key, kat + "/value");
                 frame.value = {x.x, x.y, x.z};
             } else {
-                key.fail(kat + "/value", fmt::format("must be {} for {}", size == 1 ? "a number" : "an array of 3 numbers", track.target));
+                key.fail(kat + "/value", fmt::format("must be {} for {}", size == 1 ? "a number" : "an array of 3 numbers",
+                                                     core::shortText(track.target)));
             }
             if (!track.keys.empty() && !(frame.timeS > track.keys.back().timeS)) {
                 key.fail(kat + "/t", fmt::format("key times must increase strictly: {} after {}", frame.timeS, track.keys.back().timeS));

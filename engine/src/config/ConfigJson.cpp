@@ -2,6 +2,7 @@
 
 #include "penumbra/config/Document.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/core/ShortText.h"
 
 #include <fmt/format.h>
 
@@ -100,7 +101,7 @@ private:
         if (open_.size() >= size_t(kMaxConfigNesting)) {
             throw ConfigError(fmt::format("{}: {}: nested deeper than {} levels of objects and arrays (a config "
                                           "needs a handful)",
-                                          displayPath(file_), pointer(), kMaxConfigNesting));
+                                          displayPath(file_), core::shortText(pointer()), kMaxConfigNesting));
         }
         count(2);
         open_.push_back({put(std::move(empty)), array, {}});
@@ -133,15 +134,16 @@ json parseConfigJson(std::istream& in, const fs::path& file, ConfigJsonWork* wor
         // nlohmann's message carries line and column: "parse error at line 3, column 5: ...".
         std::string what = e.what();
         if (auto pos = what.find("parse error"); pos != std::string::npos) what = what.substr(pos);
-        throw ConfigError(fmt::format("{}: malformed JSON: {}", displayPath(file), what));
+        throw ConfigError(fmt::format("{}: malformed JSON: {}", displayPath(file), core::shortText(what)));
     } catch (const json::out_of_range& e) {
         // 406: "number overflow parsing '1e309'": a number no double holds.
         std::string what = e.what();
         if (auto pos = what.find("] "); pos != std::string::npos) what = what.substr(pos + 2);
         throw ConfigError(fmt::format("{}: {}: {} (a number must lie within a double's range, about ±1.8e308)",
-                                      displayPath(file), builder.pointer(), what));
+                                      displayPath(file), core::shortText(builder.pointer()), core::shortText(what)));
     } catch (const json::exception& e) {
-        throw ConfigError(fmt::format("{}: {}: cannot read the JSON: {}", displayPath(file), builder.pointer(), e.what()));
+        throw ConfigError(fmt::format("{}: {}: cannot read the JSON: {}", displayPath(file), core::shortText(builder.pointer()),
+                                      core::shortText(e.what())));
     }
 }
 

@@ -112,7 +112,7 @@ ConfigDocument loadWithIncludes(const fs::path& file, IncludeWalk& walk, const s
             for (const json& e : *it) includes.push_back(e.get<std::string>());
         } else {
             throw ConfigError(fmt::format("{}: /include: must be a file name or an array of file names, got {}",
-                                          file.string(), it->dump()));
+                                          displayPath(file), core::shortJson(*it)));
         }
         for (size_t i = 0; i < includes.size(); ++i) {
             fs::path path = includes[i];
@@ -120,9 +120,9 @@ ConfigDocument loadWithIncludes(const fs::path& file, IncludeWalk& walk, const s
             const std::string at = fmt::format("{}: /include{}: ", displayPath(file), it->is_string() ? "" : fmt::format("/{}", i));
             if (std::find(chain.begin(), chain.end(), canonicalFor(path, at)) != chain.end()) {
                 std::string cycle;
-                for (const fs::path& p : chain) cycle += p.filename().string() + " -> ";
-                throw ConfigError(fmt::format("{}: /include/{}: include cycle: {}{}", file.string(), i, cycle,
-                                              path.filename().string()));
+                for (const fs::path& p : chain) cycle += displayPath(p.filename()) + " -> ";
+                throw ConfigError(fmt::format("{}: /include/{}: include cycle: {}{}", displayPath(file), i, cycle,
+                                              displayPath(path.filename())));
             }
             std::error_code ec;
             if (!fs::exists(path, ec)) {
@@ -142,13 +142,6 @@ ConfigDocument loadWithIncludes(const fs::path& file, IncludeWalk& walk, const s
 }
 
 } // namespace
-
-std::string shortText(std::string_view s)
-{
-    constexpr size_t kWhole = 160, kHead = 80, kTail = 60;
-    if (s.size() <= kWhole) return std::string(s);
-    return fmt::format("{}…{} ({} characters)", s.substr(0, kHead), s.substr(s.size() - kTail), s.size());
-}
 
 std::string ConfigDocument::fileFor(const std::string& pointer) const
 {

@@ -1,6 +1,7 @@
 #include "config/JsonReader.h"
 
 #include "core/Text.h"
+#include "penumbra/core/ShortText.h"
 #include "penumbra/core/Error.h"
 
 #include <fmt/format.h>
@@ -15,12 +16,12 @@ namespace penumbra::config {
 
 std::string Locator::where(const std::string& pointer) const
 {
-    return fmt::format("{}: {}", document_.fileFor(pointer), shortText(pointer));
+    return fmt::format("{}: {}", document_.fileFor(pointer), core::shortText(pointer));
 }
 
 void Locator::fail(const std::string& pointer, const std::string& what) const
 {
-    throw ConfigError(fmt::format("{}: {}: {}", document_.fileFor(pointer), pointer.empty() ? "/" : shortText(pointer), what));
+    throw ConfigError(fmt::format("{}: {}: {}", document_.fileFor(pointer), pointer.empty() ? "/" : core::shortText(pointer), what));
 }
 
 ObjectReader::ObjectReader(const json& value, const Locator& locator, std::string pointer)
@@ -51,11 +52,11 @@ double ObjectReader::number(const std::string& key, double fallback, double lo, 
 
 double ObjectReader::checkNumber(const json& v, const std::string& at, double lo, double hi, bool loOpen) const
 {
-    if (!v.is_number()) fail(at, fmt::format("must be a number, got {}", v.dump()));
+    if (!v.is_number()) fail(at, fmt::format("must be a number, got {}", core::shortJson(v)));
     const double x = v.get<double>();
     const bool below = loOpen ? x <= lo : x < lo;
     if (!std::isfinite(x) || below || x > hi) {
-        fail(at, fmt::format("must be in {}{}, {}], got {}", loOpen ? "(" : "[", lo, hi, v.dump()));
+        fail(at, fmt::format("must be in {}{}, {}], got {}", loOpen ? "(" : "[", lo, hi, core::shortJson(v)));
     }
     return x;
 }
@@ -64,7 +65,7 @@ uint32_t ObjectReader::integer(const std::string& key, uint32_t fallback, uint32
 {
     const json* v = find(key);
     if (!v) return fallback;
-    if (!v->is_number_integer()) fail(path(key), fmt::format("must be an integer, got {}", v->dump()));
+    if (!v->is_number_integer()) fail(path(key), fmt::format("must be an integer, got {}", core::shortJson(*v)));
     const int64_t x = v->get<int64_t>();
     if (x < int64_t(lo) || x > int64_t(hi)) {
         fail(path(key), fmt::format("must be an integer in [{}, {}], got {}", lo, hi, x));
@@ -81,12 +82,12 @@ glm::vec3 ObjectReader::vec3(const std::string& key, glm::vec3 fallback, bool re
 glm::vec3 ObjectReader::checkVec3(const json& v, const std::string& at) const
 {
     if (!v.is_array() || v.size() != 3 || !std::all_of(v.begin(), v.end(), [](const json& e) { return e.is_number(); })) {
-        fail(at, fmt::format("must be an array of 3 numbers, got {}", v.dump()));
+        fail(at, fmt::format("must be an array of 3 numbers, got {}", core::shortJson(v)));
     }
     glm::vec3 out;
     for (int i = 0; i < 3; ++i) {
         const double x = v[size_t(i)].get<double>();
-        if (!std::isfinite(x) || std::abs(x) > 3.0e38) fail(at, fmt::format("must be finite, got {}", v.dump()));
+        if (!std::isfinite(x) || std::abs(x) > 3.0e38) fail(at, fmt::format("must be finite, got {}", core::shortJson(v)));
         out[i] = float(x);
     }
     return out;
@@ -96,10 +97,10 @@ std::string ObjectReader::choice(const std::string& key, const std::string& fall
 {
     const json* v = find(key);
     if (!v) return fallback;
-    if (!v->is_string()) fail(path(key), fmt::format("must be a string, got {}", v->dump()));
+    if (!v->is_string()) fail(path(key), fmt::format("must be a string, got {}", core::shortJson(*v)));
     const std::string s = v->get<std::string>();
     if (std::find(allowed.begin(), allowed.end(), s) == allowed.end()) {
-        fail(path(key), fmt::format("must be one of {}, got \"{}\"", fmt::join(allowed, ", "), s));
+        fail(path(key), fmt::format("must be one of {}, got {}", fmt::join(allowed, ", "), core::shortJson(*v)));
     }
     return s;
 }
@@ -109,7 +110,7 @@ std::string ObjectReader::string(const std::string& key, const std::string& fall
     const json* v = find(key);
     if (!v) return fallback;
     if (!v->is_string() || v->get<std::string>().empty()) {
-        fail(path(key), fmt::format("must be a non-empty string, got {}", v->dump()));
+        fail(path(key), fmt::format("must be a non-empty string, got {}", core::shortJson(*v)));
     }
     return v->get<std::string>();
 }

@@ -2,6 +2,7 @@
 
 #include "core/Text.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/core/ShortText.h"
 
 #include <fmt/format.h>
 
@@ -18,7 +19,7 @@ ParamOverride parseParamOverride(std::string_view setting)
     const size_t dot = key.find('.');
     if (eq == std::string_view::npos || dot == std::string_view::npos || dot == 0 || dot + 1 == key.size()) {
         throw ConfigError(fmt::format("--set '{}': expected technique.parameter=value, e.g. --set hard.pcf_kernel=5",
-                                      setting));
+                                      core::shortText(setting)));
     }
     ParamOverride o;
     o.technique = std::string(key.substr(0, dot));
@@ -26,7 +27,7 @@ ParamOverride parseParamOverride(std::string_view setting)
     const std::string text(setting.substr(eq + 1));
     o.value = json::parse(text, nullptr, false);
     if (o.value.is_discarded()) o.value = text;
-    o.where = fmt::format("--set {}", key);
+    o.where = fmt::format("--set {}", core::shortText(key));
     return o;
 }
 
@@ -57,8 +58,8 @@ void applyParamOverrides(RenderConfig& config, const std::vector<ParamOverride>&
         if (const std::string best = core::closestMatch(o.technique, techniques); !best.empty()) {
             hint += fmt::format("; did you mean '{}'?", best);
         }
-        throw ConfigError(fmt::format("{}: no light of {} uses technique '{}' ({})", o.where, config.file.string(),
-                                      o.technique, hint));
+        throw ConfigError(fmt::format("{}: no light of {} uses technique '{}' ({})", o.where, displayPath(config.file),
+                                      core::shortText(o.technique), hint));
     }
 }
 

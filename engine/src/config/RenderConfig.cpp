@@ -2,9 +2,10 @@
 
 #include "config/AnimationReader.h"
 #include "config/JsonReader.h"
+#include "core/Text.h"
 #include "penumbra/core/Error.h"
-
 #include "penumbra/core/ShortText.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -16,7 +17,6 @@ namespace fs = std::filesystem;
 namespace penumbra::config {
 namespace {
 
-SceneSource readScene(ObjectReader& parent, const fs::path& configFile)
 // "allowed_roots": folders besides a glTF model's own whose files its URIs may name
 // (GltfLoadOptions::allowedRoots), relative to the config's folder.
 std::vector<fs::path> readAllowedRoots(ObjectReader& r, const fs::path& configFile)
@@ -32,7 +32,6 @@ std::vector<fs::path> readAllowedRoots(ObjectReader& r, const fs::path& configFi
         if (!root.is_string() || root.get_ref<const std::string&>().empty()) {
             r.fail(element, fmt::format("must be a folder name, got {}", core::shortJson(root)));
         }
-        source.allowedRoots = readAllowedRoots(r, configFile);
         fs::path folder = root.get<std::string>();
         if (folder.is_relative()) folder = configFile.parent_path() / folder;
         std::error_code ec;
@@ -42,6 +41,7 @@ std::vector<fs::path> readAllowedRoots(ObjectReader& r, const fs::path& configFi
     return roots;
 }
 
+SceneSource readScene(ObjectReader& parent, const fs::path& configFile)
 {
     SceneSource source;
     const json* v = parent.find("scene");
@@ -57,7 +57,8 @@ std::vector<fs::path> readAllowedRoots(ObjectReader& r, const fs::path& configFi
         source.gltf = gltf->get<std::string>();
         if (source.gltf.is_relative()) source.gltf = configFile.parent_path() / source.gltf;
         std::error_code ec;
-        if (!fs::is_regular_file(source.gltf, ec)) r.fail("/scene/gltf", fmt::format("file not found: {}", source.gltf.string()));
+        if (!fs::is_regular_file(source.gltf, ec)) r.fail("/scene/gltf", fmt::format("file not found: {}", displayPath(source.gltf)));
+        source.allowedRoots = readAllowedRoots(r, configFile);
         if (const json* animation = r.find("animation")) {
             // A name, or an index into the file's animations; buildScene checks it exists.
             if (animation->is_string() && !animation->get<std::string>().empty()) {
@@ -66,7 +67,7 @@ std::vector<fs::path> readAllowedRoots(ObjectReader& r, const fs::path& configFi
                 source.animation = std::to_string(animation->get<int64_t>());
             } else {
                 r.fail("/scene/animation", fmt::format("must be the name or index of an animation of the glTF file, got {}",
-                                                       animation->dump()));
+                                                       core::shortJson(*animation)));
             }
         }
         r.finish();
@@ -79,7 +80,7 @@ std::vector<fs::path> readAllowedRoots(ObjectReader& r, const fs::path& configFi
             const json* v = p.find(parameter.name);
             if (!v) continue;
             if (!v->is_number() && !v->is_boolean() && !v->is_string()) {
-                p.fail(p.path(parameter.name), fmt::format("must be a number, got {}", v->dump()));
+                p.fail(p.path(parameter.name), fmt::format("must be a number, got {}", core::shortJson(*v)));
             }
             source.params.emplace_back(parameter.name, v->is_string() ? v->get<std::string>() : v->dump());
         }
@@ -116,18 +117,29 @@ ShadowSettings readShadow(ObjectReader& light)
     ObjectReader r(*v, light.locator(), light.path("shadow"));
     s.technique = r.string("technique", s.technique);
     if (r.find("technique")) s.techniqueWhere = light.locator().where(r.path("technique"));
-    const bool nameOk = std::all_of(s.technique.begin(), s.technique.end(), [](char c) {
-        return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
-    });
-    if (!nameOk) r.fail(r.path("technique"), fmt::format("must be a plugin name ([a-z0-9_-]+), got \"{}\"", s.technique));
+    // The plugin's file, penumbra-<name>.so, must fit a file system's 255-byte names.
+    constexpr size_t kMaxPluginNameChars = 255 - std::string_view("penumbra-.so").size();
+    const bool nameOk = s.technique.size() <= kMaxPluginNameChars &&
+                        std::all_of(s.technique.begin(), s.technique.end(), [](char c) {
+                            return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
+                        });
+    if (!nameOk) {
+        r.fail(r.path("technique"), fmt::format("must be a plugin name ([a-z0-9_-]+, at most {} characters), got {}",
+                                                kMaxPluginNameChars, core::shortJson(s.technique)));
+    }
     if (const json* required = r.find("required")) {
-        if (!required->is_boolean()) r.fail(r.path("required"), fmt::format("must be true or false, got {}", required->dump()));
+        if (!required->is_boolean()) r.fail(r.path("required"), fmt::format("must be true or false, got {}", core::shortJson(*required)));
         s.required = required->get<bool>();
     }
     // Every other key is a parameter of the technique: its plugin's reflection checks
     // name, type and range when the technique is created.
     for (auto it = v->begin(); it != v->end(); ++it) {
         if (it.key() == "technique" || it.key() == "required") continue;
+        // A key an edit or two from these is their typo, not a parameter (no plugin names
+        // one so): said here, rather than as a parameter the plugin does not have.
+        if (const std::string best = core::closestMatch(it.key(), {"technique", "required"}); !best.empty()) {
+            r.fail(r.path(it.key()), fmt::format("unknown key; did you mean \"{}\"?", best));
+        }
         if (s.unshadowed()) r.fail(r.path(it.key()), "technique \"none\" (an unshadowed light) takes no parameters");
         s.params.push_back({it.key(), it.value(), light.locator().where(r.path(it.key()))});
     }
@@ -191,7 +203,7 @@ LightConfig readLight(const json& v, const Locator& locator, size_t index)
             l.type = scene::LightType::Rect;
             readAxis(r, lc, true);
             const json& size = r.require("size");
-            if (!size.is_array() || size.size() != 2) r.fail(at + "/size", fmt::format("must be [width, height], got {}", size.dump()));
+            if (!size.is_array() || size.size() != 2) r.fail(at + "/size", fmt::format("must be [width, height], got {}", core::shortJson(size)));
             // 0 is a size (a line, or with both a point that emits like a rect): every
             // technique and the reference take it, so that a sweep can reach the limit.
             for (int i = 0; i < 2; ++i) l.sizeWorld[i] = float(r.checkNumber(size[size_t(i)], fmt::format("{}/size/{}", at, i), 0.0, 1e9, false));
@@ -231,7 +243,7 @@ CullingMode parseCullingMode(std::string_view name)
     }
     throw ConfigError(fmt::format("culling: '{}' is not a mode; expected none, frustum, light-occlusion or "
                                   "receiver-mask",
-                                  name));
+                                  core::shortText(name)));
 }
 
 const char* cullingModeName(CullingMode mode)
@@ -273,7 +285,7 @@ RenderConfig parseConfig(const ConfigDocument& document)
     // Editors read "$schema" (config/schema/penumbra-config.schema.json); the engine has
     // its own checks.
     if (const json* schema = r.find("$schema"); schema && !schema->is_string()) {
-        r.fail("/$schema", fmt::format("must be the JSON Schema's path or URL (a string), got {}", schema->dump()));
+        r.fail("/$schema", fmt::format("must be the JSON Schema's path or URL (a string), got {}", core::shortJson(*schema)));
     }
     config.scene = readScene(r, document.file);
     config.camera = readCamera(r);
@@ -293,12 +305,12 @@ RenderConfig parseConfig(const ConfigDocument& document)
     for (size_t i = 0; lights.is_array() && i < lights.size(); ++i) {
         config.lights.push_back(readLight(lights[i], locator, i));
         if (!names.insert(config.lights.back().name).second) {
-            r.fail(fmt::format("/lights/{}/name", i), fmt::format("duplicate light name \"{}\"", config.lights.back().name));
+            r.fail(fmt::format("/lights/{}/name", i), fmt::format("duplicate light name {}", core::shortJson(config.lights.back().name)));
         }
     }
     config.culling = readCulling(r);
     if (const json* focus = r.find("shadow_focus")) {
-        if (!focus->is_boolean()) r.fail("/shadow_focus", fmt::format("must be true or false, got {}", focus->dump()));
+        if (!focus->is_boolean()) r.fail("/shadow_focus", fmt::format("must be true or false, got {}", core::shortJson(*focus)));
         config.shadowFocus = focus->get<bool>();
         // Focusing needs what the camera sees: the occlusion modes' camera depth.
         if (config.shadowFocus && config.culling != CullingMode::ReceiverMask &&
@@ -318,11 +330,11 @@ RenderConfig parseConfig(const ConfigDocument& document)
     config.frames = r.integer("frames", config.frames, 1, kMaxFrames);
     config.animation = readAnimation(r, config.lights, !config.scene.animation.empty());
     if (const json* notes = r.find("notes")) {
-        if (!notes->is_array()) r.fail("/notes", fmt::format("must be an array of Markdown paragraphs (strings), got {}", notes->dump()));
+        if (!notes->is_array()) r.fail("/notes", fmt::format("must be an array of Markdown paragraphs (strings), got {}", core::shortJson(*notes)));
         for (size_t i = 0; i < notes->size(); ++i) {
             const json& note = (*notes)[i];
             if (!note.is_string() || note.get<std::string>().empty()) {
-                r.fail(fmt::format("/notes/{}", i), fmt::format("must be a non-empty string (a Markdown paragraph), got {}", note.dump()));
+                r.fail(fmt::format("/notes/{}", i), fmt::format("must be a non-empty string (a Markdown paragraph), got {}", core::shortJson(note)));
             }
             config.notes.push_back(note.get<std::string>());
         }

@@ -2,6 +2,7 @@
 
 #include "penumbra/config/Animation.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/core/ShortText.h"
 #include "penumbra/scene/GltfLoader.h"
 
 #include <fmt/format.h>
@@ -79,7 +80,7 @@ scene::Scene buildScene(RenderConfig& config)
         const std::string name = target.substr(5, target.rfind('/') - 5);
         if (!nodeNames.count(name)) {
             throw ConfigError(fmt::format("{}: /animation/tracks/{}/target: the scene has no node named \"{}\"",
-                                          config.file.string(), i, name));
+                                          displayPath(config.file), i, core::shortText(name)));
         }
     }
     return scene;
@@ -122,7 +123,7 @@ int sceneAnimationIndex(const RenderConfig& config, const scene::Scene& scene)
     std::vector<std::string> names;
     for (const scene::NodeAnimation& a : scene.animations) names.push_back("\"" + a.name + "\"");
     throw ConfigError(fmt::format("{}: /scene/animation: {} has no animation \"{}\"; {}", config.file.string(),
-                                  config.scene.gltf.string(), wanted,
+                                  displayPath(config.scene.gltf), core::shortText(wanted),
                                   names.empty() ? std::string("it has none that can play")
                                                 : fmt::format("its animations: {} (or their index)", fmt::join(names, ", "))));
 }

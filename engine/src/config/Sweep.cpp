@@ -1,6 +1,7 @@
 #include "penumbra/config/Sweep.h"
 
 #include "config/JsonReader.h"
+#include "penumbra/core/ShortText.h"
 
 #include <fmt/format.h>
 
@@ -41,9 +42,9 @@ json::json_pointer readSweepPointer(const json& text, const ObjectReader& r, con
     try {
         pointer = json::json_pointer(s);
     } catch (const json::exception& e) {
-        r.fail(at, fmt::format("\"{}\" is not a JSON pointer ({})", shortText(s), e.what()));
+        r.fail(at, fmt::format("\"{}\" is not a JSON pointer ({})", core::shortText(s), core::shortText(e.what())));
     }
-    if (s.empty() || s.rfind("/sweep", 0) == 0 || s.rfind("/include", 0) == 0) r.fail(at, fmt::format("cannot sweep \"{}\"", shortText(s)));
+    if (s.empty() || s.rfind("/sweep", 0) == 0 || s.rfind("/include", 0) == 0) r.fail(at, fmt::format("cannot sweep \"{}\"", core::shortText(s)));
     return pointer;
 }
 
@@ -75,7 +76,7 @@ SweepAxis readSweepAxis(const json& entry, const Locator& locator, const std::st
             const std::string& inner = axis.pathTexts[b];
             if (a != b && inner.rfind(outer, 0) == 0 && (inner.size() == outer.size() || inner[outer.size()] == '/')) {
                 r.fail(fmt::format("{}/paths/{}", at, b), fmt::format("\"{}\" lies inside \"{}\", which the same entry sets",
-                                                                      inner, outer));
+                                                                      core::shortText(inner), core::shortText(outer)));
             }
         }
     }
@@ -83,7 +84,7 @@ SweepAxis readSweepAxis(const json& entry, const Locator& locator, const std::st
     for (size_t i = 0; i < values.size(); ++i) {
         if (paths && (!values[i].is_array() || values[i].size() != axis.paths.size())) {
             r.fail(fmt::format("{}/values/{}", at, i),
-                   fmt::format("must be an array of {} values, one per path, got {}", axis.paths.size(), values[i].dump()));
+                   fmt::format("must be an array of {} values, one per path, got {}", axis.paths.size(), core::shortJson(values[i])));
         }
         axis.values.push_back(values[i]);
     }
@@ -94,15 +95,15 @@ SweepAxis readSweepAxis(const json& entry, const Locator& locator, const std::st
         for (size_t i = 0; i < labels->size(); ++i) {
             const json& label = (*labels)[i];
             const std::string where = fmt::format("{}/labels/{}", at, i);
-            if (!label.is_string() || label.get<std::string>().empty()) r.fail(where, fmt::format("must be a non-empty string, got {}", label.dump()));
+            if (!label.is_string() || label.get<std::string>().empty()) r.fail(where, fmt::format("must be a non-empty string, got {}", core::shortJson(label)));
             if (std::find(axis.labels.begin(), axis.labels.end(), label.get<std::string>()) != axis.labels.end()) {
-                r.fail(where, fmt::format("\"{}\" labels another value already", label.get<std::string>()));
+                r.fail(where, fmt::format("{} labels another value already", core::shortJson(label)));
             }
             axis.labels.push_back(label.get<std::string>());
         }
         axis.labelled = true;
     } else {
-        for (const json& v : axis.values) axis.labels.push_back(v.dump());
+        for (const json& v : axis.values) axis.labels.push_back(core::shortJson(v));
     }
     return axis;
 }
@@ -115,7 +116,7 @@ void setSwept(json& doc, const json::json_pointer& pointer, const json& value, c
 {
     const std::string text = pointer.to_string();
     const json::json_pointer parent = pointer.parent_pointer();
-    const std::string in = variant.empty() ? "" : fmt::format(" (in the variant {})", variant);
+    const std::string in = variant.empty() ? "" : fmt::format(" (in the variant {})", core::shortText(variant));
     bool settable = false;
     try {
         // An array index beyond 64 bits makes the lookup throw rather than miss.
@@ -124,15 +125,15 @@ void setSwept(json& doc, const json::json_pointer& pointer, const json& value, c
         settable = false;
     }
     if (!settable) {
-        locator.fail(at, fmt::format("\"{}\": the config has no \"{}\" to set it in{}", shortText(text),
-                                     shortText(parent.to_string()), in));
+        locator.fail(at, fmt::format("\"{}\": the config has no \"{}\" to set it in{}", core::shortText(text),
+                                     core::shortText(parent.to_string()), in));
     }
     if (doc[parent].is_array()) {
         const std::string& index = pointer.back();
         const bool digits = !index.empty() && std::all_of(index.begin(), index.end(), [](unsigned char c) { return std::isdigit(c); });
         if (!digits || index.size() > 9 || std::stoul(index) >= doc[parent].size()) {
             locator.fail(at, fmt::format("\"{}\": \"{}\" has {} elements; a sweep replaces an element, it does not add one{}",
-                                         shortText(text), shortText(parent.to_string()), doc[parent].size(), in));
+                                         core::shortText(text), core::shortText(parent.to_string()), doc[parent].size(), in));
         }
     }
     doc[pointer] = value;

@@ -25,6 +25,10 @@ std::string closestMatch(std::string_view word, const std::vector<std::string>& 
     std::string best;
     size_t bestDistance = maxDistance + 1;
     for (const std::string& candidate : candidates) {
+        // The lengths bound the distance from below: a word far longer than every
+        // candidate (a 1 MB key) costs no edit-distance table.
+        const size_t lengthGap = word.size() > candidate.size() ? word.size() - candidate.size() : candidate.size() - word.size();
+        if (lengthGap >= bestDistance) continue;
         const size_t d = editDistance(word, candidate);
         if (d < bestDistance) {
             bestDistance = d;

@@ -4,6 +4,7 @@
 #include "frame/FrameFormats.h"
 #include "frame/LightTable.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/core/ShortText.h"
 #include "penumbra/graph/PassContext.h"
 #include "penumbra/render/Projection.h"
 
@@ -51,7 +52,7 @@ uint32_t floorResolution(const config::LightConfig& light, size_t index)
         const auto where = std::find_if(light.shadow.params.begin(), light.shadow.params.end(),
                                         [](const config::ShadowParam& p) { return p.name == "resolution"; });
         throw ConfigError(fmt::format("{}: floor of light {}: resolution must be a whole number in [16, 65536], got {}",
-                                      where->where, index, value->dump()));
+                                      where->where, index, core::shortJson(*value)));
     }
     return uint32_t(value->get<int64_t>());
 }

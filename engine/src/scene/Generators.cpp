@@ -1,6 +1,7 @@
 #include "penumbra/scene/Generators.h"
 
 #include "penumbra/core/Error.h"
+#include "penumbra/core/ShortText.h"
 
 #include <fmt/format.h>
 #include <glm/gtc/constants.hpp>
@@ -613,7 +614,7 @@ void parseValue(const std::string& generator, const std::string& name, const std
     const auto [ptr, ec] = std::from_chars(text.data(), end, value);
     if (ec != std::errc() || ptr != end) {
         throw Error(fmt::format("{}: {} must be a whole number in [0, {}], got '{}'", generator, name,
-                                std::numeric_limits<uint32_t>::max(), text));
+                                std::numeric_limits<uint32_t>::max(), core::shortText(text)));
     }
 }
 
@@ -622,7 +623,7 @@ void parseValue(const std::string& generator, const std::string& name, const std
     const char* end = text.data() + text.size();
     const auto [ptr, ec] = std::from_chars(text.data(), end, value);
     if (ec != std::errc() || ptr != end) {
-        throw Error(fmt::format("{}: {} must be a number, got '{}'", generator, name, text));
+        throw Error(fmt::format("{}: {} must be a number, got '{}'", generator, name, core::shortText(text)));
     }
 }
 
@@ -658,7 +659,7 @@ template <class Params> RegisteredGenerator registerGenerator(std::string name, 
             if (!known) {
                 std::vector<std::string> names;
                 for (const GeneratorParameter& p : parameters()) names.push_back(p.name);
-                throw Error(fmt::format("{}: unknown parameter '{}'; known: {}", name, key, fmt::join(names, ", ")));
+                throw Error(fmt::format("{}: unknown parameter '{}'; known: {}", name, core::shortText(key), fmt::join(names, ", ")));
             }
         }
         return generate(params);
@@ -684,7 +685,7 @@ const RegisteredGenerator& findGenerator(const std::string& name)
     for (const RegisteredGenerator& g : registry()) {
         if (g.name == name) return g;
     }
-    throw Error(fmt::format("unknown generator '{}'; known: {}", name, fmt::join(generatorNames(), ", ")));
+    throw Error(fmt::format("unknown generator '{}'; known: {}", core::shortText(name), fmt::join(generatorNames(), ", ")));
 }
 
 } // namespace

@@ -623,7 +623,8 @@ TEST(Config, WrongTypes)
     doc = minimal();
     // Technique names are checked against the plugins when they load; here only the form.
     doc["lights"][0]["shadow"] = {{"technique", "Ray Traced"}};
-    EXPECT_NE(errorOf(doc).find("/lights/0/shadow/technique: must be a plugin name ([a-z0-9_-]+), got \"Ray Traced\""),
+    EXPECT_NE(errorOf(doc).find("/lights/0/shadow/technique: must be a plugin name ([a-z0-9_-]+, at most 243 characters), "
+                                "got \"Ray Traced\""),
               std::string::npos);
     doc["lights"][0]["shadow"] = {{"technique", "hard"}, {"required", "yes"}};
     EXPECT_NE(errorOf(doc).find("/lights/0/shadow/required: must be true or false"), std::string::npos);

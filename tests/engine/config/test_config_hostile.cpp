@@ -196,14 +196,6 @@ TEST_F(HostileConfig, SweepPathsBeyondTheConfigAreRefused)
     EXPECT_LT(what.size(), 1000u);
 }
 
-TEST(ShortText, KeepsShortTextAndShortensLongText)
-{
-    EXPECT_EQ(config::shortText("/lights/0/shadow"), "/lights/0/shadow");
-    EXPECT_EQ(config::shortText(std::string(160, 'x')), std::string(160, 'x'));
-    const std::string s = config::shortText(std::string(100, 'a') + std::string(100, 'b'));
-    EXPECT_EQ(s, std::string(80, 'a') + "…" + std::string(60, 'b') + " (200 characters)");
-}
-
 namespace {
 
 // The default config with `animation` (JSON text) as its animation.

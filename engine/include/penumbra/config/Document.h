@@ -1,6 +1,8 @@
 #pragma once
 // A config file as JSON, with its includes merged, and for each value the file it came
 // from: what config/Config.h reads a RenderConfig from, and config/Sweep.h expands.
+#include "penumbra/core/ShortText.h"
+
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
@@ -47,9 +49,7 @@ inline constexpr size_t kMaxConfigFiles = 100;
 // include chain).
 ConfigDocument loadDocument(const std::filesystem::path& file);
 
-// `text` (a path, a JSON pointer) for a message: whole up to 160 characters, else its
-// start and end around "…" with its length.
-std::string shortText(std::string_view text);
-inline std::string displayPath(const std::filesystem::path& path) { return shortText(path.string()); }
+// A path for a message, shortened (core::shortText).
+inline std::string displayPath(const std::filesystem::path& path) { return core::shortText(path.string()); }
 
 } // namespace penumbra::config

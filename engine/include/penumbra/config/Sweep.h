@@ -20,7 +20,7 @@ namespace penumbra::config {
 struct SweepChoice {
     std::vector<std::string> paths;  // the entry's JSON pointers
     size_t value = 0;                // index into the entry's "values"
-    std::string label;               // its "labels" entry, or the value as JSON
+    std::string label;               // its "labels" entry, or the value as JSON (core::shortJson)
     bool labelled = false;           // the label is the entry's own ("labels")
 };
 struct SweepVariant {
