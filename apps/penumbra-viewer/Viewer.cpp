@@ -4,6 +4,7 @@
 
 #include "penumbra/config/Overrides.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/core/ShortText.h"
 #include "penumbra/io/Png.h"
 #include "penumbra/metrics/Images.h"
 #include "penumbra/plugin/Params.h"
@@ -60,7 +61,8 @@ float parseFloat(const std::string& text, const ScriptCommand& command)
     float value = 0.0f;
     const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
     if (ec != std::errc() || end != text.data() + text.size() || !std::isfinite(value)) {
-        throw Error(fmt::format("{}: {}: expected a finite number, got \"{}\"", command.where, command.words[0], text));
+        throw Error(fmt::format("{}: {}: expected a finite number, got \"{}\"", command.where, command.words[0],
+                                core::shortText(text)));
     }
     return value;
 }
@@ -71,7 +73,7 @@ int parseInt(const std::string& text, const ScriptCommand& command, int lo, int 
     const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
     if (ec != std::errc() || end != text.data() + text.size() || value < lo || value > hi) {
         throw Error(fmt::format("{}: {}: expected a whole number in [{}, {}], got \"{}\"", command.where, command.words[0],
-                                lo, hi, text));
+                                lo, hi, core::shortText(text)));
     }
     return value;
 }
@@ -88,7 +90,8 @@ bool parseOnOff(const ScriptCommand& command, const char* usage)
 {
     expectWords(command, 2, usage);
     if (command.words[1] != "on" && command.words[1] != "off") {
-        throw Error(fmt::format("{}: {}: expected `{}`, got \"{}\"", command.where, command.words[0], usage, command.words[1]));
+        throw Error(fmt::format("{}: {}: expected `{}`, got \"{}\"", command.where, command.words[0], usage,
+                                core::shortText(command.words[1])));
     }
     return command.words[1] == "on";
 }
@@ -630,7 +633,7 @@ size_t Viewer::lightIndex(const std::string& nameOrIndex, const ScriptCommand& c
     std::string names;
     for (const auto& l : lights) names += (names.empty() ? "" : ", ") + l.name;
     throw Error(fmt::format("{}: {}: no light \"{}\"; the lights are {} (or their index)", command.where, command.words[0],
-                            nameOrIndex, names));
+                            core::shortText(nameOrIndex), names));
 }
 
 std::vector<uint8_t> Viewer::viewPixels(uint32_t& width, uint32_t& height)
@@ -659,6 +662,7 @@ std::vector<uint8_t> Viewer::viewPixels(uint32_t& width, uint32_t& height)
 
 void Viewer::writeScreenshot(const fs::path& file, bool window)
 {
+    io::imageFormatFor(file);  // a name that is no image's fails before the frame is drawn
     session_->renderIfChanged(false);
     if (window) {
         // The window as composed, panels included: one more shown frame, read back.
@@ -673,11 +677,11 @@ void Viewer::writeScreenshot(const fs::path& file, bool window)
         const float background[3] = {0.09f, 0.09f, 0.1f};
         presenter_->present(viewBlits(), ImGui::GetDrawData(), true, background, &pixels);
         if (pixels.empty()) throw Error(fmt::format("{}: the window's images cannot be read back on this device", file.string()));
-        io::writePng(file, presenter_->extent().width, presenter_->extent().height, pixels);
+        io::writeImage(file, presenter_->extent().width, presenter_->extent().height, pixels);
     } else {
         uint32_t w = 0, h = 0;
         const std::vector<uint8_t> pixels = viewPixels(w, h);
-        io::writePng(file, w, h, pixels);
+        io::writeImage(file, w, h, pixels);
     }
     message_ = fmt::format("wrote {}", file.string());
     spdlog::info("{}", message_);
@@ -793,7 +797,7 @@ void Viewer::runCommand(const ScriptCommand& command)
             session_->setParam(i, o.param, o.value, fmt::format("{}: set {}.{}", command.where, o.technique, o.param));
             used = true;
         }
-        if (!used) throw Error(fmt::format("{}: set: no light uses the technique \"{}\"", command.where, o.technique));
+        if (!used) throw Error(fmt::format("{}: set: no light uses the technique \"{}\"", command.where, core::shortText(o.technique)));
     } else if (verb == "param") {
         expectWords(command, 4, "param LIGHT NAME VALUE");
         const size_t light = lightIndex(command.words[1], command);
@@ -831,7 +835,7 @@ void Viewer::runCommand(const ScriptCommand& command)
             }
         } else {
             throw Error(fmt::format("{}: light: unknown field \"{}\"; expected position, direction, target or intensity",
-                                    command.where, field));
+                                    command.where, core::shortText(field)));
         }
         session_->changed(Change::View);
     } else if (verb == "show") {
@@ -852,19 +856,20 @@ void Viewer::runCommand(const ScriptCommand& command)
         if (!names.contains(name)) {
             throw Error(fmt::format("{}: panel \"{}\": expected one of file, scene, camera, render, lights, animation, "
                                     "compare, \"debug images\" or timings",
-                                    command.where, command.words[1]));
+                                    command.where, core::shortText(command.words[1])));
         }
         if (command.words[2] != "open" && command.words[2] != "closed") {
-            throw Error(fmt::format("{}: panel {} \"{}\": expected open or closed", command.where, name, command.words[2]));
+            throw Error(fmt::format("{}: panel {} \"{}\": expected open or closed", command.where, name,
+                                    core::shortText(command.words[2])));
         }
         panelOpen_[name] = command.words[2] == "open";
     } else if (verb == "panel-layer") {
         presenter_->setPanelLayer(parseOnOff(command, "panel-layer on|off"));
     } else if (verb == "screenshot") {
-        expectWords(command, 2, "screenshot FILE.png");
+        expectWords(command, 2, "screenshot FILE.png|FILE.jpg");
         writeScreenshot(command.words[1], false);
     } else if (verb == "screenshot-window") {
-        expectWords(command, 2, "screenshot-window FILE.png");
+        expectWords(command, 2, "screenshot-window FILE.png|FILE.jpg");
         writeScreenshot(command.words[1], true);
     } else if (verb == "save") {
         expectWords(command, 2, "save FILE.json");
@@ -890,7 +895,10 @@ void Viewer::runCommand(const ScriptCommand& command)
             b = std::move(trial);
             used = true;
         }
-        if (!used) throw Error(fmt::format("{}: compare-set: B uses no \"{}\" (compare TECHNIQUE first)", command.where, o.technique));
+        if (!used) {
+            throw Error(fmt::format("{}: compare-set: B uses no \"{}\" (compare TECHNIQUE first)", command.where,
+                                    core::shortText(o.technique)));
+        }
         bResult_.reset();
         requestedKey_.clear();
         if (comparison_) comparison_->cancel();
@@ -901,7 +909,7 @@ void Viewer::runCommand(const ScriptCommand& command)
         else if (m == "b") viewMode_ = ViewMode::B;
         else if (m == "split") viewMode_ = ViewMode::Split;
         else if (m == "difference") viewMode_ = ViewMode::Difference;
-        else throw Error(fmt::format("{}: compare-view: \"{}\" is not a, b, split or difference", command.where, m));
+        else throw Error(fmt::format("{}: compare-view: \"{}\" is not a, b, split or difference", command.where, core::shortText(m)));
     } else if (verb == "wait-compare") {
         expectWords(command, 1, "wait-compare");
         if (!compareOn_) throw Error(fmt::format("{}: wait-compare: no comparison (compare TECHNIQUE first)", command.where));
@@ -929,7 +937,7 @@ void Viewer::runCommand(const ScriptCommand& command)
             if (!recording_) throw Error(fmt::format("{}: record stop: not recording", command.where));
             stopRecording();
         } else {
-            throw Error(fmt::format("{}: record: expected start or stop, got \"{}\"", command.where, command.words[1]));
+            throw Error(fmt::format("{}: record: expected start or stop, got \"{}\"", command.where, core::shortText(command.words[1])));
         }
     } else if (verb == "time") {
         expectWords(command, 2, "time SECONDS");
@@ -964,7 +972,7 @@ void Viewer::runCommand(const ScriptCommand& command)
         expectWords(command, 2, "expect-error TEXT");
         session_->renderIfChanged(false);
         if (session_->lastError().find(command.words[1]) == std::string::npos) {
-            throw Error(fmt::format("{}: expected an error with \"{}\", the viewer shows {}", command.where, command.words[1],
+            throw Error(fmt::format("{}: expected an error with \"{}\", the viewer shows {}", command.where, core::shortText(command.words[1]),
                                     session_->lastError().empty() ? "none" : "\"" + session_->lastError() + "\""));
         }
     } else if (verb == "expect-no-error") {
@@ -1008,7 +1016,7 @@ void Viewer::runCommand(const ScriptCommand& command)
                                 "screenshot-window, save, save-visibility, compare, compare-set, compare-view, wait-compare, errors, wait-for, "
                                 "wait-error, wait-no-error, expect-error, expect-no-error, record, time, play, widgets, timings, "
                                 "panel, panel-layer or quit",
-                                command.where, verb));
+                                command.where, core::shortText(verb)));
     }
 }
 

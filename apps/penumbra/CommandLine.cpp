@@ -1,5 +1,10 @@
 #include "CommandLine.h"
 
+#include "ConfigCheck.h"
+#include "penumbra/core/Error.h"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
 namespace penumbra::app {
@@ -38,11 +43,6 @@ void addParamOverrideFlag(CLI::App& cmd, std::vector<std::string>& settings)
         ->allow_extra_args(false);
 }
 
-void addSizeFlags(CLI::App& cmd, RunFlags& flags, const std::string& overrides)
-{
-    cmd.add_option("--width", flags.width, "Output width (overrides " + overrides + ")")->check(CLI::Range(1u, 16384u));
-    cmd.add_option("--height", flags.height, "Output height (overrides " + overrides + ")")->check(CLI::Range(1u, 16384u));
-}
 void addAllowRootFlag(CLI::App& cmd, std::vector<std::string>& roots)
 {
     cmd.add_option("--allow-root", roots,
@@ -52,17 +52,43 @@ void addAllowRootFlag(CLI::App& cmd, std::vector<std::string>& roots)
         ->allow_extra_args(false);
 }
 
+void addSizeFlags(CLI::App& cmd, RunFlags& flags, const std::string& overrides)
+{
+    cmd.add_option("--width", flags.width, "Output width (overrides " + overrides + ")")->check(CLI::Range(1u, 16384u));
+    cmd.add_option("--height", flags.height, "Output height (overrides " + overrides + ")")->check(CLI::Range(1u, 16384u));
+}
 
 config::RunOptions runOptions(const RunFlags& flags)
 {
     config::RunOptions options;
     options.overrides = config::parseParamOverrides(flags.settings);
+    options.allowedRoots.assign(flags.allowedRoots.begin(), flags.allowedRoots.end());
     options.width = flags.width;
     options.height = flags.height;
     return options;
 }
 
-    options.allowedRoots.assign(flags.allowedRoots.begin(), flags.allowedRoots.end());
+config::RenderConfig loadConfigIgnoringSweep(const std::string& file, const std::string& command)
+{
+    const config::ConfigDocument document = config::loadDocument(file);
+    if (document.json.contains("sweep")) {
+        spdlog::warn("{}: /sweep: {} ignores the sweep and draws the config as written; `penumbra bench` runs its "
+                     "variants (`penumbra validate` lists them)",
+                     config::displayPath(document.fileFor("/sweep")), command);
+    }
+    return config::parseConfig(document);
+}
+
+void checkPluginsBeforeDevice(const config::RenderConfig& config, const config::RunOptions& options,
+                              plugin::PluginRegistry& plugins)
+{
+    ConfigCheck check(options, plugins, 0);
+    check.checkConfig(config, false);
+    std::vector<std::string> errors;
+    for (const ConfigCheck::Finding& error : check.errors()) errors.push_back(check.describe(error));
+    if (!errors.empty()) throw ConfigError(fmt::format("{}", fmt::join(errors, "\n")));
+}
+
 void addReferenceFlags(CLI::App& cmd, ReferenceFlags& flags)
 {
     cmd.add_option("--reference", flags.technique, "The reference technique plugin")->capture_default_str();

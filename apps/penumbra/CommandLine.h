@@ -7,6 +7,7 @@
 // read (--allow-root).
 #include "penumbra/config/Run.h"
 #include "penumbra/gpu/Context.h"
+#include "penumbra/plugin/PluginRegistry.h"
 
 #include <CLI/CLI.hpp>
 
@@ -42,19 +43,31 @@ int validationExitCode(const gpu::Context& context);
 // the commands that render, --width and --height.
 struct RunFlags {
     std::vector<std::string> settings;
-    std::optional<uint32_t> width;
     std::vector<std::string> allowedRoots;  // --allow-root
+    std::optional<uint32_t> width;
     std::optional<uint32_t> height;
 };
 void addParamOverrideFlag(CLI::App& cmd, std::vector<std::string>& settings);
-// --width and --height; `overrides` says what they replace ("the config", "every variant").
 // --allow-root DIR (repeatable): a folder besides a glTF model's own whose files its URIs
 // may name (scene::GltfLoadOptions::allowedRoots).
 void addAllowRootFlag(CLI::App& cmd, std::vector<std::string>& roots);
+// --width and --height; `overrides` says what they replace ("the config", "every variant").
 void addSizeFlags(CLI::App& cmd, RunFlags& flags, const std::string& overrides = "the config");
 // The flags as config::prepareRun takes them (the --set values parsed: ConfigError for a
 // malformed one).
 config::RunOptions runOptions(const RunFlags& flags);
+
+// The config `file` as render, compare and graph draw it: as written. A sweep in it is
+// for `bench` to run: a warning names it and says that `command` ignores it.
+config::RenderConfig loadConfigIgnoringSweep(const std::string& file, const std::string& command);
+
+// Before the device starts, what the run's lights' plugins would refuse: a parameter
+// value (--set ones included) their metadata does not accept, a required technique that
+// cannot be used (ConfigCheck, as `validate` finds them), thrown as one ConfigError.
+// Another light whose plugin cannot be used is the renderer's to report: it warns and
+// draws that light unshadowed.
+void checkPluginsBeforeDevice(const config::RenderConfig& config, const config::RunOptions& options,
+                              plugin::PluginRegistry& plugins);
 
 // The technique that compare and bench measure against (ReferenceTechnique.h).
 struct ReferenceFlags {

@@ -177,12 +177,13 @@ int runCompare(const CompareFlags& flags)
     if (!(flags.diffScale > 0.0f && flags.diffScale <= 1.0f)) {
         throw Error(fmt::format("--diff-scale must be in (0, 1], got {}", flags.diffScale));
     }
-    config::RenderConfig loaded = config::loadConfig(flags.config);
+    config::RenderConfig loaded = loadConfigIgnoringSweep(flags.config, "compare");
     const config::RunOptions options = runOptions(flags.run);
 
     plugin::PluginRegistry plugins;
     const ReferenceTechnique reference = loadReferenceTechnique(flags.reference.technique, flags.reference.settings, plugins);
     config::PreparedRun run = config::prepareRun(std::move(loaded), options);
+    checkPluginsBeforeDevice(run.config, options, plugins);
     run.poseAtFrame(0);  // an animated config is measured at its first frame, as `render` shows it
     const config::RenderConfig& config = run.config;
     const scene::Scene& scene = run.scene;
@@ -283,8 +284,8 @@ Command addCompareCommand(CLI::App& app)
     cmd->add_flag("--json", flags->json, "Print the figures as one JSON document (as metrics.json)");
     addSizeFlags(*cmd, flags->run);
     addParamOverrideFlag(*cmd, flags->run.settings);
-    addDeviceFlags(*cmd, flags->device);
     addAllowRootFlag(*cmd, flags->run.allowedRoots);
+    addDeviceFlags(*cmd, flags->device);
     return {cmd, [flags] { return runCompare(*flags); }};
 }
 

@@ -1,6 +1,7 @@
 #include "GenerateCommand.h"
 
 #include "penumbra/core/Error.h"
+#include "penumbra/core/ShortText.h"
 #include "penumbra/scene/Generators.h"
 #include "penumbra/scene/GltfWriter.h"
 
@@ -47,7 +48,7 @@ int runGenerate(const GenerateFlags& flags)
     for (const std::string& setting : flags.settings) {
         const size_t eq = setting.find('=');
         if (eq == std::string::npos || eq == 0) {
-            throw Error(fmt::format("--set '{}': expected name=value, e.g. --set {}={}", setting,
+            throw Error(fmt::format("--set '{}': expected name=value, e.g. --set {}={}", core::shortText(setting),
                                               known.front().name, known.front().defaultValue));
         }
         settings.emplace_back(setting.substr(0, eq), setting.substr(eq + 1));

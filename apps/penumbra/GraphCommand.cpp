@@ -51,13 +51,14 @@ std::string cullingSection(const visibility::CullingStats& stats, config::Cullin
 
 int runGraph(const GraphFlags& flags)
 {
-    config::RenderConfig loaded = config::loadConfig(flags.config);
+    config::RenderConfig loaded = loadConfigIgnoringSweep(flags.config, "graph");
     const config::RunOptions options = runOptions(flags.run);
     if (!flags.output.empty()) io::checkWritable(flags.output);
-
-    gpu::Context context(contextOptions(flags.device));
     const config::PreparedRun run = config::prepareRun(std::move(loaded), options);
     plugin::PluginRegistry plugins;
+    checkPluginsBeforeDevice(run.config, options, plugins);
+
+    gpu::Context context(contextOptions(flags.device));
     frame::FrameRenderer renderer(context, run.scene, run.config, plugins);
     for (const std::string& warning : renderer.warnings()) spdlog::warn("{}", warning);
     const frame::FrameTimings timings = renderer.renderFrame();
@@ -110,8 +111,8 @@ Command addGraphCommand(CLI::App& app)
     cmd->add_option("-o,--output", flags->output, "Write to this file instead of stdout");
     addSizeFlags(*cmd, flags->run);
     addParamOverrideFlag(*cmd, flags->run.settings);
-    addDeviceFlags(*cmd, flags->device);
     addAllowRootFlag(*cmd, flags->run.allowedRoots);
+    addDeviceFlags(*cmd, flags->device);
     return {cmd, [flags] { return runGraph(*flags); }};
 }
 

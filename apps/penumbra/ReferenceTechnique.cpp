@@ -2,6 +2,7 @@
 
 #include "penumbra/config/Overrides.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/core/ShortText.h"
 
 #include <fmt/format.h>
 
@@ -18,15 +19,16 @@ config::ParamOverride parseReferenceSetting(const std::string& reference, const 
         if (key.substr(0, dot) != reference) {
             throw Error(fmt::format("--reference-set '{}': '{}' is not the reference technique '{}' (--set sets the "
                                     "parameters of the techniques under test)",
-                                    setting, key.substr(0, dot), reference));
+                                    core::shortText(setting), core::shortText(key.substr(0, dot)), reference));
         }
         key = key.substr(dot + 1);
     }
     if (eq == std::string::npos || key.empty()) {
-        throw Error(fmt::format("--reference-set '{}': expected parameter=value, e.g. --reference-set samples=64", setting));
+        throw Error(fmt::format("--reference-set '{}': expected parameter=value, e.g. --reference-set samples=64",
+                                core::shortText(setting)));
     }
     config::ParamOverride o = config::parseParamOverride(fmt::format("{}.{}{}", reference, key, setting.substr(eq)));
-    o.where = fmt::format("--reference-set {}", key);
+    o.where = fmt::format("--reference-set {}", core::shortText(key));
     return o;
 }
 
@@ -46,7 +48,7 @@ ReferenceTechnique loadReferenceTechnique(const std::string& name, const std::ve
     try {
         loaded = &plugins.load(name);
     } catch (const plugin::PluginError& e) {
-        throw Error(fmt::format("--reference {}: {}", name, e.what()));
+        throw Error(fmt::format("--reference {}: {}", core::shortText(name), e.what()));
     }
     std::vector<std::string> errors;
     reference.params = plugin::resolveParams(*loaded, reference.shadow, &errors).toJson();

@@ -6,6 +6,7 @@
 #include "VisibilityExr.h"
 #include "penumbra/config/Run.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/core/ShortText.h"
 #include "penumbra/frame/FloorRenderer.h"
 #include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/io/Png.h"
@@ -32,7 +33,7 @@ struct RenderFlags {
     bool timings = false;
     bool stats = false;
     std::optional<std::string> culling;
-    std::string debugImage;       // --debug-image: the PNG shows this graph image instead of the colour
+    std::string debugImage;       // --debug-image: the output shows this graph image instead of the colour
     std::string debugMapping = "linear";
     std::string debugRange;       // "MIN,MAX"; empty: the image's finite values
     RunFlags run;
@@ -55,23 +56,25 @@ std::optional<metrics::DebugRange> parseDebugRange(const std::string& text)
         ok = ok && !high.empty() && *end == '\0';
     }
     if (!ok || !std::isfinite(range.min) || !std::isfinite(range.max) || range.min > range.max) {
-        throw Error(fmt::format("--debug-range '{}': expected MIN,MAX, two finite numbers with MIN <= MAX", text));
+        throw Error(fmt::format("--debug-range '{}': expected MIN,MAX, two finite numbers with MIN <= MAX",
+                                core::shortText(text)));
     }
     return range;
 }
 
-// The PNG of a frame: its colour image, or the requested debug image mapped to RGBA8.
-void writeFramePng(const std::string& path, const frame::FrameRenderer& renderer, const RenderFlags& flags)
+// The image file of a frame (PNG or JPEG, as its name says): its colour image, or the
+// requested debug image mapped to RGBA8.
+void writeFrameImage(const std::string& path, const frame::FrameRenderer& renderer, const RenderFlags& flags)
 {
     if (flags.debugImage.empty()) {
-        io::writePng(path, renderer.width(), renderer.height(), renderer.readColor());
+        io::writeImage(path, renderer.width(), renderer.height(), renderer.readColor());
         return;
     }
     const metrics::DebugMapping mapping = metrics::parseDebugMapping(flags.debugMapping);
     const metrics::DebugImageValues image = renderer.readImage(flags.debugImage);
     const metrics::DebugRange found = metrics::finiteRange(image, mapping);
     const metrics::DebugRange range = parseDebugRange(flags.debugRange).value_or(found);
-    io::writePng(path, image.width, image.height, metrics::debugImageRgba(image, mapping, range));
+    io::writeImage(path, image.width, image.height, metrics::debugImageRgba(image, mapping, range));
     spdlog::info("debug image '{}': {} x {}, {} channel(s), values in [{}, {}]{}; shown {} over [{}, {}]", flags.debugImage,
                  image.width, image.height, image.channels, found.min, found.max,
                  found.nonFinite ? fmt::format(" and {} non-finite (magenta)", found.nonFinite) : "",
@@ -86,26 +89,32 @@ std::string framePath(const std::string& pattern, uint32_t frame)
     try {
         return fmt::format(fmt::runtime(pattern), fmt::arg("frame", frame));
     } catch (const fmt::format_error& e) {
-        throw Error(fmt::format("output pattern '{}': {} (use {{frame}} or {{frame:04}})", pattern, e.what()));
+        throw Error(fmt::format("output pattern '{}': {} (use {{frame}} or {{frame:04}})", core::shortText(pattern),
+                                e.what()));
     }
 }
 
 int runRender(const RenderFlags& flags)
 {
-    config::RenderConfig loaded = inPhase("loading the config", [&] { return config::loadConfig(flags.config); });
+    config::RenderConfig loaded =
+        inPhase("loading the config", [&] { return loadConfigIgnoringSweep(flags.config, "render"); });
     config::RunOptions options = runOptions(flags.run);
     options.frames = flags.frames;
     if (flags.culling) options.culling = config::parseCullingMode(*flags.culling);
-    // Fail on a bad output path before spending seconds rendering.
-    io::checkWritable(outputPerFrame(flags.output) ? framePath(flags.output, 0) : flags.output);
+    // Fail on a bad output path or image name before spending seconds rendering.
+    const std::string firstOutput = outputPerFrame(flags.output) ? framePath(flags.output, 0) : flags.output;
+    io::imageFormatFor(firstOutput);
+    io::checkWritable(firstOutput);
     if (!flags.visibilityExr.empty()) io::checkWritable(flags.visibilityExr);
     metrics::parseDebugMapping(flags.debugMapping);
     parseDebugRange(flags.debugRange);
 
-    gpu::Context context(contextOptions(flags.device));
-    spdlog::info("device: {} ({})", context.deviceInfo().name, context.deviceInfo().type);
     config::PreparedRun run = inPhase("loading the scene", [&] { return config::prepareRun(std::move(loaded), options); });
     plugin::PluginRegistry plugins;
+    checkPluginsBeforeDevice(run.config, options, plugins);
+
+    gpu::Context context(contextOptions(flags.device));
+    spdlog::info("device: {} ({})", context.deviceInfo().name, context.deviceInfo().type);
     frame::FrameRenderer renderer(context, run.scene, run.config, plugins);
     for (const std::string& warning : renderer.warnings()) spdlog::warn("{}", warning);
     if (!flags.debugImage.empty()) renderer.requestImage(flags.debugImage);
@@ -137,7 +146,7 @@ int runRender(const RenderFlags& flags)
         }
         measured.push_back(std::move(t));
         if (outputPerFrame(flags.output)) {
-            writeFramePng(framePath(flags.output, frame), renderer, flags);
+            writeFrameImage(framePath(flags.output, frame), renderer, flags);
         }
         if (floor) floorMeasured.push_back(floor->renderFrame());
     }
@@ -159,7 +168,7 @@ int runRender(const RenderFlags& flags)
         spdlog::info("wrote {} frames: {} ... {}", run.config.frames, framePath(flags.output, 0),
                      framePath(flags.output, run.config.frames - 1));
     } else {
-        writeFramePng(flags.output, renderer, flags);
+        writeFrameImage(flags.output, renderer, flags);
         spdlog::info("wrote {}", flags.output);
     }
     if (!flags.visibilityExr.empty()) {
@@ -177,9 +186,10 @@ int runRender(const RenderFlags& flags)
 Command addRenderCommand(CLI::App& app)
 {
     auto flags = std::make_shared<RenderFlags>();
-    CLI::App* cmd = app.add_subcommand("render", "Render a scene config to a PNG, headless");
+    CLI::App* cmd = app.add_subcommand("render", "Render a scene config to a PNG or JPEG image, headless");
     cmd->add_option("config", flags->config, "Scene config (JSON)")->required();
-    cmd->add_option("-o,--output", flags->output, "Output PNG; a name with {frame} (e.g. f{frame:04}.png) gets every frame")
+    cmd->add_option("-o,--output", flags->output, "Output image, .png or .jpg (.jpeg); a name with {frame} (e.g. f{frame:04}.png) gets every "
+                    "frame")
         ->required();
     cmd->add_option("--visibility-exr", flags->visibilityExr,
                     "Also write every light's visibility image V (the last frame's) as 32-bit floats: an OpenEXR "
@@ -198,7 +208,7 @@ Command addRenderCommand(CLI::App& app)
     cmd->add_option("--culling", flags->culling, "Caster culling mode (overrides the config)")
         ->check(CLI::IsMember({"none", "frustum", "light-occlusion", "receiver-mask"}));
     cmd->add_option("--debug-image", flags->debugImage,
-                    "Write this image of the frame's graph to the PNG instead of the colour (a shadow map, a moment "
+                    "Write this image of the frame's graph to the output instead of the colour (a shadow map, a moment "
                     "map, a visibility image: `penumbra graph CONFIG` lists them); its passes run even where nothing "
                     "else reads it");
     cmd->add_option("--debug-map", flags->debugMapping, "How --debug-image maps values: linear, log or false-color")
@@ -207,9 +217,9 @@ Command addRenderCommand(CLI::App& app)
                     "The values --debug-image maps to black and white, MIN,MAX (default: its finite values' range)");
     addSizeFlags(*cmd, flags->run);
     addParamOverrideFlag(*cmd, flags->run.settings);
+    addAllowRootFlag(*cmd, flags->run.allowedRoots);
     addDeviceFlags(*cmd, flags->device);
     return {cmd, [flags] { return runRender(*flags); }};
 }
 
 } // namespace penumbra::app
-    addAllowRootFlag(*cmd, flags->run.allowedRoots);

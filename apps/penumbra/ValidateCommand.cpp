@@ -5,6 +5,7 @@
 #include "penumbra/config/Run.h"
 #include "penumbra/config/Sweep.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/core/ShortText.h"
 #include "penumbra/plugin/PluginRegistry.h"
 #include "penumbra/scene/GltfLoader.h"
 
@@ -116,7 +117,9 @@ int runValidateConfig(const ValidateFlags& flags)
                scene.textures.size());
     for (const config::LightConfig& l : base.lights) {
         std::string params;
-        for (const config::ShadowParam& p : l.shadow.params) params += fmt::format(" {}={}", p.name, p.value.dump());
+        for (const config::ShadowParam& p : l.shadow.params) {
+            params += fmt::format(" {}={}", core::shortText(p.name), core::shortJson(p.value));
+        }
         fmt::print("light '{}': {}, intensity {:.4g}, shadow {}{}{}\n", l.name, scene::lightTypeName(l.light.type),
                    l.light.intensity, l.shadow.technique, l.shadow.required == true ? " (required)" : "", params);
     }
@@ -155,11 +158,12 @@ int runValidate(const ValidateFlags& flags)
     std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return char(std::tolower(c)); });
     if ((extension == ".gltf" || extension == ".glb") && !flags.settings.empty()) {
         throw Error(fmt::format("{}: --set sets technique parameters of a config (.json), not of a glTF file",
-                                          flags.file));
+                                core::shortText(flags.file)));
     }
     if (extension == ".gltf" || extension == ".glb") return runValidateGltf(flags);
     if (extension == ".json") return runValidateConfig(flags);
-    throw Error(fmt::format("{}: unknown file type '{}': validate reads .gltf, .glb and .json", flags.file, extension));
+    throw Error(fmt::format("{}: unknown file type '{}': validate reads .gltf, .glb and .json", core::shortText(flags.file),
+                            core::shortText(extension)));
 }
 
 } // namespace

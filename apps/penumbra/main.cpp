@@ -16,6 +16,7 @@
 #include "ValidateCommand.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/core/LeakCheck.h"
+#include "penumbra/core/ShortText.h"
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -38,6 +39,12 @@ int runCommandLine(int argc, char** argv)
     spdlog::set_pattern("%^%l%$: %v");
     CLI::App cli{"penumbra: real-time shadows, every technique a plugin"};
     cli.require_subcommand(1);
+    // CLI11 quotes an offending argument whole: a 100 KB argument shown shortened, as
+    // every other message shows a value.
+    cli.failure_message([](const CLI::App* app, const CLI::Error& e) {
+        const std::string what = e.what();
+        return penumbra::core::shortText(what) + CLI::FailureMessage::simple(app, e).substr(what.size());
+    });
     bool verbose = false;
     cli.add_flag("-v,--verbose", verbose, "Log debug detail");
 

@@ -5,7 +5,9 @@
 // animation tracks evaluated at the frames render poses first and last.
 //
 // The contract under test: a config either loads or is refused with a penumbra::Error
-// (the CLI's exit 1, naming the file and JSON path). Any other exception escapes to
+// (the CLI's exit 1, naming the file and JSON path) whose message shows values shortened
+// (core::shortJson): one longer than kMaxMessageBytes echoed a value whole and aborts, a
+// finding (inputs are at most 8 KiB: run.sh). Any other exception escapes to
 // libFuzzer as a finding (the CLI's exit 2, "internal error"), as do crashes, sanitizer
 // reports, hangs (-timeout) and runaway memory (-rss_limit_mb).
 #include "FuzzScratch.h"
@@ -16,12 +18,19 @@
 #include "penumbra/config/Sweep.h"
 #include "penumbra/core/Error.h"
 
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <memory>
 #include <string>
 
 namespace {
 
 penumbra::fuzz::ScratchFolder* scratch = nullptr;
+
+// A refusal names a file, a JSON path and what was expected, each value shortened to
+// about core::kShownChars characters: far less than this.
+constexpr size_t kMaxMessageBytes = 2048;
 
 // Files an input may include: a complete config, a partial one, one that includes
 // another (a chain), one that includes itself (a cycle), one that is not JSON, and two
@@ -82,8 +91,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
         // the document, and up to kMaxSweepCombinations of them take time, not memory.
         const penumbra::config::SweepVariants variants(document);
         for (size_t i = 0; i < variants.size() && i < 64; ++i) evaluateTracks(variants.variant(i).config);
-    } catch (const penumbra::Error&) {
+    } catch (const penumbra::Error& e) {
         // Refused with a message: the contract.
+        if (std::strlen(e.what()) > kMaxMessageBytes) {
+            std::fprintf(stderr, "a message of %zu bytes: %.400s...\n", std::strlen(e.what()), e.what());
+            std::abort();
+        }
     }
     return 0;
 }

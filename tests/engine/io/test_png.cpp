@@ -61,3 +61,54 @@ TEST(Png, DirectoryAsOutputIsAnError)
 {
     EXPECT_THROW(io::checkWritable(fs::temp_directory_path()), Error);
 }
+
+TEST(Png, JpgNamesGetJpegBytes)
+{
+    const fs::path dir = tempDir();
+    // A flat colour: JPEG's 8x8 blocks hold it within a few levels.
+    std::vector<uint8_t> rgba;
+    for (int i = 0; i < 16 * 16; ++i) rgba.insert(rgba.end(), {200, 100, 50, 255});
+    for (const char* name : {"out.jpg", "out.JPEG"}) {
+        SCOPED_TRACE(name);
+        const fs::path file = dir / name;
+        io::writeImage(file, 16, 16, rgba);
+        std::ifstream in(file, std::ios::binary);
+        unsigned char magic[3] = {};
+        in.read(reinterpret_cast<char*>(magic), 3);
+        EXPECT_EQ(magic[0], 0xFF);  // SOI and the first marker: a JPEG, not a PNG under another name
+        EXPECT_EQ(magic[1], 0xD8);
+        EXPECT_EQ(magic[2], 0xFF);
+        int w = 0, h = 0, n = 0;
+        unsigned char* data = stbi_load(file.c_str(), &w, &h, &n, 4);
+        ASSERT_NE(data, nullptr);
+        EXPECT_EQ(w, 16);
+        EXPECT_EQ(h, 16);
+        EXPECT_EQ(n, 3);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(int(data[c]), int(rgba[size_t(c)]), 4) << "channel " << c;
+        stbi_image_free(data);
+    }
+    io::writeImage(dir / "out.PNG", 16, 16, rgba);
+    int w = 0, h = 0, n = 0;
+    unsigned char* data = stbi_load((dir / "out.PNG").c_str(), &w, &h, &n, 4);
+    ASSERT_NE(data, nullptr);
+    EXPECT_EQ(n, 4);  // a PNG keeps the alpha channel
+    stbi_image_free(data);
+    fs::remove_all(dir);
+}
+
+TEST(Png, OtherImageNamesAreRefusedBeforeAnythingIsWritten)
+{
+    const fs::path dir = tempDir();
+    for (const char* name : {"out.bmp", "out", "out.png.txt", "f{frame:04}.tiff"}) {
+        SCOPED_TRACE(name);
+        try {
+            io::writeImage(dir / name, 1, 1, {0, 0, 0, 255});
+            ADD_FAILURE() << "accepted";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find(".png or .jpg"), std::string::npos) << e.what();
+        }
+        EXPECT_FALSE(fs::exists(dir / name));
+    }
+    EXPECT_EQ(io::imageFormatFor("f{frame:04}.jpg"), io::ImageFormat::Jpeg);
+    fs::remove_all(dir);
+}
