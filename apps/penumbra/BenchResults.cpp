@@ -23,8 +23,9 @@ json timingJson(const TimingSummary& t)
     for (const PassTimes& p : t.passes) {
         passes.push_back({{"name", p.name}, {"host", p.host}, {"gpu_ms", p.gpuMs}, {"cpu_ms", p.cpuMs}});
     }
-    return {{"work_ms", t.workMs}, {"gpu_ms", t.gpuMs},         {"host_ms", t.hostMs},
-            {"cpu_ms", t.cpuMs},   {"wall_ms", t.frameWallMs}, {"passes", std::move(passes)}};
+    return {{"work_ms", t.workMs}, {"work_min_ms", t.workMinMs}, {"work_max_ms", t.workMaxMs},
+            {"gpu_ms", t.gpuMs},   {"host_ms", t.hostMs},        {"cpu_ms", t.cpuMs},
+            {"wall_ms", t.frameWallMs}, {"passes", std::move(passes)}};
 }
 
 json floorJson(const FloorComparison& c)

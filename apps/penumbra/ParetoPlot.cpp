@@ -1,12 +1,12 @@
 #include "ParetoPlot.h"
 
+#include "PlotLabels.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <map>
-#include <tuple>
 
 namespace penumbra::app {
 namespace {
@@ -102,56 +102,56 @@ Axis timeAxis(const std::vector<double>& times)
     return linearAxis(*hi);
 }
 
-// Where a point's label goes: beside the point, on the first side where it stays inside
-// the axes and clear of the labels and points placed before; where none is clear, the
-// side with the fewest collisions. Text widths are estimated (10 px sans-serif: at most
-// about 6 px per character), which is all the layout needs.
-class LabelPlacer {
-public:
-    LabelPlacer(double left, double top, double right, double bottom) : left_(left), top_(top), right_(right), bottom_(bottom) {}
-
-    void addPoint(double x, double y) { taken_.push_back({x - 5, y - 5, x + 5, y + 5}); }
-
-    // The label's anchor position and text-anchor value.
-    std::tuple<double, double, const char*> place(double x, double y, const std::string& text)
-    {
-        struct Side {
-            double dx, dy;
-            const char* anchor;
-        };
-        constexpr Side kSides[] = {{7, -6, "start"},    {7, 13, "start"},   {-7, -6, "end"},    {-7, 13, "end"},
-                                   {0, -10, "middle"},  {0, 19, "middle"},  {7, -18, "start"},  {7, 25, "start"},
-                                   {-7, -18, "end"},    {-7, 25, "end"}};
-        const double width = 6.0 * double(text.size());
-        size_t best = 0, fewest = SIZE_MAX;
-        Box bestBox{};
-        for (size_t i = 0; i < std::size(kSides); ++i) {
-            const Side& side = kSides[i];
-            const double ax = x + side.dx, ay = y + side.dy;
-            const double x0 = side.anchor[0] == 's' ? ax : side.anchor[0] == 'e' ? ax - width : ax - 0.5 * width;
-            const Box box{x0, ay - 9, x0 + width, ay + 2};
-            const bool inside = box.x0 >= left_ && box.x1 <= right_ && box.y0 >= top_ && box.y1 <= bottom_;
-            const size_t collisions = size_t(std::count_if(taken_.begin(), taken_.end(), [&](const Box& b) { return b.overlaps(box); })) +
-                                      (inside ? 0 : 1000);
-            if (collisions < fewest) {
-                fewest = collisions;
-                best = i;
-                bestBox = box;
-            }
-            if (collisions == 0) break;
-        }
-        taken_.push_back(bestBox);
-        return {x + kSides[best].dx, y + kSides[best].dy, kSides[best].anchor};
-    }
-
-private:
-    struct Box {
-        double x0, y0, x1, y1;
-        bool overlaps(const Box& o) const { return x0 < o.x1 && o.x0 < x1 && y0 < o.y1 && o.y0 < y1; }
-    };
-    double left_, top_, right_, bottom_;
-    std::vector<Box> taken_;
+// Presentation attributes, never a <style> sheet: ImageMagick's own SVG renderer ignores a
+// sheet's fonts and sizes.
+struct TextStyle {
+    double px;
+    const char* fill;
+    bool bold;
 };
+constexpr TextStyle kTitleText{15, "#222", true}, kPanelText{13, "#222", true}, kAxisText{12, "#222", false},
+    kTickText{10, "#555", false}, kLabelText{10, "#222", false};
+
+constexpr double kPointRadius = 4.5;
+constexpr double kSpreadCap = 3.5;  // half the height of a spread mark's end caps
+
+// A <text> at (x, y), or placed by `transform` when one is given.
+std::string svgText(double x, double y, const TextStyle& style, const char* anchor, const std::string& text,
+                    const std::string& transform = {})
+{
+    const std::string where = transform.empty() ? fmt::format("x=\"{:.1f}\" y=\"{:.1f}\"", x, y)
+                                                : fmt::format("transform=\"{}\"", transform);
+    return fmt::format("<text {} font-family=\"sans-serif\" font-size=\"{}\"{} fill=\"{}\" text-anchor=\"{}\">{}</text>\n", where,
+                       style.px, style.bold ? " font-weight=\"bold\"" : "", style.fill, anchor, xmlText(text));
+}
+
+// A horizontal bar from x0 to x1 at y with end caps: a median's min–max over the frames.
+std::string spreadMark(double x0, double x1, double y, const std::string& color)
+{
+    return fmt::format("<path d=\"M {0:.1f} {2:.1f} H {1:.1f} M {0:.1f} {3:.1f} V {4:.1f} M {1:.1f} {3:.1f} V {4:.1f}\" "
+                       "fill=\"none\" stroke=\"{5}\" stroke-width=\"1.2\"/>\n",
+                       x0, x1, y, y - kSpreadCap, y + kSpreadCap, color);
+}
+
+std::string pointMarker(double x, double y, const std::string& color, bool onFront, const std::string& title)
+{
+    // The tooltip's <title> belongs to a group around the disc, not to the disc itself:
+    // ImageMagick's renderer drops a shape that has a child.
+    return fmt::format("<g><title>{}</title><circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"{}\" fill=\"{}\" stroke=\"{}\" "
+                       "stroke-width=\"{}\"/></g>\n",
+                       xmlText(title), x, y, kPointRadius, color, onFront ? "#000" : "#fff", onFront ? 1.5 : 1.0);
+}
+
+constexpr const char* kFrontStroke = "fill=\"none\" stroke=\"#444\" stroke-width=\"1.5\" stroke-dasharray=\"5 3\"";
+
+// The document in two layers, shapes then text: ImageMagick's renderer stops drawing at a
+// text whose font it cannot load (a system without its fonts), so every shape comes first.
+struct SvgLayers {
+    std::string shapes, text;
+};
+
+// A light's time spread is drawn when it has one: more than one frame, not all equal.
+bool hasSpread(const TimingSummary& t) { return t.frames > 1 && t.workMaxMs > t.workMinMs; }
 
 struct Point {
     double x = 0.0, y = 0.0;  // ms, RMSE
@@ -159,19 +159,28 @@ struct Point {
     const BenchVariant* variant = nullptr;
 };
 
-std::string drawPanel(const TradeoffPanel& panel, const BenchRun& run, double ox, double oy,
-                      const std::map<std::string, std::string>& colors)
+std::string pointTitle(const Point& p)
+{
+    const BenchLight& l = *p.light;
+    const std::string spread =
+        hasSpread(l.timing) ? fmt::format(" (min {:.4g}, max {:.4g} over {} frames)", l.timing.workMinMs, l.timing.workMaxMs, l.timing.frames)
+                            : "";
+    return fmt::format("{}: {} {}; {:.4g} ms{}, RMSE {:.4g}{}", p.variant->label.empty() ? "the config" : p.variant->label,
+                       l.technique, l.params.dump(), p.x, spread, p.y, l.paretoFront ? " (Pareto front)" : "");
+}
+
+void drawPanel(const TradeoffPanel& panel, const BenchRun& run, double ox, double oy, const std::map<std::string, std::string>& colors,
+               SvgLayers& svg)
 {
     std::vector<Point> points;
+    std::vector<double> times, errors;
     for (const TradeoffPanel::Member& m : panel.members) {
         const BenchVariant& v = run.variants[m.variant];
         const BenchLight& l = v.lights[m.light];
         points.push_back({l.timing.workMs, l.visibility.all.rmse, &l, &v});
-    }
-    std::vector<double> times, errors;
-    for (const Point& p : points) {
-        times.push_back(p.x);
-        errors.push_back(p.y);
+        times.push_back(l.timing.workMs);
+        if (hasSpread(l.timing)) times.insert(times.end(), {l.timing.workMinMs, l.timing.workMaxMs});
+        errors.push_back(l.visibility.all.rmse);
     }
     const Axis x = timeAxis(times);
     const Axis y = linearAxis(errors.empty() ? 0.0 : *std::max_element(errors.begin(), errors.end()));
@@ -179,26 +188,25 @@ std::string drawPanel(const TradeoffPanel& panel, const BenchRun& run, double ox
     const auto px = [&](double v) { return left + x.fraction(v) * (right - left); };
     const auto py = [&](double v) { return bottom - y.fraction(v) * (bottom - top); };
 
-    std::string svg = fmt::format("<g>\n<text x=\"{:.1f}\" y=\"{:.1f}\" class=\"panel\">{}</text>\n", left, oy + 20,
-                                  xmlText(panel.title));
+    svg.text += svgText(left, oy + 20, kPanelText, "start", panel.title);
     for (double t : x.ticks) {
-        svg += fmt::format("<line x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{0:.1f}\" y2=\"{2:.1f}\" class=\"grid\"/>"
-                           "<text x=\"{0:.1f}\" y=\"{3:.1f}\" class=\"tick\" text-anchor=\"middle\">{4:g}</text>\n",
-                           px(t), top, bottom, bottom + 16, t);
+        svg.shapes += fmt::format("<line x1=\"{0:.1f}\" y1=\"{1:.1f}\" x2=\"{0:.1f}\" y2=\"{2:.1f}\" stroke=\"#e4e4e4\"/>\n", px(t),
+                                  top, bottom);
+        svg.text += svgText(px(t), bottom + 16, kTickText, "middle", fmt::format("{:g}", t));
     }
     for (double t : y.ticks) {
-        svg += fmt::format("<line x1=\"{0:.1f}\" y1=\"{2:.1f}\" x2=\"{1:.1f}\" y2=\"{2:.1f}\" class=\"grid\"/>"
-                           "<text x=\"{3:.1f}\" y=\"{4:.1f}\" class=\"tick\" text-anchor=\"end\">{5:g}</text>\n",
-                           left, right, py(t), left - 6, py(t) + 4, t);
+        svg.shapes += fmt::format("<line x1=\"{0:.1f}\" y1=\"{2:.1f}\" x2=\"{1:.1f}\" y2=\"{2:.1f}\" stroke=\"#e4e4e4\"/>\n", left,
+                                  right, py(t));
+        svg.text += svgText(left - 6, py(t) + 4, kTickText, "end", fmt::format("{:g}", t));
     }
-    svg += fmt::format("<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"{:.1f}\" height=\"{:.1f}\" class=\"frame\"/>\n", left, top,
-                       right - left, bottom - top);
-    svg += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" class=\"axis\" text-anchor=\"middle\">technique ms{}</text>\n",
-                       0.5 * (left + right), oy + kPanelHeight - 14, x.log ? " (log scale)" : "");
-    svg += fmt::format("<text transform=\"translate({:.1f} {:.1f}) rotate(-90)\" class=\"axis\" text-anchor=\"middle\">"
-                       "RMSE against the reference</text>\n",
-                       ox + 18, 0.5 * (top + bottom));
+    svg.shapes += fmt::format("<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"{:.1f}\" height=\"{:.1f}\" fill=\"none\" stroke=\"#888\"/>\n",
+                              left, top, right - left, bottom - top);
+    svg.text += svgText(0.5 * (left + right), oy + kPanelHeight - 14, kAxisText, "middle",
+                        fmt::format("technique ms{}", x.log ? " (log scale)" : ""));
+    svg.text += svgText(0, 0, kAxisText, "middle", "RMSE against the reference",
+                        fmt::format("translate({:.1f} {:.1f}) rotate(-90)", ox + 18, 0.5 * (top + bottom)));
 
+    LabelPlacer labels({left, top, right, bottom}, kLabelText.px);
     // The front first, under the points: its points ordered by time (error falls along it).
     std::vector<const Point*> front;
     for (const Point& p : points)
@@ -206,24 +214,34 @@ std::string drawPanel(const TradeoffPanel& panel, const BenchRun& run, double ox
     std::sort(front.begin(), front.end(), [](const Point* a, const Point* b) { return a->x != b->x ? a->x < b->x : a->y < b->y; });
     if (front.size() > 1) {
         std::string coords;
-        for (const Point* p : front) coords += fmt::format("{:.1f},{:.1f} ", px(p->x), py(p->y));
-        svg += fmt::format("<polyline points=\"{}\" class=\"front\"/>\n", coords);
+        for (size_t i = 0; i < front.size(); ++i) {
+            coords += fmt::format("{:.1f},{:.1f} ", px(front[i]->x), py(front[i]->y));
+            if (i > 0) labels.addSegment(px(front[i - 1]->x), py(front[i - 1]->y), px(front[i]->x), py(front[i]->y));
+        }
+        svg.shapes += fmt::format("<polyline points=\"{}\" {}/>\n", coords, kFrontStroke);
     }
-    LabelPlacer labels(left, top, right, bottom);
-    for (const Point& p : points) labels.addPoint(px(p.x), py(p.y));
+    for (const Point& p : points) {
+        const TimingSummary& t = p.light->timing;
+        if (!hasSpread(t)) continue;
+        svg.shapes += spreadMark(px(t.workMinMs), px(t.workMaxMs), py(p.y), colors.at(p.light->technique));
+        for (double end : {t.workMinMs, t.workMaxMs}) labels.addSegment(px(end), py(p.y) - kSpreadCap, px(end), py(p.y) + kSpreadCap);
+        labels.addSegment(px(t.workMinMs), py(p.y), px(t.workMaxMs), py(p.y));
+    }
+    for (const Point& p : points) {
+        svg.shapes += pointMarker(px(p.x), py(p.y), colors.at(p.light->technique), p.light->paretoFront, pointTitle(p));
+        labels.addPoint(px(p.x), py(p.y), kPointRadius);
+    }
     for (const Point& p : points) {
         const BenchLight& l = *p.light;
-        const std::string label = l.techniqueLabel.empty() ? l.technique : l.techniqueLabel;
-        const auto [labelX, labelY, anchor] = labels.place(px(p.x), py(p.y), label);
-        svg += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"4.5\" fill=\"{}\"{}><title>{}: {} {}; {:.4g} ms, RMSE "
-                           "{:.4g}{}</title></circle>\n",
-                           px(p.x), py(p.y), colors.at(l.technique), l.paretoFront ? " class=\"on-front\"" : "",
-                           xmlText(p.variant->label.empty() ? "the config" : p.variant->label), xmlText(l.technique),
-                           xmlText(l.params.dump()), p.x, p.y, l.paretoFront ? " (Pareto front)" : "");
-        svg += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" class=\"label\" text-anchor=\"{}\">{}</text>\n", labelX, labelY,
-                           anchor, xmlText(label));
+        const std::string text = l.techniqueLabel.empty() ? l.technique : l.techniqueLabel;
+        const PlacedLabel label = labels.place(px(p.x), py(p.y), kPointRadius, text);
+        if (label.leader) {
+            svg.shapes += fmt::format("<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#777\" "
+                                      "stroke-width=\"0.8\"/>\n",
+                                      label.leaderX0, label.leaderY0, label.leaderX1, label.leaderY1);
+        }
+        svg.text += svgText(label.x, label.y, kLabelText, label.anchor, text);
     }
-    return svg + "</g>\n";
 }
 
 } // namespace
@@ -233,8 +251,10 @@ std::string paretoSvg(const BenchRun& run)
     const std::vector<TradeoffPanel> panels = tradeoffPanels(run);
     std::map<std::string, std::string> colors;  // technique -> colour, in order of first appearance
     std::vector<std::string> techniques;
+    bool anySpread = false;
     for (const BenchVariant& v : run.variants) {
         for (const BenchLight& l : v.lights) {
+            anySpread = anySpread || hasSpread(l.timing);
             if (colors.count(l.technique)) continue;
             colors[l.technique] = kTechniqueColors[techniques.size() % std::size(kTechniqueColors)];
             techniques.push_back(l.technique);
@@ -244,36 +264,34 @@ std::string paretoSvg(const BenchRun& run)
     const size_t rows = std::max<size_t>(1, (panels.size() + columns - 1) / columns);
     const double width = double(columns) * kPanelWidth, height = kHeaderHeight + double(rows) * kPanelHeight;
 
-    std::string svg = fmt::format(
-        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" width=\"{0}\" height=\"{1}\" viewBox=\"0 0 {0} {1}\">\n"
-        "<style>\n"
-        "text {{ font-family: sans-serif; fill: #222; }}\n"
-        ".title {{ font-size: 15px; font-weight: bold; }} .panel {{ font-size: 13px; font-weight: bold; }}\n"
-        ".axis {{ font-size: 12px; }} .tick {{ font-size: 10px; fill: #555; }} .label {{ font-size: 10px; }}\n"
-        ".grid {{ stroke: #e4e4e4; stroke-width: 1; }} .frame {{ fill: none; stroke: #888; stroke-width: 1; }}\n"
-        ".front {{ fill: none; stroke: #444; stroke-width: 1.5; stroke-dasharray: 5 3; }}\n"
-        "circle {{ stroke: #fff; stroke-width: 1; }} circle.on-front {{ stroke: #000; stroke-width: 1.5; }}\n"
-        "</style>\n"
-        "<rect width=\"100%\" height=\"100%\" fill=\"#fff\"/>\n",
-        width, height);
-    svg += fmt::format("<text x=\"16\" y=\"24\" class=\"title\">{}: error against time</text>\n", xmlText(run.config));
-    svg += fmt::format("<text x=\"16\" y=\"44\" class=\"axis\">{}; reference technique: {}; medians of {} frame(s)</text>\n",
-                       xmlText(run.device.value("name", "")), xmlText(run.reference), run.frames);
+    SvgLayers svg;
+    svg.text += svgText(16, 24, kTitleText, "start", fmt::format("{}: error against time", run.config));
+    svg.text += svgText(16, 44, kAxisText, "start",
+                        fmt::format("{}; reference technique: {}; medians of {} frame(s)", run.device.value("name", ""),
+                                    run.reference, run.frames));
     double legendX = 16;
     for (const std::string& technique : techniques) {
-        svg += fmt::format("<circle cx=\"{:.1f}\" cy=\"64\" r=\"5\" fill=\"{}\"/><text x=\"{:.1f}\" y=\"68\" class=\"axis\">{}</text>\n",
-                           legendX + 5, colors[technique], legendX + 14, xmlText(technique));
-        legendX += 30 + 7.5 * double(technique.size());
+        svg.shapes += fmt::format("<circle cx=\"{:.1f}\" cy=\"64\" r=\"5\" fill=\"{}\"/>\n", legendX + 5, colors[technique]);
+        svg.text += svgText(legendX + 14, 68, kAxisText, "start", technique);
+        legendX += 30 + estimateTextWidth(technique, kAxisText.px);
     }
-    svg += fmt::format("<polyline points=\"{0:.1f},64 {1:.1f},64\" class=\"front\"/><text x=\"{2:.1f}\" y=\"68\" "
-                       "class=\"axis\">Pareto front (outlined points)</text>\n",
-                       legendX, legendX + 28, legendX + 34);
+    const std::string frontText = "Pareto front (outlined points)";
+    svg.shapes += fmt::format("<polyline points=\"{:.1f},64 {:.1f},64\" {}/>\n", legendX, legendX + 28, kFrontStroke);
+    svg.text += svgText(legendX + 34, 68, kAxisText, "start", frontText);
+    if (anySpread) {
+        legendX += 50 + estimateTextWidth(frontText, kAxisText.px);
+        svg.shapes += spreadMark(legendX, legendX + 24, 64, "#444444");
+        svg.text += svgText(legendX + 30, 68, kAxisText, "start", "time's min–max over the frames");
+    }
     for (size_t i = 0; i < panels.size(); ++i) {
-        svg += drawPanel(panels[i], run, double(i % columns) * kPanelWidth, kHeaderHeight + double(i / columns) * kPanelHeight,
-                         colors);
+        drawPanel(panels[i], run, double(i % columns) * kPanelWidth, kHeaderHeight + double(i / columns) * kPanelHeight, colors,
+                  svg);
     }
-    return svg + "</svg>\n";
+    return fmt::format("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+                       "<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" width=\"{0}\" height=\"{1}\" "
+                       "viewBox=\"0 0 {0} {1}\">\n"
+                       "<rect width=\"100%\" height=\"100%\" fill=\"#fff\"/>\n{2}{3}</svg>\n",
+                       width, height, svg.shapes, svg.text);
 }
 
 } // namespace penumbra::app

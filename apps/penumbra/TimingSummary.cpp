@@ -56,6 +56,11 @@ TimingSummary summarizeTimings(const std::vector<frame::FrameTimings>& frames, s
     summary.gpuMs = median(std::move(gpuSums));
     summary.cpuMs = median(std::move(cpuSums));
     summary.hostMs = median(std::move(hostSums));
+    if (!workSums.empty()) {
+        const auto [least, most] = std::minmax_element(workSums.begin(), workSums.end());
+        summary.workMinMs = *least;
+        summary.workMaxMs = *most;
+    }
     summary.workMs = median(std::move(workSums));
     summary.frameWallMs = median(std::move(wall));
     return summary;

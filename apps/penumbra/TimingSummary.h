@@ -35,6 +35,10 @@ struct TimingSummary {
     // What the frame waits for: GPU passes on the GPU plus host passes on the CPU. The
     // cost of a technique whatever runs where; gpuMs when it has no host pass.
     double workMs = 0.0;
+    // The least and the most work of one frame over the frames: the spread behind workMs's
+    // median, which a few frames leave uncertain.
+    double workMinMs = 0.0;
+    double workMaxMs = 0.0;
     double frameWallMs = 0.0;  // median of FrameTimings::frameCpuMs: the whole frame, wall clock
 };
 
