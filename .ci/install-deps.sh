@@ -12,6 +12,9 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libembree-dev libtbb-dev libxxhash-dev libimgui-dev libopenexr-dev xvfb xauth python3-jsonschema
   assimp-testmodels
+  # ImageMagick with its own SVG renderer and OpenEXR coder (the -extra coders), and
+  # librsvg: the readers that pareto.svg and the visibility EXR are tested with
+  imagemagick libmagickcore-6.q16-6-extra librsvg2-bin
 )
 
 missing=()
