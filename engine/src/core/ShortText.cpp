@@ -110,10 +110,10 @@ private:
         // Some of a string even where little budget is left: "ab…" says more than "…".
         const size_t room = std::max<size_t>(budget_ - std::min(budget_, text_.size()), 8);
         if (s.size() <= room) {
-            text_ += '"' + escaped(s) + '"';
+            text_ += fmt::format("\"{}\"", escaped(s));
             return;
         }
-        text_ += '"' + escaped(head(s, room)) + "…\"";
+        text_ += fmt::format("\"{}…\"", escaped(head(s, room)));
         wasCut_ = true;
     }
 
@@ -134,7 +134,7 @@ std::string shortJson(const json& value)
 {
     if (value.is_string()) {
         const std::string& s = value.get_ref<const std::string&>();
-        if (s.size() <= kShownChars) return '"' + escaped(s) + '"';
+        if (s.size() <= kShownChars) return fmt::format("\"{}\"", escaped(s));
         return fmt::format("\"{}…{}\" ({} characters)", escaped(head(s, kHeadChars)), escaped(tail(s, kTailChars)),
                            characterCount(s));
     }
