@@ -244,6 +244,7 @@ TEST_F(ViewerTest, ScriptErrorsNameTheCommandAndEndTheRunWithExit1)
         {"panel-layer yes", "expected `panel-layer on|off`"},
         {"panel shadows open", "panel \"shadows\": expected one of"},
         {"panel timings shut", "expected open or closed"},
+        {"frames 1; screenshot view.bmp", "an image is written as .png or .jpg (.jpeg)"},
     };
     for (const Bad& bad : cases) {
         SCOPED_TRACE(bad.script);
