@@ -1,6 +1,7 @@
 #include "VisibilityCache.h"
 
 #include "penumbra/core/Error.h"
+#include "penumbra/io/ReadFile.h"
 #include "penumbra/io/StagedFile.h"
 
 #include <fmt/format.h>
@@ -29,7 +30,7 @@ template <class T> void append(std::vector<char>& bytes, const T& value)
     bytes.insert(bytes.end(), p, p + sizeof value);
 }
 
-template <class T> T readAt(const std::vector<char>& bytes, size_t offset)
+template <class T> T readAt(const std::vector<unsigned char>& bytes, size_t offset)
 {
     T value;
     std::memcpy(&value, bytes.data() + offset, sizeof value);
@@ -54,20 +55,22 @@ VisibilityCache::Lookup VisibilityCache::load(const CacheKey& key, uint32_t widt
 {
     Lookup result;
     const std::filesystem::path path = fileFor(key);
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return result;  // not cached
     const size_t pixels = size_t(width) * height;
     const size_t expected = kHeaderBytes + pixels * sizeof(float) + sizeof(uint64_t);
-    std::vector<char> bytes(expected + 1);
-    in.read(bytes.data(), std::streamsize(bytes.size()));
-    const auto got = size_t(in.gcount());
-    if (got != expected) {
-        result.rejected = fmt::format("{}: {} {} bytes, expected {} for {} x {}", path.string(),
-                                      got > expected ? "more than" : "only", got > expected ? expected : got, expected,
+    std::vector<unsigned char> bytes;
+    try {
+        // A FIFO in the cache folder would block the read: read as every input file is.
+        bytes = io::readRegularFile(path, expected, "a visibility cache file");
+    } catch (const io::FileReadError& e) {
+        if (e.problem() == io::FileReadProblem::NotFound) return result;  // not cached
+        result.rejected = e.what();
+        return result;
+    }
+    if (bytes.size() != expected) {
+        result.rejected = fmt::format("{}: only {} bytes, expected {} for {} x {}", path.string(), bytes.size(), expected,
                                       width, height);
         return result;
     }
-    bytes.resize(expected);
     const size_t checked = expected - sizeof(uint64_t);
     if (std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0) {
         result.rejected = fmt::format("{}: not a visibility cache file of this version", path.string());

@@ -21,6 +21,7 @@
 #include <fmt/format.h>
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -539,7 +540,8 @@ TEST_F(ReferencePlugin, SecondRunComesFromTheCacheAndDamagedFilesAreIgnored)
     EXPECT_EQ(after.framesTraced, now.framesTraced) << "a cached frame traced rays";
     EXPECT_EQ(after.cacheHits - now.cacheHits, 2u);
 
-    // Truncated, then one flipped byte: each is rejected, traced again, rewritten whole.
+    // Truncated, one flipped byte, a FIFO in its place (it blocked the read): each is
+    // rejected, traced again, rewritten whole.
     const auto size = fs::file_size(files[0]);
     const std::vector<std::function<void()>> damages = {
         [&] { fs::resize_file(files[0], size / 2); },
@@ -548,9 +550,13 @@ TEST_F(ReferencePlugin, SecondRunComesFromTheCacheAndDamagedFilesAreIgnored)
             file.seekp(std::streamoff(size / 2));
             file.put('\x7f');
         },
+        [&] {
+            fs::remove(files[0]);
+            ASSERT_EQ(::mkfifo(files[0].c_str(), 0600), 0);
+        },
     };
     for (size_t d = 0; d < damages.size(); ++d) {
-        SCOPED_TRACE(d == 0 ? "truncated" : "flipped byte");
+        SCOPED_TRACE(d == 0 ? "truncated" : d == 1 ? "flipped byte" : "FIFO");
         damages[d]();
         now = stats();
         EXPECT_EQ(render(cfg, scene).visibility, traced);
