@@ -1,11 +1,12 @@
 #include "Script.h"
 
 #include "penumbra/core/Error.h"
+#include "penumbra/core/ShortText.h"
+#include "penumbra/io/ReadFile.h"
 
 #include <fmt/format.h>
 
-#include <fstream>
-#include <sstream>
+#include <cstdint>
 
 namespace penumbra::viewer {
 
@@ -69,11 +70,15 @@ std::vector<ScriptCommand> parseScript(const std::string& text, const std::strin
 
 std::vector<ScriptCommand> readScript(const std::filesystem::path& file)
 {
-    std::ifstream in(file);
-    if (!in) throw Error(fmt::format("{}: cannot read the script", file.string()));
-    std::stringstream text;
-    text << in.rdbuf();
-    return parseScript(text.str(), file.string(), false);
+    // A script is a few lines of commands; a FIFO or a device would block or never end.
+    constexpr uint64_t kMaxScriptBytes = uint64_t(16) << 20;
+    std::string text;
+    try {
+        text = io::readRegularTextFile(file, kMaxScriptBytes, "a viewer script");
+    } catch (const io::FileReadError& e) {
+        throw Error(fmt::format("{}: {}", core::shortText(file.string()), e.reason()));
+    }
+    return parseScript(text, file.string(), false);
 }
 
 } // namespace penumbra::viewer

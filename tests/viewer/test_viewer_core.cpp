@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <sys/stat.h>
 #include <unistd.h>
 
 using namespace penumbra;
@@ -122,6 +123,17 @@ TEST(ViewerScript, WordsQuotesCommentsAndWhereEachCommandCameFrom)
         EXPECT_NE(std::string(err.what()).find("s.txt:2"), std::string::npos) << err.what();
     }
     EXPECT_THROW(readScript("/no/such/script.txt"), Error);
+    // A FIFO as the script is named, never waited on.
+    const std::filesystem::path fifo = std::filesystem::temp_directory_path() / ("penumbra_script_" + std::to_string(::getpid()));
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    try {
+        readScript(fifo);
+        ADD_FAILURE() << "a FIFO was read as a script";
+    } catch (const Error& err) {
+        EXPECT_NE(std::string(err.what()).find(": is a FIFO (named pipe), expected a viewer script"), std::string::npos)
+            << err.what();
+    }
+    std::filesystem::remove(fifo);
 }
 
 TEST(ShaderWatcher, SeesEditsAdditionsAndRemovalsOfShadersOnlyOnce)
