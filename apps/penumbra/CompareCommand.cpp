@@ -7,6 +7,7 @@
 
 #include "penumbra/config/Run.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/core/ShortText.h"
 #include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/io/Png.h"
 #include "penumbra/io/StagedFile.h"
@@ -30,6 +31,7 @@ namespace {
 
 struct CompareFlags {
     std::string config;
+    std::string referenceExr;  // a second file: `compare A.exr B.exr` compares two OpenEXR files
     std::string output;  // -o DIR; empty: print the figures only
     ReferenceFlags reference;
     RunFlags run;        // --set: the test render's techniques
@@ -124,6 +126,20 @@ void printStatsHeader()
     fmt::print("  {:<9} {:>9} {:>9} {:>9} {:>9} {:>12}{}\n", "region", "pixels", "RMSE", "MAE", "max", "max at", above);
 }
 
+// One visibility image's figures: the rows by region, SSIM, and any invalid values.
+void printVisibility(const metrics::VisibilityComparison& c)
+{
+    printStatsHeader();
+    printStatsRow("all", c.all);
+    for (size_t r = 0; r < metrics::kRegionCount; ++r) printStatsRow(metrics::regionName(metrics::Region(r)), c.regions[r]);
+    fmt::print("  SSIM {:.5f}\n", c.ssim);
+    if (c.test.total() + c.reference.total() > 0) {
+        fmt::print("  invalid values: test {} non-finite (left out), {} outside [0, 1]; reference {} non-finite, {} "
+                   "outside [0, 1]\n",
+                   c.test.nonFinite, c.test.outOfRange, c.reference.nonFinite, c.reference.outOfRange);
+    }
+}
+
 void printTable(const json& doc, const std::vector<metrics::VisibilityComparison>& lights,
                 const metrics::ColorComparison& color)
 {
@@ -137,15 +153,7 @@ void printTable(const json& doc, const std::vector<metrics::VisibilityComparison
         const metrics::VisibilityComparison& c = lights[i];
         fmt::print("\nlight {} '{}': {} {}\n", i, light["name"].get<std::string>(), light["technique"].get<std::string>(),
                    light["params"].dump());
-        printStatsHeader();
-        printStatsRow("all", c.all);
-        for (size_t r = 0; r < metrics::kRegionCount; ++r) printStatsRow(metrics::regionName(metrics::Region(r)), c.regions[r]);
-        fmt::print("  SSIM {:.5f}\n", c.ssim);
-        if (c.test.total() + c.reference.total() > 0) {
-            fmt::print("  invalid values: test {} non-finite (left out), {} outside [0, 1]; reference {} non-finite, {} "
-                       "outside [0, 1]\n",
-                       c.test.nonFinite, c.test.outOfRange, c.reference.nonFinite, c.reference.outOfRange);
-        }
+        printVisibility(c);
     }
     fmt::print("\ncolour (sRGB values in [0, 1], averaged over R, G, B):\n");
     printStatsHeader();
@@ -264,6 +272,49 @@ int runCompare(const CompareFlags& flags)
     return validationExitCode(context);
 }
 
+// `compare A.exr B.exr`: every channel of A against B's (B the reference).
+int compareExrFiles(const CompareFlags& flags)
+{
+    const ExrImage test = readExr(flags.config), reference = readExr(flags.referenceExr);
+    const std::vector<ExrChannelComparison> comparisons = compareExrChannels(test, flags.config, reference, flags.referenceExr);
+    if (flags.json) {
+        json doc = {{"test", flags.config}, {"reference", flags.referenceExr}, {"width", test.width}, {"height", test.height},
+                    {"channels", json::array()}};
+        for (const ExrChannelComparison& c : comparisons) {
+            doc["channels"].push_back({{"name", c.channel}, {"visibility", metrics::toJson(c.visibility)}});
+        }
+        fmt::print("{}\n", doc.dump(2));
+        return 0;
+    }
+    fmt::print("compare {} against the reference {}: {}x{}, every pixel\n", flags.config, flags.referenceExr, test.width,
+               test.height);
+    fmt::print("regions of the reference: umbra V <= {}, lit V >= {}, penumbra between\n", metrics::kUmbraMaxVisibility,
+               metrics::kLitMinVisibility);
+    for (const ExrChannelComparison& c : comparisons) {
+        fmt::print("\nchannel '{}'{}\n", c.channel,
+                   c.channel == kFirstLightLumaChannel ? " (in penumbra's files: the first light's V again)" : "");
+        printVisibility(c.visibility);
+    }
+    return 0;
+}
+
+// Which of the two forms the arguments ask for; the config form's flags mean nothing to two
+// files and are refused rather than ignored.
+int runCompareCommand(const CLI::App& cmd, const CompareFlags& flags)
+{
+    const bool firstIsExr = fs::path(flags.config).extension() == ".exr";
+    if (flags.referenceExr.empty()) {
+        if (firstIsExr) throw Error(fmt::format("compare {}: two OpenEXR files are compared (compare A.exr B.exr)", core::shortText(flags.config)));
+        return runCompare(flags);
+    }
+    for (const CLI::Option* option : cmd.get_options()) {
+        if (option->count() > 0 && option->nonpositional() && option->get_name() != "--json") {
+            throw Error(fmt::format("compare A.exr B.exr takes only --json; {} belongs to compare CONFIG.json", option->get_name()));
+        }
+    }
+    return compareExrFiles(flags);
+}
+
 } // namespace
 
 Command addCompareCommand(CLI::App& app)
@@ -271,12 +322,15 @@ Command addCompareCommand(CLI::App& app)
     auto flags = std::make_shared<CompareFlags>();
     CLI::App* cmd = app.add_subcommand("compare", "Render a config with its techniques and with the reference "
                                                   "technique; print each light's error figures (RMSE, MAE, max, % "
-                                                  "wrong, by umbra/penumbra/lit; SSIM) and the colour image's");
-    cmd->add_option("config", flags->config, "Scene config (JSON)")->required();
+                                                  "wrong, by umbra/penumbra/lit; SSIM) and the colour image's. Or, "
+                                                  "given two OpenEXR files, the same figures per channel");
+    cmd->add_option("config", flags->config, "Scene config (JSON); or A.exr, compared with B.exr after it")->required();
+    cmd->add_option("reference_exr", flags->referenceExr,
+                    "B.exr: with A.exr, compare every channel of two OpenEXR files (visibility EXRs), B the reference");
     cmd->add_option("-o,--output", flags->output,
                     "Write <light>.test.png, <light>.reference.png, <light>.diff.png, color.test.png, "
                     "color.reference.png, visibility.test.exr and visibility.reference.exr (every light's V as "
-                    "32-bit floats, one channel \"<light name>.V\" each) and metrics.json into this folder "
+                    "32-bit floats, one channel \"<light name>.V\" each, and Y: the first light's V again) and metrics.json into this folder "
                     "(created if missing; other files in it are left alone)");
     addReferenceFlags(*cmd, flags->reference);
     cmd->add_option("--diff-scale", flags->diffScale, "|dV| at which the difference image's colours saturate, in (0, 1]")
@@ -286,7 +340,7 @@ Command addCompareCommand(CLI::App& app)
     addParamOverrideFlag(*cmd, flags->run.settings);
     addAllowRootFlag(*cmd, flags->run.allowedRoots);
     addDeviceFlags(*cmd, flags->device);
-    return {cmd, [flags] { return runCompare(*flags); }};
+    return {cmd, [flags, cmd] { return runCompareCommand(*cmd, *flags); }};
 }
 
 } // namespace penumbra::app

@@ -4,6 +4,8 @@
 // each light's visibility image and the colour image against the reference's
 // (metrics/ImageComparison.h); optionally writes the images and the figures to a folder.
 // Exit codes as `render`: 0 done, 3 when the validation layer reported anything.
+// `penumbra compare A.exr B.exr`: the same figures for every channel of two OpenEXR files
+// (VisibilityExr.h), B the reference; no device.
 #include "CommandLine.h"
 
 namespace penumbra::app {

@@ -193,7 +193,8 @@ Command addRenderCommand(CLI::App& app)
         ->required();
     cmd->add_option("--visibility-exr", flags->visibilityExr,
                     "Also write every light's visibility image V (the last frame's) as 32-bit floats: an OpenEXR "
-                    "file with one channel per light, \"<light name>.V\"");
+                    "file with one channel per light, \"<light name>.V\", and \"Y\": the first light's V again, which "
+                    "image viewers show");
     cmd->add_option("--frames", flags->frames, "Frames to render (overrides the config)")->check(CLI::Range(1u, 100000u));
     cmd->add_option("--warmup", flags->warmup,
                     "Untimed frames before the measured ones (default: 1 with --frames > 1 or --timings, else 0)")

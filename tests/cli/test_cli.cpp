@@ -49,6 +49,7 @@ std::string slurp(const fs::path& p)
 
 using penumbra::test::Exr;
 using penumbra::test::readExr;
+using penumbra::test::writeExr;
 
 class Cli : public ::testing::Test {
 protected:
@@ -1360,7 +1361,9 @@ TEST_F(Cli, CompareWritesTheFloatVisibilityItsFiguresComeFrom)
     const Exr test = readExr(out / "visibility.test.exr"), reference = readExr(out / "visibility.reference.exr");
     ASSERT_EQ(test.width, 160);
     ASSERT_EQ(test.height, 90);
-    ASSERT_EQ(test.channels.size(), doc["lights"].size());
+    ASSERT_EQ(test.channels.size(), doc["lights"].size() + 1) << "a channel per light, and Y";
+    EXPECT_EQ(test.channels.at("Y"), test.channels.at(doc["lights"][0]["files"]["channel"].get<std::string>()))
+        << "Y is the first light's V";
     for (const nlohmann::json& light : doc["lights"]) {
         const std::string channel = light["files"]["channel"];
         EXPECT_EQ(channel, light["name"].get<std::string>() + ".V");
@@ -1393,9 +1396,10 @@ TEST_F(Cli, RenderWritesEveryLightsVisibilityAsFloats)
     const Exr v = readExr(exr);
     EXPECT_EQ(v.width, 96);
     EXPECT_EQ(v.height, 54);
-    ASSERT_EQ(v.channels.size(), 2u);
+    ASSERT_EQ(v.channels.size(), 3u);
+    EXPECT_EQ(v.channels.at("Y"), v.channels.at("light0.V")) << "Y is the first light's V, for image viewers";
     for (const auto& [name, values] : v.channels) {
-        EXPECT_EQ(name.substr(name.size() - 2), ".V");
+        EXPECT_TRUE(name == "Y" || name.substr(name.size() - 2) == ".V") << name;
         size_t shadowed = 0;
         for (const float x : values) {
             ASSERT_TRUE(x >= 0.0f && x <= 1.0f) << name << ": " << x;
@@ -1408,6 +1412,46 @@ TEST_F(Cli, RenderWritesEveryLightsVisibilityAsFloats)
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_NE(r.err.find("missing/v.exr"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir / "again.png")) << "refused before rendering";
+}
+
+// compare A.exr B.exr: every channel of A against B's, no device; files that differ in
+// size or channels are refused (exit 1) naming both; the config form's flags are refused.
+TEST_F(Cli, CompareTakesTwoExrFiles)
+{
+    Exr reference;
+    reference.width = 4;
+    reference.height = 2;
+    reference.channels["sun.V"] = {1, 1, 1, 1, 0, 0, 0.5f, 0.5f};
+    reference.channels["Y"] = reference.channels["sun.V"];
+    Exr test = reference;
+    test.channels["sun.V"][6] = 0.9f;  // one pixel of eight off by 0.4: RMSE sqrt(0.16 / 8)
+    writeExr(dir / "a.exr", test);
+    writeExr(dir / "b.exr", reference);
+    CliResult r = run(fmt::format("compare '{0}/a.exr' '{0}/b.exr' --json", dir.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const nlohmann::json doc = nlohmann::json::parse(r.out);
+    EXPECT_EQ(doc["reference"], (dir / "b.exr").string());
+    ASSERT_EQ(doc["channels"].size(), 2u);
+    for (const nlohmann::json& c : doc["channels"]) {
+        EXPECT_NEAR(c["visibility"]["all"]["rmse"].get<double>(), c["name"] == "sun.V" ? std::sqrt(0.16 / 8) : 0.0, 1e-6) << c.dump();
+    }
+    r = run(fmt::format("compare '{0}/b.exr' '{0}/b.exr'", dir.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(has(r.out, "channel 'sun.V'")) << r.out;
+
+    Exr small = reference;
+    small.width = 2;
+    for (auto& [name, values] : small.channels) values.resize(4);
+    writeExr(dir / "small.exr", small);
+    r = run(fmt::format("compare '{0}/a.exr' '{0}/small.exr'", dir.string()));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(has(r.err, "a.exr is 4x2 and") && has(r.err, "small.exr is 2x2")) << r.err;
+    r = run(fmt::format("compare '{0}/a.exr' '{0}/b.exr' --width 8", dir.string()));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(has(r.err, "--width")) << r.err;
+    r = run(fmt::format("compare '{0}/a.exr'", dir.string()));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_TRUE(has(r.err, "compare A.exr B.exr")) << r.err;
 }
 
 // A spot light's figures count only the pixels it reaches (issue 19): outside its outer

@@ -4,6 +4,7 @@
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfOutputFile.h>
 #include <gtest/gtest.h>
 
 namespace penumbra::test {
@@ -26,6 +27,21 @@ Exr readExr(const std::filesystem::path& path)
     file.setFrameBuffer(frame);
     file.readPixels(window.min.y, window.max.y);
     return exr;
+}
+
+void writeExr(const std::filesystem::path& path, const Exr& exr)
+{
+    Imf::Header header(exr.width, exr.height);
+    header.compression() = Imf::NO_COMPRESSION;
+    Imf::FrameBuffer frame;
+    for (const auto& [name, values] : exr.channels) {
+        header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+        char* base = reinterpret_cast<char*>(const_cast<float*>(values.data()));
+        frame.insert(name, Imf::Slice(Imf::FLOAT, base, sizeof(float), sizeof(float) * size_t(exr.width)));
+    }
+    Imf::OutputFile file(path.c_str(), header);
+    file.setFrameBuffer(frame);
+    file.writePixels(exr.height);
 }
 
 } // namespace penumbra::test
