@@ -72,10 +72,12 @@ void checkRequiredExtensions(const std::string& file, const tinygltf::Model& mod
         if (!supported(extension)) unsupported.push_back(extension);
     }
     if (unsupported.size() == 1) {
-        throw AssetError(fmt::format("{}: required extension {} is not supported", file, unsupported[0]));
+        throw AssetError(
+            fmt::format("{}: required extension {} is not supported", file, core::shortText(unsupported[0])));
     }
     if (!unsupported.empty()) {
-        throw AssetError(fmt::format("{}: required extensions {} are not supported", file, fmt::join(unsupported, ", ")));
+        throw AssetError(fmt::format("{}: required extensions {} are not supported", file,
+                                     core::shortText(fmt::format("{}", fmt::join(unsupported, ", ")))));
     }
 }
 
@@ -83,12 +85,14 @@ void checkVersion(const Document& doc)
 {
     const tinygltf::Asset& asset = doc.model.asset;
     auto major = [](const std::string& version) { return std::atoi(version.c_str()); };
-    if (major(asset.version) == 1) failVersion1(doc.file, fmt::format("asset.version \"{}\"", asset.version));
+    if (major(asset.version) == 1) failVersion1(doc.file, fmt::format("asset.version {}", core::shortJson(asset.version)));
     if (major(asset.version) != 2) {
-        doc.fail("/asset/version", fmt::format("glTF \"{}\" is not supported; penumbra reads glTF 2.0", asset.version));
+        doc.fail("/asset/version",
+                 fmt::format("glTF {} is not supported; penumbra reads glTF 2.0", core::shortJson(asset.version)));
     }
     if (!asset.minVersion.empty() && asset.minVersion != "2.0") {
-        doc.fail("/asset/minVersion", fmt::format("the file needs glTF {}; penumbra reads glTF 2.0", asset.minVersion));
+        doc.fail("/asset/minVersion",
+                 fmt::format("the file needs glTF {}; penumbra reads glTF 2.0", core::shortText(asset.minVersion)));
     }
 }
 
@@ -205,7 +209,9 @@ void noteIgnoredFeatures(const Document& doc)
 {
     const tinygltf::Model& model = doc.model;
     for (const std::string& extension : model.extensionsUsed) {
-        if (!supported(extension)) doc.warn("/extensionsUsed", fmt::format("extension {} is not supported; ignored", extension));
+        if (!supported(extension)) {
+            doc.warn("/extensionsUsed", fmt::format("extension {} is not supported; ignored", core::shortText(extension)));
+        }
     }
     if (!model.cameras.empty()) {
         doc.note("/cameras", fmt::format("{} camera(s) ignored: the camera comes from the render config", model.cameras.size()));

@@ -79,6 +79,21 @@ protected:
 
 } // namespace
 
+// Values a message echoes are shortened (issue 43: a 1 MB string became 1 MB of stderr):
+// a name, an enum value, a version, an extension name of 100,000 characters each.
+TEST_F(EditedQuad, EchoedValuesAreShortened)
+{
+    const nlohmann::json huge = std::string(100000, 'x'), quad = doc;
+    for (const char* at : {"/materials/0/alphaMode", "/asset/version", "/extensionsRequired"}) {
+        SCOPED_TRACE(at);
+        doc = quad;
+        doc[nlohmann::json::json_pointer(at)] = std::string(at) == "/extensionsRequired" ? nlohmann::json{huge, huge} : huge;
+        const std::string e = errorOfPath(write());
+        EXPECT_NE(e.find("characters)"), std::string::npos) << e.substr(0, 300);
+        EXPECT_LT(e.size(), 1000u) << e.substr(0, 300);
+    }
+}
+
 TEST(GltfLoader, QuadWithEmbeddedBuffer)
 {
     GltfLoadReport report;

@@ -1,5 +1,7 @@
 #include "scene/gltf/Animations.h"
 
+#include "penumbra/core/ShortText.h"
+
 #include "scene/gltf/Accessors.h"
 
 #include <fmt/format.h>
@@ -45,8 +47,8 @@ std::optional<NodeChannel> loadChannel(const Document& doc, const NodeMap& nodes
     const std::optional<ChannelPath> path = pathOf(channel.target_path);
     if (!path) {
         why = channel.target_path == "weights" ? "morph target weights are not played (morph targets are ignored)"
-                                               : fmt::format("target path \"{}\" is not translation, rotation or scale",
-                                                             channel.target_path);
+                                               : fmt::format("target path {} is not translation, rotation or scale",
+                                                             core::shortJson(channel.target_path));
         return std::nullopt;
     }
     if (channel.target_node < 0 || size_t(channel.target_node) >= doc.model.nodes.size()) {
@@ -75,7 +77,8 @@ std::optional<NodeChannel> loadChannel(const Document& doc, const NodeMap& nodes
     else if (sampler.interpolation == "CUBICSPLINE") out.interpolation = KeyInterpolation::CubicSpline;
     else if (sampler.interpolation.empty() || sampler.interpolation == "LINEAR") out.interpolation = KeyInterpolation::Linear;
     else {
-        why = fmt::format("{}: interpolation \"{}\" is not STEP, LINEAR or CUBICSPLINE", samplerElement, sampler.interpolation);
+        why = fmt::format("{}: interpolation {} is not STEP, LINEAR or CUBICSPLINE", samplerElement,
+                          core::shortJson(sampler.interpolation));
         return std::nullopt;
     }
     const CountLimit limit{floatsLeft, fmt::format("animation keys left of the limit of {} floats per file", kMaxKeyFloats)};

@@ -1,5 +1,7 @@
 #include "scene/gltf/Lights.h"
 
+#include "penumbra/core/ShortText.h"
+
 #include <fmt/format.h>
 #include <glm/gtc/constants.hpp>
 
@@ -41,7 +43,7 @@ Light convertLight(const Document& doc, int index)
     } else if (source.type == "spot") {
         light.type = LightType::Spot;
     } else {
-        doc.fail(path + "/type", fmt::format("'{}' is not directional, point or spot", source.type));
+        doc.fail(path + "/type", fmt::format("'{}' is not directional, point or spot", core::shortText(source.type)));
     }
     const std::vector<double>& color = source.color;
     if (!color.empty()) {
@@ -85,7 +87,7 @@ std::optional<GltfLight> lightOfNode(const Document& doc, int node, uint32_t gra
         if (!(length > 1e-12f && std::isfinite(length))) {
             doc.warn(fmt::format("/nodes/{}", node), fmt::format("the node's transform leaves light '{}' no direction "
                                                                  "(zero scale); light skipped",
-                                                                 out.name));
+                                                                 core::shortText(out.name)));
             return std::nullopt;
         }
         out.light.direction = direction / length;

@@ -41,7 +41,7 @@ uint32_t MaterialTable::sceneMaterial(int index, std::string_view element)
     } else if (source.alphaMode == "BLEND") {
         material.alphaMode = AlphaMode::Blend;
     } else {
-        doc_.fail(path + "/alphaMode", fmt::format("'{}' is not OPAQUE, MASK or BLEND", source.alphaMode));
+        doc_.fail(path + "/alphaMode", fmt::format("'{}' is not OPAQUE, MASK or BLEND", core::shortText(source.alphaMode)));
     }
     if (!std::isfinite(source.alphaCutoff) || source.alphaCutoff < 0.0) {
         doc_.fail(path + "/alphaCutoff", fmt::format("must be a number >= 0, got {}", source.alphaCutoff));

@@ -1,5 +1,7 @@
 #include "scene/gltf/Nodes.h"
 
+#include "penumbra/core/ShortText.h"
+
 #include <fmt/format.h>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -15,7 +17,7 @@ std::string nodePath(size_t node) { return fmt::format("/nodes/{}", node); }
 std::string nodeLabel(const tinygltf::Model& model, size_t node)
 {
     const std::string& name = model.nodes[node].name;
-    return name.empty() ? fmt::format("node {}", node) : fmt::format("node {} '{}'", node, name);
+    return name.empty() ? fmt::format("node {}", node) : fmt::format("node {} '{}'", node, core::shortText(name));
 }
 
 // parent[i]: the node listing i among its children, or -1.
