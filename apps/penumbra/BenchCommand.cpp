@@ -11,6 +11,7 @@
 #include "TimingSummary.h"
 
 #include "penumbra/config/Animation.h"
+#include "penumbra/config/ConfigWriter.h"
 #include "penumbra/config/Run.h"
 #include "penumbra/config/Sweep.h"
 #include "penumbra/core/Error.h"
@@ -244,23 +245,6 @@ void checkVariants(const config::SweepVariants& variants, const config::RunOptio
     if (!errors.empty()) throw Error(fmt::format("{}", fmt::join(errors, "\n")));
 }
 
-std::string sceneName(const config::SceneSource& source)
-{
-    return source.kind == config::SceneSource::Kind::Gltf ? source.gltf.filename().string() : source.generator;
-}
-
-// The generator parameters as JSON numbers where they are numbers (the config keeps them
-// as text for the generator to parse).
-json sceneParamsJson(const config::SceneSource& source)
-{
-    json params = json::object();
-    for (const auto& [name, text] : source.params) {
-        json value = json::parse(text, nullptr, false);
-        params[name] = value.is_discarded() ? json(text) : value;
-    }
-    return {{"params", std::move(params)}, {"scale", source.scale}};
-}
-
 // ---- the reference, once per distinct (scene, camera, light, image size) -----------------
 
 // What a light's reference visibility depends on, as text: the scene (its source, and the
@@ -269,14 +253,13 @@ json sceneParamsJson(const config::SceneSource& source)
 std::string referenceKey(const config::RenderConfig& config, size_t light)
 {
     const auto vec = [](const glm::vec3& v) { return json::array({v.x, v.y, v.z}); };
-    const config::SceneSource& s = config.scene;
     json nodes = json::array();
     for (const config::AnimationTrack& track : config.animation.tracks) {
         if (track.target.rfind("node:", 0) == 0) nodes.push_back({track.target, config::evaluate(track, 0.0f)});
     }
     const scene::Camera& c = config.camera;
     const scene::Light& l = config.lights[light].light;
-    return json{{"scene", {s.kind == config::SceneSource::Kind::Gltf, s.gltf.string(), s.generator, s.params, s.scale, nodes}},
+    return json{{"scene", {config::sceneJson(config.scene, "/"), nodes}},
                 {"camera", {vec(c.position), vec(c.target), vec(c.up), c.fovYDeg, c.nearWorld}},
                 {"light",
                  {scene::lightTypeName(l.type), vec(l.position), vec(l.direction), vec(l.tangent), l.outerConeDeg,
@@ -425,8 +408,9 @@ BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& v
     result.index = index;
     result.label = variant.label;
     result.choices = variant.choices;
-    result.scene = sceneName(config.scene);
-    result.sceneParams = sceneParamsJson(config.scene);
+    result.scene = config.scene.describe();
+    // The scene as the config gives it (its files named as from the config's folder).
+    result.sceneParams = config::sceneJson(config.scene, config.file);
     result.width = images.width;
     result.height = images.height;
     result.frame = summarizeTimings(measured, "", hostPasses);

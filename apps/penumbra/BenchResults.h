@@ -43,8 +43,8 @@ struct BenchVariant {
     size_t index = 0;
     std::string label;  // config::SweepVariant::label; empty without a sweep
     std::vector<config::SweepChoice> choices;
-    std::string scene;            // the generator, or the glTF file's name
-    nlohmann::json sceneParams;   // {"params": {name: value}, "scale": s}
+    std::string scene;            // each part's generator or glTF file name ("a.glb + box-grid")
+    nlohmann::json sceneParams;   // the config's "scene" as configJson writes it (parts, transforms)
     uint32_t width = 0;
     uint32_t height = 0;
     TimingSummary frame;          // every pass of the frame

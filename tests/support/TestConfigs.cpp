@@ -42,7 +42,11 @@ config::RenderConfig defaultTestConfig()
 
 void scaleConfig(config::RenderConfig& c, float s)
 {
-    c.scene.scale *= s;
+    // Scaled about the origin: each part's placement too.
+    for (config::ScenePart& part : c.scene.parts) {
+        part.transform.translation *= double(s);
+        part.transform.scale *= double(s);
+    }
     c.camera.position *= s;
     c.camera.target *= s;
     c.camera.nearWorld *= s;

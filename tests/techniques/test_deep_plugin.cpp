@@ -242,7 +242,7 @@ config::RenderConfig hairConfig(scene::LightType type)
     config::RenderConfig cfg = config::loadConfig(test::sourceDir() / "config/hair.json");
     cfg.width = 120;
     cfg.height = 90;
-    cfg.scene.params = {{"strands", "2000"}};
+    cfg.scene.parts[0].params = {{"strands", "2000"}};
     if (type == scene::LightType::Point) cfg.lights[0].light.type = type;
     return cfg;
 }
@@ -407,10 +407,10 @@ TEST_F(DeepPlugin, ErrorAgainstTheReference)
     const fs::path gltf = scratch / "panes.gltf";
     scene::writeGltf(panesScene(five, 0.3f), gltf);
     config::RenderConfig fromFile = panesConfig(scene::LightType::Spot);
-    fromFile.scene.kind = config::SceneSource::Kind::Gltf;
-    fromFile.scene.gltf = gltf;
+    fromFile.scene.parts[0].kind = config::ScenePart::Kind::Gltf;
+    fromFile.scene.parts[0].gltf = gltf;
     config::RenderConfig hair = config::loadConfig(test::sourceDir() / "config/hair.json");
-    hair.scene.params = {{"strands", "10000"}};
+    hair.scene.parts[0].params = {{"strands", "10000"}};
     config::RenderConfig fence = config::loadConfig(test::sourceDir() / "config/fence.json");
     for (config::RenderConfig* c : {&hair, &fence}) c->width = 120, c->height = 90;
     std::vector<Scene> scenes = {

@@ -34,7 +34,7 @@ json generatorValue(const std::string& text)
     return text;
 }
 
-// A path (the glTF file, an allowed root) as the reader resolves it: relative paths against
+// A path (a glTF file, an allowed root) as the reader resolves it: relative paths against
 // the saved file's folder.
 std::string scenePath(const fs::path& gltf, const fs::path& savedAs)
 {
@@ -47,25 +47,42 @@ std::string scenePath(const fs::path& gltf, const fs::path& savedAs)
     return relative.generic_string();
 }
 
-json sceneJson(const SceneSource& source, const fs::path& savedAs)
+json dvec3(const glm::dvec3& v) { return json::array({v.x, v.y, v.z}); }
+
+// The transform in full (the reader's defaults written out): doubles as read, so that
+// they read back to the same value.
+void writeTransform(const PartTransform& t, json& part)
 {
-    json scene = json::object();
-    if (source.kind == SceneSource::Kind::Gltf) {
-        scene["gltf"] = scenePath(source.gltf, savedAs);
-        if (!source.animation.empty()) scene["animation"] = source.animation;
-        if (!source.allowedRoots.empty()) {
+    part["translation"] = dvec3(t.translation);
+    if (t.rotationDeg) {
+        part["rotation_deg"] = dvec3(*t.rotationDeg);
+    } else {
+        part["rotation"] = json::array({t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w});
+    }
+    const bool uniform = t.scale.x == t.scale.y && t.scale.y == t.scale.z;
+    part["scale"] = uniform ? json(t.scale.x) : dvec3(t.scale);
+}
+
+json partJson(const ScenePart& part, const fs::path& savedAs)
+{
+    json out = json::object();
+    out["name"] = part.name;
+    if (part.kind == ScenePart::Kind::Gltf) {
+        out["gltf"] = scenePath(part.gltf, savedAs);
+        if (!part.animation.empty()) out["animation"] = part.animation;
+        if (!part.allowedRoots.empty()) {
             json roots = json::array();
-            for (const fs::path& root : source.allowedRoots) roots.push_back(scenePath(root, savedAs));
-            scene["allowed_roots"] = roots;
+            for (const fs::path& root : part.allowedRoots) roots.push_back(scenePath(root, savedAs));
+            out["allowed_roots"] = roots;
         }
     } else {
-        scene["generator"] = source.generator;
+        out["generator"] = part.generator;
         json params = json::object();
-        for (const auto& [name, text] : source.params) params[name] = generatorValue(text);
-        if (!params.empty()) scene["params"] = params;
+        for (const auto& [name, text] : part.params) params[name] = generatorValue(text);
+        if (!params.empty()) out["params"] = params;
     }
-    scene["scale"] = number(source.scale);
-    return scene;
+    writeTransform(part.transform, out);
+    return out;
 }
 
 json cameraJson(const scene::Camera& camera)
@@ -147,6 +164,14 @@ json animationJson(const Animation& animation)
 
 } // namespace
 
+json sceneJson(const SceneSource& source, const fs::path& savedAs)
+{
+    if (!source.listed && source.parts.size() == 1) return partJson(source.parts[0], savedAs);
+    json parts = json::array();
+    for (const ScenePart& part : source.parts) parts.push_back(partJson(part, savedAs));
+    return {{"parts", parts}};
+}
+
 json configJson(const RenderConfig& config, const fs::path& savedAs)
 {
     json out = json::object();
@@ -162,12 +187,12 @@ json configJson(const RenderConfig& config, const fs::path& savedAs)
         out["lights"] = lights;
     }
     out["culling"] = cullingModeName(config.culling);
-    if (config.shadowFocus) out["shadow_focus"] = true;
+    out["shadow_focus"] = config.shadowFocus;
     out["draw_batching"] = config.batchDraws ? "batched" : "per-instance";
     out["output"] = {{"width", config.width}, {"height", config.height}};
     out["frames"] = config.frames;
     // Without tracks, fps is the frame rate of the glTF animation the scene plays.
-    if (!config.animation.empty() || !config.scene.animation.empty()) out["animation"] = animationJson(config.animation);
+    if (!config.animation.empty() || config.scene.playsClip()) out["animation"] = animationJson(config.animation);
     if (!config.notes.empty()) out["notes"] = config.notes;
     return out;
 }

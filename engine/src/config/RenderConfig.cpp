@@ -2,6 +2,7 @@
 
 #include "config/AnimationReader.h"
 #include "config/JsonReader.h"
+#include "config/SceneReader.h"
 #include "core/Text.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/core/ShortText.h"
@@ -16,79 +17,6 @@ namespace fs = std::filesystem;
 
 namespace penumbra::config {
 namespace {
-
-// "allowed_roots": folders besides a glTF model's own whose files its URIs may name
-// (GltfLoadOptions::allowedRoots), relative to the config's folder.
-std::vector<fs::path> readAllowedRoots(ObjectReader& r, const fs::path& configFile)
-{
-    std::vector<fs::path> roots;
-    const json* v = r.find("allowed_roots");
-    if (!v) return roots;
-    const std::string at = r.path("allowed_roots");
-    if (!v->is_array()) r.fail(at, fmt::format("must be an array of folder names, got {}", core::shortJson(*v)));
-    for (size_t i = 0; i < v->size(); ++i) {
-        const json& root = (*v)[i];
-        const std::string element = fmt::format("{}/{}", at, i);
-        if (!root.is_string() || root.get_ref<const std::string&>().empty()) {
-            r.fail(element, fmt::format("must be a folder name, got {}", core::shortJson(root)));
-        }
-        fs::path folder = root.get<std::string>();
-        if (folder.is_relative()) folder = configFile.parent_path() / folder;
-        std::error_code ec;
-        if (!fs::is_directory(folder, ec)) r.fail(element, fmt::format("folder not found: {}", displayPath(folder)));
-        roots.push_back(std::move(folder));
-    }
-    return roots;
-}
-
-SceneSource readScene(ObjectReader& parent, const fs::path& configFile)
-{
-    SceneSource source;
-    const json* v = parent.find("scene");
-    if (!v) return source;
-    ObjectReader r(*v, parent.locator(), "/scene");
-    const json* gltf = r.find("gltf");
-    const json* generator = r.find("generator");
-    if (gltf && generator) r.fail("/scene", "give either \"gltf\" or \"generator\", not both");
-    source.scale = float(r.number("scale", 1.0, 0.0, 1e9, true));
-    if (gltf) {
-        source.kind = SceneSource::Kind::Gltf;
-        if (!gltf->is_string() || gltf->get<std::string>().empty()) r.fail("/scene/gltf", "must be a file path");
-        source.gltf = gltf->get<std::string>();
-        if (source.gltf.is_relative()) source.gltf = configFile.parent_path() / source.gltf;
-        std::error_code ec;
-        if (!fs::is_regular_file(source.gltf, ec)) r.fail("/scene/gltf", fmt::format("file not found: {}", displayPath(source.gltf)));
-        source.allowedRoots = readAllowedRoots(r, configFile);
-        if (const json* animation = r.find("animation")) {
-            // A name, or an index into the file's animations; buildScene checks it exists.
-            if (animation->is_string() && !animation->get<std::string>().empty()) {
-                source.animation = animation->get<std::string>();
-            } else if (animation->is_number_integer() && animation->get<int64_t>() >= 0) {
-                source.animation = std::to_string(animation->get<int64_t>());
-            } else {
-                r.fail("/scene/animation", fmt::format("must be the name or index of an animation of the glTF file, got {}",
-                                                       core::shortJson(*animation)));
-            }
-        }
-        r.finish();
-        return source;
-    }
-    source.generator = r.choice("generator", source.generator, scene::generatorNames());
-    if (const json* params = r.find("params")) {
-        ObjectReader p(*params, parent.locator(), "/scene/params");
-        for (const scene::GeneratorParameter& parameter : scene::generatorParameters(source.generator)) {
-            const json* v = p.find(parameter.name);
-            if (!v) continue;
-            if (!v->is_number() && !v->is_boolean() && !v->is_string()) {
-                p.fail(p.path(parameter.name), fmt::format("must be a number, got {}", core::shortJson(*v)));
-            }
-            source.params.emplace_back(parameter.name, v->is_string() ? v->get<std::string>() : v->dump());
-        }
-        p.finish(fmt::format("for the {} generator", source.generator));
-    }
-    r.finish();
-    return source;
-}
 
 scene::Camera readCamera(ObjectReader& parent)
 {
@@ -291,8 +219,8 @@ RenderConfig parseConfig(const ConfigDocument& document)
     config.camera = readCamera(r);
     const json& lights = r.require("lights");
     if (lights.is_string() && lights.get<std::string>() == "scene") {
-        if (config.scene.kind != SceneSource::Kind::Gltf) {
-            r.fail("/lights", "\"scene\" takes the lights of a glTF scene, but /scene is a generator");
+        if (!config.scene.hasGltf()) {
+            r.fail("/lights", "\"scene\" takes the lights of a glTF scene, but /scene has no glTF file (only generators)");
         }
         config.lightsFromScene = true;
     } else if (!lights.is_array() || lights.empty()) {
@@ -328,7 +256,7 @@ RenderConfig parseConfig(const ConfigDocument& document)
         o.finish();
     }
     config.frames = r.integer("frames", config.frames, 1, kMaxFrames);
-    config.animation = readAnimation(r, config.lights, !config.scene.animation.empty());
+    config.animation = readAnimation(r, config.lights, config.scene.playsClip());
     if (const json* notes = r.find("notes")) {
         if (!notes->is_array()) r.fail("/notes", fmt::format("must be an array of Markdown paragraphs (strings), got {}", core::shortJson(*notes)));
         for (size_t i = 0; i < notes->size(); ++i) {

@@ -13,33 +13,6 @@
 
 namespace penumbra::config {
 
-scene::Scene buildScene(const SceneSource& source, std::vector<scene::GltfLight>* fileLights)
-{
-    scene::Scene scene;
-    if (source.kind == SceneSource::Kind::Gltf) {
-        scene::GltfLoadReport report;
-        scene::GltfLoadOptions options;
-        options.allowedRoots = source.allowedRoots;
-        scene = scene::loadGltf(source.gltf, report, options);
-        if (scene.instances.empty()) {
-            throw ConfigError(fmt::format("{}: the glTF file has no triangles to render", source.gltf.string()));
-        }
-        for (const scene::GltfLight& l : report.lights) {
-            if (!fileLights) break;
-            scene::GltfLight light = l;
-            // Scaling the scene about the origin moves its lights with it; radiant
-            // intensity times s² keeps the irradiance it gives the scaled scene.
-            light.light.position *= source.scale;
-            if (light.light.type != scene::LightType::Directional) light.light.intensity *= source.scale * source.scale;
-            fileLights->push_back(light);
-        }
-    } else {
-        scene = scene::generateScene(source.generator, source.params);
-    }
-    if (source.scale != 1.0f) scene::scaleScene(scene, source.scale);
-    return scene;
-}
-
 scene::Scene buildScene(RenderConfig& config)
 {
     scene::Scene scene;
@@ -49,13 +22,15 @@ scene::Scene buildScene(RenderConfig& config)
     } catch (const ConfigError&) {
         throw;
     } catch (const Error& e) {
-        // A generator's parameter error names the parameter; add where it was set.
-        throw ConfigError(fmt::format("{}: /scene: {}", config.file.string(), e.what()));
+        // The error names the part (/scene/parts/1) and what in it; add the config file.
+        throw ConfigError(fmt::format("{}: {}", displayPath(config.file), e.what()));
     }
     if (config.lightsFromScene) {
         if (fileLights.empty() || fileLights.size() > kMaxLights) {
-            throw ConfigError(fmt::format("{}: /lights: \"scene\" needs 1 to {} KHR_lights_punctual lights in {}, found {}",
-                                          config.file.string(), kMaxLights, config.scene.gltf.string(), fileLights.size()));
+            throw ConfigError(fmt::format("{}: /lights: \"scene\" needs 1 to {} KHR_lights_punctual lights in the scene's "
+                                          "glTF files ({}), found {}",
+                                          displayPath(config.file), kMaxLights, core::shortText(config.scene.describe()),
+                                          fileLights.size()));
         }
         config.lights.clear();
         std::set<std::string> names;
@@ -71,7 +46,7 @@ scene::Scene buildScene(RenderConfig& config)
             config.lights.push_back(lc);
         }
     }
-    sceneAnimationIndex(config, scene);  // the animation it plays exists
+    playedClips(config, scene);  // the animations its parts play exist
     std::set<std::string> nodeNames;
     for (uint32_t n = 0; n < scene.graph.size(); ++n) nodeNames.insert(scene.graph.node(n).name);
     for (size_t i = 0; i < config.animation.tracks.size(); ++i) {
@@ -89,8 +64,12 @@ scene::Scene buildScene(RenderConfig& config)
 PreparedRun prepareRun(RenderConfig config, const RunOptions& options)
 {
     PreparedRun run;
+    for (ScenePart& part : config.scene.parts) {
+        if (part.kind == ScenePart::Kind::Gltf) {
+            part.allowedRoots.insert(part.allowedRoots.end(), options.allowedRoots.begin(), options.allowedRoots.end());
+        }
+    }
     run.scene = buildScene(config);
-    config.scene.allowedRoots.insert(config.scene.allowedRoots.end(), options.allowedRoots.begin(), options.allowedRoots.end());
     applyParamOverrides(config, options.overridesOfUsedTechniquesOnly ? overridesUsedBy(options.overrides, config)
                                                                        : options.overrides);
     if (options.width) config.width = *options.width;
@@ -107,33 +86,12 @@ PreparedRun prepareRun(const std::filesystem::path& file, const RunOptions& opti
     return prepareRun(loadConfig(file), options);
 }
 
-bool animated(const RenderConfig& config) { return !config.animation.empty() || !config.scene.animation.empty(); }
-
-int sceneAnimationIndex(const RenderConfig& config, const scene::Scene& scene)
-{
-    const std::string& wanted = config.scene.animation;
-    if (wanted.empty()) return -1;
-    for (size_t i = 0; i < scene.animations.size(); ++i) {
-        if (scene.animations[i].name == wanted) return int(i);
-    }
-    if (std::all_of(wanted.begin(), wanted.end(), [](char c) { return c >= '0' && c <= '9'; }) && wanted.size() < 9) {
-        const size_t index = std::stoul(wanted);
-        if (index < scene.animations.size()) return int(index);
-    }
-    std::vector<std::string> names;
-    for (const scene::NodeAnimation& a : scene.animations) names.push_back("\"" + a.name + "\"");
-    throw ConfigError(fmt::format("{}: /scene/animation: {} has no animation \"{}\"; {}", config.file.string(),
-                                  displayPath(config.scene.gltf), core::shortText(wanted),
-                                  names.empty() ? std::string("it has none that can play")
-                                                : fmt::format("its animations: {} (or their index)", fmt::join(names, ", "))));
-}
+bool animated(const RenderConfig& config) { return !config.animation.empty() || config.scene.playsClip(); }
 
 std::vector<uint32_t> poseScene(const RenderConfig& rest, float timeS, RenderConfig& posed, scene::Scene& scene)
 {
     posed = rest;
-    if (const int clip = sceneAnimationIndex(rest, scene); clip >= 0) {
-        scene::applyNodeAnimation(scene.animations[size_t(clip)], timeS, scene.graph);
-    }
+    for (const size_t clip : playedClips(rest, scene)) scene::applyNodeAnimation(scene.animations[clip], timeS, scene.graph);
     applyAnimation(rest.animation, timeS, posed, scene);
     return scene.updateTransforms();
 }
@@ -144,7 +102,7 @@ float animationDuration(const RenderConfig& config, const scene::Scene& scene)
     for (const AnimationTrack& track : config.animation.tracks) {
         if (!track.keys.empty()) end = std::max(end, track.keys.back().timeS);
     }
-    if (const int clip = sceneAnimationIndex(config, scene); clip >= 0) end = std::max(end, scene.animations[size_t(clip)].duration());
+    for (const size_t clip : playedClips(config, scene)) end = std::max(end, scene.animations[clip].duration());
     return end;
 }
 

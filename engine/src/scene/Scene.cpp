@@ -94,6 +94,44 @@ size_t Scene::triangleCount() const
     return count;
 }
 
+size_t Scene::materialsUsed() const
+{
+    std::vector<uint8_t> used(materials.size(), 0);
+    for (const Mesh& mesh : meshes) used.at(mesh.material) = 1;
+    return size_t(std::count(used.begin(), used.end(), uint8_t(1)));
+}
+
+uint32_t appendUnderRoot(Scene& scene, Scene part, std::string name, const glm::mat4& local)
+{
+    const auto meshBase = uint32_t(scene.meshes.size());
+    const auto materialBase = uint32_t(scene.materials.size());
+    const auto textureBase = int32_t(scene.textures.size());
+    for (Material& material : part.materials) {
+        if (material.baseColorTexture != kNoTexture) material.baseColorTexture += textureBase;
+        scene.materials.push_back(std::move(material));
+    }
+    for (Texture& texture : part.textures) scene.textures.push_back(std::move(texture));
+    for (Mesh& mesh : part.meshes) {
+        mesh.material += materialBase;
+        scene.meshes.push_back(std::move(mesh));
+    }
+    const uint32_t root = scene.graph.addNode(std::move(name), kNoParent, local);
+    const uint32_t nodeBase = root + 1;
+    for (uint32_t n = 0; n < part.graph.size(); ++n) {
+        const Node& node = part.graph.node(n);
+        // Parents come first in the part, so they do in the scene too.
+        const int32_t parent = node.parent == kNoParent ? int32_t(root) : node.parent + int32_t(nodeBase);
+        scene.graph.addNode(node.name, parent, node.local);
+    }
+    for (const Instance& instance : part.instances) scene.addInstance(instance.mesh + meshBase, instance.node + nodeBase);
+    for (NodeAnimation& animation : part.animations) {
+        for (NodeChannel& channel : animation.channels) channel.node += nodeBase;
+        for (NodeRestPose& rest : animation.rest) rest.node += nodeBase;
+        scene.animations.push_back(std::move(animation));
+    }
+    return root;
+}
+
 Mesh makeBox(const std::string& name)
 {
     Mesh mesh{name, {}, {}};

@@ -234,10 +234,10 @@ TEST(Config, SweepPathsSetSeveralValuesTogether)
         [{"generator": "fence", "scale": 2}, 60]]}])");
     const std::vector<config::SweepVariant> v = expand(doc);
     ASSERT_EQ(v.size(), 2u);
-    EXPECT_EQ(v[0].config.scene.generator, "box-grid");
+    EXPECT_EQ(v[0].config.scene.parts[0].generator, "box-grid");
     EXPECT_FLOAT_EQ(v[0].config.camera.fovYDeg, 30.0f);
-    EXPECT_EQ(v[1].config.scene.generator, "fence");
-    EXPECT_FLOAT_EQ(v[1].config.scene.scale, 2.0f);
+    EXPECT_EQ(v[1].config.scene.parts[0].generator, "fence");
+    EXPECT_EQ(v[1].config.scene.parts[0].transform.scale, glm::dvec3(2.0));
     EXPECT_FLOAT_EQ(v[1].config.camera.fovYDeg, 60.0f);
     EXPECT_EQ(v[1].label, "/scene+/camera/fov_y_deg=fence");
     EXPECT_EQ(v[1].choices[0].paths, (std::vector<std::string>{"/scene", "/camera/fov_y_deg"}));
@@ -324,7 +324,7 @@ TEST(Config, TheTradeoffBenchmarkCoversEveryBaselineAtTwoLightSizesOnTwoScenes)
     std::set<float> sizes;
     for (config::SweepVariant v : variants) {
         SCOPED_TRACE(v.label);
-        scenes.insert(v.config.scene.generator);
+        scenes.insert(v.config.scene.parts[0].generator);
         sizes.insert(v.config.lights[0].light.angularDiameterDeg);
         techniques.insert(v.config.lights[0].shadow.technique);
         labels.insert(v.choices[2].label);
@@ -479,8 +479,8 @@ TEST(Config, GeneratorParametersAreCheckedByName)
     json doc = minimal();
     doc["scene"] = {{"generator", "city"}, {"params", {{"blocks", 2}, {"seed", 3}}}};
     config::RenderConfig c = config::parseConfig(doc, "scene.json");
-    EXPECT_EQ(c.scene.generator, "city");
-    EXPECT_EQ(c.scene.params.size(), 2u);
+    EXPECT_EQ(c.scene.parts[0].generator, "city");
+    EXPECT_EQ(c.scene.parts[0].params.size(), 2u);
     EXPECT_GT(config::buildScene(c).instances.size(), 100u);
 
     doc["scene"]["params"] = {{"block", 2}};
@@ -555,7 +555,7 @@ TEST(Config, CommittedAssetMatchesItsGenerator)
     // generator makes (config/penumbra-gltf.json swaps the generator for the file).
     config::RenderConfig fromFile = config::loadConfig(penumbra::test::sourceDir() / "config/penumbra-gltf.json");
     config::RenderConfig generated = config::loadConfig(penumbra::test::sourceDir() / "config/penumbra-scene.json");
-    ASSERT_EQ(fromFile.scene.kind, config::SceneSource::Kind::Gltf);
+    ASSERT_EQ(fromFile.scene.parts[0].kind, config::ScenePart::Kind::Gltf);
     const scene::Scene a = config::buildScene(fromFile), b = config::buildScene(generated);
     EXPECT_EQ(a.triangleCount(), b.triangleCount());
     EXPECT_EQ(a.instances.size(), b.instances.size());
@@ -569,7 +569,7 @@ TEST(Config, MinimalConfigGetsDefaults)
 {
     const config::RenderConfig c = config::parseConfig(minimal(), "scene.json");
     EXPECT_EQ(c.frames, 1u);
-    EXPECT_EQ(c.scene.generator, "box-grid");
+    EXPECT_EQ(c.scene.parts[0].generator, "box-grid");
     EXPECT_FLOAT_EQ(c.lights[0].light.outerConeDeg, 40.0f);
     EXPECT_LE(c.lights[0].light.innerConeDeg, 40.0f);
 }

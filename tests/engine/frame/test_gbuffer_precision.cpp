@@ -47,7 +47,7 @@ TEST_P(GBufferPrecision, RebuiltPositionsLieOnTheSurfaceWithinTheStatedBound)
     config::RenderConfig cfg = test::defaultTestConfig();
     cfg.width = 160;
     cfg.height = 90;
-    for (auto& [name, value] : cfg.scene.params)
+    for (auto& [name, value] : cfg.scene.parts[0].params)
         if (name == "sphere_segments") value = "12";  // a cheaper ray cast; the same depths
     test::scaleConfig(cfg, c.scale);
     if (c.nearWorld > 0.0f) cfg.camera.nearWorld = c.nearWorld;

@@ -111,7 +111,7 @@ TEST(GltfAnimation, TheAnimationIsNamedOrIndexedAndAnUnknownOneIsAConfigError)
                 {"camera", {{"position", {0, 5, 10}}, {"target", {0, 0, 0}}}},
                 {"lights", json::array({{{"type", "directional"}, {"direction", {0, -1, 0}}}})}};
     config::PreparedRun run = config::prepareRun(config::parseConfig(doc, "anim.json"), {});
-    EXPECT_EQ(config::sceneAnimationIndex(run.rest, run.scene), 1);
+    EXPECT_EQ(config::playedClips(run.rest, run.scene), std::vector<size_t>{1});
     EXPECT_FLOAT_EQ(config::animationDuration(run.rest, run.scene), 1.0f);
     // Written back as given, and read into the same run.
     EXPECT_EQ(config::configJson(run.rest, "x.json")["scene"]["animation"], "1");

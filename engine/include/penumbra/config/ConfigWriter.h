@@ -13,10 +13,15 @@
 namespace penumbra::config {
 
 // The config as JSON, as it reads back (parseConfig) into the same RenderConfig. A glTF
-// scene's path is written relative to `savedAs`'s folder when both are on one file-system
-// tree, absolute otherwise. Numbers are written as the shortest decimal that reads back
-// to the same float (0.96, not 0.9599999785423279).
+// part's path (and its allowed roots) is written relative to `savedAs`'s folder when both
+// are on one file-system tree, absolute otherwise. Numbers are written as the shortest
+// decimal that reads back to the same float (0.96, not 0.9599999785423279); a part's
+// transform, kept in double, as the shortest that reads back to the same double.
 nlohmann::json configJson(const RenderConfig& config, const std::filesystem::path& savedAs);
+
+// Its "scene": in the form the config gave (one part's keys, or "parts"), each part with
+// its name, source and full transform.
+nlohmann::json sceneJson(const SceneSource& source, const std::filesystem::path& savedAs);
 
 // Writes configJson(config, file) to `file` through io::writeTextFile: the file is
 // replaced complete or not at all (a crash or kill mid-save leaves the old file).

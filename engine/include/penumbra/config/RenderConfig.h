@@ -1,6 +1,6 @@
 #pragma once
 // What one run of a config renders (config/Config.h lists the rest of the config API):
-// scene source (a glTF file or a generator with parameters), camera, lights with their
+// scene source (glTF files and generators, each placed by a transform), camera, lights with their
 // shadow technique and its parameters, culling mode, output size, frame count and
 // animation tracks, read from a ConfigDocument and validated. Every error names the file
 // (the one the value came from, through includes), the JSON path and what is expected:
@@ -10,6 +10,7 @@
 #include "penumbra/scene/Generators.h"
 #include "penumbra/scene/Scene.h"
 
+#include <glm/gtc/quaternion.hpp>
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
@@ -75,22 +76,66 @@ const char* cullingModeName(CullingMode mode);
 // "none", "frustum", "light-occlusion", "receiver-mask"; throws ConfigError otherwise.
 CullingMode parseCullingMode(std::string_view name);
 
-struct SceneSource {
+// Where a part of the scene sits: x_world = T · R · S · x_part, kept in double as the
+// config gives it and rounded to float once, as the part's root node's transform.
+struct PartTransform {
+    glm::dvec3 translation{0.0};
+    glm::dquat rotation{1.0, 0.0, 0.0, 0.0};  // unit
+    // The rotation as Euler angles in degrees when the config gave "rotation_deg" (the
+    // convention of a node track's rotation_deg: R = Rx · Ry · Rz), for Save to write
+    // back as it was read; empty when it gave a quaternion "rotation" (or none).
+    std::optional<glm::dvec3> rotationDeg;
+    glm::dvec3 scale{1.0};  // every component in (0, kMaxPartScale]
+
+    bool identity() const;
+    glm::dmat4 matrix() const;  // T · R · S
+};
+
+// The largest scale factor of a part (each component), as for the single "scale" before.
+inline constexpr double kMaxPartScale = 1e9;
+
+// One glTF file or one generator, placed by its transform. Every part becomes one root
+// node of the scene (named `name`) with the part's own nodes below it.
+struct ScenePart {
     enum class Kind { Generator, Gltf };
     Kind kind = Kind::Generator;
-    std::filesystem::path gltf;       // Kind::Gltf, resolved against the config's folder
+    // The part's root node: animation tracks move the whole part as "node:<name>/...".
+    std::string name = "part0";
+    // Where the config gave the part: "/scene" or "/scene/parts/<i>", for messages.
+    std::string pointer = "/scene";
+    std::filesystem::path gltf;          // Kind::Gltf, resolved against the config's folder
     std::string generator = "box-grid";  // one of scene::generatorNames()
     // The generator's parameters that the config sets, by name, values as text (the
     // generator parses and validates them: scene/Generators.h).
     std::vector<std::pair<std::string, std::string>> params;
-    float scale = 1.0f;               // every length times this (1e-3 ... 1e5 are tested)
+    PartTransform transform;
     // Kind::Gltf: folders besides the file's own whose files its URIs may name (resolved
     // against the config's folder; the command line's --allow-root adds to them).
     std::vector<std::filesystem::path> allowedRoots;
-    // Kind::Gltf: the file's animation that plays (its name, or its index as text), empty
-    // for none: the scene at rest. Posed by poseScene (config/Run.h) with the config's own
-    // tracks.
+    // Kind::Gltf: the file's animation that plays (its name, or its index among the file's
+    // animations as text), empty for none: the part at rest. Posed by poseScene
+    // (config/Run.h) with the config's own tracks.
     std::string animation;
+
+    // "box-grid" or the glTF file's name, for messages and tables.
+    std::string sourceName() const;
+};
+
+// The most parts a scene may have: each is a file to load or a generator to run.
+inline constexpr size_t kMaxSceneParts = 64;
+
+// "scene": one part's keys ({"gltf": ...} or {"generator": ...}, with a transform), or
+// {"parts": [part, ...]} for several.
+struct SceneSource {
+    std::vector<ScenePart> parts{ScenePart{}};  // 1 to kMaxSceneParts
+    // The config gave "parts" (Save writes the form it read).
+    bool listed = false;
+
+    bool hasGltf() const;
+    // Whether a part plays one of its glTF file's animations.
+    bool playsClip() const;
+    // "box-grid", or "model.glb + box-grid" for several parts.
+    std::string describe() const;
 };
 
 struct RenderConfig {
@@ -98,8 +143,9 @@ struct RenderConfig {
     SceneSource scene;
     scene::Camera camera;
     std::vector<LightConfig> lights;
-    // "lights": "scene": the lights come from the glTF file (KHR_lights_punctual), with
-    // default shadow settings; resolved by buildScene (config/Run.h).
+    // "lights": "scene": the lights come from the glTF parts (KHR_lights_punctual; every
+    // part's, placed by its transform), with default shadow settings; resolved by
+    // buildScene (config/Run.h).
     bool lightsFromScene = false;
     CullingMode culling = CullingMode::None;
     // Fit directional and spot lights' shadow maps to what the camera sees (the visibility

@@ -27,8 +27,8 @@ struct RunOptions {
     std::optional<uint32_t> height;
     std::optional<uint32_t> frames;
     std::optional<CullingMode> culling;
-    // --allow-root: folders a glTF scene's URIs may name, added to the config's
-    // scene.allowed_roots.
+    // --allow-root: folders a glTF scene's URIs may name, added to every glTF part's
+    // allowed roots (the config's scene.allowed_roots).
     std::vector<std::filesystem::path> allowedRoots;
 };
 
@@ -50,27 +50,40 @@ PreparedRun prepareRun(RenderConfig config, const RunOptions& options);
 
 // Whether frames of the config differ: it has tracks, or plays a glTF file's animation.
 bool animated(const RenderConfig& config);
-// The index in scene.animations of the glTF animation the config plays (SceneSource::
-// animation: a name, else an index), -1 for none. Throws ConfigError naming
-// /scene/animation and listing the file's animations when there is no such one.
-int sceneAnimationIndex(const RenderConfig& config, const scene::Scene& scene);
+// The indices in scene.animations of the glTF animations the config's parts play, in
+// part order (a part's "animation": a name among its own file's animations, else an
+// index among them); empty for none. Throws ConfigError naming the part's
+// /scene/.../animation and listing its file's animations when it has no such one.
+std::vector<size_t> playedClips(const RenderConfig& config, const scene::Scene& scene);
 // Poses `posed` (starting from `rest`) and the scene's nodes at `timeS`: first the glTF
-// animation the config plays, then the config's own tracks (a node track overrides the
+// animations the config's parts play, then the config's own tracks (a node track overrides the
 // file's channel of that node). Returns the instances that moved (Scene::updateTransforms).
 std::vector<uint32_t> poseScene(const RenderConfig& rest, float timeS, RenderConfig& posed, scene::Scene& scene);
-// The last key of the config's tracks and of the glTF animation it plays (0: at rest).
+// The last key of the config's tracks and of the glTF animations it plays (0: at rest).
 float animationDuration(const RenderConfig& config, const scene::Scene& scene);
 PreparedRun prepareRun(const std::filesystem::path& file, const RunOptions& options);
 
-// Builds the scene that the config's scene source describes (at its scale), and checks
-// that the animation's node tracks name nodes of that scene. With "lights": "scene" it
-// also fills config.lights from the glTF file's lights, each named as the file names it
-// (one without a name: `light<its index in the file>`; a name an earlier light took:
-// `light<i>`, or `light<i>_2`, ... if that is taken too), so that
-// compare's files and bench's tables say "sun", not "light0". prepareRun does this first.
+// Builds the scene that the config's scene source describes: each part (a glTF file,
+// loaded with the part's allowed roots, or a generator) under a root node of its own
+// named as the part, whose transform places it; then checks that the animation's node
+// tracks name nodes of that scene. With "lights": "scene" it also fills config.lights
+// from the glTF parts' lights (every part's, in part order, placed by its transform),
+// each named as the file names it (one without a name: `light<its index in the file>`; a
+// name an earlier light took: `light<i>`, or `light<i>_2`, ... if that is taken too, i
+// counting the lights of all parts), so that compare's files and bench's tables say
+// "sun", not "light0". prepareRun does this first.
 scene::Scene buildScene(RenderConfig& config);
-// `fileLights` (optional) receives a glTF file's KHR_lights_punctual lights with their
-// names, placed and scaled with the scene.
+// `fileLights` (optional) receives the glTF parts' KHR_lights_punctual lights with their
+// names, placed by their parts' transforms (intensity times s² for a part scaled by s).
+// Errors name the part ("/scene/parts/1: ...").
 scene::Scene buildScene(const SceneSource& source, std::vector<scene::GltfLight>* fileLights = nullptr);
+
+// One part's share of a scene that buildScene made (validate prints them).
+struct PartSummary {
+    size_t instances = 0;
+    size_t triangles = 0;  // drawn: each instance's mesh's
+    scene::Aabb bounds;    // world space, after the part's transform
+};
+std::vector<PartSummary> summarizeParts(const SceneSource& source, const scene::Scene& scene);
 
 } // namespace penumbra::config

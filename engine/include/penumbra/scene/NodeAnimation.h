@@ -3,7 +3,7 @@
 // one node's translation, rotation or scale with STEP, LINEAR (rotations: shortest-arc
 // slerp) or CUBICSPLINE (Hermite, tangents scaled by the key interval) interpolation. The
 // glTF loader reads a file's clips into Scene::animations; a config plays one of them
-// ("scene": {"gltf": ..., "animation": "name"}: config::poseScene).
+// ("scene": {"gltf": ..., "animation": "name"}, or per part: config::poseScene).
 #include "penumbra/scene/SceneGraph.h"
 
 #include <glm/glm.hpp>

@@ -131,7 +131,17 @@ public:
 
     Aabb bounds() const;
     size_t triangleCount() const;
+    // The materials that meshes use (the default at index 0 only where a mesh has no
+    // material of its own): what a file or a generator brought, not the slots held.
+    size_t materialsUsed() const;
 };
+
+// Moves `part` into `scene` below a new root node `name` with local transform `local`:
+// its meshes, materials, textures, nodes (its roots become the new node's children),
+// instances and animations, each index shifted past what `scene` held, so that several
+// files and generators make one scene with one node per part to place it. Returns the
+// new root node; the part's node i is node root + 1 + i.
+uint32_t appendUnderRoot(Scene& scene, Scene part, std::string name, const glm::mat4& local);
 
 // Mesh builders for the procedural scenes (Generators.h).
 Mesh makeBox(const std::string& name);                       // unit cube [-0.5, 0.5]^3
