@@ -162,8 +162,7 @@ void Viewer::drawScenePanel()
     if (!panelHeader("Scene", false)) return;
     const scene::Scene& scene = session_->scene();
     const config::SceneSource& source = session_->config().scene;
-    ImGui::Text("%s", source.kind == config::SceneSource::Kind::Gltf ? source.gltf.filename().string().c_str()
-                                                                      : ("generator " + source.generator).c_str());
+    ImGui::Text("%s", source.describe().c_str());
     ImGui::Text("%zu instances, %zu meshes, %llu triangles", scene.instances.size(), scene.meshes.size(),
                 static_cast<unsigned long long>(scene.triangleCount()));
     const scene::Aabb b = scene.bounds();
@@ -459,8 +458,8 @@ void Viewer::drawAnimationPanel()
     }
     ImGui::EndDisabled();
     const config::Animation& a = session_->config().animation;
-    if (!session_->config().scene.animation.empty()) {
-        ImGui::Text("glTF animation \"%s\"", session_->config().scene.animation.c_str());
+    for (const config::ScenePart& part : session_->config().scene.parts) {
+        if (!part.animation.empty()) ImGui::Text("%s: glTF animation \"%s\"", part.name.c_str(), part.animation.c_str());
     }
     ImGui::Text("%zu track(s), %.3f s at %.4g fps; `penumbra render` draws %u frame(s)", a.tracks.size(), end, a.fps,
                 session_->config().frames);

@@ -31,8 +31,8 @@ config::RenderConfig configForGltf(const fs::path& file, const scene::Scene& sce
 {
     config::RenderConfig c;
     c.file = file;
-    c.scene.kind = config::SceneSource::Kind::Gltf;
-    c.scene.gltf = fs::absolute(file);
+    c.scene.parts[0].kind = config::ScenePart::Kind::Gltf;
+    c.scene.parts[0].gltf = fs::absolute(file);
     const scene::Aabb bounds = scene.bounds();
     // A scene of one point (or none) still gets a camera: a unit radius around it.
     const float radius = bounds.radius() > 0.0f && std::isfinite(bounds.radius()) ? bounds.radius() : 1.0f;
@@ -45,7 +45,7 @@ config::RenderConfig configForGltf(const fs::path& file, const scene::Scene& sce
     // The file's first animation plays (the viewer's timeline; Save writes which one, and
     // frames enough for `penumbra render` to play it through).
     if (!scene.animations.empty()) {
-        c.scene.animation = scene.animations.front().name;
+        c.scene.parts[0].animation = scene.animations.front().name;
         c.frames = config::framesToPlay(scene.animations.front().duration(), c.animation.fps);
     }
     if (!fileLights.empty()) {
@@ -78,8 +78,8 @@ void Session::open(const fs::path& file)
     config::RenderConfig c;
     if (isGltf(file)) {
         config::SceneSource source;
-        source.kind = config::SceneSource::Kind::Gltf;
-        source.gltf = file;
+        source.parts[0].kind = config::ScenePart::Kind::Gltf;
+        source.parts[0].gltf = file;
         std::vector<scene::GltfLight> lights;
         run->scene = config::buildScene(source, &lights);
         c = configForGltf(file, run->scene, lights);

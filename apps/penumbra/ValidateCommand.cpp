@@ -43,6 +43,44 @@ void printLight(const scene::GltfLight& gltfLight)
     fmt::print(", intensity {:.4g}, color ({:.3g}, {:.3g}, {:.3g})\n", l.intensity, l.color.r, l.color.g, l.color.b);
 }
 
+std::string formatBounds(const scene::Aabb& b)
+{
+    if (b.empty()) return "empty";
+    return fmt::format("({:.4g}, {:.4g}, {:.4g}) to ({:.4g}, {:.4g}, {:.4g})", b.min.x, b.min.y, b.min.z, b.max.x, b.max.y,
+                       b.max.z);
+}
+
+std::string formatTransform(const config::PartTransform& t)
+{
+    std::string text = fmt::format("translation ({:.6g}, {:.6g}, {:.6g})", t.translation.x, t.translation.y, t.translation.z);
+    if (t.rotationDeg) {
+        text += fmt::format(", rotation_deg ({:.6g}, {:.6g}, {:.6g})", t.rotationDeg->x, t.rotationDeg->y, t.rotationDeg->z);
+    } else {
+        text += fmt::format(", rotation ({:.6g}, {:.6g}, {:.6g}, {:.6g})", t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w);
+    }
+    if (t.scale.x == t.scale.y && t.scale.y == t.scale.z) return text + fmt::format(", scale {:.6g}", t.scale.x);
+    return text + fmt::format(", scale ({:.6g}, {:.6g}, {:.6g})", t.scale.x, t.scale.y, t.scale.z);
+}
+
+// The scene in total, then each part: what it draws and where it is after its transform.
+// Triangles are those drawn (an instanced mesh counts per instance); materials those
+// the meshes use.
+void printScene(const config::SceneSource& source, const scene::Scene& scene)
+{
+    fmt::print("scene: {} part(s), {} meshes, {} instances, {} triangles, {} materials, {} textures, bounds {}\n",
+               source.parts.size(), scene.meshes.size(), scene.instances.size(), scene.triangleCount(),
+               scene.materialsUsed(), scene.textures.size(), formatBounds(scene.bounds()));
+    const std::vector<config::PartSummary> summaries = config::summarizeParts(source, scene);
+    for (size_t i = 0; i < source.parts.size(); ++i) {
+        const config::ScenePart& part = source.parts[i];
+        const std::string what = part.kind == config::ScenePart::Kind::Gltf ? config::displayPath(part.gltf)
+                                                                            : "generator " + part.generator;
+        fmt::print("  part {} '{}': {}, {}: {} instances, {} triangles, bounds {}\n", i, core::shortText(part.name), what,
+                   formatTransform(part.transform), summaries[i].instances, summaries[i].triangles,
+                   formatBounds(summaries[i].bounds));
+    }
+}
+
 std::string describeRepair(const scene::RepairReport& r)
 {
     std::vector<std::string> parts;
@@ -79,7 +117,7 @@ int runValidateGltf(const ValidateFlags& flags)
     for (const auto& mesh : scene.meshes) meshTriangles += mesh.indices.size() / 3;
     fmt::print("{}: {} meshes, {} triangles ({} drawn by {} instances), {} nodes, {} materials, {} textures, {} lights\n",
                flags.file, scene.meshes.size(), meshTriangles, scene.triangleCount(), scene.instances.size(),
-               scene.graph.size(), scene.materials.size(), scene.textures.size(), report.lights.size());
+               scene.graph.size(), scene.materialsUsed(), scene.textures.size(), report.lights.size());
     for (const auto& light : report.lights) printLight(light);
     for (size_t i = 0; i < scene.meshes.size(); ++i) {
         const scene::Mesh& mesh = scene.meshes[i];
@@ -110,11 +148,7 @@ int runValidateConfig(const ValidateFlags& flags)
         inPhase("loading the scene", [&] { return config::prepareRun(config::parseConfig(document), options); });
     const config::RenderConfig& base = run.config;
     const scene::Scene& scene = run.scene;
-    const config::SceneSource& source = base.scene;
-    fmt::print("scene: {} (scale {}): {} meshes, {} instances, {} triangles, {} materials, {} textures\n",
-               source.kind == config::SceneSource::Kind::Gltf ? source.gltf.string() : "generator " + source.generator,
-               source.scale, scene.meshes.size(), scene.instances.size(), scene.triangleCount(), scene.materials.size(),
-               scene.textures.size());
+    printScene(base.scene, scene);
     for (const config::LightConfig& l : base.lights) {
         std::string params;
         for (const config::ShadowParam& p : l.shadow.params) {
