@@ -115,7 +115,7 @@ PlacedLabel LabelPlacer::place(double x, double y, double radius, std::string_vi
         size_t textOverlaps;  // other labels it covers: text on text, avoided first
         size_t shapeOverlaps; // points and lines it covers or its leader crosses
         bool nearerAnother;   // nearer to another point than to its own: it would read as that one's
-        double distance;      // from the point, for the order of preference
+        double distance;      // from the point to the text's anchored end, for the order of preference
         int rank;             // |baseline steps| then side: which of two equally near spots reads best
     };
     std::vector<Candidate> candidates;
@@ -141,12 +141,14 @@ PlacedLabel LabelPlacer::place(double x, double y, double radius, std::string_vi
         // Right above or below the point comes last: such a label closes the way out for
         // the leaders of labels stacked beside the point after it.
         const double abovePenalty = nearX == x ? 3.0 * fontPx_ : 0.0;
+        // A label reads as the point nearest to where its text begins (or, anchored at its
+        // end, ends), not to its box: a wide label above a point can start beside another.
+        const double textX = ax, textY = ay - 0.5 * (above - below);
+        const double own = std::hypot(textX - x, textY - y);
         const bool nearerAnother = std::any_of(points_.begin(), points_.end(), [&](const PlotBox& p) {
-            const double px = 0.5 * (p.x0 + p.x1), py = 0.5 * (p.y0 + p.y1);
-            return std::hypot(std::clamp(px, label.box.x0, label.box.x1) - px, std::clamp(py, label.box.y0, label.box.y1) - py) <
-                   distance - 1.0;
+            return std::hypot(textX - 0.5 * (p.x0 + p.x1), textY - 0.5 * (p.y0 + p.y1)) < own - 1.0;
         });
-        candidates.push_back({label, textOverlaps(label.box), shapes, nearerAnother, distance + abovePenalty, rank});
+        candidates.push_back({label, textOverlaps(label.box), shapes, nearerAnother, own + abovePenalty, rank});
     };
     for (int k = -stepsUp; k <= stepsDown; ++k) {
         const double baseline = centredBaseline + k * step;
