@@ -99,11 +99,6 @@ size_t partClip(const RenderConfig& config, const scene::Scene& scene, size_t in
 
 } // namespace
 
-bool PartTransform::identity() const
-{
-    return translation == glm::dvec3(0.0) && rotation == glm::dquat(1.0, 0.0, 0.0, 0.0) && scale == glm::dvec3(1.0);
-}
-
 glm::dmat4 PartTransform::matrix() const
 {
     return glm::translate(glm::dmat4(1.0), translation) * glm::mat4_cast(rotation) * glm::scale(glm::dmat4(1.0), scale);

@@ -87,7 +87,6 @@ struct PartTransform {
     std::optional<glm::dvec3> rotationDeg;
     glm::dvec3 scale{1.0};  // every component in (0, kMaxPartScale]
 
-    bool identity() const;
     glm::dmat4 matrix() const;  // T · R · S
 };
 
