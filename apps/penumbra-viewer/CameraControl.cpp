@@ -99,4 +99,19 @@ float flySpeed(float sceneRadius, float speedExponent)
     return 0.1f * radius * std::exp2(std::clamp(speedExponent, -20.0f, 20.0f));
 }
 
+bool hasCameraTrack(const config::Animation& animation)
+{
+    return std::any_of(animation.tracks.begin(), animation.tracks.end(),
+                       [](const config::AnimationTrack& t) { return t.target.rfind("/camera/", 0) == 0; });
+}
+
+config::RenderConfig withoutCameraTracks(config::RenderConfig config)
+{
+    auto& tracks = config.animation.tracks;
+    tracks.erase(std::remove_if(tracks.begin(), tracks.end(),
+                                [](const config::AnimationTrack& t) { return t.target.rfind("/camera/", 0) == 0; }),
+                 tracks.end());
+    return config;
+}
+
 } // namespace penumbra::viewer

@@ -3,6 +3,7 @@
 // are tested without a window. Distances scale with the scene: a step is a fraction of
 // the scene's radius (or of the distance to the target), never a fixed length, so a
 // millimetre model and a city move alike.
+#include "penumbra/config/RenderConfig.h"
 #include "penumbra/scene/Scene.h"
 
 namespace penumbra::viewer {
@@ -27,5 +28,13 @@ scene::Camera fly(const scene::Camera& camera, float yawDeg, float pitchDeg, con
 
 // World units per second for fly mode: a tenth of the scene's radius, times 2^speedExponent.
 float flySpeed(float sceneRadius, float speedExponent);
+
+// Camera tracks (targets under /camera/): the window either follows them or leaves the
+// camera free; a free camera draws `config.camera` while the tracks stay in the config
+// (Save writes them, `penumbra render` plays them).
+enum class CameraFollow { Track, Free };
+bool hasCameraTrack(const config::Animation& animation);
+// The config as a free camera draws it: its camera tracks left out, every other track kept.
+config::RenderConfig withoutCameraTracks(config::RenderConfig config);
 
 } // namespace penumbra::viewer

@@ -56,6 +56,7 @@ ComparisonWorker::~ComparisonWorker()
         std::lock_guard<std::mutex> lock(mutex_);
         stop_ = true;
         waiting_.reset();
+        progress_.cancelled = true;
     }
     wake_.notify_all();
     thread_.join();
@@ -77,6 +78,7 @@ void ComparisonWorker::cancel()
     waiting_.reset();
     done_.reset();
     ++generation_;
+    progress_.cancelled = true;  // a pass that polls (the reference's tracing) stops at its next row
 }
 
 double ComparisonWorker::busySeconds() const
@@ -116,6 +118,7 @@ void ComparisonWorker::run()
             startedNs_ = std::chrono::steady_clock::now().time_since_epoch().count();
             progress_.passes = 0;
             progress_.fraction = 0.0;
+            progress_.cancelled = false;
         }
         ComparisonResult result;
         result.viewKey = request.viewKey;

@@ -58,13 +58,14 @@ public:
     // (headless; the viewer's device request and validation), and its plugin registry with
     // `pluginSearchPath` (after a plugin reload: the fresh copies', PluginReloader.h).
     ComparisonWorker(gpu::ContextOptions options, std::vector<std::filesystem::path> pluginSearchPath);
-    // Waits for a frame in flight (it cannot be interrupted) and joins the thread.
+    // Cancels the frame in flight, waits for it and joins the thread.
     ~ComparisonWorker();
     ComparisonWorker(const ComparisonWorker&) = delete;
     ComparisonWorker& operator=(const ComparisonWorker&) = delete;
 
     void request(ComparisonRequest request);
-    // Drops the waiting request and the result of the one in flight.
+    // Drops the waiting request and the result of the one in flight, which stops at its
+    // next progress poll (the reference's tracing: its next row; plugin/Progress.h).
     void cancel();
     // A request is waiting or being drawn; for how long the current one has run.
     bool busy() const { return busy_.load(); }

@@ -6,6 +6,7 @@
 
 #include "penumbra/core/Error.h"
 #include "penumbra/plugin/Params.h"
+#include "penumbra/plugin/ShadowMapParams.h"
 
 #include <fmt/format.h>
 #include <imgui.h>
@@ -46,6 +47,19 @@ std::string specTooltip(const plugin::ParamSpec& spec)
 // A drag speed for world lengths: a small fraction of the scene.
 float lengthSpeed(float radius) { return std::max(radius * 0.002f, 1e-6f); }
 
+// How far a frame of a stack (A or B) has come: a pass that reports (the reference's
+// tracing) gives its fraction of rows done; with none, the bar runs.
+void frameProgressBar(const char* stack, uint32_t passes, double fraction, double seconds, float width)
+{
+    const ImVec2 size(width, 0.0f);
+    if (passes > 0) {
+        const std::string pass = passes > 1 ? fmt::format(" pass {},", passes) : std::string();
+        ImGui::ProgressBar(float(fraction), size, fmt::format("{}: tracing{} {:.0f} %, {:.1f} s", stack, pass, 100.0 * fraction, seconds).c_str());
+    } else {
+        ImGui::ProgressBar(float(std::fmod(seconds, 2.0) / 2.0), size, fmt::format("{}: drawing, {:.1f} s", stack, seconds).c_str());
+    }
+}
+
 bool dragVec3(const char* label, glm::vec3& v, float speed)
 {
     return ImGui::DragFloat3(label, &v.x, speed, 0.0f, 0.0f, "%.4g");
@@ -82,7 +96,8 @@ void Viewer::drawPanels()
                  ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse |
                      ImGuiWindowFlags_NoBringToFrontOnFocus);
     ImGui::PopStyleVar();
-    ImGui::PushItemWidth(-ImGui::GetFontSize() * 11.0f);  // room for the labels on the right
+    // Room for the labels on the right: the longest reflected name (20 characters) whole.
+    ImGui::PushItemWidth(-ImGui::GetFontSize() * 13.0f);
     if (!message_.empty()) {
         const bool error = !session_->lastError().empty() && message_ == session_->lastError();
         ImGui::PushStyleColor(ImGuiCol_Text, error ? ImVec4(1.0f, 0.45f, 0.4f, 1.0f) : ImVec4(0.6f, 0.9f, 0.6f, 1.0f));
@@ -106,6 +121,7 @@ void Viewer::drawPanels()
     ImGui::PopItemWidth();
     ImGui::End();
     drawPixelInspector();
+    if (compareOn_ && bCurrent() && viewMode_ == ViewMode::Difference) drawDifferenceColourBar();
     // Split view: where A ends and B begins, and which is which.
     if (compareOn_ && bCurrent() && viewMode_ == ViewMode::Split && viewRect_.extent.width > 0) {
         const float s = io.DisplayFramebufferScale.x > 0.0f ? 1.0f / io.DisplayFramebufferScale.x : 1.0f;
@@ -184,7 +200,18 @@ void Viewer::drawCameraPanel()
     tooltip(cameraMode_ == CameraMode::Orbit
                 ? "left drag: orbit; middle or shift+left drag: pan; wheel: closer / farther; R: back to the file's camera"
                 : "left or right drag: look; W/S/A/D: forward, back, left, right; Q/E: down, up; wheel: speed");
-    scene::Camera camera = session_->config().camera;
+    if (hasCameraTrack(session_->config().animation)) {
+        int follow = session_->followsCameraTrack() ? int(CameraFollow::Track) : int(CameraFollow::Free);
+        bool picked = ImGui::RadioButton("follow track", &follow, int(CameraFollow::Track));
+        ImGui::SameLine();
+        picked |= ImGui::RadioButton("free camera", &follow, int(CameraFollow::Free));
+        if (picked) session_->setCameraFollow(CameraFollow(follow));
+        tooltip("the config's camera tracks (/camera/...) move the camera while it follows them; orbiting, flying or "
+                "an edit below frees it from the pose drawn (the tracks stay in the config: Save writes them)");
+    }
+    // The pose drawn last (a followed track's included): an edit starts from what is seen.
+    scene::Camera camera = session_->drawnCamera();
+    panelCamera_ = camera;
     const float speed = lengthSpeed(sceneRadius());
     bool edited = dragVec3("position", camera.position, speed);
     edited |= dragVec3("target", camera.target, speed);
@@ -200,13 +227,9 @@ void Viewer::drawCameraPanel()
     const glm::vec3 view = camera.target - camera.position;
     if (edited && glm::length(view) > 0.0f &&
         glm::length(glm::cross(glm::normalize(view), glm::normalize(camera.up))) > 1e-4f) {
-        session_->config().camera = camera;
-        session_->changed(Change::View);
+        moveCamera(camera);
     }
-    if (ImGui::Button("Back to the file's camera")) {
-        session_->config().camera = homeCamera_;
-        session_->changed(Change::View);
-    }
+    if (ImGui::Button("Back to the file's camera")) moveCamera(homeCamera_);
 }
 
 void Viewer::drawRenderPanel()
@@ -386,8 +409,19 @@ void Viewer::drawParamWidgets(const std::string& key, const std::string& lightNa
 {
     const std::string& technique = values.pluginName();
     for (const plugin::ParamSpec& spec : values.specs()) {
-        drawnParamWidgets_.push_back(fmt::format("{} {} {} {}", lightName, technique, spec.name, plugin::paramTypeName(spec.type)));
-        const std::string label = *spec.unit ? fmt::format("{} ({})", spec.name, spec.unit) : std::string(spec.name);
+        // An odd-only kernel (the plugin's own check, plugin::mustBeOdd) steps by 2 from
+        // the first odd value of its range.
+        const bool odd = spec.type == plugin::ParamType::Int && plugin::mustBeOdd(technique, spec.name);
+        const int intLo = odd ? int(spec.minValue) | 1 : int(spec.minValue);
+        const int intHi = odd && int(spec.maxValue) % 2 == 0 ? int(spec.maxValue) - 1 : int(spec.maxValue);
+        drawnParamWidgets_.push_back(
+            fmt::format("{} {} {} {}{}", lightName, technique, spec.name, plugin::paramTypeName(spec.type),
+                        spec.type == plugin::ParamType::Int ? fmt::format(" {}..{} step {}", intLo, intHi, odd ? 2 : 1) : ""));
+        // The unit goes with the value, not the label: the label column keeps room for the name.
+        const std::string label = spec.name;
+        std::string unit;  // " texels", as printf text
+        for (const char* c = spec.unit; *c; ++c) unit += *c == '%' ? std::string("%%") : std::string(1, *c);
+        if (!unit.empty()) unit = " " + unit;
         switch (spec.type) {
         case plugin::ParamType::Bool: {
             bool v = values.getBool(spec.name);
@@ -403,18 +437,27 @@ void Viewer::drawParamWidgets(const std::string& key, const std::string& lightNa
             const double lo = spec.minValue, hi = spec.maxValue;
             bool changed = false;
             double value = 0.0;
-            if (spec.type == plugin::ParamType::Int) {
+            if (odd) {
+                // The slider moves over the odd values' index and shows the value.
+                const int current = editing != editing_.end() ? int(editing->second) : values.getInt(spec.name);
+                int k = std::clamp((current - intLo) / 2, 0, (intHi - intLo) / 2);
+                changed = ImGui::SliderInt(label.c_str(), &k, 0, (intHi - intLo) / 2, fmt::format("{}{}", intLo + 2 * k, unit).c_str(),
+                                           ImGuiSliderFlags_AlwaysClamp);
+                value = intLo + 2 * std::clamp(k, 0, (intHi - intLo) / 2);
+            } else if (spec.type == plugin::ParamType::Int) {
                 int v = editing != editing_.end() ? int(editing->second) : values.getInt(spec.name);
-                changed = hi - lo <= 64 ? ImGui::SliderInt(label.c_str(), &v, int(lo), int(hi), "%d", ImGuiSliderFlags_AlwaysClamp)
+                const std::string format = "%d" + unit;
+                changed = hi - lo <= 64 ? ImGui::SliderInt(label.c_str(), &v, int(lo), int(hi), format.c_str(), ImGuiSliderFlags_AlwaysClamp)
                                         : ImGui::DragInt(label.c_str(), &v, float(std::max(1.0, (hi - lo) / 2000.0)), int(lo),
-                                                         int(hi), "%d", ImGuiSliderFlags_AlwaysClamp);
+                                                         int(hi), format.c_str(), ImGuiSliderFlags_AlwaysClamp);
                 value = std::clamp(double(v), lo, hi);
             } else {
                 float v = editing != editing_.end() ? float(editing->second) : values.getFloat(spec.name);
                 // Wide positive ranges (biases, radii) are dragged on a log scale.
                 const bool logarithmic = lo > 0.0 && hi / lo > 1000.0;
                 changed = ImGui::DragFloat(label.c_str(), &v, float(std::max((hi - lo) / 2000.0, 1e-6)), float(lo), float(hi),
-                                           "%.5g", ImGuiSliderFlags_AlwaysClamp | (logarithmic ? ImGuiSliderFlags_Logarithmic : 0));
+                                           ("%.5g" + unit).c_str(),
+                                           ImGuiSliderFlags_AlwaysClamp | (logarithmic ? ImGuiSliderFlags_Logarithmic : 0));
                 value = std::clamp(double(v), lo, hi);
             }
             if (changed) editing_[editKey] = value;
@@ -537,17 +580,8 @@ void Viewer::drawComparePanel()
         ImGui::PopID();
     }
     if (comparison_->busy()) {
-        const double seconds = comparison_->busySeconds();
-        const ImVec2 size(-ImGui::GetFontSize() * 5.0f, 0.0f);
-        if (const uint32_t passes = comparison_->progressPasses(); passes > 0) {
-            // A pass that reports (the reference's tracing): its fraction of rows done.
-            const double f = comparison_->progressFraction();
-            const std::string pass = passes > 1 ? fmt::format(" pass {},", passes) : std::string();
-            ImGui::ProgressBar(float(f), size, fmt::format("B: tracing{} {:.0f} %, {:.1f} s", pass, 100.0 * f, seconds).c_str());
-        } else {
-            // Nothing reports (a technique's own passes, the first frame's set-up): the bar runs.
-            ImGui::ProgressBar(float(std::fmod(seconds, 2.0) / 2.0), size, fmt::format("B: drawing, {:.1f} s", seconds).c_str());
-        }
+        frameProgressBar("B", comparison_->progressPasses(), comparison_->progressFraction(), comparison_->busySeconds(),
+                         -ImGui::GetFontSize() * 5.0f);
         ImGui::SameLine();
         if (ImGui::Button("Cancel")) {
             comparison_->cancel();
@@ -617,6 +651,7 @@ void Viewer::drawDebugImagePanel()
             if (ImGui::Selectable(name.c_str(), name == session_->shownImage())) {
                 try {
                     session_->showImage(name);
+                    resetDebugView();
                 } catch (const std::exception& e) {
                     message_ = e.what();
                 }
@@ -629,6 +664,7 @@ void Viewer::drawDebugImagePanel()
     int mapping = int(mapping_);
     bool remap = ImGui::Combo("mapping", &mapping, mappings, 3);
     mapping_ = metrics::DebugMapping(mapping);
+    debugMappingChosen_ |= remap;
     remap |= ImGui::Checkbox("automatic range", &autoRange_);
     ImGui::BeginDisabled(autoRange_);
     remap |= ImGui::InputDouble("min", &range_.min, 0.0, 0.0, "%.6g");
@@ -640,7 +676,24 @@ void Viewer::drawDebugImagePanel()
         debugUpload_->set(shownValues_->width, shownValues_->height, metrics::debugImageRgba(*shownValues_, mapping_, range_));
     }
     if (shownValues_) {
-        ImGui::Text("%u x %u, %u channel(s)", shownValues_->width, shownValues_->height, shownValues_->channels);
+        ImGui::Text("%u x %u, %u channel(s), zoom %.3g", shownValues_->width, shownValues_->height, shownValues_->channels,
+                    debugZoom_);
+        tooltip("wheel over the image: zoom; drag: pan; showing an image again resets both");
+        ImGui::SameLine();
+        if (ImGui::SmallButton("fit")) resetDebugView();
+        if (!debugClasses_.empty()) {
+            // A classification's legend: each value in the colour the mapping gives it.
+            metrics::DebugImageValues swatches{uint32_t(debugClasses_.size()), 1, 1, {}};
+            for (const auto& [value, count] : debugClasses_) swatches.values.push_back(value);
+            const std::vector<uint8_t> rgba = metrics::debugImageRgba(swatches, mapping_, range_);
+            for (size_t i = 0; i < debugClasses_.size(); ++i) {
+                const ImVec4 colour(rgba[4 * i] / 255.0f, rgba[4 * i + 1] / 255.0f, rgba[4 * i + 2] / 255.0f, 1.0f);
+                ImGui::ColorButton(fmt::format("##class{}", i).c_str(), colour, ImGuiColorEditFlags_NoTooltip);
+                ImGui::SameLine();
+                ImGui::Text("%.6g: %.1f %% of the pixels", debugClasses_[i].first,
+                            100.0 * double(debugClasses_[i].second) / double(std::max<size_t>(shownValues_->values.size(), 1)));
+            }
+        }
         if (range_.nonFinite) ImGui::Text("%llu non-finite values (magenta)", static_cast<unsigned long long>(range_.nonFinite));
     }
 }
@@ -723,6 +776,60 @@ void Viewer::drawTimingsPanel()
     }
 }
 
+// The difference view's scale: the false-colour ramp from 0 to the saturating |dV|, in the
+// view's lower right corner.
+void Viewer::drawDifferenceColourBar()
+{
+    if (viewRect_.extent.width == 0) return;
+    const ImGuiIO& io = ImGui::GetIO();
+    const float s = io.DisplayFramebufferScale.x > 0.0f ? 1.0f / io.DisplayFramebufferScale.x : 1.0f;
+    constexpr uint32_t kSteps = 64;
+    metrics::DebugImageValues ramp;
+    ramp.width = kSteps;
+    ramp.height = 1;
+    for (uint32_t i = 0; i < kSteps; ++i) ramp.values.push_back((float(i) + 0.5f) / float(kSteps));
+    const std::vector<uint8_t> rgba = metrics::debugImageRgba(ramp, metrics::DebugMapping::FalseColor, {0.0, 1.0});
+    const float pad = 10.0f * uiScale_, height = ImGui::GetTextLineHeight();
+    const float width = std::min(ImGui::GetFontSize() * 16.0f, float(viewRect_.extent.width) * s - 2.0f * pad);
+    const ImVec2 low(float(viewRect_.offset.x + int32_t(viewRect_.extent.width)) * s - pad - width,
+                     float(viewRect_.offset.y + int32_t(viewRect_.extent.height)) * s - pad - 2.0f * height);
+    ImDrawList* draw = ImGui::GetForegroundDrawList();
+    draw->AddRectFilled(ImVec2(low.x - 4.0f, low.y - 4.0f), ImVec2(low.x + width + 4.0f, low.y + 2.0f * height + 4.0f),
+                        IM_COL32(0, 0, 0, 170));
+    for (uint32_t i = 0; i < kSteps; ++i) {
+        const float x0 = low.x + width * float(i) / float(kSteps), x1 = low.x + width * float(i + 1) / float(kSteps);
+        draw->AddRectFilled(ImVec2(x0, low.y), ImVec2(x1, low.y + height),
+                            IM_COL32(rgba[4 * i], rgba[4 * i + 1], rgba[4 * i + 2], 255));
+    }
+    const ImU32 text = IM_COL32(255, 255, 255, 235);
+    const std::string high = fmt::format("{:.2f}", differenceScale_), mid = fmt::format("|dV| of {}", 
+        session_->shownConfig().lights.at(size_t(std::clamp(differenceLight_, 0, int(session_->shownConfig().lights.size()) - 1))).name);
+    draw->AddText(ImVec2(low.x, low.y + height), text, "0");
+    draw->AddText(ImVec2(low.x + 0.5f * (width - ImGui::CalcTextSize(mid.c_str()).x), low.y + height), text, mid.c_str());
+    draw->AddText(ImVec2(low.x + width - ImGui::CalcTextSize(high.c_str()).x, low.y + height), text, high.c_str());
+}
+
+// Over the view while A draws a long frame (onFrameProgress): what is drawing, how far, Cancel.
+void Viewer::drawBusyOverlay(const Session::FrameProgress& progress)
+{
+    const ImGuiIO& io = ImGui::GetIO();
+    const float s = io.DisplayFramebufferScale.x > 0.0f ? 1.0f / io.DisplayFramebufferScale.x : 1.0f;
+    const ImVec2 centre((float(viewRect_.offset.x) + 0.5f * float(viewRect_.extent.width)) * s,
+                        (float(viewRect_.offset.y) + 0.5f * float(viewRect_.extent.height)) * s);
+    const float width = std::min(ImGui::GetFontSize() * 26.0f, 0.9f * float(viewRect_.extent.width) * s);
+    ImGui::SetNextWindowPos(centre, ImGuiCond_Always, ImVec2(0.5f, 0.5f));
+    ImGui::SetNextWindowSize(ImVec2(width, 0.0f));
+    ImGui::Begin("A is drawing", nullptr,
+                 ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoSavedSettings);
+    ImGui::TextWrapped("%s", progress.rebuild ? "A: drawing the edit (the last complete frame is shown)"
+                                              : "A: drawing the new view");
+    frameProgressBar("A", progress.passes, progress.fraction, progress.seconds, -1.0f);
+    if (ImGui::Button("Cancel")) session_->cancelFrame();
+    ImGui::SameLine();
+    ImGui::TextDisabled("keeps the last complete image");
+    ImGui::End();
+}
+
 // The value under the cursor: the colour and every light's V, or the debug image's values.
 void Viewer::drawPixelInspector()
 {
@@ -734,8 +841,14 @@ void Viewer::drawPixelInspector()
     if (!(fx >= 0.0f && fx < 1.0f && fy >= 0.0f && fy < 1.0f)) return;
     if (ImGui::IsMouseDown(ImGuiMouseButton_Left) || ImGui::IsMouseDown(ImGuiMouseButton_Right)) return;
     if (shownValues_ && !session_->shownImage().empty()) {
-        const uint32_t x = std::min(uint32_t(fx * float(shownValues_->width)), shownValues_->width - 1);
-        const uint32_t y = std::min(uint32_t(fy * float(shownValues_->height)), shownValues_->height - 1);
+        // The texel under the cursor, where the image is placed (zoom and pan).
+        VkRect2D target{}, source{};
+        if (!debugImageBlit({shownValues_->width, shownValues_->height}, target, source)) return;
+        const float tx = (io.MousePos.x * fbScale - float(target.offset.x)) / float(target.extent.width);
+        const float ty = (io.MousePos.y * fbScale - float(target.offset.y)) / float(target.extent.height);
+        if (!(tx >= 0.0f && tx < 1.0f && ty >= 0.0f && ty < 1.0f)) return;
+        const uint32_t x = std::min(uint32_t(float(source.offset.x) + tx * float(source.extent.width)), shownValues_->width - 1);
+        const uint32_t y = std::min(uint32_t(float(source.offset.y) + ty * float(source.extent.height)), shownValues_->height - 1);
         std::string values;
         for (uint32_t ch = 0; ch < shownValues_->channels; ++ch) {
             values += fmt::format("{}{:.6g}", ch ? ", " : "",
@@ -744,9 +857,16 @@ void Viewer::drawPixelInspector()
         ImGui::SetTooltip("%s (%u, %u)\n%s", session_->shownImage().c_str(), x, y, values.c_str());
         return;
     }
-    frame::FrameRenderer& r = session_->renderer();
+    const frame::FrameRenderer& r = session_->renderer();
     const uint32_t x = std::min(uint32_t(fx * float(r.width())), r.width() - 1);
     const uint32_t y = std::min(uint32_t(fy * float(r.height())), r.height() - 1);
+    const std::string text = pixelReport(x, y);
+    ImGui::SetTooltip("%s", text.c_str());
+}
+
+std::string Viewer::pixelReport(uint32_t x, uint32_t y)
+{
+    frame::FrameRenderer& r = session_->renderer();
     // One texel of the colour and of each V, read again for a new frame, renderer (an edit,
     // another file: its frame count starts again) or pixel only.
     if (!inspected_ || inspectedRenderer_ != &r || inspectedFrame_ != session_->framesRendered() ||
@@ -758,10 +878,19 @@ void Viewer::drawPixelInspector()
     }
     std::string text = fmt::format("pixel ({}, {})\ncolour {} {} {}", x, y, inspected_->color[0], inspected_->color[1],
                                    inspected_->color[2]);
+    // Against B (its image is of this view, so of this size): both values and their difference.
+    const app::FrameImages* b = compareOn_ && bCurrent() ? &bResult_->images : nullptr;
+    const size_t pixel = size_t(y) * r.width() + x;
     for (size_t l = 0; l < inspected_->visibility.size() && l < session_->config().lights.size(); ++l) {
-        text += fmt::format("\nV {} = {:.5f}", session_->config().lights[l].name, inspected_->visibility[l]);
+        const float a = inspected_->visibility[l];
+        if (b && l < b->visibility.size() && pixel < b->visibility[l].size()) {
+            const float vb = b->visibility[l][pixel];
+            text += fmt::format("\nV {}: A {:.5f}  B {:.5f}  dV {:+.5f}", session_->config().lights[l].name, a, vb, a - vb);
+        } else {
+            text += fmt::format("\nV {} = {:.5f}", session_->config().lights[l].name, a);
+        }
     }
-    ImGui::SetTooltip("%s", text.c_str());
+    return text;
 }
 
 } // namespace penumbra::viewer

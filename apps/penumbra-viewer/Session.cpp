@@ -100,6 +100,8 @@ void Session::open(const fs::path& file)
     shownImage_.clear();
     paramsByTechnique_.assign(c.lights.size(), {});
     time_ = 0.0f;
+    follow_ = CameraFollow::Track;
+    drawnCamera_ = c.camera;
     for (const std::string& warning : renderer_->warnings()) spdlog::warn("{}", warning);
     pending_ = Change::View;  // the new renderer has not drawn yet
     framesRendered_ = 0;
@@ -107,6 +109,27 @@ void Session::open(const fs::path& file)
 }
 
 void Session::changed(Change change) { pending_ = std::max(pending_, change); }
+
+config::RenderConfig Session::shownView() const
+{
+    return follow_ == CameraFollow::Free ? withoutCameraTracks(shown_) : shown_;
+}
+
+void Session::setCameraFollow(CameraFollow follow)
+{
+    if (follow == CameraFollow::Free && followsCameraTrack()) config_.camera = drawnCamera_;
+    follow_ = follow;
+    changed(Change::View);
+}
+
+bool Session::moveCamera(const scene::Camera& camera)
+{
+    const bool followed = followsCameraTrack();
+    follow_ = CameraFollow::Free;
+    config_.camera = camera;
+    changed(Change::View);
+    return followed;
+}
 
 void Session::setParam(size_t light, const std::string& name, const nlohmann::json& value, const std::string& where)
 {
@@ -215,10 +238,13 @@ void Session::usePlugins(plugin::PluginRegistry& plugins)
 const config::RenderConfig& Session::pose(std::vector<uint32_t>& moved) const
 {
     moved.clear();
-    if (!config::animated(config_)) return config_;
     // The edited config is the rest pose: the animation starts from it, as in `penumbra render`.
-    run_->rest = config_;
-    moved = run_->poseAt(time_);
+    run_->rest = follow_ == CameraFollow::Free ? withoutCameraTracks(config_) : config_;
+    if (config::animated(run_->rest)) {
+        moved = run_->poseAt(time_);
+    } else {
+        run_->config = run_->rest;
+    }
     return run_->config;
 }
 
@@ -253,12 +279,35 @@ std::unique_ptr<frame::FrameRenderer> Session::build() const
     return renderer;
 }
 
+Session::FrameProgress Session::frameProgress() const
+{
+    FrameProgress p;
+    p.drawing = drawing_;
+    p.rebuild = drawingRebuild_;
+    p.passes = progress_.passes.load();
+    p.fraction = progress_.fraction.load();
+    p.seconds = drawing_ ? std::chrono::duration<double>(std::chrono::steady_clock::now() - frameStart_).count() : 0.0;
+    return p;
+}
+
 bool Session::renderIfChanged(bool always)
 {
     if (!renderer_) return false;
     if (pending_ == Change::None && !always) return false;
     const Change change = pending_;
     pending_ = Change::None;
+    // Long passes report to progress_ (and poll it for a cancel) while the frame draws.
+    const plugin::ProgressScope progressScope(progress_);
+    progress_.passes = 0;
+    progress_.fraction = 0.0;
+    progress_.cancelled = false;
+    frameStart_ = std::chrono::steady_clock::now();
+    drawing_ = true;
+    drawingRebuild_ = change == Change::Renderer;
+    struct NotDrawing {
+        bool& drawing;
+        ~NotDrawing() { drawing = false; }
+    } notDrawing{drawing_};
     try {
         if (change == Change::Renderer) {
             // The new renderer draws its first frame before it replaces the old one: a
@@ -287,17 +336,30 @@ bool Session::renderIfChanged(bool always)
             timings_ = renderer_->renderFrame();
         }
         shown_ = config_;
+        drawnCamera_ = run_->config.camera;
+        lastFrameSeconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - frameStart_).count();
         // A build's error stays until a build succeeds (the shader is still broken while
         // the camera moves); an update's until the next update or build.
         if (change == Change::Renderer || (change == Change::View && !errorFromBuild_)) lastError_.clear();
     } catch (const Error& e) {
-        lastError_ = e.what();
-        errorFromBuild_ = change == Change::Renderer;
+        if (progress_.cancelled) {
+            // Not a failure: the user gave up on the frame. The edit goes, as a refused one.
+            const FrameProgress p = frameProgress();
+            cancelNotice_ = fmt::format("A: cancelled after {:.1f} s{}; the last complete image stays{}", p.seconds,
+                                        p.passes > 0 ? fmt::format(" at {:.0f} % of its long pass", 100.0 * p.fraction) : "",
+                                        change == Change::Renderer ? " and the edit is undone" : "");
+            spdlog::info("{} ({})", cancelNotice_, e.what());
+            progress_.cancelled = false;
+        } else {
+            lastError_ = e.what();
+            errorFromBuild_ = change == Change::Renderer;
+            spdlog::error("{}", lastError_);
+        }
         newPlugins_ = nullptr;  // reloaded plugins that do not build are not taken
-        spdlog::error("{}", lastError_);
         config_ = shown_;
         if (change == Change::View) {
-            // A failed update: the renderer goes back to the camera and lights it drew.
+            // A failed or cancelled update: the renderer goes back to the camera and lights
+            // it drew (a technique that caches, as the reference does, draws them at once).
             try {
                 std::vector<uint32_t> moved;
                 renderer_->update(pose(moved), run_->scene, moved);
@@ -331,7 +393,18 @@ std::vector<fs::path> Session::shaderFolders()
 
 void Session::save(const fs::path& file)
 {
-    config::saveConfig(shown_, file);
+    // Every value explicit, a technique's parameters too (defaults included): the file
+    // does not depend on a plugin's defaults, which may change.
+    config::RenderConfig c = shown_;
+    for (config::LightConfig& light : c.lights) {
+        if (light.shadow.unshadowed()) continue;
+        const plugin::ParamValues values = plugin::resolveParams(plugins_->load(light.shadow.technique), light.shadow);
+        std::vector<config::ShadowParam> params;
+        const nlohmann::json all = values.toJson();
+        for (const auto& [name, value] : all.items()) params.push_back({name, value, "viewer: save"});
+        light.shadow.params = std::move(params);
+    }
+    config::saveConfig(c, file);
     spdlog::info("saved {}", file.string());
 }
 

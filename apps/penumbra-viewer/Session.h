@@ -5,10 +5,17 @@
 // renderer; a technique, parameter, culling mode, size or debug image builds a new one
 // (and keeps the old one, and the config it drew, when that fails); another scene builds
 // everything. Nothing is rendered while nothing changed.
+#include "CameraControl.h"
+
 #include "penumbra/config/Config.h"
 #include "penumbra/frame/FrameRenderer.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/plugin/PluginRegistry.h"
+#include "penumbra/plugin/Progress.h"
+
+#include <chrono>
+#include <functional>
+#include <utility>
 
 #include <filesystem>
 #include <map>
@@ -55,6 +62,22 @@ public:
 
     // The config as the renderer last drew it.
     const config::RenderConfig& shownConfig() const { return shown_; }
+    // shownConfig() as the window draws it: without its camera tracks while the camera is
+    // free (what B must draw to show the same view).
+    config::RenderConfig shownView() const;
+
+    // Camera tracks (/camera/...): the window follows them (after open, after a recording)
+    // or the camera is free. Freeing it starts from the pose drawn last, so nothing jumps.
+    bool followsCameraTrack() const { return follow_ == CameraFollow::Track && hasCameraTrack(config_.animation); }
+    void setCameraFollow(CameraFollow follow);
+    // The camera of the last frame drawn (a followed track's pose): what the panels show.
+    const scene::Camera& drawnCamera() const { return drawnCamera_; }
+    // Where a move starts: the drawn pose while following, else config().camera (edits not
+    // drawn yet included).
+    const scene::Camera& viewCamera() const { return followsCameraTrack() ? drawnCamera_ : config_.camera; }
+    // Places the camera; a followed track is left (the camera is free from then on).
+    // Returns whether it was followed.
+    bool moveCamera(const scene::Camera& camera);
     void changed(Change change);
 
     // One technique parameter of light `light`, checked against the plugin's reflection
@@ -94,6 +117,26 @@ public:
     // sorted, each once.
     std::vector<std::filesystem::path> shaderFolders();
 
+    // A's long frames (plugin/Progress.h): `onReport` is called on this thread while a long
+    // pass of a frame runs (every few tens of milliseconds), so that the window is drawn
+    // meanwhile (Viewer::drawBusyFrame); it must not edit or render the session.
+    void setProgressListener(std::function<void()> onReport) { progress_.onReport = std::move(onReport); }
+    struct FrameProgress {
+        bool drawing = false;   // a frame is in flight (renderIfChanged has not returned)
+        bool rebuild = false;   // of a new renderer: renderer() still holds the last complete frame
+        uint32_t passes = 0;    // long passes that reported so far
+        double fraction = 0.0;  // of the one reporting now
+        double seconds = 0.0;   // since the frame began
+    };
+    FrameProgress frameProgress() const;
+    // Asks the frame in flight to stop (a pass that polls stops at its next unit of work):
+    // the last complete frame, and the config it drew, stay; the edit is undone.
+    void cancelFrame() { progress_.cancelled = true; }
+    // Once, after a cancelled frame: what was cancelled, and that the last image stays.
+    std::string takeCancelNotice() { return std::exchange(cancelNotice_, {}); }
+    // The wall clock of the last frame drawn (a rebuild's: building and drawing).
+    double lastFrameSeconds() const { return lastFrameSeconds_; }
+
     frame::FrameRenderer& renderer() { return *renderer_; }
     const frame::FrameTimings& lastTimings() const { return timings_; }
     uint64_t framesRendered() const { return framesRendered_; }
@@ -111,7 +154,8 @@ public:
 
 private:
     std::unique_ptr<frame::FrameRenderer> build() const;
-    // The config a frame draws: config() posed at time() (the scene's nodes too); `moved`
+    // The config a frame draws: config() posed at time() (the scene's nodes too; its camera
+    // tracks left out while the camera is free); `moved`
     // gets the instances that moved, for FrameRenderer::update.
     const config::RenderConfig& pose(std::vector<uint32_t>& moved) const;
 
@@ -131,6 +175,13 @@ private:
     bool errorFromBuild_ = false;
     float time_ = 0.0f;
     double lastRebuildMs_ = 0.0;
+    CameraFollow follow_ = CameraFollow::Track;
+    plugin::ProgressSink progress_;  // A's frame in flight
+    std::chrono::steady_clock::time_point frameStart_{};
+    bool drawing_ = false, drawingRebuild_ = false;
+    double lastFrameSeconds_ = 0.0;
+    std::string cancelNotice_;
+    scene::Camera drawnCamera_;
     // Per light, the parameters each technique had when the light left it.
     std::vector<std::map<std::string, std::vector<config::ShadowParam>>> paramsByTechnique_;
     std::optional<std::vector<std::string>> techniques_;

@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <imgui.h>
+#include <imgui_internal.h>  // ImGuiContext::WithinFrameScope: no window frame inside Dear ImGui's
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_vulkan.h>
 #include <spdlog/spdlog.h>
@@ -163,11 +164,18 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options)
     glfwWindowHint(GLFW_CLIENT_API, GLFW_NO_API);
     glfwWindowHint(GLFW_RESIZABLE, GLFW_TRUE);
     glfwWindowHint(GLFW_SCALE_TO_MONITOR, GLFW_TRUE);  // HiDPI: the window's size in screen points
-    const uint32_t width = options.windowWidth ? options.windowWidth : session_->config().width + uint32_t(panelWidth_);
-    const uint32_t height = options.windowHeight ? options.windowHeight : session_->config().height;
+    uint32_t width = options.windowWidth ? options.windowWidth : session_->config().width + uint32_t(panelWidth_);
+    uint32_t height = options.windowHeight ? options.windowHeight : session_->config().height;
+    const std::optional<VkRect2D> workArea = monitorWorkArea();
+    if (workArea && !options.windowWidth && !options.windowHeight) {
+        // The frame's size plus the panel, within the screen (the frame follows the window).
+        width = std::min(width, workArea->extent.width);
+        height = std::min(height, workArea->extent.height);
+    }
     window_ = glfwCreateWindow(int(width), int(height), fmt::format("Penumbra — {}", options.file.filename().string()).c_str(),
                                nullptr, nullptr);
     if (!window_) throw GpuError(fmt::format("cannot open a window: {}", glfwErrorText));
+    if (workArea && !options.windowWidth && !options.windowHeight) fitFrameIntoWorkArea(*workArea);
     float xs = 1.0f, ys = 1.0f;
     glfwGetWindowContentScale(window_, &xs, &ys);
     uiScale_ = std::clamp(std::max(xs, ys), 1.0f, 4.0f);
@@ -195,7 +203,41 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options)
     debugUpload_ = std::make_unique<UploadedImage>(*context_, "viewer debug image");
     bUpload_ = std::make_unique<UploadedImage>(*context_, "viewer B image");
     differenceUpload_ = std::make_unique<UploadedImage>(*context_, "viewer difference image");
+    lastCompleteUpload_ = std::make_unique<UploadedImage>(*context_, "viewer last complete frame");
+    busyBackdrop_ = std::make_unique<UploadedImage>(*context_, "viewer busy backdrop");
+    busyBackdrop_->set(1, 1, {uint8_t(kBackground[0] * 255.0f), uint8_t(kBackground[1] * 255.0f), uint8_t(kBackground[2] * 255.0f), 255});
+    session_->setProgressListener([this] { onFrameProgress(); });
     lastTime_ = glfwGetTime();
+}
+
+// The primary monitor's work area (the screen less task bars and docks), in the window's
+// size units (screen coordinates over the content scale, as GLFW_SCALE_TO_MONITOR sizes a
+// window); none without a monitor.
+std::optional<VkRect2D> Viewer::monitorWorkArea()
+{
+    GLFWmonitor* monitor = glfwGetPrimaryMonitor();
+    if (!monitor) return std::nullopt;
+    int x = 0, y = 0, w = 0, h = 0;
+    glfwGetMonitorWorkarea(monitor, &x, &y, &w, &h);
+    float xs = 1.0f, ys = 1.0f;
+    glfwGetMonitorContentScale(monitor, &xs, &ys);
+    if (w <= 0 || h <= 0) return std::nullopt;
+    const float scale = std::clamp(std::max(xs, ys), 1.0f, 4.0f);
+    return VkRect2D{{x, y}, {uint32_t(float(w) / scale), uint32_t(float(h) / scale)}};
+}
+
+// A window manager's title bar and borders come on top of the window's size: the window
+// shrinks by them, and moves into the work area, when they would reach past it.
+void Viewer::fitFrameIntoWorkArea(const VkRect2D& workArea)
+{
+    int left = 0, top = 0, right = 0, bottom = 0, w = 0, h = 0;
+    glfwGetWindowFrameSize(window_, &left, &top, &right, &bottom);
+    glfwGetWindowSize(window_, &w, &h);
+    const int maxW = int(workArea.extent.width) - left - right, maxH = int(workArea.extent.height) - top - bottom;
+    if ((w > maxW || h > maxH) && maxW > 0 && maxH > 0) {
+        glfwSetWindowSize(window_, std::min(w, maxW), std::min(h, maxH));
+        glfwSetWindowPos(window_, workArea.offset.x + left, workArea.offset.y + top);
+    }
 }
 
 Viewer::~Viewer()
@@ -205,6 +247,8 @@ Viewer::~Viewer()
     debugUpload_.reset();
     bUpload_.reset();
     differenceUpload_.reset();
+    lastCompleteUpload_.reset();
+    busyBackdrop_.reset();
     presenter_.reset();  // shuts ImGui's Vulkan backend down
     if (ImGui::GetCurrentContext()) {
         ImGui_ImplGlfw_Shutdown();
@@ -284,7 +328,14 @@ void Viewer::frame()
         if (showUi_) drawPanels();
     }
     double panelsCpuMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - uiStart).count();
-    if (panels) handleInput();
+    if (panels) {
+        handleInput();
+        // Dear ImGui's frame ends before A is drawn: a long frame draws frames of its own
+        // meanwhile (drawBusyFrame).
+        const auto renderStart = std::chrono::steady_clock::now();
+        ImGui::Render();
+        panelsCpuMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - renderStart).count();
+    }
     if (playing_) {
         // Plays at wall-clock speed and loops.
         const float end = session_->duration();
@@ -323,11 +374,22 @@ void Viewer::frame()
     }
     // A frame drawn for a change (not the next frame of a continuous run): the panels show
     // what changed (the camera's fields, the technique's figures) on the next frame.
+    const uint64_t busyFramesBefore = busyFrames_;
     if (session_->renderIfChanged(continuous_)) {
         afterRender();
         if (!continuous_) panelsDirty_ = true;
     }
     if (!session_->lastError().empty()) message_ = session_->lastError();
+    if (std::string notice = session_->takeCancelNotice(); !notice.empty()) message_ = std::move(notice);
+    if (busyFrames_ != busyFramesBefore) {
+        // The window was drawn while A drew, with Dear ImGui's frames of its own: the panels
+        // are built again for the next one, and this one is not shown again.
+        spdlog::info("A: {} window frame(s) shown while the frame drew ({:.1f} s)", busyFrames_ - busyFramesBefore,
+                     busyLastProgress_.seconds);
+        panelsDirty_ = true;
+        if (framesToRun_ > 0) --framesToRun_;
+        return;
+    }
     try {
         updateComparison();
     } catch (const std::exception& e) {
@@ -340,12 +402,7 @@ void Viewer::frame()
     }
 
     const auto presentStart = std::chrono::steady_clock::now();
-    if (panels) {
-        ImGui::Render();
-        panelsCpuMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - presentStart).count();
-    }
-    const float background[3] = {0.09f, 0.09f, 0.1f};
-    presenter_->present(viewBlits(), ImGui::GetDrawData(), panels, background);
+    presenter_->present(viewBlits(), ImGui::GetDrawData(), panels, kBackground);
     uiMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - presentStart).count();
     TimingHistory::push(history_.viewerMs, float(uiMs));
     TimingHistory::push(history_.panelsCpuMs, panels ? float(panelsCpuMs) : 0.0f);
@@ -353,10 +410,56 @@ void Viewer::frame()
     if (framesToRun_ > 0) --framesToRun_;
 }
 
+// A long pass of A's frame reported (on this thread, from inside Session::renderIfChanged).
+void Viewer::onFrameProgress()
+{
+    const Session::FrameProgress p = session_->frameProgress();
+    busyLastProgress_ = p;
+    if (cancelAfterS_ && p.seconds >= *cancelAfterS_) {
+        cancelAfterS_.reset();
+        spdlog::info("A: cancelling the frame after {:.1f} s at {:.0f} % (cancel-after)", p.seconds, 100.0 * p.fraction);
+        session_->cancelFrame();
+    }
+    const double now = glfwGetTime();
+    // A short pass draws no window frame (no flicker); Dear ImGui's frames do not nest.
+    if (p.seconds < kBusyAfterS || now - busyDrawnAt_ < kBusyFrameS || GImGui->WithinFrameScope) return;
+    busyDrawnAt_ = now;
+    ++busyFrames_;
+    glfwPollEvents();
+    if (glfwWindowShouldClose(window_)) session_->cancelFrame();
+    ImGui_ImplVulkan_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+    drawBusyOverlay(p);
+    ImGui::Render();
+    // The panels as last drawn (their layer), the overlay over the view.
+    presenter_->present(busyBlits(p.rebuild), ImGui::GetDrawData(), false, kBackground);
+}
+
+// The views while A draws: a rebuild leaves the last renderer and its frame untouched; an
+// update draws into the renderer's images, so its colour is the copy of the last slow
+// frame (afterRender) or, after a fast one, which was not copied, the background.
+std::vector<ViewBlit> Viewer::busyBlits(bool rebuild) const
+{
+    std::vector<ViewBlit> blits = viewBlits();
+    if (rebuild) return blits;
+    const gpu::Image* color = &session_->renderer().executor().image("color");
+    const bool kept = lastComplete_ && lastComplete_->first == &session_->renderer() &&
+                      lastComplete_->second == session_->framesRendered();
+    for (ViewBlit& b : blits) {
+        if (b.image != color) continue;
+        b.image = kept ? &lastCompleteUpload_->image() : &busyBackdrop_->image();
+        b.layout = UploadedImage::kLayout;
+        if (!kept) b.source = {};
+    }
+    return blits;
+}
+
 void Viewer::startRecording()
 {
     // The recorded path replaces the config's camera tracks: they would move the camera
     // away from the one being flown.
+    session_->setCameraFollow(CameraFollow::Free);  // from the pose drawn
     auto& tracks = session_->config().animation.tracks;
     tracks.erase(std::remove_if(tracks.begin(), tracks.end(),
                                 [](const config::AnimationTrack& t) {
@@ -402,6 +505,7 @@ void Viewer::stopRecording()
     config::RenderConfig& config = session_->config();
     config.animation.tracks.push_back(recordedPosition_);
     config.animation.tracks.push_back(recordedTarget_);
+    session_->setCameraFollow(CameraFollow::Track);  // the path plays as recorded
     // `penumbra render` of the saved config plays the whole path.
     const float duration = session_->duration();
     config.frames = std::max(config.frames, config::framesToPlay(duration, config.animation.fps));
@@ -416,12 +520,49 @@ void Viewer::afterRender()
 {
     errorsDirty_ = true;  // A changed: its error against B is computed again
     history_.add(session_->lastTimings());
+    // A slow frame is kept as shown: while the next one draws, the renderer's own images
+    // are the frame in flight's (drawBusyFrame shows this copy). A fast one costs no copy.
+    lastComplete_.reset();
+    if (session_->lastFrameSeconds() >= kKeepFrameS) {
+        const frame::FrameRenderer& r = session_->renderer();
+        lastCompleteUpload_->set(r.width(), r.height(), r.readColor());
+        lastComplete_ = {&r, session_->framesRendered()};
+    }
     shownValues_.reset();
     if (!session_->shownImage().empty()) {
         shownValues_ = session_->renderer().readImage(session_->shownImage());
+        debugClasses_ = imageClasses(*shownValues_);
+        if (!debugMappingChosen_) {
+            mapping_ = debugClasses_.empty() ? metrics::DebugMapping::Linear : metrics::DebugMapping::FalseColor;
+            debugMappingChosen_ = true;  // the user's choice from now on, until another image is shown
+        }
         if (autoRange_) range_ = metrics::finiteRange(*shownValues_, mapping_);
         debugUpload_->set(shownValues_->width, shownValues_->height, metrics::debugImageRgba(*shownValues_, mapping_, range_));
     }
+}
+
+void Viewer::resetDebugView()
+{
+    debugZoom_ = 1.0;
+    debugPan_ = {0.0, 0.0};
+    autoRange_ = true;
+    debugMappingChosen_ = false;
+}
+
+// A classification (vssm's classes, a mask): one channel of at most kMaxClasses distinct
+// finite values, each with its pixel count, ascending; empty for any other image.
+std::vector<std::pair<float, uint64_t>> Viewer::imageClasses(const metrics::DebugImageValues& image)
+{
+    constexpr size_t kMaxClasses = 8;
+    std::map<float, uint64_t> counts;
+    if (image.channels != 1) return {};
+    for (const float v : image.values) {
+        if (!std::isfinite(v)) continue;
+        ++counts[v];
+        if (counts.size() > kMaxClasses) return {};
+    }
+    if (counts.size() < 2) return {};
+    return {counts.begin(), counts.end()};
 }
 
 // The render size follows the view (the window less the panel) unless fixed; a change
@@ -452,6 +593,7 @@ void Viewer::fitRenderSize()
     const uint32_t shownH = std::max(1u, uint32_t(std::lround(float(h) * scale)));
     viewRect_.offset = {panel + int32_t(viewW - shownW) / 2, int32_t(viewH - shownH) / 2};
     viewRect_.extent = {shownW, shownH};
+    viewArea_ = {{panel, 0}, {viewW, viewH}};
 }
 
 std::vector<ViewBlit> Viewer::viewBlits() const
@@ -480,9 +622,42 @@ std::vector<ViewBlit> Viewer::viewBlits() const
         }
     }
     if (!session_->shownImage().empty() && !debugUpload_->empty()) {
-        return {{&debugUpload_->image(), UploadedImage::kLayout, viewRect_}};
+        const VkRect2D& whole = debugUpload_->image().desc().width ? VkRect2D{{0, 0}, {debugUpload_->image().desc().width,
+                                                                                   debugUpload_->image().desc().height}}
+                                                                    : VkRect2D{};
+        ViewBlit blit{&debugUpload_->image(), UploadedImage::kLayout, {}, whole};
+        if (debugImageBlit(whole.extent, blit.target, blit.source)) return {blit};
+        return {};
     }
     return {a};
+}
+
+// A debug image in the view: its own aspect, scaled to fit at zoom 1, zoomed about the
+// view's centre and panned; only its part inside the view is copied (target and source
+// cut alike). False when none of it is in the view.
+bool Viewer::debugImageBlit(VkExtent2D image, VkRect2D& target, VkRect2D& source) const
+{
+    if (image.width == 0 || image.height == 0 || viewArea_.extent.width == 0) return false;
+    const double fit = std::min(double(viewArea_.extent.width) / image.width, double(viewArea_.extent.height) / image.height);
+    const double scale = fit * debugZoom_;  // window pixels per image texel
+    const double x0 = viewArea_.offset.x + 0.5 * viewArea_.extent.width - 0.5 * image.width * scale + debugPan_.x;
+    const double y0 = viewArea_.offset.y + 0.5 * viewArea_.extent.height - 0.5 * image.height * scale + debugPan_.y;
+    // The visible texels: whole texels, so that the copy's scale is the view's.
+    const double tx0 = std::max(0.0, std::floor((viewArea_.offset.x - x0) / scale));
+    const double ty0 = std::max(0.0, std::floor((viewArea_.offset.y - y0) / scale));
+    const double tx1 = std::min(double(image.width), std::ceil((viewArea_.offset.x + viewArea_.extent.width - x0) / scale));
+    const double ty1 = std::min(double(image.height), std::ceil((viewArea_.offset.y + viewArea_.extent.height - y0) / scale));
+    if (!(tx1 > tx0 && ty1 > ty0)) return false;
+    // Window pixels of those texels, cut to the view (a texel cut at the edge is drawn whole
+    // inside the cut: at most one texel's shift at high zoom, where texels are large).
+    const auto clampX = [&](double x) { return std::clamp(x, double(viewArea_.offset.x), double(viewArea_.offset.x + int32_t(viewArea_.extent.width))); };
+    const auto clampY = [&](double y) { return std::clamp(y, double(viewArea_.offset.y), double(viewArea_.offset.y + int32_t(viewArea_.extent.height))); };
+    const int32_t wx0 = int32_t(std::lround(clampX(x0 + tx0 * scale))), wx1 = int32_t(std::lround(clampX(x0 + tx1 * scale)));
+    const int32_t wy0 = int32_t(std::lround(clampY(y0 + ty0 * scale))), wy1 = int32_t(std::lround(clampY(y0 + ty1 * scale)));
+    if (wx1 <= wx0 || wy1 <= wy0) return false;
+    target = {{wx0, wy0}, {uint32_t(wx1 - wx0), uint32_t(wy1 - wy0)}};
+    source = {{int32_t(tx0), int32_t(ty0)}, {uint32_t(tx1 - tx0), uint32_t(ty1 - ty0)}};
+    return true;
 }
 
 bool Viewer::bCurrent() const { return bResult_ && bResult_->viewKey == lastViewKey_ && !lastViewKey_.empty(); }
@@ -520,7 +695,7 @@ void Viewer::updateComparison()
     if (bShadows_.size() != session_->shownConfig().lights.size()) {
         startComparison(bShadows_.empty() ? "reference" : bShadows_.front().technique);  // lights added or removed
     }
-    const std::string key = viewKey(session_->shownConfig(), session_->time());
+    const std::string key = viewKey(session_->shownView(), session_->time());
     if (key != lastViewKey_) {
         lastViewKey_ = key;
         stillSince_ = now;
@@ -539,7 +714,7 @@ void Viewer::updateComparison()
     }
     // Asked for once the view has rested: not for every step of a drag.
     if (!bCurrent() && requestedKey_ != key && now - stillSince_ >= std::chrono::milliseconds(400)) {
-        comparison_->request({withShadows(session_->shownConfig(), bShadows_), session_->time(), key});
+        comparison_->request({withShadows(session_->shownView(), bShadows_), session_->time(), key});
         requestedKey_ = key;
     }
     if (errorsDirty_ && bCurrent()) {
@@ -576,10 +751,7 @@ void Viewer::handleInput()
     const ImGuiIO& io = ImGui::GetIO();
     if (!io.WantCaptureKeyboard) {
         if (ImGui::IsKeyPressed(GLFW_KEY_F1)) showUi_ = !showUi_;
-        if (ImGui::IsKeyPressed(GLFW_KEY_R) && !ImGui::IsMouseDown(ImGuiMouseButton_Right)) {
-            session_->config().camera = homeCamera_;
-            session_->changed(Change::View);
-        }
+        if (ImGui::IsKeyPressed(GLFW_KEY_R) && !ImGui::IsMouseDown(ImGuiMouseButton_Right)) moveCamera(homeCamera_);
     }
     if (io.WantCaptureMouse && !ImGui::IsMouseDown(ImGuiMouseButton_Right)) return;
     const ImVec2 mouse = io.MousePos;
@@ -588,9 +760,23 @@ void Viewer::handleInput()
                         mouse.x * fbScale < float(viewRect_.offset.x + int32_t(viewRect_.extent.width)) &&
                         mouse.y * fbScale >= float(viewRect_.offset.y) &&
                         mouse.y * fbScale < float(viewRect_.offset.y + int32_t(viewRect_.extent.height));
-    scene::Camera& camera = session_->config().camera;
-    const scene::Camera before = camera;
     const ImVec2 d = io.MouseDelta;
+    if (!session_->shownImage().empty() && shownValues_ && !(compareOn_ && bCurrent() && viewMode_ != ViewMode::A)) {
+        // A debug image: the wheel zooms about the cursor, a drag pans; the camera stays.
+        if (ImGui::IsMouseDown(ImGuiMouseButton_Left)) debugPan_ += glm::dvec2(d.x, d.y) * double(fbScale);
+        if (inView && io.MouseWheel != 0.0f) {
+            const double factor = std::pow(1.15, double(io.MouseWheel));
+            const double zoom = std::clamp(debugZoom_ * factor, 0.05, 512.0);
+            // The texel under the cursor stays under it.
+            const glm::dvec2 centre(viewArea_.offset.x + 0.5 * viewArea_.extent.width, viewArea_.offset.y + 0.5 * viewArea_.extent.height);
+            const glm::dvec2 cursor = glm::dvec2(mouse.x, mouse.y) * double(fbScale) - centre;
+            debugPan_ = cursor - (cursor - debugPan_) * (zoom / debugZoom_);
+            debugZoom_ = zoom;
+        }
+        return;
+    }
+    scene::Camera camera = session_->viewCamera();
+    const scene::Camera before = camera;
     const float radius = sceneRadius();
     if (cameraMode_ == CameraMode::Orbit) {
         const bool panning = ImGui::IsMouseDown(ImGuiMouseButton_Middle) ||
@@ -621,7 +807,15 @@ void Viewer::handleInput()
             camera = fly(camera, yaw, pitch, move, cameraMode_ == CameraMode::FirstPerson);
         }
     }
-    if (camera.position != before.position || camera.target != before.target) session_->changed(Change::View);
+    if (camera.position != before.position || camera.target != before.target) moveCamera(camera);
+}
+
+void Viewer::moveCamera(const scene::Camera& camera)
+{
+    if (session_->moveCamera(camera)) {
+        message_ = "free camera: the camera tracks are no longer followed (Camera > follow track; they stay in the config)";
+        spdlog::info("{}", message_);
+    }
 }
 
 size_t Viewer::lightIndex(const std::string& nameOrIndex, const ScriptCommand& command) const
@@ -666,16 +860,16 @@ void Viewer::writeScreenshot(const fs::path& file, bool window)
     session_->renderIfChanged(false);
     if (window) {
         // The window as composed, panels included: one more shown frame, read back.
+        // Drawn before Dear ImGui's frame begins: a long frame draws frames of its own.
+        fitRenderSize();
+        if (session_->renderIfChanged(false)) afterRender();
         ImGui_ImplVulkan_NewFrame();
         ImGui_ImplGlfw_NewFrame();
         ImGui::NewFrame();
         if (showUi_) drawPanels();
-        fitRenderSize();
-        if (session_->renderIfChanged(false)) afterRender();
         ImGui::Render();
         std::vector<uint8_t> pixels;
-        const float background[3] = {0.09f, 0.09f, 0.1f};
-        presenter_->present(viewBlits(), ImGui::GetDrawData(), true, background, &pixels);
+        presenter_->present(viewBlits(), ImGui::GetDrawData(), true, kBackground, &pixels);
         if (pixels.empty()) throw Error(fmt::format("{}: the window's images cannot be read back on this device", file.string()));
         io::writeImage(file, presenter_->extent().width, presenter_->extent().height, pixels);
     } else {
@@ -763,7 +957,7 @@ void Viewer::runCommand(const ScriptCommand& command)
         glfwSetWindowSize(window_, parseInt(command.words[1], command, 64, 16384), parseInt(command.words[2], command, 64, 16384));
     } else if (verb == "camera") {
         expectWords(command, 7, "camera PX PY PZ TX TY TZ");
-        scene::Camera camera = c.camera;
+        scene::Camera camera = session_->viewCamera();
         camera.position = parseVec3(command, 1);
         camera.target = parseVec3(command, 4);
         const glm::vec3 view = camera.target - camera.position;
@@ -775,18 +969,35 @@ void Viewer::runCommand(const ScriptCommand& command)
             throw Error(fmt::format("{}: camera: the view must not be parallel to the up axis ({}, {}, {})", command.where,
                                     camera.up.x, camera.up.y, camera.up.z));
         }
-        c.camera = camera;
-        session_->changed(Change::View);
+        moveCamera(camera);
     } else if (verb == "orbit") {
         expectWords(command, 3, "orbit YAW_DEG PITCH_DEG");
-        c.camera = orbit(c.camera, parseFloat(command.words[1], command), parseFloat(command.words[2], command));
-        session_->changed(Change::View);
+        moveCamera(orbit(session_->viewCamera(), parseFloat(command.words[1], command), parseFloat(command.words[2], command)));
     } else if (verb == "dolly") {
         expectWords(command, 2, "dolly FACTOR");
         const float factor = parseFloat(command.words[1], command);
         if (!(factor > 0.0f)) throw Error(fmt::format("{}: dolly: the factor must be > 0", command.where));
-        c.camera = dolly(c.camera, factor, sceneRadius());
-        session_->changed(Change::View);
+        moveCamera(dolly(session_->viewCamera(), factor, sceneRadius()));
+    } else if (verb == "camera-track") {
+        expectWords(command, 2, "camera-track follow|free");
+        if (!hasCameraTrack(c.animation)) {
+            throw Error(fmt::format("{}: camera-track: the config has no camera track (/camera/...) to follow", command.where));
+        }
+        if (command.words[1] != "follow" && command.words[1] != "free") {
+            throw Error(fmt::format("{}: camera-track: expected follow or free, got \"{}\"", command.where,
+                                    core::shortText(command.words[1])));
+        }
+        session_->setCameraFollow(command.words[1] == "follow" ? CameraFollow::Track : CameraFollow::Free);
+    } else if (verb == "print-camera") {
+        // The pose drawn last and the one the camera panel showed: a test holds them equal.
+        expectWords(command, 1, "print-camera");
+        session_->renderIfChanged(false);
+        const scene::Camera& d = session_->drawnCamera();
+        fmt::print("camera {} drawn {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} panel {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g}\n",
+                   session_->followsCameraTrack() ? "follow" : "free", d.position.x, d.position.y, d.position.z, d.target.x,
+                   d.target.y, d.target.z, panelCamera_.position.x, panelCamera_.position.y, panelCamera_.position.z,
+                   panelCamera_.target.x, panelCamera_.target.y, panelCamera_.target.z);
+        std::fflush(stdout);
     } else if (verb == "set") {
         // As `penumbra render --set`: every light that uses the technique.
         expectWords(command, 2, "set TECHNIQUE.PARAM=VALUE");
@@ -840,8 +1051,12 @@ void Viewer::runCommand(const ScriptCommand& command)
         session_->changed(Change::View);
     } else if (verb == "show") {
         if (command.words.size() < 2 || command.words.size() > 3) throw Error(fmt::format("{}: show: expected `show IMAGE [linear|log|false-color]` or `show color`", command.where));
-        if (command.words.size() == 3) mapping_ = metrics::parseDebugMapping(command.words[2]);
+        // The image's own default mapping (afterRender: false colour for a classification,
+        // else linear; automatic range), at zoom 1, unless the command names one.
         session_->showImage(command.words[1] == "color" ? std::string() : command.words[1]);
+        resetDebugView();
+        if (command.words.size() == 3) mapping_ = metrics::parseDebugMapping(command.words[2]);
+        debugMappingChosen_ = command.words.size() == 3;
     } else if (verb == "continuous") {
         continuous_ = parseOnOff(command, "continuous on|off");
     } else if (verb == "vsync") {
@@ -910,6 +1125,25 @@ void Viewer::runCommand(const ScriptCommand& command)
         else if (m == "split") viewMode_ = ViewMode::Split;
         else if (m == "difference") viewMode_ = ViewMode::Difference;
         else throw Error(fmt::format("{}: compare-view: \"{}\" is not a, b, split or difference", command.where, core::shortText(m)));
+    } else if (verb == "inspect") {
+        // The pixel inspector's text for a pixel of the frame, one `inspect` line per row.
+        expectWords(command, 3, "inspect X Y");
+        session_->renderIfChanged(false);
+        const frame::FrameRenderer& r = session_->renderer();
+        const std::string text = pixelReport(uint32_t(parseInt(command.words[1], command, 0, int(r.width()) - 1)),
+                                             uint32_t(parseInt(command.words[2], command, 0, int(r.height()) - 1)));
+        for (size_t at = 0; at <= text.size();) {
+            const size_t end = std::min(text.find('\n', at), text.size());
+            fmt::print("inspect {}\n", text.substr(at, end - at));
+            at = end + 1;
+        }
+        std::fflush(stdout);
+    } else if (verb == "cancel-after") {
+        // A frame of A still drawing after SECONDS is cancelled (as its Cancel button does).
+        expectWords(command, 2, "cancel-after SECONDS");
+        const float seconds = parseFloat(command.words[1], command);
+        if (seconds < 0.0f) throw Error(fmt::format("{}: cancel-after: the time must be >= 0", command.where));
+        cancelAfterS_ = seconds;
     } else if (verb == "wait-compare") {
         expectWords(command, 1, "wait-compare");
         if (!compareOn_) throw Error(fmt::format("{}: wait-compare: no comparison (compare TECHNIQUE first)", command.where));
@@ -1012,8 +1246,9 @@ void Viewer::runCommand(const ScriptCommand& command)
                      history_.panelsCpuMs.size(), presenter_->panelLayer() ? "on" : "off", history_.panelsShare());
     } else {
         throw Error(fmt::format("{}: unknown command \"{}\"; expected open, size, window, camera, orbit, dolly, set, param, "
-                                "technique, culling, light, show, continuous, vsync, ui, frames, screenshot, "
-                                "screenshot-window, save, save-visibility, compare, compare-set, compare-view, wait-compare, errors, wait-for, "
+                                "camera-track, print-camera, technique, culling, light, show, continuous, vsync, ui, frames, screenshot, "
+                                "screenshot-window, save, save-visibility, compare, compare-set, compare-view, wait-compare, cancel-after, inspect, errors, "
+                                "wait-for, "
                                 "wait-error, wait-no-error, expect-error, expect-no-error, record, time, play, widgets, timings, "
                                 "panel, panel-layer or quit",
                                 command.where, core::shortText(verb)));

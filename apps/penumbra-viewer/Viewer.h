@@ -89,7 +89,11 @@ private:
     std::vector<uint8_t> viewPixels(uint32_t& width, uint32_t& height);
     void writeScreenshot(const std::filesystem::path& file, bool window);
     size_t lightIndex(const std::string& nameOrIndex, const ScriptCommand& command) const;
+    // Places the camera (Session::moveCamera), saying so when that left a followed track.
+    void moveCamera(const scene::Camera& camera);
     float sceneRadius() const;
+    static std::optional<VkRect2D> monitorWorkArea();
+    void fitFrameIntoWorkArea(const VkRect2D& workArea);
 
     // Panels.cpp
     void drawPanels();
@@ -111,6 +115,27 @@ private:
     void drawDebugImagePanel();
     void drawTimingsPanel();
     void drawPixelInspector();
+    void drawDifferenceColourBar();
+    // The pixel inspector's text for frame pixel (x, y): colour and every light's V (and B's
+    // and the difference, when B is of this view). `inspect X Y` prints it.
+    std::string pixelReport(uint32_t x, uint32_t y);
+
+    // A's long frames (Session::setProgressListener): the window is drawn meanwhile — the
+    // panels as last drawn, the last complete image, an overlay with the progress and Cancel.
+    void onFrameProgress();
+    void drawBusyOverlay(const Session::FrameProgress& progress);
+    std::vector<ViewBlit> busyBlits(bool rebuild) const;
+    static constexpr double kBusyAfterS = 0.25;  // a frame drawn faster draws no window frame
+    static constexpr double kBusyFrameS = 0.05;  // at most 20 window frames a second meanwhile
+    static constexpr double kKeepFrameS = 0.2;   // a frame this slow is copied (shown while the next draws)
+    static constexpr float kBackground[3] = {0.09f, 0.09f, 0.1f};
+    uint64_t busyFrames_ = 0;  // window frames drawn inside A's frames, since start
+    double busyDrawnAt_ = -1.0;
+    Session::FrameProgress busyLastProgress_;
+    std::optional<double> cancelAfterS_;  // `cancel-after SECONDS`
+    std::unique_ptr<UploadedImage> lastCompleteUpload_, busyBackdrop_;
+    // Whose frame lastCompleteUpload_ holds: the renderer and its frame count.
+    std::optional<std::pair<const frame::FrameRenderer*, uint64_t>> lastComplete_;
 
     ViewerOptions options_;
     GLFWwindow* window_ = nullptr;
@@ -135,6 +160,16 @@ private:
     bool autoRange_ = true;
     metrics::DebugRange range_{};
     std::optional<metrics::DebugImageValues> shownValues_;  // of the last frame, when a debug image is shown
+    // Its place in the view: zoom (1: fitted, aspect kept) and pan (window pixels); the
+    // wheel zooms and a drag pans it; showing an image resets them and the mapping.
+    double debugZoom_ = 1.0;
+    glm::dvec2 debugPan_{0.0};
+    bool debugMappingChosen_ = false;  // else the image's default (afterRender)
+    std::vector<std::pair<float, uint64_t>> debugClasses_;  // a classification's values (its legend)
+    VkRect2D viewArea_{};  // the window less the panel
+    bool debugImageBlit(VkExtent2D image, VkRect2D& target, VkRect2D& source) const;
+    void resetDebugView();
+    static std::vector<std::pair<float, uint64_t>> imageClasses(const metrics::DebugImageValues& image);
 
     // Pixel inspector: read back lazily, per rendered frame.
     uint64_t inspectedFrame_ = ~0ull;
@@ -144,6 +179,7 @@ private:
 
     CameraMode cameraMode_ = CameraMode::Orbit;
     scene::Camera homeCamera_;  // as the file gave it: R goes back to it
+    scene::Camera panelCamera_;  // the pose the camera panel showed last (`print-camera`)
     double lastTime_ = 0.0;
     float flySpeedExponent_ = 0.0f;
     bool continuous_ = false;

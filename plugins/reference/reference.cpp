@@ -328,15 +328,26 @@ private:
         plugin::startProgress();
         std::vector<std::thread> pool;
         for (uint32_t t = 0; t < threads; ++t) pool.emplace_back(work);
+        bool cancelled = false;
         if (progress.shown() || wanted) {
             while (rowsDone.load() < height_ && !failure) {
                 if (progress.shown()) progress.draw(rowsDone.load());
                 plugin::reportProgress(rowsDone.load(), height_);
+                // Whoever waits gave up on the frame: the tracers stop after their row.
+                if (plugin::progressCancelled()) {
+                    cancelled = true;
+                    nextRow = height_;
+                    break;
+                }
                 std::this_thread::sleep_for(std::chrono::milliseconds(progress.shown() ? 200 : 50));
             }
         }
         for (std::thread& t : pool) t.join();
         if (failure) std::rethrow_exception(failure);
+        if (cancelled) {
+            throw Error(fmt::format("reference (light {}): tracing cancelled at row {} of {}", lightIndex_, rowsDone.load(),
+                                    height_));
+        }
         plugin::reportProgress(height_, height_);
         if (progress.shown()) progress.finish();
         ++gFramesTraced;

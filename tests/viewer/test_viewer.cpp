@@ -188,7 +188,8 @@ TEST_F(ViewerTest, EveryReflectedParameterOfEveryPluginGetsAWidget)
     for (const json& p : plugins) {
         const std::string name = p["name"];
         // The reference traces rays: at its cheapest, so that the frame stays small.
-        script += fmt::format("; technique 0 {}; {}frames 1; widgets", name,
+        // Two frames: the panels drawn after the technique was made know its odd kernels.
+        script += fmt::format("; technique 0 {}; {}frames 2; widgets", name,
                               name == "reference" ? "set reference.samples=1; " : "");
         for (const json& param : p["params"]) {
             expected.insert(fmt::format("light0 {} {} {}", name, param["name"].get<std::string>(), param["type"].get<std::string>()));
@@ -198,10 +199,27 @@ TEST_F(ViewerTest, EveryReflectedParameterOfEveryPluginGetsAWidget)
     ASSERT_EQ(v.exitCode, 0) << v.err;
     std::set<std::string> drawn;
     std::istringstream lines(v.out);
+    int kernels = 0;
     for (std::string line; std::getline(lines, line);) {
-        if (line.rfind("widget ", 0) == 0) drawn.insert(line.substr(7));
+        if (line.rfind("widget ", 0) != 0) continue;
+        // "widget LIGHT TECHNIQUE PARAM TYPE[ LO..HI step S]"
+        std::istringstream words(line.substr(7));
+        std::string light, technique, param, type, range, stepWord;
+        int step = 0;
+        words >> light >> technique >> param >> type >> range >> stepWord >> step;
+        drawn.insert(fmt::format("{} {} {} {}", light, technique, param, type));
+        if (param == "pcf_kernel") {
+            // Every plugin refuses an even kernel: its widget offers odd values only.
+            ++kernels;
+            int lo = 0, hi = 0;
+            ASSERT_EQ(std::sscanf(range.c_str(), "%d..%d", &lo, &hi), 2) << line;
+            EXPECT_EQ(step, 2) << line;
+            EXPECT_EQ(lo % 2, 1) << line;
+            EXPECT_EQ(hi % 2, 1) << line;
+        }
     }
     EXPECT_EQ(drawn, expected);
+    EXPECT_GE(kernels, 3);  // hard, deep, adaptive-sm
 }
 
 TEST_F(ViewerTest, ADebugImageIsShownAtItsOwnSizeAndItsPassesRunOnlyWhileShown)
@@ -618,3 +636,107 @@ TEST_F(ViewerTest, AGltfAnimationPlaysAsRenderDrawsIt)
     EXPECT_LE(worst, 1);
     EXPECT_NE(rest.rgba, rendered.rgba) << "the quad moved";
 }
+
+// A viewer user's rough edges (issue 43): on a 1600 x 900 screen the window fits; an
+// animated camera is followed until an orbit frees it, and the camera panel shows the pose
+// drawn; the inspector gives A, B and their difference; a debug image keeps its aspect;
+// Save writes every technique parameter.
+TEST_F(ViewerTest, ASmallScreenAFollowedOrFreeCameraTheInspectorAgainstBAndAnExplicitSave)
+{
+    const fs::path window = dir / "window.png", debug = dir / "debug.png", saved = dir / "saved.json";
+    const RunResult v = viewer(config("animated.json"),
+                               fmt::format("frames 2; print-camera; orbit 40 10; frames 2; print-camera; camera-track follow; "
+                                           "frames 2; print-camera; screenshot-window {}; size 64 36; compare reference; "
+                                           "wait-compare; inspect 32 30; show light0.hard.shadow_map; frames 2; "
+                                           "screenshot-window {}; save {}; quit",
+                                           window.string(), debug.string(), saved.string()),
+                               fmt::format("xvfb-run -a -n {} -s '-screen 0 1600x900x24'", 100 + ::getpid() % 5000 * 4));
+    ASSERT_EQ(v.exitCode, 0) << v.err;
+    // "camera follow|free drawn PX PY PZ TX TY TZ panel PX PY PZ TX TY TZ"
+    std::vector<std::pair<std::string, std::vector<double>>> poses;
+    std::istringstream lines(v.out);
+    std::vector<std::string> inspected;
+    for (std::string line; std::getline(lines, line);) {
+        if (line.rfind("inspect ", 0) == 0) inspected.push_back(line);
+        if (line.rfind("camera ", 0) != 0) continue;
+        std::istringstream words(line.substr(7));
+        std::string mode, word;
+        std::vector<double> numbers;
+        words >> mode;
+        for (double x; words >> word;) {
+            if (std::sscanf(word.c_str(), "%lf", &x) == 1) numbers.push_back(x);
+        }
+        ASSERT_EQ(numbers.size(), 12u) << line;
+        poses.emplace_back(mode, numbers);
+    }
+    ASSERT_EQ(poses.size(), 3u) << v.out;
+    EXPECT_EQ(poses[0].first, "follow");
+    EXPECT_EQ(poses[1].first, "free");
+    EXPECT_EQ(poses[2].first, "follow");
+    for (const auto& [mode, n] : poses) {
+        for (int i = 0; i < 6; ++i) EXPECT_NEAR(n[i], n[6 + i], 1e-3 * (1.0 + std::abs(n[i]))) << mode << ": panel != drawn";
+    }
+    // The orbit moved the drawn eye; following again shows the track's pose once more.
+    const double moved = std::hypot(poses[1].second[0] - poses[0].second[0], poses[1].second[2] - poses[0].second[2]);
+    EXPECT_GT(moved, 0.1);
+    for (int i = 0; i < 6; ++i) EXPECT_NEAR(poses[2].second[i], poses[0].second[i], 1e-3 * (1.0 + std::abs(poses[0].second[i])));
+
+    const Png w = readPng(window);
+    EXPECT_LE(w.width, 1600);
+    EXPECT_LE(w.height, 900);
+    EXPECT_GT(w.width, 800);
+
+    ASSERT_GE(inspected.size(), 3u) << v.out;
+    EXPECT_NE(inspected[2].find(" A "), std::string::npos) << inspected[2];
+    EXPECT_NE(inspected[2].find(" B "), std::string::npos) << inspected[2];
+    EXPECT_NE(inspected[2].find(" dV "), std::string::npos) << inspected[2];
+
+    // The square shadow map: the bounding box of what is not background right of the panel.
+    const Png d = readPng(debug);
+    const int panel = 440;
+    int x0 = d.width, x1 = -1, y0 = d.height, y1 = -1;
+    for (int y = 0; y < d.height; ++y)
+        for (int x = panel; x < d.width; ++x) {
+            const uint8_t* p = &d.rgba[(size_t(y) * d.width + x) * 4];
+            if (std::abs(p[0] - 23) + std::abs(p[1] - 23) + std::abs(p[2] - 25) <= 3) continue;
+            x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+        }
+    ASSERT_GT(x1, x0);
+    EXPECT_NEAR(double(x1 - x0 + 1) / double(y1 - y0 + 1), 1.0, 0.01) << x0 << " " << x1 << " " << y0 << " " << y1;
+
+    // Every parameter of every light's technique, defaults included.
+    const json config = json::parse(slurp(saved));
+    for (const json& light : config["lights"]) {
+        for (const char* param : {"resolution", "depth_bias", "slope_bias", "bias_mode", "filter", "pcf_kernel"}) {
+            EXPECT_TRUE(light["shadow"].contains(param)) << light["shadow"].dump();
+        }
+    }
+    EXPECT_TRUE(config.contains("shadow_focus"));
+}
+
+// A slow frame of A (the reference, traced on the CPU) draws the window meanwhile with its
+// progress, and a cancel leaves the last complete image and the config it drew.
+TEST_F(ViewerTest, ASlowFrameOfAShowsProgressAndACancelKeepsTheLastImage)
+{
+    const fs::path before = dir / "before.png", after = dir / "after.png", saved = dir / "saved.json";
+    const RunResult v = viewer(config("pcss.json"),
+                               fmt::format("size 96 54; frames 2; screenshot {}; technique 0 reference; param 0 samples 4096; "
+                                           "param 0 cache false; cancel-after 0.6; frames 2; screenshot {}; expect-no-error; "
+                                           "save {}; quit",
+                                           before.string(), after.string(), saved.string()));
+    ASSERT_EQ(v.exitCode, 0) << v.err;
+    EXPECT_NE(v.err.find("window frame(s) shown while the frame drew"), std::string::npos) << v.err;
+    const size_t at = v.err.find("A: cancelled after");
+    ASSERT_NE(at, std::string::npos) << v.err;
+    double percent = -1.0;
+    const size_t pct = v.err.find(" at ", at);
+    ASSERT_NE(pct, std::string::npos);
+    std::sscanf(v.err.c_str() + pct, " at %lf %%", &percent);
+    EXPECT_GT(percent, 0.0) << v.err;
+    EXPECT_LT(percent, 100.0) << v.err;
+    const Png a = readPng(before), b = readPng(after);
+    EXPECT_EQ(a.rgba, b.rgba);  // the last complete image
+    const json config = json::parse(slurp(saved));
+    EXPECT_EQ(config["lights"][0]["shadow"]["technique"], "pcss");  // the edit is undone
+}
+

@@ -1,5 +1,5 @@
 // The viewer's parts that need no window (apps/penumbra-viewer/): camera moves
-// (CameraControl.h) at scene scales from 1e-3 to 1e5, script parsing (Script.h), shader
+// (CameraControl.h) at scene scales from 1e-3 to 1e5 and camera tracks left out, script parsing (Script.h), shader
 // watching (ShaderWatcher.h) and the panels' layer geometry (PanelLayer.h) on Dear ImGui's
 // own draw data.
 #include "CameraControl.h"
@@ -97,6 +97,19 @@ TEST(CameraControl, FlyMovesAlongTheViewAndFirstPersonStaysLevel)
     EXPECT_FLOAT_EQ(flySpeed(1e-3f, 1.0f), 2e-4f);
     EXPECT_FLOAT_EQ(flySpeed(0.0f, 0.0f), 0.1f);
     EXPECT_FLOAT_EQ(flySpeed(NAN, 100.0f), 0.1f * std::exp2(20.0f));
+}
+
+TEST(CameraControl, AFreeCameraLeavesOutTheCameraTracksOnly)
+{
+    config::RenderConfig c;
+    c.animation.tracks = {{"/camera/position", config::Interpolation::Linear, {{0.0f, {1, 2, 3}}}},
+                          {"/lights/0/intensity", config::Interpolation::Linear, {{0.0f, {5}}}},
+                          {"/camera/fov_y_deg", config::Interpolation::Step, {{0.0f, {30}}}}};
+    EXPECT_TRUE(hasCameraTrack(c.animation));
+    const config::RenderConfig free = withoutCameraTracks(c);
+    ASSERT_EQ(free.animation.tracks.size(), 1u);
+    EXPECT_EQ(free.animation.tracks[0].target, "/lights/0/intensity");
+    EXPECT_FALSE(hasCameraTrack(free.animation));
 }
 
 TEST(ViewerScript, WordsQuotesCommentsAndWhereEachCommandCameFrom)

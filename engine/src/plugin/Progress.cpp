@@ -25,6 +25,9 @@ void reportProgress(uint64_t done, uint64_t total)
 {
     if (!tSink) return;
     tSink->fraction.store(total > 0 ? std::clamp(double(done) / double(total), 0.0, 1.0) : 1.0);
+    if (tSink->onReport) tSink->onReport();
 }
+
+bool progressCancelled() { return tSink && tSink->cancelled.load(); }
 
 } // namespace penumbra::plugin

@@ -48,5 +48,9 @@ float lightSizeOverride(const ParamValues& params, std::string_view technique);
 // its value, which must be odd; an even one (no centre texel) throws
 // penumbra::ConfigError naming `technique`'s parameter and the odd values beside it.
 int oddKernelParam(const ParamValues& params, std::string_view name, std::string_view technique);
+// Whether oddKernelParam has checked `technique`'s parameter `name` in this process (a
+// technique of that plugin was made): an editor then offers odd values only. ParamSpec
+// cannot say "odd" without a new plugin ABI; the check the plugin runs says it.
+bool mustBeOdd(std::string_view technique, std::string_view name);
 
 } // namespace penumbra::plugin
