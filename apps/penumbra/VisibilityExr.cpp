@@ -95,13 +95,20 @@ ExrImage readExr(const std::filesystem::path& path)
     const std::vector<unsigned char> bytes = io::readRegularFile(path, kMaxExrFileBytes, "an OpenEXR file");
     const std::string name = core::shortText(path.string());
     try {
+        // A damaged header's data window sizes the tables OpenEXR allocates on opening;
+        // beyond kMaxExrSide it refuses the file instead.
+        Imf::Header::setMaxImageSize(int(kMaxExrSide), int(kMaxExrSide));
+        Imf::Header::setMaxTileSize(int(kMaxExrSide), int(kMaxExrSide));
         MemoryStream stream(path.string(), bytes);
         Imf::InputFile file(stream);
         const Imath::Box2i window = file.header().dataWindow();
         const int64_t width = int64_t(window.max.x) - window.min.x + 1, height = int64_t(window.max.y) - window.min.y + 1;
         size_t channels = 0;
         for (auto c = file.header().channels().begin(); c != file.header().channels().end(); ++c) ++channels;
-        if (width <= 0 || height <= 0 || uint64_t(width) * uint64_t(height) * std::max<size_t>(channels, 1) > kMaxExrValues) {
+        // Pixels first: with at most 2^28 of them, times the channels cannot overflow.
+        const uint64_t pixels = width > 0 && height > 0 ? uint64_t(width) * uint64_t(height) : 0;
+        if (pixels == 0) throw Error(fmt::format("{}: an empty data window ({}x{} pixels)", name, width, height));
+        if (pixels > kMaxExrValues || pixels * channels > kMaxExrValues) {
             throw Error(fmt::format("{}: {}x{} pixels of {} channel(s): more than the {} values an OpenEXR file may hold here",
                                     name, width, height, channels, kMaxExrValues));
         }

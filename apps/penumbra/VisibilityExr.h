@@ -39,8 +39,10 @@ struct ExrImage {
     std::vector<Channel> channels;  // in the file's order (by name)
 };
 
-// The largest file and image readExr takes: 1 GiB of file, 2^28 values in all.
+// The largest file and image readExr takes: 1 GiB of file, 65536 pixels a side, 2^28
+// values in all.
 inline constexpr uint64_t kMaxExrFileBytes = uint64_t(1) << 30;
+inline constexpr uint32_t kMaxExrSide = 65536;
 inline constexpr uint64_t kMaxExrValues = uint64_t(1) << 28;
 
 // Reads the first part of `path` over its data window. Throws Error naming the file when it

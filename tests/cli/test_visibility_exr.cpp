@@ -161,6 +161,18 @@ TEST_F(VisibilityExr, ReadingAFileThatIsNoExrNamesIt)
     const std::string bytes = test::readFile(dir / "whole.exr");
     std::ofstream(dir / "cut.exr", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
     EXPECT_NE(test::errorOf([&] { app::readExr(dir / "cut.exr"); }).find("cut.exr"), std::string::npos);
+    // A data window of 100000² pixels in a file of a few hundred bytes: refused before
+    // anything is allocated for it (kMaxExrSide).
+    std::string huge = bytes;
+    const std::string window = std::string("dataWindow") + '\0' + "box2i" + '\0';
+    const size_t at = huge.find(window);
+    ASSERT_NE(at, std::string::npos);
+    const int32_t corners[4] = {0, 0, 99999, 99999};
+    std::memcpy(huge.data() + at + window.size() + 4, corners, sizeof(corners));  // after the attribute's size
+    std::ofstream(dir / "huge.exr", std::ios::binary) << huge;
+    const std::string tooBig = test::errorOf([&] { app::readExr(dir / "huge.exr"); });
+    EXPECT_NE(tooBig.find("huge.exr: not a readable OpenEXR image"), std::string::npos) << tooBig;
+    EXPECT_NE(tooBig.find("exceeds the maximum"), std::string::npos) << tooBig;
     EXPECT_NE(test::errorOf([&] { app::readExr(dir / "missing.exr"); }).find("missing.exr"), std::string::npos);
     EXPECT_NE(test::errorOf([&] { app::readExr(dir); }).find("expected an OpenEXR file"), std::string::npos);
 }
