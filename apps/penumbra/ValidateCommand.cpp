@@ -106,8 +106,8 @@ int runValidateGltf(const ValidateFlags& flags)
     scene::GltfLoadOptions options;
     options.repair.weld = flags.weld;
     options.repair.analyzeTopology = true;
-    // The report lists every warning on stdout; logging them on stderr too would say
     options.allowedRoots.assign(flags.allowedRoots.begin(), flags.allowedRoots.end());
+    // The report lists every warning on stdout; logging them on stderr too would say
     // everything twice.
     if (!flags.verbose) spdlog::set_level(spdlog::level::err);
     scene::GltfLoadReport report;
@@ -141,8 +141,8 @@ int runValidateConfig(const ValidateFlags& flags)
     const bool swept = variants.swept();
     config::RunOptions options;
     options.overrides = config::parseParamOverrides(flags.settings);
-    // A --set is for the variants whose lights use its technique, as `bench` applies it.
     options.allowedRoots.assign(flags.allowedRoots.begin(), flags.allowedRoots.end());
+    // A --set is for the variants whose lights use its technique, as `bench` applies it.
     options.overridesOfUsedTechniquesOnly = swept;
     const config::PreparedRun run =
         inPhase("loading the scene", [&] { return config::prepareRun(config::parseConfig(document), options); });
@@ -210,11 +210,11 @@ Command addValidateCommand(CLI::App& app, const bool& verbose)
     cmd->add_option("file", flags->file, "glTF file or scene config")->required();
     cmd->add_flag("--weld", flags->weld, "Also weld coincident vertices with equal attributes");
     addParamOverrideFlag(*cmd, flags->settings);
+    addAllowRootFlag(*cmd, flags->allowedRoots);
     return {cmd, [flags, &verbose] {
                 flags->verbose = verbose;
                 return runValidate(*flags);
             }};
-    addAllowRootFlag(*cmd, flags->allowedRoots);
 }
 
 } // namespace penumbra::app
