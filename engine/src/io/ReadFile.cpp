@@ -83,6 +83,13 @@ RegularFile::RegularFile(const fs::path& file, uint64_t maxBytes, std::string_vi
 
 RegularFile::~RegularFile() { ::close(fd_); }
 
+fs::path RegularFile::openedPath() const
+{
+    std::error_code ec;
+    fs::path opened = fs::read_symlink(fmt::format("/proc/self/fd/{}", fd_), ec);
+    return ec ? fs::path() : opened;
+}
+
 size_t RegularFile::readAt(uint64_t offset, void* out, size_t bytes) const
 {
     size_t done = 0;

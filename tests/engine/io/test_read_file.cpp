@@ -85,3 +85,19 @@ TEST_F(ReadFile, ReadsAtAnOffsetFewerAtTheEnd)
     EXPECT_EQ(std::string(bytes, 4), "6789");
     EXPECT_EQ(file.readAt(10, bytes, sizeof bytes), 0u);
 }
+
+// The open descriptor names the file it reached, links and all: a link (in the file's
+// place or in a folder on its way) leads a confinement check to the real file.
+TEST_F(ReadFile, TheOpenedPathIsTheFileTheOpenReached)
+{
+    fs::create_directories(dir / "inside");
+    fs::create_directories(dir / "outside");
+    std::ofstream(dir / "outside/secret") << "s";
+    std::ofstream(dir / "inside/plain") << "p";
+    fs::create_symlink(dir / "outside/secret", dir / "inside/link");
+    fs::create_directory_symlink(dir / "outside", dir / "inside/folder");
+    const fs::path real = fs::canonical(dir);
+    EXPECT_EQ(io::RegularFile(dir / "inside/plain", 16, "a test file").openedPath(), real / "inside/plain");
+    EXPECT_EQ(io::RegularFile(dir / "inside/link", 16, "a test file").openedPath(), real / "outside/secret");
+    EXPECT_EQ(io::RegularFile(dir / "inside/folder/secret", 16, "a test file").openedPath(), real / "outside/secret");
+}

@@ -58,6 +58,11 @@ public:
     size_t readAt(uint64_t offset, void* out, size_t bytes) const;
     // The whole file. Throws FileReadError when it holds more than the limit.
     std::vector<unsigned char> readAll() const;
+    // The file the open descriptor reads, absolute with every link resolved as the open
+    // resolved it (/proc/self/fd): what a confinement check must look at, since the path
+    // given may have been swapped for a link between that check and the open. Empty where
+    // /proc is not mounted.
+    std::filesystem::path openedPath() const;
 
 private:
     std::filesystem::path file_;

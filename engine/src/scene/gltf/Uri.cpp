@@ -188,7 +188,21 @@ bool ExternalFiles::read(std::vector<unsigned char>* out, std::string* err, cons
     File& file = it->second;
     const bool buffer = file.pointer.rfind("/buffers/", 0) == 0;
     try {
-        *out = io::readRegularFile(file.path, self.bytesLeft_, buffer ? "a glTF buffer" : "a glTF image");
+        const io::RegularFile opened(file.path, self.bytesLeft_, buffer ? "a glTF buffer" : "a glTF image");
+        // add() checked the path; a link put in its place (or in a folder on its way)
+        // since then would lead the open elsewhere: the descriptor says where it led.
+        const fs::path reached = opened.openedPath();
+        if (reached.empty() ||
+            std::none_of(self.roots_.begin(), self.roots_.end(), [&](const fs::path& root) { return within(reached, root); })) {
+            file.failure = fmt::format("{} file '{}' led to {} when opened, outside the model's folder and the allowed "
+                                       "roots (a link changed since the URI was checked)",
+                                       buffer ? "buffer" : "texture", core::shortText(file.uri),
+                                       reached.empty() ? std::string("a file /proc/self/fd cannot name")
+                                                       : core::shortText(reached.string()));
+            if (err) *err += file.failure;
+            return false;
+        }
+        *out = opened.readAll();
         self.bytesLeft_ -= out->size();
         return true;
     } catch (const io::FileReadError& e) {
