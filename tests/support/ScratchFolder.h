@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -16,16 +17,37 @@ namespace penumbra::test {
 
 // temp/penumbra_<prefix>_<pid>_<test name>, created (and emptied first, should a killed
 // run have left it): one per test and process, so parallel tests never share one. The
-// caller removes it (std::filesystem::remove_all) in its TearDown.
+// caller removes it (std::filesystem::remove_all) in its TearDown. A parameterised test's
+// name ("Case/3") is one folder too: its '/' becomes '_'.
 inline std::filesystem::path makeScratchFolder(std::string_view prefix)
 {
-    const std::filesystem::path dir =
-        std::filesystem::temp_directory_path() /
-        fmt::format("penumbra_{}_{}_{}", prefix, ::getpid(), ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::string name = fmt::format("penumbra_{}_{}_{}", prefix, ::getpid(), ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::replace(name.begin(), name.end(), '/', '_');
+    const std::filesystem::path dir = std::filesystem::temp_directory_path() / name;
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     return dir;
 }
+
+// A test with a scratch folder of its own (`dir`, makeScratchFolder named after the test
+// suite), removed after the test. `Base` is the fixture it extends (a GPU test, ...).
+template <class Base = ::testing::Test>
+class WithScratchFolder : public Base {
+protected:
+    void SetUp() override
+    {
+        Base::SetUp();
+        dir = makeScratchFolder(::testing::UnitTest::GetInstance()->current_test_info()->test_suite_name());
+    }
+    void TearDown() override
+    {
+        std::filesystem::remove_all(dir);
+        Base::TearDown();
+    }
+
+    std::filesystem::path dir;
+};
+using ScratchFolderTest = WithScratchFolder<>;
 
 // JSON text: `levels` nested objects ({"a": ...}) or arrays ([...]) around the number 1,
 // as deep as a hostile file nests them.
