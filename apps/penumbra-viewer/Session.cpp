@@ -90,9 +90,11 @@ void Session::open(const fs::path& file)
     run->rest = c;
     run->config = c;
     // The new scene's renderer first: a failure leaves what was shown.
-    auto renderer = std::make_unique<frame::FrameRenderer>(context_, run->scene, c, *plugins_);
+    auto resources = std::make_shared<frame::SceneResources>(context_, run->scene, frame::SceneResources::batchingOf(c));
+    auto renderer = std::make_unique<frame::FrameRenderer>(resources, c, *plugins_);
     renderer_.reset();  // it refers to the old scene
     renderer_ = std::move(renderer);
+    resources_ = std::move(resources);
     run_ = std::move(run);
     file_ = file;
     config_ = c;
@@ -258,7 +260,7 @@ void Session::setTime(float seconds)
     changed(Change::View);
 }
 
-std::unique_ptr<frame::FrameRenderer> Session::build() const
+std::unique_ptr<frame::FrameRenderer> Session::build()
 {
     // A technique that drew, or that the user just chose, must build: its failure (a
     // shader that does not compile, a light it refuses) is an error that keeps the last
@@ -270,7 +272,14 @@ std::unique_ptr<frame::FrameRenderer> Session::build() const
         const bool chosen = i >= shown_.lights.size() || shown_.lights[i].shadow.technique != strict.lights[i].shadow.technique;
         if (drew || chosen) strict.lights[i].shadow.required = true;
     }
-    auto renderer = std::make_unique<frame::FrameRenderer>(context_, run_->scene, strict, newPlugins_ ? *newPlugins_ : *plugins_);
+    // The scene's resources stay unless the draw batching changed or shaders are reloaded
+    // (the engine's pipelines are made from them); then no technique is kept either.
+    const bool fresh = reloadAll_ || resources_->batching() != frame::SceneResources::batchingOf(strict);
+    std::shared_ptr<frame::SceneResources> resources =
+        fresh ? std::make_shared<frame::SceneResources>(context_, run_->scene, frame::SceneResources::batchingOf(strict))
+              : resources_;
+    auto renderer = std::make_unique<frame::FrameRenderer>(resources, strict, newPlugins_ ? *newPlugins_ : *plugins_,
+                                                           fresh ? nullptr : renderer_.get());
     if (!shownImage_.empty()) {
         const std::vector<std::string> names = renderer->imageNames();
         if (std::find(names.begin(), names.end(), shownImage_) != names.end()) renderer->requestImage(shownImage_);
@@ -317,6 +326,8 @@ bool Session::renderIfChanged(bool always)
             frame::FrameTimings timings = fresh->renderFrame();
             lastRebuildMs_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
             renderer_ = std::move(fresh);
+            resources_ = renderer_->sharedResources();
+            reloadAll_ = false;
             timings_ = std::move(timings);
             if (newPlugins_) {
                 // The reloaded plugins drew: they are the session's from now on.

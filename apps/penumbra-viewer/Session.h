@@ -1,10 +1,13 @@
 #pragma once
-// What the viewer shows: one config, edited in place, its scene, and the FrameRenderer
-// that draws it — the same renderer and render graph `penumbra render` uses. Edits are
-// classed by what they invalidate: a camera or light that moved is an update of the
-// renderer; a technique, parameter, culling mode, size or debug image builds a new one
-// (and keeps the old one, and the config it drew, when that fails); another scene builds
-// everything. Nothing is rendered while nothing changed.
+// What the viewer shows: one config, edited in place, its scene with the resources that
+// depend only on it (frame::SceneResources: the scene on the GPU, the BVH, shaders and
+// the engine's pipelines), and the FrameRenderer that draws it — the same renderer and
+// render graph `penumbra render` uses. Edits are classed by what they invalidate: a
+// camera or light that moved is an update of the renderer; a technique, parameter,
+// culling mode, size or debug image builds a new renderer over the same scene resources,
+// which keeps the technique instances of the lights the edit did not touch (and keeps
+// the old renderer, and the config it drew, when that fails); another scene, a draw
+// batching or a shader reload builds everything. Nothing is rendered while nothing changed.
 #include "CameraControl.h"
 
 #include "penumbra/config/Config.h"
@@ -106,8 +109,13 @@ public:
     // message in lastError() ("path:line: error: ..." for a shader). Returns whether a new
     // frame was rendered.
     bool renderIfChanged(bool always);
-    // Builds the renderer again from disk: its shaders (hot reload) and the techniques.
-    void reload() { changed(Change::Renderer); }
+    // Builds the renderer again from disk: its shaders (hot reload), the engine's pipelines
+    // and every technique.
+    void reload()
+    {
+        reloadAll_ = true;
+        changed(Change::Renderer);
+    }
     // Builds the renderer with another registry (reloaded plugin libraries: PluginReloader),
     // which must outlive the session; taken only if that renderer draws, else the current
     // one stays, with the error. The config, and so every light's parameters, stays.
@@ -153,7 +161,7 @@ public:
     void save(const std::filesystem::path& file);
 
 private:
-    std::unique_ptr<frame::FrameRenderer> build() const;
+    std::unique_ptr<frame::FrameRenderer> build();
     // The config a frame draws: config() posed at time() (the scene's nodes too; its camera
     // tracks left out while the camera is free); `moved`
     // gets the instances that moved, for FrameRenderer::update.
@@ -166,8 +174,10 @@ private:
     std::unique_ptr<config::PreparedRun> run_;  // the scene (and the config as it was read)
     config::RenderConfig config_;               // as edited
     config::RenderConfig shown_;                // as the renderer last drew it (a failed edit returns to it)
+    std::shared_ptr<frame::SceneResources> resources_;  // of run_->scene, for renderer_
     std::unique_ptr<frame::FrameRenderer> renderer_;
     Change pending_ = Change::None;
+    bool reloadAll_ = false;  // the next build starts from new scene resources, keeping no technique
     std::string shownImage_;
     frame::FrameTimings timings_;
     uint64_t framesRendered_ = 0;

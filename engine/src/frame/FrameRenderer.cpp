@@ -20,9 +20,6 @@
 namespace penumbra::frame {
 namespace {
 
-// The G-buffer's formats: shaders/common/gbuffer.glsl.
-constexpr VkFormat kNormalFormat = VK_FORMAT_R16G16_SNORM;
-constexpr VkFormat kAlbedoFormat = VK_FORMAT_R8G8B8A8_UNORM;
 using plugin::kVisibilityFormat;
 
 struct GBufferCameraData {  // matches GBufferCamera in shaders/common/gbuffer.glsl (std140)
@@ -44,53 +41,41 @@ constexpr const char* kColor = "color";
 
 } // namespace
 
-FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, const config::RenderConfig& config,
-                             plugin::PluginRegistry& plugins)
-    : context_(context),
+FrameRenderer::FrameRenderer(std::shared_ptr<SceneResources> resources, const config::RenderConfig& config,
+                             plugin::PluginRegistry& plugins, const FrameRenderer* previous)
+    : resources_(std::move(resources)),
+      context_(resources_->context()),
       plugins_(plugins),
-      scene_(scene),
-      compiler_({gpu::engineShaderDir()}),
+      scene_(resources_->scene()),
       width_(config.width),
       height_(config.height),
-      sceneGpu_(context, scene, config.batchDraws ? render::DrawBatching::Batched : render::DrawBatching::PerInstance),
-      casters_(sceneGpu_),
-      lightBuffer_(context, sizeof(LightData) * config::kMaxLights, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "lights"),
-      gbufferCamera_(context, sizeof(GBufferCameraData), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, "gbuffer.camera"),
-      executor_(context)
+      lightBuffer_(context_, sizeof(LightData) * config::kMaxLights, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "lights"),
+      gbufferCamera_(context_, sizeof(GBufferCameraData), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, "gbuffer.camera"),
+      executor_(context_)
 {
     if (config.lights.empty() || config.lights.size() > config::kMaxLights) {
         throw Error(fmt::format("{} lights: expected 1 to {}", config.lights.size(), config::kMaxLights));
     }
+    if (resources_->batching() != SceneResources::batchingOf(config)) {
+        throw Error("FrameRenderer: the scene's resources were made for another draw batching than the config's");
+    }
     setCamera(config.camera);
     ambient_ = kSkyAmbient;
     background_ = kBackground;
+    visibility_ = resources_->visibility(config.culling, width_, height_, config.shadowFocus);
+    resources_->casters().setCulling(visibility_.get());
 
-    gpu::GraphicsPipelineDesc g;
-    g.name = "gbuffer";
-    g.vertexShader = "engine/gbuffer.vert";
-    g.fragmentShader = "engine/gbuffer.frag";
-    g.pushConstantBytes = sizeof(glm::mat4);
-    g.vertexLayout = {sceneGpu_.vertexStride(),
-                      {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(scene::Vertex, position)},
-                       {1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(scene::Vertex, normal)},
-                       {2, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(scene::Vertex, uv)}}};
-    g.colorFormats = {kNormalFormat, kAlbedoFormat};
-    g.depthFormat = kFrameDepthFormat;
-    g.depthCompare = VK_COMPARE_OP_GREATER_OR_EQUAL;
-    // Open or single-sided geometry (the ground plane seen from below) must still
-    // occlude: no culling; the fragment shader flips back-facing normals.
-    g.cullMode = VK_CULL_MODE_NONE;
-    gbufferPipelines_ = BaseColorPipelines(context, compiler_, g);
-
-    nearestSampler_ = gpu::createSampler(context, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
-    visibility_ = std::make_unique<visibility::Visibility>(context, compiler_, scene, sceneGpu_, config.culling, width_,
-                                                           height_, config.shadowFocus);
-    casters_.setCulling(visibility_.get());
-
-    createTechniques(config, scene);
+    createTechniques(config, previous);
     createShadingPipeline();
-    updateLights(config, scene.bounds());
+    updateLights(config, scene_.bounds());
     buildGraph();
+}
+
+FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, const config::RenderConfig& config,
+                             plugin::PluginRegistry& plugins)
+    : FrameRenderer(std::make_shared<SceneResources>(context, scene, SceneResources::batchingOf(config)), config,
+                    plugins)
+{
 }
 
 // The shading pass is compiled for the frame's lights: LIGHT_COUNT, and for each light i
@@ -107,7 +92,7 @@ void FrameRenderer::createShadingPipeline()
         s.defines.push_back({fmt::format("VISIBILITY_SLOT_{}", i), lights_[i].unshadowed ? "-1" : std::to_string(slots++)});
     s.defines.push_back({"VISIBILITY_COUNT", std::to_string(slots)});
     s.pushConstantBytes = sizeof(ShadingPush);
-    shadingPipeline_ = gpu::Pipeline(context_, compiler_, s);
+    shadingPipeline_ = &resources_->computePipeline(s);
 }
 
 void FrameRenderer::setCamera(const scene::Camera& camera)
@@ -142,7 +127,7 @@ FrameRenderer::~FrameRenderer()
     lights_.clear();
 }
 
-void FrameRenderer::createTechniques(const config::RenderConfig& config, const scene::Scene& scene)
+void FrameRenderer::createTechniques(const config::RenderConfig& config, const FrameRenderer* previous)
 {
     lights_.resize(config.lights.size());
     for (size_t i = 0; i < config.lights.size(); ++i) {
@@ -150,15 +135,15 @@ void FrameRenderer::createTechniques(const config::RenderConfig& config, const s
         LightSlot& slot = lights_[i];
         slot.visibility = fmt::format("light{}.visibility", i);
         slot.required = lc.shadow.registrationFailureStopsTheRun();
-        slot.light = lc.light;
         slot.unshadowed = lc.shadow.unshadowed();
         if (slot.unshadowed) {
             slot.technique = lc.shadow.technique;
             continue;
         }
         const std::string who = fmt::format("light {} ('{}')", i, lc.name);
+        const plugin::LoadedPlugin* loaded = nullptr;
         try {
-            slot.plugin = &plugins_.load(lc.shadow.technique);
+            loaded = &plugins_.load(lc.shadow.technique);
         } catch (const plugin::PluginError& e) {
             if (lc.shadow.loadFailureStopsTheRun()) {
                 const std::string where = lc.shadow.techniqueWhere.empty() ? "" : lc.shadow.techniqueWhere + ": ";
@@ -169,17 +154,36 @@ void FrameRenderer::createTechniques(const config::RenderConfig& config, const s
             continue;
         }
         // Bad parameter values are the config's fault, not the plugin's: always an error.
-        slot.params = std::make_unique<plugin::ParamValues>(plugin::resolveParams(*slot.plugin, lc.shadow));
-
-        auto& shaders = pluginShaders_[lc.shadow.technique];
-        if (!shaders) {
-            shaders = std::make_unique<gpu::ShaderCompiler>(
-                std::vector<std::filesystem::path>{slot.plugin->shaderDir, gpu::engineShaderDir()});
+        auto values = std::make_unique<plugin::ParamValues>(plugin::resolveParams(*loaded, lc.shadow));
+        nlohmann::json params = values->toJson();
+        if (auto kept = keptTechnique(previous, i, lc, *loaded, params)) {
+            slot.created = std::move(kept);
+            slot.instance = slot.created->instance.get();
+            slot.technique = lc.shadow.technique;
+            slot.kept = true;
+            continue;
         }
-        const plugin::TechniqueSetup setup{context_,     *shaders,      casters_, scene, *slot.params,
-                                           slot.light,   scene.bounds(), uint32_t(i), width_, height_};
+        auto created = std::make_shared<CreatedTechnique>();
+        created->plugin = loaded;
+        created->name = lc.shadow.technique;
+        created->params = std::move(params);
+        created->values = std::move(values);
+        created->light = lc.light;
+        const plugin::TechniqueSetup setup{context_,
+                                           resources_->pluginShaders(loaded->shaderDir),
+                                           resources_->casters(),
+                                           scene_,
+                                           *created->values,
+                                           created->light,
+                                           scene_.bounds(),
+                                           uint32_t(i),
+                                           width_,
+                                           height_,
+                                           fmt::format("light{}.{}.", i, lc.shadow.technique)};
         try {
-            slot.instance = plugins_.create(*slot.plugin, setup, who);
+            created->instance = plugins_.create(*loaded, setup, who);
+            slot.created = std::move(created);
+            slot.instance = slot.created->instance.get();
             slot.technique = lc.shadow.technique;
         } catch (const plugin::PluginError& e) {
             if (slot.required) throw;
@@ -188,10 +192,38 @@ void FrameRenderer::createTechniques(const config::RenderConfig& config, const s
     }
 }
 
+// What a technique is created from besides the light's pose and radiance (which update()
+// passes it every frame): the plugin, its parameters, the light's type and shape, the
+// light's index and the output, and the scene's resources and culling it draws with.
+std::shared_ptr<FrameRenderer::CreatedTechnique> FrameRenderer::keptTechnique(const FrameRenderer* previous,
+                                                                              size_t light,
+                                                                              const config::LightConfig& config,
+                                                                              const plugin::LoadedPlugin& plugin,
+                                                                              const nlohmann::json& params) const
+{
+    if (!previous || previous->resources_ != resources_ || previous->visibility_ != visibility_ ||
+        previous->width_ != width_ || previous->height_ != height_ || light >= previous->lights_.size()) {
+        return nullptr;
+    }
+    const std::shared_ptr<CreatedTechnique>& created = previous->lights_[light].created;
+    if (!created || !created->instance || created->plugin != &plugin || created->name != config.shadow.technique ||
+        created->params != params) {
+        return nullptr;
+    }
+    const scene::Light& a = created->light;
+    const scene::Light& b = config.light;
+    const bool sameShape = a.type == b.type && a.outerConeDeg == b.outerConeDeg && a.innerConeDeg == b.innerConeDeg &&
+                           a.angularDiameterDeg == b.angularDiameterDeg && a.sizeWorld == b.sizeWorld &&
+                           a.radiusWorld == b.radiusWorld;
+    return sameShape ? created : nullptr;
+}
+
 void FrameRenderer::dropTechnique(size_t light, const std::string& why)
 {
     LightSlot& slot = lights_[light];
-    slot.instance.reset();
+    slot.created.reset();
+    slot.instance = nullptr;
+    slot.kept = false;
     slot.technique.clear();
     warnings_.push_back(fmt::format("light {}: rendered without shadows: {}", light, why));
 }
@@ -204,8 +236,8 @@ void FrameRenderer::buildGraph()
     for (;;) {
         graph_ = std::make_unique<graph::RenderGraph>();
         graph::RenderGraph& g = *graph_;
-        g.declareImage({kGNormal, width_, height_, kNormalFormat});
-        g.declareImage({kGAlbedo, width_, height_, kAlbedoFormat});
+        g.declareImage({kGNormal, width_, height_, kGBufferNormalFormat});
+        g.declareImage({kGAlbedo, width_, height_, kGBufferAlbedoFormat});
         g.declareImage({kGDepth, width_, height_, kFrameDepthFormat});
         g.declareImage({kColor, width_, height_, kFrameColorFormat});
         g.addPass("gbuffer", graph::QueueKind::Graphics)
@@ -258,6 +290,7 @@ bool FrameRenderer::registerTechnique(size_t light)
         io.bindBuffer = [this](std::string_view name, const gpu::Buffer& buffer) { executor_.bindBuffer(name, buffer); };
         std::string failure;
         try {
+            slot.created->declaredBy = this;
             slot.instance->registerPasses(g, io);
             if (!g.isWritten(slot.visibility)) {
                 failure = fmt::format("registered no pass that writes '{}' (the light's visibility image)",
@@ -306,7 +339,7 @@ void FrameRenderer::update(const config::RenderConfig& config, const scene::Scen
     }
     setCamera(config.camera);
     if (!movedInstances.empty()) {
-        sceneGpu_.updateInstances(context_, scene);
+        resources_->sceneGpu().updateInstances(context_, scene);
         visibility_->instancesMoved(movedInstances);
         for (LightSlot& slot : lights_)
             if (slot.instance) slot.instance->instancesMoved(movedInstances);
@@ -328,8 +361,18 @@ FrameTimings FrameRenderer::renderFrame()
 {
     const auto frameStart = std::chrono::steady_clock::now();
     FrameTimings timings;
+    // Techniques this renderer shares with another renderer over the same scene (an edit
+    // that failed, say) hold the other's graph now: declare ours again, with our lights.
+    resources_->casters().setCulling(visibility_.get());
+    bool declaredElsewhere = false;
+    for (size_t i = 0; i < lights_.size(); ++i) {
+        if (!lights_[i].instance || lights_[i].created->declaredBy == this) continue;
+        lights_[i].instance->update(currentLights_[i], scene_.bounds());
+        declaredElsewhere = true;
+    }
+    if (declaredElsewhere) buildGraph();
     // The previous frame has finished (execute() waits): its indirect commands are spent.
-    sceneGpu_.beginFrame();
+    resources_->sceneGpu().beginFrame();
     // Step 1 of the visibility service: the camera's receivers (the G-buffer draws them);
     // light views are culled when their casters are first drawn.
     visibility_->beginFrame(cameraViewProj_);
@@ -345,7 +388,7 @@ FrameTimings FrameRenderer::renderFrame()
             if (slot.instance && slot.instance->grewForLastFrame()) grew = true;
         if (!grew) break;
         buildGraph();
-        sceneGpu_.beginFrame();
+        resources_->sceneGpu().beginFrame();
         visibility_->beginFrame(cameraViewProj_);
         executor_.execute(*graph_);
         ++timings.redraws;
@@ -362,6 +405,8 @@ FrameTimings FrameRenderer::renderFrame()
 void FrameRenderer::recordGBuffer(graph::PassContext& pass)
 {
     const VkCommandBuffer cmd = pass.cmd();
+    render::SceneGpu& sceneGpu = resources_->sceneGpu();
+    BaseColorPipelines& gbufferPipelines = resources_->gbufferPipelines();
     VkRenderingAttachmentInfo colors[2];
     const char* targets[2] = {kGNormal, kGAlbedo};
     for (int i = 0; i < 2; ++i) {
@@ -390,17 +435,17 @@ void FrameRenderer::recordGBuffer(graph::PassContext& pass)
     VkRect2D scissor{{0, 0}, {width_, height_}};
     vkCmdSetViewport(cmd, 0, 1, &viewport);
     vkCmdSetScissor(cmd, 0, 1, &scissor);
-    gbufferPipelines_.begin();
-    sceneGpu_.draw(
+    gbufferPipelines.begin();
+    sceneGpu.draw(
         cmd, render::DrawFilter::All,
         [&](const gpu::Image& texture) {
             const gpu::Pipeline& pipeline =
-                gbufferPipelines_.bindFor(cmd, sceneGpu_, texture, &cameraViewProj_, sizeof(glm::mat4));
+                gbufferPipelines.bindFor(cmd, sceneGpu, texture, &cameraViewProj_, sizeof(glm::mat4));
             gpu::DescriptorPush descriptors;
-            descriptors.storageBuffer("Instances", sceneGpu_.instanceBuffer())
-                .storageBuffer("Materials", sceneGpu_.materialBuffer());
-            if (gbufferPipelines_.textured(pipeline))
-                descriptors.sampledImage("baseColorTexture", texture, sceneGpu_.textureSampler());
+            descriptors.storageBuffer("Instances", sceneGpu.instanceBuffer())
+                .storageBuffer("Materials", sceneGpu.materialBuffer());
+            if (gbufferPipelines.textured(pipeline))
+                descriptors.sampledImage("baseColorTexture", texture, sceneGpu.textureSampler());
             descriptors.push(context_, cmd, pipeline);
         },
         visibility_->receivers());
@@ -413,17 +458,18 @@ void FrameRenderer::recordShading(graph::PassContext& pass)
     std::vector<const gpu::Image*> visibility;
     for (const LightSlot& slot : lights_)
         if (!slot.unshadowed) visibility.push_back(&pass.image(slot.visibility));
-    shadingPipeline_.bind(cmd);
+    const gpu::Pipeline& shading = *shadingPipeline_;
+    shading.bind(cmd);
     gpu::DescriptorPush descriptors;
     plugin::bindGBuffer(pass, gbufferIo(), descriptors);
-    descriptors.sampledImage("gAlbedo", pass.image(kGAlbedo), nearestSampler_, pass.layout(kGAlbedo))
+    descriptors.sampledImage("gAlbedo", pass.image(kGAlbedo), resources_->nearestSampler(), pass.layout(kGAlbedo))
         .storageBuffer("Lights", lightBuffer_)
         .storageImage("outColor", pass.image(kColor));
-    if (!visibility.empty()) descriptors.sampledImages("visibility", visibility, nearestSampler_);
-    descriptors.push(context_, cmd, shadingPipeline_);
+    if (!visibility.empty()) descriptors.sampledImages("visibility", visibility, resources_->nearestSampler());
+    descriptors.push(context_, cmd, shading);
     const ShadingPush push{ambient_, background_};
-    shadingPipeline_.pushConstants(cmd, &push, sizeof(push));
-    shadingPipeline_.dispatchOver(cmd, width_, height_);
+    shading.pushConstants(cmd, &push, sizeof(push));
+    shading.dispatchOver(cmd, width_, height_);
 }
 
 std::vector<uint8_t> FrameRenderer::readColor() const
@@ -498,7 +544,7 @@ plugin::GBufferIo FrameRenderer::gbufferIo() const
     io.depth = kGDepth;
     io.normal = kGNormal;
     io.camera = &gbufferCamera_;
-    io.sampler = nearestSampler_;
+    io.sampler = resources_->nearestSampler();
     return io;
 }
 
@@ -506,7 +552,7 @@ plugin::GBufferIo FrameRenderer::gbufferIo() const
 // the GPU by plugin::GBufferExport (common/gbuffer.glsl's readers), not decoded again here.
 FrameRenderer::SurfaceFloats FrameRenderer::readSurfaces() const
 {
-    if (!gbufferExport_) gbufferExport_ = std::make_unique<plugin::GBufferExport>(context_, compiler_);
+    const plugin::GBufferExport& gbufferExport = resources_->gbufferExport();
     const VkDeviceSize bytes = VkDeviceSize(width_) * height_ * plugin::GBufferExport::kTexelBytes;
     const gpu::Buffer positions(context_, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "gbuffer.positions_readback");
     const gpu::Buffer normals(context_, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "gbuffer.normals_readback");
@@ -519,8 +565,8 @@ FrameRenderer::SurfaceFloats FrameRenderer::readSurfaces() const
                                     VK_ACCESS_2_MEMORY_WRITE_BIT};
         gpu::transition(cmd, depth, {depthLayout, last.stage, last.access}, depthRead);
         gpu::transition(cmd, normal, {normalLayout, last.stage, last.access}, normalRead);
-        gbufferExport_->record(cmd, depth, depthRead.layout, normal, normalRead.layout, gbufferCamera_, nearestSampler_,
-                               positions, normals);
+        gbufferExport.record(cmd, depth, depthRead.layout, normal, normalRead.layout, gbufferCamera_,
+                             resources_->nearestSampler(), positions, normals);
         gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT},
                            {VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT});
         gpu::transition(cmd, depth, depthRead, {depthLayout, last.stage, VK_ACCESS_2_MEMORY_READ_BIT});

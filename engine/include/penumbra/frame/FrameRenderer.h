@@ -18,6 +18,7 @@
 #include "penumbra/plugin/GBuffer.h"
 #include "penumbra/plugin/PluginRegistry.h"
 #include "penumbra/render/Casters.h"
+#include "penumbra/frame/SceneResources.h"
 #include "penumbra/render/Projection.h"
 #include "penumbra/render/SceneGpu.h"
 #include "penumbra/visibility/CullingStats.h"
@@ -54,10 +55,21 @@ struct FrameTimings {
 class FrameRenderer {
 public:
     // Loads the technique plugin of every light from `plugins` (which must outlive the
-    // renderer), creates one technique per light and builds the frame's graph. `scene`
-    // must outlive the renderer too: techniques keep it (TechniqueSetup::scene). Throws
+    // renderer), creates one technique per light and builds the frame's graph over
+    // `resources` (made with the config's draw batching, else Error). The scene must
+    // outlive the renderer: techniques keep it (TechniqueSetup::scene). Throws
     // plugin::PluginError when a required technique fails, penumbra::Error (naming the
     // pass) when the graph does not compile.
+    //
+    // An edit of a config drawn by `previous` (over the same resources, plugins and
+    // output): a light whose technique, parameters and light shape (type, cones, sizes)
+    // are unchanged at the same index takes previous's technique instance, with the state
+    // it grew (an adaptive shadow map's quadtree, a deep shadow map's pool); only the
+    // other lights' techniques are created. `previous` stays usable: it declares its graph
+    // again before its next frame when a shared technique was declared by another.
+    FrameRenderer(std::shared_ptr<SceneResources> resources, const config::RenderConfig& config,
+                  plugin::PluginRegistry& plugins, const FrameRenderer* previous = nullptr);
+    // The same over resources of its own (one config drawn once: tests, tools).
     FrameRenderer(gpu::Context& context, const scene::Scene& scene, const config::RenderConfig& config,
                   plugin::PluginRegistry& plugins);
     ~FrameRenderer();
@@ -97,6 +109,10 @@ public:
     // with sizes and aliasing), and the executor that allocated its memory.
     const graph::CompiledGraph& compiledGraph();
     const graph::GraphExecutor& executor() const { return executor_; }
+    const SceneResources& resources() const { return *resources_; }
+    std::shared_ptr<SceneResources> sharedResources() const { return resources_; }
+    // Whether light `light`'s technique instance was taken from the previous renderer.
+    bool techniqueKept(size_t light) const { return lights_.at(light).kept; }
 
     // Debug images: any image a pass of the frame writes (imageNames(): the G-buffer,
     // every technique's maps and tables, the visibility images, the colour image), by
@@ -128,22 +144,37 @@ public:
     std::vector<float> readNormals() const;
 
 private:
+    // A technique instance with what its TechniqueSetup refers to; shared by the renderers
+    // of successive edits that keep it.
+    struct CreatedTechnique {
+        const plugin::LoadedPlugin* plugin = nullptr;
+        std::string name;
+        nlohmann::json params;  // resolved values (defaults filled in): what an edit compares
+        std::unique_ptr<plugin::ParamValues> values;
+        scene::Light light;  // the state the technique was created with (its setup refers to it)
+        // The renderer whose graph holds its passes now: another must declare its graph
+        // again before it draws.
+        const FrameRenderer* declaredBy = nullptr;
+        std::unique_ptr<plugin::Technique> instance;  // last: destroyed first
+    };
     struct LightSlot {
         std::string technique;  // empty: unshadowed fallback
-        const plugin::LoadedPlugin* plugin = nullptr;
-        std::unique_ptr<plugin::ParamValues> params;
-        std::unique_ptr<plugin::Technique> instance;
+        std::shared_ptr<CreatedTechnique> created;
+        plugin::Technique* instance = nullptr;  // created->instance, or none
+        bool kept = false;      // created by a previous renderer
         bool required = false;
         bool unshadowed = false;  // technique "none": no passes, no visibility image
         std::string visibility;  // "light<i>.visibility"
-        scene::Light light;      // the state the technique was created with (its setup refers to it)
     };
 
     struct SurfaceFloats {
         std::vector<float> positions, normals;
     };
 
-    void createTechniques(const config::RenderConfig& config, const scene::Scene& scene);
+    void createTechniques(const config::RenderConfig& config, const FrameRenderer* previous);
+    std::shared_ptr<CreatedTechnique> keptTechnique(const FrameRenderer* previous, size_t light,
+                                                    const config::LightConfig& config,
+                                                    const plugin::LoadedPlugin& plugin, const nlohmann::json& params) const;
     void createShadingPipeline();
     void setCamera(const scene::Camera& camera);
     plugin::GBufferIo gbufferIo() const;
@@ -156,33 +187,26 @@ private:
     void recordShading(graph::PassContext& pass);
     std::vector<float> readFloats(const std::string& name) const;
 
+    std::shared_ptr<SceneResources> resources_;
     gpu::Context& context_;
     plugin::PluginRegistry& plugins_;
     const scene::Scene& scene_;
-    gpu::ShaderCompiler compiler_;
     uint32_t width_ = 0;
     uint32_t height_ = 0;
     glm::mat4 cameraViewProj_{1.0f};
     glm::vec4 ambient_{0.0f};
     glm::vec4 background_{0.0f};
 
-    render::SceneGpu sceneGpu_;
-    render::Casters casters_;
-    std::unique_ptr<visibility::Visibility> visibility_;
+    std::shared_ptr<visibility::Visibility> visibility_;
     gpu::Buffer lightBuffer_;
     gpu::Buffer gbufferCamera_;  // GBufferCamera (common/gbuffer.glsl), rewritten by setCamera
-    BaseColorPipelines gbufferPipelines_;
-    gpu::Pipeline shadingPipeline_;
-    gpu::Sampler nearestSampler_;
-    // One shader compiler per plugin: its folder first, then the engine's shaders/.
-    std::map<std::string, std::unique_ptr<gpu::ShaderCompiler>> pluginShaders_;
+    const gpu::Pipeline* shadingPipeline_ = nullptr;  // resources_'s, for this layout of lights
     std::vector<LightSlot> lights_;
     std::vector<scene::Light> currentLights_;  // as the last update() left them
     std::vector<std::string> warnings_;
     std::vector<std::string> requestedImages_;  // marked outputs again when the graph is declared again
     std::unique_ptr<graph::RenderGraph> graph_;
     graph::GraphExecutor executor_;
-    mutable std::unique_ptr<plugin::GBufferExport> gbufferExport_;  // made at the first read-back
 };
 
 } // namespace penumbra::frame
