@@ -68,6 +68,18 @@ void PluginGpuTest::expectRayCastAgreement(const std::vector<float>& v, double b
     EXPECT_GT(a.surelyLit, 2000u) << label;
 }
 
+void PluginGpuTest::expectExactlyLitWhereGeometry(const std::vector<float>& v, const std::string& label) const
+{
+    size_t seen = 0, notLit = 0;
+    for (size_t i = 0; i < v.size(); ++i) {
+        if (!frame->hasGeometry(i)) continue;
+        ++seen;
+        notLit += v[i] != 1.0f;
+    }
+    EXPECT_GT(seen, v.size() / 2) << label << ": pixels that see geometry";
+    EXPECT_EQ(notLit, 0u) << label;
+}
+
 void setShadow(config::LightConfig& light, const std::string& technique, const nlohmann::json& params)
 {
     config::ShadowSettings& shadow = light.shadow;

@@ -73,6 +73,10 @@ protected:
     void expectRayCastAgreement(const std::vector<float>& v, double bandTexels, float tolerance,
                                 const std::string& label) const;
 
+    // Expects light 0's `v` to be exactly 1 at every pixel that sees geometry, and more
+    // than half of the pixels to see it: a receiver that nothing shadows.
+    void expectExactlyLitWhereGeometry(const std::vector<float>& v, const std::string& label) const;
+
     std::unique_ptr<plugin::PluginRegistry> registry;
     std::unique_ptr<RenderedFrame> frame;
 };

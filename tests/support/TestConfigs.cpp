@@ -4,9 +4,13 @@
 
 #include "penumbra/scene/Generators.h"
 
+#include <fmt/format.h>
 #include <glm/glm.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
 
 namespace penumbra::test {
 
@@ -142,6 +146,64 @@ config::RenderConfig boxOnGroundConfig()
     config::RenderConfig cfg = lookDownRectLightConfig({1.3f, 2.5f, 0.0f}, {-3.0f, 3.0f, 0.0f}, 0.5f);
     cfg.lights[0].shadow = {};
     return cfg;
+}
+
+scene::Scene platformScene()
+{
+    scene::Scene s = planeScene();
+    addInstance(s, addMesh(s, scene::makeBox("pillar")), "pillar",
+                glm::scale(glm::translate(glm::mat4(1.0f), {0.0f, 0.5f, 0.0f}), {0.3f, 1.0f, 0.3f}));
+    addInstance(s, addMesh(s, scene::makePlane("plate")), "plate",
+                glm::scale(glm::translate(glm::mat4(1.0f), {0.0f, 1.2f, 0.0f}), {0.3f, 1.0f, 0.3f}));
+    return s;
+}
+
+config::RenderConfig platformConfig()
+{
+    return lookDownRectLightConfig({0.0f, 1.15f, 0.0f}, {0.0f, 4.0f, 0.0f}, 1.0f);
+}
+
+config::RenderConfig planeUnderDirectionalLightConfig(float degreesFromNormal)
+{
+    config::RenderConfig cfg = defaultTestConfig();
+    cfg.camera.position = {0.0f, 12.0f, 0.5f};
+    cfg.camera.target = {0.0f, 0.0f, 0.0f};
+    cfg.lights.resize(1);
+    const float a = glm::radians(degreesFromNormal);
+    cfg.lights[0].light = {};
+    cfg.lights[0].light.type = scene::LightType::Directional;
+    cfg.lights[0].light.direction = {std::sin(a), -std::cos(a), 0.0f};
+    return cfg;
+}
+
+scene::Scene panesScene(const std::vector<float>& heights, float alpha, const std::vector<float>& opaque, float scale)
+{
+    scene::Scene s = planeScene();
+    s.materials.push_back({"glass", {1.0f, 1.0f, 1.0f, alpha}, scene::kNoTexture, scene::AlphaMode::Blend, 0.5f, true});
+    scene::Mesh pane = scene::makePlane("pane");
+    pane.material = uint32_t(s.materials.size() - 1);
+    const uint32_t translucent = addMesh(s, pane);
+    const auto place = [scale](float h) {
+        return glm::scale(glm::mat4(1.0f), glm::vec3(scale)) *
+               glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(0, h, 0)), glm::vec3(2, 1, 2));
+    };
+    s.graph.setLocal(s.instances[0].node, glm::scale(s.graph.local(s.instances[0].node), glm::vec3(scale)));
+    for (float h : heights) addInstance(s, translucent, fmt::format("pane{}", h), place(h));
+    if (!opaque.empty()) {
+        pane.material = 0;
+        const uint32_t plate = addMesh(s, pane);
+        for (float h : opaque) addInstance(s, plate, fmt::format("plate{}", h), place(h));
+    }
+    s.updateTransforms();
+    return s;
+}
+
+glm::mat4 wallAt(float x)
+{
+    // Rotating -90 degrees about z takes the square's normal +y to +x.
+    return glm::translate(glm::mat4(1.0f), {x, 1.0f, 0.0f}) *
+           glm::rotate(glm::mat4(1.0f), -0.5f * std::numbers::pi_v<float>, {0.0f, 0.0f, 1.0f}) *
+           glm::scale(glm::mat4(1.0f), {2.0f, 1.0f, 2.0f});
 }
 
 uint32_t addHalfMaskedMaterial(scene::Scene& s)

@@ -1,6 +1,8 @@
 #pragma once
-// Configs the rendering tests share: config/default.json at a small output size, the
-// same at another scale, and its light turned into another type.
+// Configs and scenes the rendering tests share: config/default.json at a small output size,
+// the same at another scale, its light turned into another type, and the small scenes the
+// technique tests build (each with the view and light it is seen under), so that a scene
+// named in two tests is one scene.
 #include "penumbra/config/Config.h"
 #include "penumbra/scene/Scene.h"
 
@@ -77,6 +79,29 @@ config::RenderConfig boxOnGroundConfig();
 // `lightSide` at `lightPosition` emitting downwards (width axis x, intensity 40). The
 // scene and the light's shadow settings are left as the default config has them.
 config::RenderConfig lookDownRectLightConfig(glm::vec3 cameraPosition, glm::vec3 lightPosition, float lightSide);
+
+// Overlapping blockers at two depths: a 0.3 x 1 x 0.3 pillar on planeScene()'s ground (top
+// at y = 1) and a plate of the same size 0.2 above its top.
+scene::Scene platformScene();
+// Its view and light: a 1 x 1 rect light 3 above the top; the camera looks straight down
+// on the top from just below the plate (y = 1.15). The light's technique is the default
+// config's.
+config::RenderConfig platformConfig();
+
+// planeScene() seen from straight above, from (0, 12, 0.5), under one directional light
+// `degreesFromNormal` from the plane's normal, tilted towards +x (every other field of the
+// light is scene::Light's default): a receiver nothing shadows, at any angle.
+config::RenderConfig planeUnderDirectionalLightConfig(float degreesFromNormal);
+
+// Blended panes of `alpha` ([-1, 1]² at the heights `heights`) over planeScene()'s
+// ground, and opaque plates the same size at the heights `opaque`; all of it scaled by
+// `scale` about the origin.
+scene::Scene panesScene(const std::vector<float>& heights, float alpha, const std::vector<float>& opaque = {},
+                        float scale = 1.0f);
+
+// Places makePlane's unit square as a 2 x 2 wall in the plane x = `x` (y in [0, 2],
+// z in [-1, 1]), facing +x.
+glm::mat4 wallAt(float x);
 
 // Alpha-masked casters: a 4 x 4 quad at height 2 over a 20 x 20 ground, textured half
 // transparent (x < 0: alpha 0) and half opaque, alpha-masked.

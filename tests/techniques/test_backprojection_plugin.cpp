@@ -134,24 +134,6 @@ protected:
     }
 };
 
-// A 0.3 x 1 x 0.3 pillar with a plate of the same size 0.2 above its top, under a 1 x 1
-// rect light 3 above the top, seen from just above the top (test_vssm_plugin.cpp's
-// overlapping blockers).
-scene::Scene platformScene()
-{
-    scene::Scene s = test::planeScene();
-    test::addInstance(s, test::addMesh(s, scene::makeBox("pillar")), "pillar",
-                      glm::scale(glm::translate(glm::mat4(1.0f), {0.0f, 0.5f, 0.0f}), {0.3f, 1.0f, 0.3f}));
-    test::addInstance(s, test::addMesh(s, scene::makePlane("plate")), "plate",
-                      glm::scale(glm::translate(glm::mat4(1.0f), {0.0f, 1.2f, 0.0f}), {0.3f, 1.0f, 0.3f}));
-    return s;
-}
-
-config::RenderConfig platformConfig()
-{
-    return test::lookDownRectLightConfig({0.0f, 1.15f, 0.0f}, {0.0f, 4.0f, 0.0f}, 1.0f);
-}
-
 } // namespace
 
 // ---------------------------------------------------------------------------------
@@ -199,7 +181,8 @@ const TraversalScene kTraversalScenes[] = {
     {"box_grid", test::defaultTestConfig, [](const config::RenderConfig& c) { return config::buildScene(c.scene); },
      0.8},
     {"lattice", fenceConfig, [](const config::RenderConfig& c) { return config::buildScene(c.scene); }, 0.3},
-    {"overlapping_blockers", platformConfig, [](const config::RenderConfig&) { return platformScene(); }, -1.0, 512},
+    {"overlapping_blockers", test::platformConfig,
+     [](const config::RenderConfig&) { return test::platformScene(); }, -1.0, 512},
 };
 
 class BackprojectionTraversals : public BackprojectionTest, public ::testing::WithParamInterface<TraversalScene> {};
@@ -434,10 +417,10 @@ TEST_F(BackprojectionPenumbra, FollowsTheExactPenumbraAsCloselyAsVssmAndMoreThan
 
 TEST_F(BackprojectionTest, OverlappingBlockersFollowTheReference)
 {
-    const std::vector<float> reference = renderReference(platformConfig(), platformScene(), 256);
+    const std::vector<float> reference = renderReference(test::platformConfig(), test::platformScene(), 256);
     BackprojectionSettings s;
     s.resolution = 512;
-    const std::vector<float> v = renderWith(platformConfig(), s, platformScene());
+    const std::vector<float> v = renderWith(test::platformConfig(), s, test::platformScene());
     size_t top = 0, wrong = 0, shadowedTop = 0;
     double squared = 0.0;
     for (size_t i = 0; i < v.size(); ++i) {
@@ -464,24 +447,10 @@ TEST_F(BackprojectionTest, OverlappingBlockersFollowTheReference)
 TEST_F(BackprojectionTest, NoBlockerIsExactlyLitAtGrazingAngles)
 {
     for (float degrees : {60.0f, 85.0f, 89.0f}) {
-        config::RenderConfig cfg = test::defaultTestConfig();
-        cfg.camera.position = {0.0f, 12.0f, 0.5f};
-        cfg.camera.target = {0.0f, 0.0f, 0.0f};
-        cfg.lights.resize(1);
-        const float a = glm::radians(degrees);
-        cfg.lights[0].light = {};
-        cfg.lights[0].light.type = scene::LightType::Directional;
-        cfg.lights[0].light.direction = {std::sin(a), -std::cos(a), 0.0f};
+        config::RenderConfig cfg = test::planeUnderDirectionalLightConfig(degrees);
         cfg.lights[0].light.angularDiameterDeg = 1.0f;
         const std::vector<float> v = renderWith(cfg, BackprojectionSettings{}, test::planeScene());
-        size_t plane = 0, notLit = 0;
-        for (size_t i = 0; i < v.size(); ++i) {
-            if (!frame->hasGeometry(i)) continue;
-            ++plane;
-            notLit += v[i] != 1.0f;
-        }
-        EXPECT_GT(plane, v.size() / 2);
-        EXPECT_EQ(notLit, 0u) << degrees << " degrees";
+        expectExactlyLitWhereGeometry(v, fmt::format("{} degrees", degrees));
     }
 }
 
@@ -546,7 +515,7 @@ namespace {
 // off the centre see the pillar's sides.
 config::RenderConfig pillarFootConfig()
 {
-    config::RenderConfig cfg = platformConfig();
+    config::RenderConfig cfg = test::platformConfig();
     cfg.camera.position = {1.0f, 0.9f, 0.7f};
     cfg.camera.target = {0.1f, 0.0f, 0.0f};
     cfg.camera.up = {0.0f, 1.0f, 0.0f};
@@ -599,13 +568,13 @@ GroundErrors pillarGroundErrors(const test::RenderedFrame& frame, const std::vec
 TEST_F(BackprojectionTest, SubLightsReduceTheSingleSilhouetteError)
 {
     const config::RenderConfig cfg = pillarFootConfig();
-    const std::vector<float> reference = renderReference(cfg, platformScene(), 1024);
+    const std::vector<float> reference = renderReference(cfg, test::platformScene(), 1024);
     BackprojectionSettings s;
     s.resolution = 512;
     std::vector<GroundErrors> errors;
     for (int sub : {1, 2, 3}) {
         s.subLights = sub;
-        errors.push_back(pillarGroundErrors(*frame, renderWith(cfg, s, platformScene()), reference));
+        errors.push_back(pillarGroundErrors(*frame, renderWith(cfg, s, test::platformScene()), reference));
         RecordProperty(fmt::format("rmse_s{}", sub),
                        fmt::format("away {:.4f} foot {:.4f}", errors.back().away, errors.back().foot));
     }
@@ -682,7 +651,7 @@ namespace {
 // 256-texel maps.
 config::RenderConfig platformWithSubLights(uint32_t width, uint32_t height)
 {
-    config::RenderConfig cfg = platformConfig();
+    config::RenderConfig cfg = test::platformConfig();
     cfg.width = width;
     cfg.height = height;
     BackprojectionSettings s;
@@ -698,7 +667,7 @@ config::RenderConfig platformWithSubLights(uint32_t width, uint32_t height)
 // their MSSMs one (§5: "only one shadow map and one MSSM are allocated and reused").
 TEST_F(BackprojectionTest, SubLightsReuseOneMapAndOneMssm)
 {
-    render(platformWithSubLights(64, 36), platformScene());
+    render(platformWithSubLights(64, 36), test::platformScene());
     const graph::CompiledGraph& compiled = frame->renderer.compiledGraph();
     for (const char* image : {"shadow_map", "mssm"}) {
         std::set<int> slots;
@@ -776,9 +745,9 @@ TEST_F(BackprojectionTest, SubLightsFollowAMovingLight)
     const config::RenderConfig cfg = platformWithSubLights(96, 54);
     config::RenderConfig moved = cfg;
     moved.lights[0].light.position += glm::vec3(0.4f, -0.5f, -0.3f);
-    render(moved, platformScene());
+    render(moved, test::platformScene());
     const std::vector<float> there = frame->checkedVisibility();
-    render(cfg, platformScene());
+    render(cfg, test::platformScene());
     const std::vector<float> here = frame->checkedVisibility();
     frame->renderer.update(moved, frame->scene, {});
     frame->renderer.renderFrame();

@@ -68,29 +68,6 @@ double figure(const test::RenderedFrame& f, const std::string& name)
     return 0.0;
 }
 
-// Panes of `alpha` ([-1, 1]² at the given heights) over a 20 x 20 ground, and `opaque`
-// plates the same size at their heights.
-scene::Scene panesScene(const std::vector<float>& heights, float alpha, const std::vector<float>& opaque = {},
-                        float scale = 1.0f)
-{
-    scene::Scene s = test::planeScene();
-    s.materials.push_back({"glass", {1.0f, 1.0f, 1.0f, alpha}, scene::kNoTexture, scene::AlphaMode::Blend, 0.5f, true});
-    scene::Mesh pane = scene::makePlane("pane");
-    pane.material = uint32_t(s.materials.size() - 1);
-    const uint32_t translucent = test::addMesh(s, pane);
-    pane.material = 0;
-    const uint32_t plate = test::addMesh(s, pane);
-    const auto place = [scale](float h) {
-        return glm::scale(glm::mat4(1.0f), glm::vec3(scale)) *
-               glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(0, h, 0)), glm::vec3(2, 1, 2));
-    };
-    s.graph.setLocal(s.instances[0].node, glm::scale(s.graph.local(s.instances[0].node), glm::vec3(scale)));
-    for (float h : heights) test::addInstance(s, translucent, fmt::format("pane{}", h), place(h));
-    for (float h : opaque) test::addInstance(s, plate, fmt::format("plate{}", h), place(h));
-    s.updateTransforms();
-    return s;
-}
-
 // A camera looking down on the ground beside the panes, and a light of `type` up and to
 // the side, so that the panes' shadows fall on the ground in view.
 config::RenderConfig panesConfig(scene::LightType type, float scale = 1.0f)
@@ -161,7 +138,7 @@ TEST_F(DeepPlugin, TranslucentPanesAttenuateByOneMinusAlphaEach)
             SCOPED_TRACE(fmt::format("{} light, scale {}, {} pane(s)", scene::lightTypeName(c.type), c.scale,
                                      heights.size()));
             const config::RenderConfig cfg = panesConfig(c.type, c.scale);
-            const std::vector<float> v = renderDeep(cfg, panesScene(heights, 0.3f, {}, c.scale), {{"resolution", 512}});
+            const std::vector<float> v = renderDeep(cfg, test::panesScene(heights, 0.3f, {}, c.scale), {{"resolution", 512}});
             std::vector<size_t> counted(heights.size() + 1, 0);
             for (size_t i = 0; i < v.size(); ++i) {
                 if (!frame->hasGeometry(i) || std::abs(frame->position(i).y) > 1e-4f * c.scale) continue;
@@ -280,7 +257,7 @@ TEST_F(DeepPlugin, TruncationErrorStaysWithinEpsilon)
     for (const double epsilon : {0.0, 0.2, 0.3, 0.45}) {
         SCOPED_TRACE(fmt::format("panes, epsilon {}", epsilon));
         const std::vector<float> v =
-            renderDeep(panes, panesScene(heights, 0.3f), {{"resolution", 512}, {"epsilon", epsilon}});
+            renderDeep(panes, test::panesScene(heights, 0.3f), {{"resolution", 512}, {"epsilon", epsilon}});
         int k = 1;
         while (std::pow(0.7, k) > epsilon && k < 5) ++k;
         size_t behindAll = 0;
@@ -312,7 +289,7 @@ TEST_F(DeepPlugin, AFaintLayerDoesNotHideAnOpaqueCasterBehindIt)
 {
     const config::RenderConfig cfg = panesConfig(scene::LightType::Spot);
     const std::vector<float> v =
-        renderDeep(cfg, panesScene({2.0f}, 0.005f, {1.0f}), {{"resolution", 512}, {"epsilon", 0.01}});
+        renderDeep(cfg, test::panesScene({2.0f}, 0.005f, {1.0f}), {{"resolution", 512}, {"epsilon", 0.01}});
     size_t under = 0;
     for (size_t i = 0; i < v.size(); ++i) {
         if (!frame->onGround(i) || panesCrossed(cfg.lights[0].light, frame->position(i), {1.0f}, 0.15) != 1) continue;
@@ -405,7 +382,7 @@ TEST_F(DeepPlugin, ErrorAgainstTheReference)
     const std::vector<float> two = {1.0f, 1.5f}, five = {1.0f, 1.25f, 1.5f, 1.75f, 2.0f};
     const fs::path scratch = test::makeScratchFolder("deep_panes");
     const fs::path gltf = scratch / "panes.gltf";
-    scene::writeGltf(panesScene(five, 0.3f), gltf);
+    scene::writeGltf(test::panesScene(five, 0.3f), gltf);
     config::RenderConfig fromFile = panesConfig(scene::LightType::Spot);
     fromFile.scene.parts[0].kind = config::ScenePart::Kind::Gltf;
     fromFile.scene.parts[0].gltf = gltf;
@@ -414,8 +391,8 @@ TEST_F(DeepPlugin, ErrorAgainstTheReference)
     config::RenderConfig fence = config::loadConfig(test::sourceDir() / "config/fence.json");
     for (config::RenderConfig* c : {&hair, &fence}) c->width = 120, c->height = 90;
     std::vector<Scene> scenes = {
-        {"2 panes", panesConfig(scene::LightType::Spot), [&] { return panesScene(two, 0.3f); }},
-        {"5 panes", panesConfig(scene::LightType::Spot), [&] { return panesScene(five, 0.3f); }},
+        {"2 panes", panesConfig(scene::LightType::Spot), [&] { return test::panesScene(two, 0.3f); }},
+        {"5 panes", panesConfig(scene::LightType::Spot), [&] { return test::panesScene(five, 0.3f); }},
         {"5 panes (glTF)", fromFile, [&] { return config::buildScene(fromFile.scene); }},
         {"hair", hair, [&] { return config::buildScene(hair.scene); }},
         {"fence", fence, [&] { return config::buildScene(fence.scene); }},
@@ -487,11 +464,7 @@ TEST_F(DeepPlugin, ContactAndGrazingLight)
         {"glass", {1.0f, 1.0f, 1.0f, 0.3f}, scene::kNoTexture, scene::AlphaMode::Blend, 0.5f, true});
     scene::Mesh pane = scene::makePlane("pane");
     pane.material = uint32_t(standing.materials.size() - 1);
-    // Rotating -90 degrees about z takes the plane's normal +Y to +X.
-    test::addInstance(standing, test::addMesh(standing, pane), "pane",
-                      glm::translate(glm::mat4(1.0f), {0.0f, 1.0f, 0.0f}) *
-                          glm::rotate(glm::mat4(1.0f), -0.5f * glm::pi<float>(), {0.0f, 0.0f, 1.0f}) *
-                          glm::scale(glm::mat4(1.0f), {2.0f, 1.0f, 2.0f}));
+    test::addInstance(standing, test::addMesh(standing, pane), "pane", test::wallAt(0.0f));
     standing.updateTransforms();
     config::RenderConfig cfg = panesConfig(scene::LightType::Spot);
     cfg.camera.position = {0.6f, 3.0f, 0.001f};
@@ -539,7 +512,7 @@ TEST_F(DeepPlugin, RefusesBadParametersByName)
     const config::RenderConfig cfg = panesConfig(scene::LightType::Spot);
     const auto expectRefusal = [&](const nlohmann::json& params, const std::string& name, const std::string& why) {
         try {
-            renderDeep(cfg, panesScene({1.0f}, 0.3f), params);
+            renderDeep(cfg, test::panesScene({1.0f}, 0.3f), params);
             ADD_FAILURE() << "rendered with " << params.dump();
         } catch (const Error& e) {
             EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();

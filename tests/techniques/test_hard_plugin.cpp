@@ -320,23 +320,13 @@ TEST_F(HardPcf, FractionalPixelsGrowWithTheKernel)
 
 namespace {
 
-struct Grazing {
-    float angleDeg;  // between the plane's normal and the direction to the light
-};
-
 class HardAcne : public PluginGpuTest, public ::testing::WithParamInterface<float> {
 protected:
     // A 20 x 20 plane alone, seen from above, lit by a directional light GetParam()
     // degrees from its normal. Every pixel that sees the plane is lit.
     config::RenderConfig grazingConfig(const HardSettings& s) const
     {
-        config::RenderConfig cfg = test::defaultTestConfig();
-        cfg.camera.position = {0.0f, 12.0f, 0.5f};
-        cfg.camera.target = {0.0f, 0.0f, 0.0f};
-        cfg.lights.resize(1);
-        const float a = glm::radians(GetParam());
-        cfg.lights[0].light.type = scene::LightType::Directional;
-        cfg.lights[0].light.direction = {std::sin(a), -std::cos(a), 0.0f};
+        config::RenderConfig cfg = test::planeUnderDirectionalLightConfig(GetParam());
         cfg.lights[0].light.intensity = 3.0f;
         cfg.lights[0].shadow = {};
         applySettings(cfg.lights[0], s);

@@ -14,6 +14,7 @@
 #include "penumbra/plugin/PluginRegistry.h"
 #include "penumbra/scene/Generators.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -243,24 +244,10 @@ TEST_F(PcssTest, NoBlockerIsExactlyLit)
     // (85: grazing): the receiver plane keeps it from finding itself as a blocker, so
     // every pixel is exactly 1.
     for (float degrees : {60.0f, 85.0f}) {
-        config::RenderConfig cfg = test::defaultTestConfig();
-        cfg.camera.position = {0.0f, 12.0f, 0.5f};
-        cfg.camera.target = {0.0f, 0.0f, 0.0f};
-        cfg.lights.resize(1);
-        const float a = glm::radians(degrees);
-        cfg.lights[0].light = {};
-        cfg.lights[0].light.type = scene::LightType::Directional;
-        cfg.lights[0].light.direction = {std::sin(a), -std::cos(a), 0.0f};
+        config::RenderConfig cfg = test::planeUnderDirectionalLightConfig(degrees);
         cfg.lights[0].light.angularDiameterDeg = 10.0f;
         const std::vector<float> v = renderWith(cfg, {}, test::planeScene());
-        size_t plane = 0, notLit = 0;
-        for (size_t i = 0; i < v.size(); ++i) {
-            if (!frame->hasGeometry(i)) continue;
-            ++plane;
-            notLit += v[i] != 1.0f;
-        }
-        EXPECT_GT(plane, v.size() / 2);
-        EXPECT_EQ(notLit, 0u) << degrees << " degrees";
+        expectExactlyLitWhereGeometry(v, fmt::format("{} degrees", degrees));
     }
 }
 

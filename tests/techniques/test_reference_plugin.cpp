@@ -34,7 +34,6 @@
 #include <functional>
 #include <iterator>
 #include <memory>
-#include <numbers>
 #include <tuple>
 
 using namespace penumbra;
@@ -407,26 +406,7 @@ TEST_F(ReferencePlugin, LightSizeZeroEqualsThePointLightAndSizedLightsSoften)
 // ---------------------------------------------------------------------------------------
 // Translucent and alpha-masked casters
 
-scene::Scene glassScene(std::initializer_list<float> heights)
-{
-    scene::Scene s;
-    s.materials.push_back({"glass", {1.0f, 1.0f, 1.0f, 0.3f}, scene::kNoTexture, scene::AlphaMode::Blend, 0.5f, true});
-    scene::Mesh ground = scene::makePlane("ground");
-    scene::Mesh pane = scene::makePlane("pane");
-    pane.material = 1;
-    ground.computeBounds();
-    pane.computeBounds();
-    s.meshes = {ground, pane};
-    const glm::mat4 identity(1.0f);
-    s.addInstance(0, s.graph.addNode("ground", scene::kNoParent, glm::scale(identity, glm::vec3(20, 1, 20))));
-    for (float h : heights)
-        s.addInstance(1, s.graph.addNode(fmt::format("pane{}", h), scene::kNoParent,
-                                         glm::scale(glm::translate(identity, glm::vec3(0, h, 0)), glm::vec3(2, 1, 2))));
-    s.updateTransforms();
-    return s;
-}
-
-// Panes of alpha 0.3 ([-1, 1]² at the given heights) under a point light off to the
+// test::panesScene of alpha 0.3 ([-1, 1]² at the given heights) under a point light off to the
 // side: a ground point behind k panes gets 0.7^k.
 TEST_F(ReferencePlugin, TranslucentPanesAttenuateByOneMinusAlphaEach)
 {
@@ -437,7 +417,7 @@ TEST_F(ReferencePlugin, TranslucentPanesAttenuateByOneMinusAlphaEach)
     for (const std::vector<float>& heights : {std::vector<float>{1.0f}, std::vector<float>{1.0f, 1.5f}}) {
         SCOPED_TRACE(fmt::format("{} pane(s)", heights.size()));
         const Frame& f = render(referenceConfig(64, 48, camera, light),
-                                heights.size() == 1 ? glassScene({1.0f}) : glassScene({1.0f, 1.5f}));
+                                test::panesScene(heights, 0.3f));
         size_t counted[3] = {0, 0, 0};
         for (size_t i = 0; i < f.pixels(); ++i) {
             const glm::dvec3 p = f.position(i);
@@ -937,7 +917,7 @@ TEST_F(ReferenceBruteForce, MaskHolesLetLightThroughAndBlendedCastersAreOpaque)
     light.position = {3.0f, 4.0f, 0.0f};
     const Frame& g = render(referenceConfig(64, 48, lookDown({-2.5f, 6.0f, 0.001f}, {-2.5f, 0.0f, 0.0f}, 40.0f), light,
                                             {{"mode", "brute_force"}}),
-                            glassScene({1.0f}));
+                            test::panesScene({1.0f}, 0.3f));
     size_t behindPane = 0;
     for (size_t i = 0; i < g.pixels(); ++i) {
         const glm::dvec3 p = g.position(i);

@@ -30,7 +30,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <string>
 #include <utility>
 #include <vector>
@@ -152,14 +151,7 @@ class TechniqueExtremes : public Extremes, public ::testing::WithParamInterface<
 scene::Scene wallScene()
 {
     scene::Scene s = test::planeScene();
-    scene::Mesh wall = scene::makePlane("wall");  // unit square in XZ, normal +Y
-    wall.computeBounds();
-    s.meshes.push_back(wall);
-    // Rotating -90 degrees about z takes +Y to +X.
-    const glm::mat4 m = glm::translate(glm::mat4(1.0f), {0.5f, 1.0f, 0.0f}) *
-                        glm::rotate(glm::mat4(1.0f), -0.5f * std::numbers::pi_v<float>, {0.0f, 0.0f, 1.0f}) *
-                        glm::scale(glm::mat4(1.0f), {2.0f, 1.0f, 2.0f});
-    s.addInstance(1, s.graph.addNode("wall", scene::kNoParent, m));
+    test::addInstance(s, test::addMesh(s, scene::makePlane("wall")), "wall", test::wallAt(0.5f));
     return s;
 }
 

@@ -181,27 +181,12 @@ INSTANTIATE_TEST_SUITE_P(
 
 namespace {
 
-// test::planeScene() seen from above, lit by a directional light `degrees` from its
-// normal.
-config::RenderConfig planeConfig(float degrees)
-{
-    config::RenderConfig cfg = test::defaultTestConfig();
-    cfg.camera.position = {0.0f, 12.0f, 0.5f};
-    cfg.camera.target = {0.0f, 0.0f, 0.0f};
-    cfg.lights.resize(1);
-    const float a = glm::radians(degrees);
-    cfg.lights[0].light = {};
-    cfg.lights[0].light.type = scene::LightType::Directional;
-    cfg.lights[0].light.direction = {std::sin(a), -std::cos(a), 0.0f};
-    return cfg;
-}
-
 class VsmPlane : public VsmTest {
 protected:
     // V on the plane's pixels.
     std::vector<float> planeVisibility(float degrees, const VsmSettings& s)
     {
-        const std::vector<float> v = renderWith(planeConfig(degrees), s, test::planeScene());
+        const std::vector<float> v = renderWith(test::planeUnderDirectionalLightConfig(degrees), s, test::planeScene());
         std::vector<float> plane;
         for (size_t i = 0; i < v.size(); ++i) {
             if (frame->hasGeometry(i)) plane.push_back(v[i]);

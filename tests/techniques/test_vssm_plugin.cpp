@@ -140,9 +140,6 @@ protected:
         const gpu::Pipeline probe(*context, compiler, probeDesc);
         const gpu::Sampler sampler = gpu::createSampler(*context, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
 
-        const gpu::MemoryAccess write{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
-        const gpu::MemoryAccess readWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                                          VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
         context->submitAndWait([&](VkCommandBuffer cmd) {
             gpu::transition(cmd, sat, gpu::access::kUndefined, gpu::access::kComputeWrite);
             scan.bind(cmd);
@@ -155,11 +152,11 @@ protected:
             int32_t push[3] = {int32_t(size), int32_t(size), 0};
             scan.pushConstants(cmd, push, sizeof(push));
             scan.dispatchOver(cmd, size);
-            gpu::memoryBarrier(cmd, write, readWrite);
+            gpu::memoryBarrier(cmd, gpu::access::kComputeStorageWrite, gpu::access::kComputeStorageReadWrite);
             push[2] = 1;
             scan.pushConstants(cmd, push, sizeof(push));
             scan.dispatchOver(cmd, size);
-            gpu::memoryBarrier(cmd, write, readWrite);
+            gpu::memoryBarrier(cmd, gpu::access::kComputeStorageWrite, gpu::access::kComputeStorageReadWrite);
             probe.bind(cmd);
             gpu::DescriptorPush()
                 .storageImage("satImage", sat)
@@ -443,31 +440,16 @@ INSTANTIATE_TEST_SUITE_P(Vssm, VssmPenumbra, ::testing::Values("none", "uniform"
 
 // ---------------------------------------------------------------------------------
 // Overlapping blockers at different depths (the paper's Fig. 3 and 9, as numbers).
+// test::platformScene(): a pillar with a plate 0.2 above its top, under a 1 x 1 rect light
+// 3 above the top. The plate's umbra covers most of the top. The kernels there (up to 64
+// texels, about 0.4 m) mostly see the ground a metre below, behind the receiver, so a
+// kernel's mean depth lies behind the receiver although the plate covers part of it: the
+// non-planar case, which SAVSM-like lookups (subdivision none) take as lit. The camera
+// looks straight down on the top from below the plate.
 
 namespace {
 
-// A 0.3 x 1 x 0.3 pillar on the ground (top at y = 1) and a plate of the same size 0.2
-// above its top, under a 1 x 1 rect light 3 above the top: the plate's umbra covers most
-// of the top. The kernels there (up to 64 texels, about 0.4 m) mostly see the ground a
-// metre below, behind the receiver, so a kernel's mean depth lies behind the receiver
-// although the plate covers part of it: the non-planar case, which SAVSM-like lookups
-// (subdivision none) take as lit. The camera looks straight down on the top from below
-// the plate.
-scene::Scene platformScene()
-{
-    scene::Scene s = test::planeScene();
-    test::addInstance(s, test::addMesh(s, scene::makeBox("pillar")), "pillar",
-                      glm::scale(glm::translate(glm::mat4(1.0f), {0.0f, 0.5f, 0.0f}), {0.3f, 1.0f, 0.3f}));
-    test::addInstance(s, test::addMesh(s, scene::makePlane("plate")), "plate",
-                      glm::scale(glm::translate(glm::mat4(1.0f), {0.0f, 1.2f, 0.0f}), {0.3f, 1.0f, 0.3f}));
-    return s;
-}
-
-config::RenderConfig platformConfig()
-{
-    return test::lookDownRectLightConfig({0.0f, 1.15f, 0.0f}, {0.0f, 4.0f, 0.0f}, 1.0f);
-}
-
+// A pixel on the pillar's top (y = 1).
 bool onPlatformTop(const test::RenderedFrame& frame, size_t pixel)
 {
     return frame.hasGeometry(pixel) && std::abs(frame.positions[4 * pixel + 1] - 1.0f) < 1e-3f;
@@ -477,13 +459,13 @@ bool onPlatformTop(const test::RenderedFrame& frame, size_t pixel)
 
 TEST_F(VssmTest, SubdivisionRemovesTheIncorrectlyLitAreaOfOverlappingBlockers)
 {
-    config::RenderConfig cfg = platformConfig();
+    config::RenderConfig cfg = test::platformConfig();
     cfg.lights[0].shadow = {};
     cfg.lights[0].shadow.technique = "reference";
     cfg.lights[0].shadow.required = true;
     cfg.lights[0].shadow.setParam("cache", false, "test");
     cfg.lights[0].shadow.setParam("samples", 256, "test");
-    render(cfg, platformScene());
+    render(cfg, test::platformScene());
     const std::vector<float> reference = frame->checkedVisibility();
 
     std::map<std::string, size_t> incorrectlyLit;
@@ -493,7 +475,7 @@ TEST_F(VssmTest, SubdivisionRemovesTheIncorrectlyLitAreaOfOverlappingBlockers)
         s.maxSearchTexels = 64.0;
         s.maxFilterTexels = 64.0;
         s.subdivision = subdivision;
-        const std::vector<float> v = renderWith(platformConfig(), s, platformScene());
+        const std::vector<float> v = renderWith(test::platformConfig(), s, test::platformScene());
         size_t wrong = 0, top = 0;
         double squared = 0.0;
         shadowedTop = 0;
@@ -527,27 +509,13 @@ TEST_F(VssmTest, NoBlockerIsExactlyLitAtGrazingAngles)
     // (1 degree wide, so all of it stays above the horizon): the HSM or the receiver
     // plane keeps the plane from finding itself as a blocker, so every pixel is exactly 1.
     for (float degrees : {60.0f, 85.0f, 89.0f}) {
-        config::RenderConfig cfg = test::defaultTestConfig();
-        cfg.camera.position = {0.0f, 12.0f, 0.5f};
-        cfg.camera.target = {0.0f, 0.0f, 0.0f};
-        cfg.lights.resize(1);
-        const float a = glm::radians(degrees);
-        cfg.lights[0].light = {};
-        cfg.lights[0].light.type = scene::LightType::Directional;
-        cfg.lights[0].light.direction = {std::sin(a), -std::cos(a), 0.0f};
+        config::RenderConfig cfg = test::planeUnderDirectionalLightConfig(degrees);
         cfg.lights[0].light.angularDiameterDeg = 1.0f;
         VssmSettings s;
         s.maxSearchTexels = 64.0;
         s.maxFilterTexels = 64.0;
         const std::vector<float> v = renderWith(cfg, s, test::planeScene());
-        size_t plane = 0, notLit = 0;
-        for (size_t i = 0; i < v.size(); ++i) {
-            if (!frame->hasGeometry(i)) continue;
-            ++plane;
-            notLit += v[i] != 1.0f;
-        }
-        EXPECT_GT(plane, v.size() / 2);
-        EXPECT_EQ(notLit, 0u) << degrees << " degrees";
+        expectExactlyLitWhereGeometry(v, fmt::format("{} degrees", degrees));
     }
 }
 
