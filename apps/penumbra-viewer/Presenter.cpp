@@ -517,7 +517,7 @@ void Presenter::present(const std::vector<ViewBlit>& views, ImDrawData* ui, bool
             recordUi(framebuffers_[index], {}, &over, background);
         }
     } else {
-        recordUi(framebuffers_[index], uncovered, ui, background);  // no layer: as it was before there was one
+        recordUi(framebuffers_[index], uncovered, ui, background);  // no layer: every panel drawn over the frame
         uiLayerRects_.clear();  // the layer missed these panels: drawn again when next used
     }
     timer_->endScope(cmd_, panelsScope);

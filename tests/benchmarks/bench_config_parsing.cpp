@@ -1,9 +1,9 @@
 // Loading a config of many objects, as `penumbra validate` and every command start: the
 // file read and parsed (config::loadDocument), then read as a config (parseConfig). Two
-// shapes that were quadratic before issue 43: N empty objects in one array (nlohmann's
-// callback parser scanned the array at each closing object) and an animation of N keys
-// (each key an object, each recorded as an origin). Linear now: the time per object
-// should stay flat from 10k to 100k.
+// shapes that a naive reader makes quadratic: N empty objects in one array (nlohmann's
+// callback parser scans the array at each closing object) and an animation of N keys
+// (each key an object, each recorded as an origin). The time per object should stay
+// flat from 10k to 100k.
 //
 //   cmake --build --preset release --target penumbra_benchmarks
 //   build/release/tests/benchmarks/penumbra_benchmarks --benchmark_filter='Config' --benchmark_repetitions=5 --benchmark_report_aggregates_only=true

@@ -1,8 +1,8 @@
 // Wide kernels across the edges of a cube atlas. Area lights (rect, disk, sphere) are
 // shadowed through six cube faces; a kernel that reaches past its receiver's face must
 // read the casters beyond the cube edge, not the edge's own texels: clamped to the face,
-// a PCSS or VSSM penumbra that crossed a face border was cut along it (V = 0 before the
-// border, 1 beyond, where the truth is 0.5). Each face now carries a guard band of the
+// a PCSS or VSSM penumbra that crosses a face border is cut along it (V = 0 before the
+// border, 1 beyond, where the truth is 0.5). So each face carries a guard band of the
 // kernel's reach beyond its 90° (render::ShadowMap guardTexels; docs/plugins.md, "Cube
 // edges").
 //

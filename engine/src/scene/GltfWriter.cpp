@@ -273,8 +273,9 @@ void writeGlb(tinygltf::Model& model, const fs::path& path)
 // The name of the buffer file written beside `<stem>.gltf` for `bytes`: `<stem>.<16 hex
 // digits of the bytes' FNV-1a hash>.bin`. A new buffer gets a new name, so writing it never
 // replaces the buffer the old .gltf references: the .gltf's rename alone switches from
-// the old pair to the new one (a kill between two renames left the new .bin beside the
-// old .gltf, which then failed to load). Equal bytes get the same name.
+// the old pair to the new one (with a fixed .bin name, a kill between the two renames
+// would leave the new .bin beside the old .gltf, which would then fail to load). Equal
+// bytes get the same name.
 std::string bufferFileName(const std::string& stem, const std::vector<unsigned char>& bytes)
 {
     uint64_t hash = 14695981039346656037ull;  // FNV-1a, 64-bit
