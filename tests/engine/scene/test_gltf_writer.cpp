@@ -307,9 +307,9 @@ TEST_F(GltfWriter, FailedWriteKeepsTheExistingFiles)
 }
 
 // Multi-file output all or nothing (issue 20): a kill between the renames of a rewrite
-// left the new scene.bin beside the old scene.gltf, which then failed to load. Each
-// buffer is named by its content, so writing the new one never touches the one the old
-// .gltf reads, and the .gltf's rename switches pairs at once.
+// must not leave a new scene.bin beside the old scene.gltf, which would fail to load.
+// Each buffer is named by its content, so writing the new one never touches the one the
+// old .gltf reads, and the .gltf's rename switches pairs at once.
 TEST_F(GltfWriter, RewriteSwitchesTheGltfAndItsBufferAtOnce)
 {
     const Scene first = generatePenumbra({});

@@ -41,7 +41,7 @@ inline float kernelLimitTexels(float fraction, uint32_t faceTexels) { return fra
 
 // kLightSizeParam's value: -1 or >= 0. Its range, [-1, 1e9], cannot say that the values
 // between mean nothing: throws penumbra::ConfigError naming `technique`'s light_size for
-// them (-0.5 was taken as -1 before).
+// them (a test for < 0 would take -0.5 silently as -1, the light's own size).
 float lightSizeOverride(const ParamValues& params, std::string_view technique);
 
 // An Int parameter `name` that sizes a box of taps centred on the receiver's texel (PCF):
