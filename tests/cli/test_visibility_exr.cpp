@@ -57,12 +57,7 @@ bool sameBits(const std::vector<float>& a, const std::vector<float>& b)
     return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
 }
 
-class VisibilityExr : public ::testing::Test {
-protected:
-    void SetUp() override { dir = test::makeScratchFolder("vexr"); }
-    void TearDown() override { fs::remove_all(dir); }
-    fs::path dir;
-};
+class VisibilityExr : public test::ScratchFolderTest {};
 
 TEST_F(VisibilityExr, ReadsBackWhatWasWrittenWithTheFirstLightAsY)
 {

@@ -1,7 +1,8 @@
 // `penumbra-viewer` as a script drives it under Xvfb (xvfb-run): what it shows, what it
 // saves, and how it fails. The frame must be `penumbra render`'s frame of the saved config.
-#include "ExrFile.h"    // support/
-#include "TestPaths.h"  // support/: the build tree's paths
+#include "ExrFile.h"        // support/
+#include "ScratchFolder.h"  // support/
+#include "TestPaths.h"      // support/: the build tree's paths
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -70,16 +71,8 @@ std::string xvfb()
     return fmt::format("xvfb-run -a -n {} -s '-screen 0 1920x1080x24'", 100 + ::getpid() % 5000 * 4);
 }
 
-class ViewerTest : public ::testing::Test {
+class ViewerTest : public penumbra::test::ScratchFolderTest {
 protected:
-    void SetUp() override
-    {
-        dir = fs::temp_directory_path() /
-              fmt::format("penumbra_viewer_{}_{}", ::getpid(), ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::create_directories(dir);
-    }
-    void TearDown() override { fs::remove_all(dir); }
-
     // Runs `prefix penumbra-viewer FILE --validation --no-vsync --exec SCRIPT` (the
     // script's commands separated by ';').
     RunResult viewer(const std::string& file, const std::string& script, const std::string& prefix = xvfb()) const
@@ -106,8 +99,6 @@ protected:
     }
 
     std::string config(const std::string& name) const { return (penumbra::test::sourceDir() / "config" / name).string(); }
-
-    fs::path dir;
 };
 
 // A session's edits, then the screenshot, V and the saved config; `penumbra render` of the
@@ -739,4 +730,3 @@ TEST_F(ViewerTest, ASlowFrameOfAShowsProgressAndACancelKeepsTheLastImage)
     const json config = json::parse(slurp(saved));
     EXPECT_EQ(config["lights"][0]["shadow"]["technique"], "pcss");  // the edit is undone
 }
-

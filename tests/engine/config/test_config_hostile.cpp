@@ -34,15 +34,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// A folder of its own per test, removed after it.
-class HostileConfig : public ::testing::Test {
+class HostileConfig : public test::ScratchFolderTest {
 protected:
-    void SetUp() override { dir_ = test::makeScratchFolder("hostile"); }
-    void TearDown() override { fs::remove_all(dir_); }
-
     fs::path write(const std::string& name, const std::string& text) const
     {
-        const fs::path file = dir_ / name;
+        const fs::path file = dir / name;
         std::ofstream(file, std::ios::binary) << text;
         return file;
     }
@@ -66,7 +62,6 @@ protected:
                lightsIntensity + "}]}";
     }
 
-    fs::path dir_;
 };
 
 } // namespace
@@ -120,7 +115,7 @@ TEST_F(HostileConfig, FileNamesTheFileSystemRefusesAreNamedShortened)
         EXPECT_LT(what.size(), 600u) << "the name is shortened";
     }
     // As the config file itself.
-    const std::string what = errorLoading(dir_ / (longName + ".json"));
+    const std::string what = errorLoading(dir / (longName + ".json"));
     EXPECT_NE(what.find("too long"), std::string::npos) << what;
     EXPECT_LT(what.size(), 600u);
 }
@@ -129,7 +124,7 @@ TEST_F(HostileConfig, OnlyRegularFilesOfBoundedSizeAreRead)
 {
     // A FIFO would block the read forever, a device never end it: refused by type, as the
     // config itself and as an include, before any read.
-    const fs::path fifo = dir_ / "pipe.json";
+    const fs::path fifo = dir / "pipe.json";
     ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
     std::string what = errorLoading(fifo);
     EXPECT_NE(what.find("pipe.json: is a FIFO (named pipe), expected a JSON config file"), std::string::npos) << what;
@@ -140,8 +135,8 @@ TEST_F(HostileConfig, OnlyRegularFilesOfBoundedSizeAreRead)
         EXPECT_NE(what.find(fmt::format("{}: is a character device, expected a JSON config file", device)), std::string::npos)
             << what;
     }
-    what = errorLoading(dir_);
-    EXPECT_NE(what.find(fmt::format("{}: is a directory, expected a JSON config file", dir_.filename().string())),
+    what = errorLoading(dir);
+    EXPECT_NE(what.find(fmt::format("{}: is a directory, expected a JSON config file", dir.filename().string())),
               std::string::npos)
         << what;
     // /proc files report 0 bytes: /proc/self/mem cannot be read from its start (an internal
@@ -294,7 +289,7 @@ TEST_F(HostileConfig, AnAnimationWithoutTracksIsTheFrameRateOfTheScenesGltfAnima
     EXPECT_FLOAT_EQ(c.animation.fps, 24.0f);
     EXPECT_TRUE(c.animation.empty());
     // Saved, it keeps its frame rate.
-    EXPECT_EQ(config::configJson(c, dir_ / "saved.json")["animation"]["fps"], 24);
+    EXPECT_EQ(config::configJson(c, dir / "saved.json")["animation"]["fps"], 24);
 }
 
 TEST(TrackEvaluation, FramesToPlayAreBounded)
@@ -326,9 +321,9 @@ TEST_F(HostileConfig, IncludesFanningOutAreRefusedAtTheFileLimit)
 TEST_F(HostileConfig, IncludesTogetherHoldAtMostTheConfigByteLimit)
 {
     // Two loads of one file a little over half the limit: refused before the second read.
-    std::ofstream(dir_ / "half.json", std::ios::binary) << std::string(config::kMaxConfigBytes / 2 + 16, ' ') << "{}";
+    std::ofstream(dir / "half.json", std::ios::binary) << std::string(config::kMaxConfigBytes / 2 + 16, ' ') << "{}";
     const std::string what = errorLoading(write("a.json", R"({"include": ["half.json", "half.json"]})"));
-    EXPECT_NE(what.find("a.json: /include/1: " + (dir_ / "half.json").string() + ": the config and its includes come to"),
+    EXPECT_NE(what.find("a.json: /include/1: " + (dir / "half.json").string() + ": the config and its includes come to"),
               std::string::npos)
         << what;
     EXPECT_NE(what.find("at most 64 MiB together (include chain: a.json)"), std::string::npos) << what;
@@ -356,7 +351,7 @@ TEST_F(HostileConfig, ParsingIsLinearInTheNumberOfObjects)
     for (int i = 0; i < 100000; ++i) doc["animation"]["tracks"][0]["keys"].push_back({{"t", i * 0.01}, {"value", 45}});
     const config::ConfigDocument loaded = config::loadDocument(write("keys.json", doc.dump()));
     EXPECT_LE(loaded.origin.size(), 20u);
-    EXPECT_EQ(loaded.fileFor("/animation/tracks/0/keys/99999/t"), (dir_ / "keys.json").string());
+    EXPECT_EQ(loaded.fileFor("/animation/tracks/0/keys/99999/t"), (dir / "keys.json").string());
     EXPECT_EQ(config::parseConfig(loaded).animation.tracks[0].keys.size(), 100000u);
 }
 

@@ -117,16 +117,13 @@ std::vector<LongValueCase> longValueCases()
     return cases;
 }
 
-class LongValues : public ::testing::Test {
+class LongValues : public test::ScratchFolderTest {
 protected:
-    void SetUp() override { dir_ = test::makeScratchFolder("long_values"); }
-    void TearDown() override { fs::remove_all(dir_); }
-
     // The ConfigError of reading `config` as `validate` does: the document, every sweep
     // variant, and (`buildScene`) the scene.
     std::string errorReading(const json& config, bool buildScene) const
     {
-        const fs::path file = dir_ / "long.json";
+        const fs::path file = dir / "long.json";
         std::ofstream(file, std::ios::binary) << config.dump();
         try {
             const config::ConfigDocument document = config::loadDocument(file);
@@ -141,7 +138,6 @@ protected:
         return "(accepted)";
     }
 
-    fs::path dir_;
 };
 
 TEST_F(LongValues, EveryConfigMessageShowsTheValueShortenedAndNamesThePlace)

@@ -15,11 +15,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-class ReadFile : public ::testing::Test {
+class ReadFile : public test::ScratchFolderTest {
 protected:
-    void SetUp() override { dir = test::makeScratchFolder("read_file"); }
-    void TearDown() override { fs::remove_all(dir); }
-
     // The FileReadError reading `file` within `maxBytes` gives; a test failure if it reads.
     static io::FileReadError refusal(const fs::path& file, uint64_t maxBytes = 1024)
     {
@@ -32,7 +29,6 @@ protected:
         return io::FileReadError(file, io::FileReadProblem::Unreadable, "");
     }
 
-    fs::path dir;
 };
 
 } // namespace

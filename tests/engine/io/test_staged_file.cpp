@@ -23,19 +23,15 @@ namespace fs = std::filesystem;
 
 namespace {
 
-class StagedFileTest : public ::testing::Test {
+class StagedFileTest : public test::ScratchFolderTest {
 protected:
-    void SetUp() override { dir_ = test::makeScratchFolder("staged"); }
-    void TearDown() override { fs::remove_all(dir_); }
-
-    std::set<std::string> entries() const { return test::entryNames(dir_); }
+    std::set<std::string> entries() const { return test::entryNames(dir); }
     static std::string read(const fs::path& file) { return test::readFile(file); }
     void writeFile(const std::string& name, const std::string& text) const
     {
-        std::ofstream(dir_ / name, std::ios::binary) << text;
+        std::ofstream(dir / name, std::ios::binary) << text;
     }
 
-    fs::path dir_;
 };
 
 } // namespace
@@ -43,7 +39,7 @@ protected:
 TEST_F(StagedFileTest, ContentIsUnseenUntilTheCommitReplacesTheTargetWhole)
 {
     writeFile("out.txt", "old");
-    io::StagedFile file(dir_ / "out.txt");
+    io::StagedFile file(dir / "out.txt");
     {
         std::ofstream out = file.openTemp();
         out << "new content";
@@ -56,9 +52,9 @@ TEST_F(StagedFileTest, ContentIsUnseenUntilTheCommitReplacesTheTargetWhole)
     } else {
         EXPECT_EQ(during.size(), 2u);
     }
-    EXPECT_EQ(read(dir_ / "out.txt"), "old");
+    EXPECT_EQ(read(dir / "out.txt"), "old");
     file.commit();
-    EXPECT_EQ(read(dir_ / "out.txt"), "new content");
+    EXPECT_EQ(read(dir / "out.txt"), "new content");
     EXPECT_EQ(entries(), std::set<std::string>{"out.txt"});
 }
 
@@ -66,14 +62,14 @@ TEST_F(StagedFileTest, AnAbandonedWriteLeavesTheTargetAndNothingElse)
 {
     writeFile("out.txt", "old");
     {
-        io::StagedFile file(dir_ / "out.txt");
+        io::StagedFile file(dir / "out.txt");
         file.openTemp() << "half";
     }
-    EXPECT_EQ(read(dir_ / "out.txt"), "old");
+    EXPECT_EQ(read(dir / "out.txt"), "old");
     EXPECT_EQ(entries(), std::set<std::string>{"out.txt"});
     // Through the path that stb and OpenEXR open, too.
     {
-        io::StagedFile file(dir_ / "new.txt");
+        io::StagedFile file(dir / "new.txt");
         std::ofstream(file.tempPath(), std::ios::binary) << "half";
     }
     EXPECT_EQ(entries(), std::set<std::string>{"out.txt"});
@@ -82,10 +78,10 @@ TEST_F(StagedFileTest, AnAbandonedWriteLeavesTheTargetAndNothingElse)
 TEST_F(StagedFileTest, TheCommittedFileHasTheModeAnOfstreamWouldGiveIt)
 {
     const mode_t old = ::umask(022);
-    io::writeTextFile(dir_ / "out.txt", "x");
+    io::writeTextFile(dir / "out.txt", "x");
     ::umask(old);
     struct stat st {};
-    ASSERT_EQ(::stat((dir_ / "out.txt").c_str(), &st), 0);
+    ASSERT_EQ(::stat((dir / "out.txt").c_str(), &st), 0);
     EXPECT_EQ(st.st_mode & 0777, 0644u);
 }
 
@@ -95,7 +91,7 @@ TEST_F(StagedFileTest, AWriterKilledWhileWritingLeavesNoFile)
     const pid_t child = ::fork();
     ASSERT_GE(child, 0);
     if (child == 0) {
-        io::StagedFile file(dir_ / "out.txt");
+        io::StagedFile file(dir / "out.txt");
         std::ofstream out = file.openTemp();
         out << std::string(1 << 16, 'x');
         out.flush();
@@ -105,11 +101,11 @@ TEST_F(StagedFileTest, AWriterKilledWhileWritingLeavesNoFile)
     int status = 0;
     ASSERT_EQ(::waitpid(child, &status, 0), child);
     ASSERT_TRUE(WIFSIGNALED(status));
-    EXPECT_EQ(read(dir_ / "out.txt"), "old");
+    EXPECT_EQ(read(dir / "out.txt"), "old");
     // Without O_TMPFILE the killed writer's name stays; the next writer removes it.
-    io::writeTextFile(dir_ / "out.txt", "next");
+    io::writeTextFile(dir / "out.txt", "next");
     EXPECT_EQ(entries(), std::set<std::string>{"out.txt"});
-    EXPECT_EQ(read(dir_ / "out.txt"), "next");
+    EXPECT_EQ(read(dir / "out.txt"), "next");
 }
 
 TEST_F(StagedFileTest, StaleTemporariesOfTheTargetGoAndALiveWritersStays)
@@ -120,22 +116,22 @@ TEST_F(StagedFileTest, StaleTemporariesOfTheTargetGoAndALiveWritersStays)
                              "out.png.tmp0123abcde", "out.png.tmpxyz12345", "other.png.tmp01234567", "out.png.tmp0123abcd.keep"}) {
         writeFile(name, "x");
     }
-    fs::rename(dir_ / "out.png.tmplive0000", dir_ / "out.png.tmp00001111");
-    const int live = ::open((dir_ / "out.png.tmp00001111").c_str(), O_RDONLY);
+    fs::rename(dir / "out.png.tmplive0000", dir / "out.png.tmp00001111");
+    const int live = ::open((dir / "out.png.tmp00001111").c_str(), O_RDONLY);
     ASSERT_GE(live, 0);
     ASSERT_EQ(::flock(live, LOCK_EX), 0);
     // A link named like a temporary is not followed or removed through.
-    fs::create_symlink(dir_ / "other.png.tmp01234567", dir_ / "out.png.tmp99999999");
+    fs::create_symlink(dir / "other.png.tmp01234567", dir / "out.png.tmp99999999");
 
-    EXPECT_EQ(io::removeStaleTemporaries(dir_ / "out.png"), 2);
+    EXPECT_EQ(io::removeStaleTemporaries(dir / "out.png"), 2);
     EXPECT_EQ(entries(), (std::set<std::string>{"out.png.tmp00001111", "out.png.tmp0123", "out.png.tmp0123abcde",
                                                 "out.png.tmpxyz12345", "other.png.tmp01234567", "out.png.tmp0123abcd.keep",
                                                 "out.png.tmp99999999"}));
     ::close(live);
     // Its writer gone, the next writer of the target removes it too.
-    io::writeTextFile(dir_ / "out.png", "png");
-    EXPECT_FALSE(fs::exists(dir_ / "out.png.tmp00001111"));
-    EXPECT_TRUE(fs::exists(dir_ / "other.png.tmp01234567"));
+    io::writeTextFile(dir / "out.png", "png");
+    EXPECT_FALSE(fs::exists(dir / "out.png.tmp00001111"));
+    EXPECT_TRUE(fs::exists(dir / "other.png.tmp01234567"));
 }
 
 TEST(StagedFileNames, TemporaryNamesAreTheTargetsNameDotTmpAndEightHexDigits)
@@ -153,22 +149,22 @@ TEST_F(StagedFileTest, AbandonedEntriesAreRemovedOnlyOfTheKindAskedForAndNeverTh
 {
     // Named like leftovers: a folder, a locked folder, a file, a FIFO, a link to a folder.
     const auto leftover = [](const std::string& name) { return name.rfind("stage-", 0) == 0; };
-    fs::create_directories(dir_ / "stage-killed" / "inside");
+    fs::create_directories(dir / "stage-killed" / "inside");
     writeFile("stage-killed/inside/file", "x");
-    fs::create_directory(dir_ / "stage-live");
-    fs::create_directory(dir_ / "kept");
+    fs::create_directory(dir / "stage-live");
+    fs::create_directory(dir / "kept");
     writeFile("stage-file", "x");
-    ASSERT_EQ(::mkfifo((dir_ / "stage-fifo").c_str(), 0600), 0);
-    fs::create_directory_symlink(dir_ / "kept", dir_ / "stage-link");
-    const int live = ::open((dir_ / "stage-live").c_str(), O_RDONLY | O_DIRECTORY);
+    ASSERT_EQ(::mkfifo((dir / "stage-fifo").c_str(), 0600), 0);
+    fs::create_directory_symlink(dir / "kept", dir / "stage-link");
+    const int live = ::open((dir / "stage-live").c_str(), O_RDONLY | O_DIRECTORY);
     ASSERT_GE(live, 0);
     ASSERT_EQ(::flock(live, LOCK_EX), 0);
 
-    EXPECT_EQ(io::removeAbandoned(dir_, io::Leftover::Folder, leftover), 1);
+    EXPECT_EQ(io::removeAbandoned(dir, io::Leftover::Folder, leftover), 1);
     EXPECT_EQ(entries(), (std::set<std::string>{"stage-live", "kept", "stage-file", "stage-fifo", "stage-link"}));
-    EXPECT_EQ(io::removeAbandoned(dir_, io::Leftover::File, leftover), 1);
+    EXPECT_EQ(io::removeAbandoned(dir, io::Leftover::File, leftover), 1);
     EXPECT_EQ(entries(), (std::set<std::string>{"stage-live", "kept", "stage-fifo", "stage-link"}));
     ::close(live);
-    EXPECT_EQ(io::removeAbandoned(dir_, io::Leftover::Folder, leftover), 1);
+    EXPECT_EQ(io::removeAbandoned(dir, io::Leftover::Folder, leftover), 1);
     EXPECT_EQ(entries(), (std::set<std::string>{"kept", "stage-fifo", "stage-link"}));
 }

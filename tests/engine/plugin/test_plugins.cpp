@@ -2,6 +2,7 @@
 // names plugin, file and what to do) per way a plugin can fail, the registry still
 // working after each failure, reflected parameters from spec to config to the plugin's
 // own view, and --set overrides. The test plugins are in tests/fixtures/plugins/.
+#include "ScratchFolder.h"
 #include "TestContext.h"
 #include "TestPaths.h"  // support/: the build tree's paths
 
@@ -869,16 +870,7 @@ const char* const kTwoLights = R"({
     {"type": "point", "position": [4, 4, 0], "shadow": {"technique": "testgood"}}
   ]})";
 
-class Configs : public Registry {
-protected:
-    void SetUp() override
-    {
-        dir = fs::temp_directory_path() / fmt::format("penumbra_plugin_configs_{}", ::getpid());
-        fs::create_directories(dir);
-    }
-    void TearDown() override { fs::remove_all(dir); }
-    fs::path dir;
-};
+class Configs : public test::WithScratchFolder<Registry> {};
 
 } // namespace
 

@@ -56,15 +56,14 @@ bool anyContains(const std::vector<std::string>& lines, const std::string& text)
 
 // quad.gltf's JSON, edited and written to a temporary file (its buffer is a data URI,
 // so the copy stands alone).
-class EditedQuad : public ::testing::Test {
+class EditedQuad : public test::ScratchFolderTest {
 protected:
     void SetUp() override
     {
-        dir = test::makeScratchFolder("gltf");
+        test::ScratchFolderTest::SetUp();
         std::ifstream in(gltfFile("quad.gltf"));
         doc = nlohmann::json::parse(in);
     }
-    void TearDown() override { fs::remove_all(dir); }
 
     fs::path write()
     {
@@ -73,7 +72,6 @@ protected:
         return path;
     }
 
-    fs::path dir;
     nlohmann::json doc;
 };
 

@@ -2,6 +2,7 @@
 // extreme, every key removed, every value given another type, every GLB header byte
 // overwritten. Each variant must load or be refused with an AssetError — never another
 // exception or a crash (the test-asan workflow runs this under ASan and UBSan).
+#include "ScratchFolder.h"
 #include "TestConfigs.h"
 
 #include "penumbra/core/Error.h"
@@ -11,7 +12,6 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
-#include <unistd.h>
 
 #include <fstream>
 #include <functional>
@@ -30,12 +30,11 @@ struct Tally {
     size_t refused = 0;
 };
 
-class GltfMutations : public ::testing::Test {
+class GltfMutations : public test::ScratchFolderTest {
 protected:
     void SetUp() override
     {
-        dir = fs::temp_directory_path() / fmt::format("penumbra_mutations_{}", ::getpid());
-        fs::create_directories(dir);
+        test::ScratchFolderTest::SetUp();
         // Thousands of variants: their warnings are not the point here.
         level = spdlog::get_level();
         spdlog::set_level(spdlog::level::off);
@@ -43,7 +42,7 @@ protected:
     void TearDown() override
     {
         spdlog::set_level(level);
-        fs::remove_all(dir);
+        test::ScratchFolderTest::TearDown();
     }
 
     void loadVariant(const fs::path& path, const std::string& what)
@@ -107,7 +106,6 @@ protected:
         walk(json::json_pointer());
     }
 
-    fs::path dir;
     Tally tally;
     spdlog::level::level_enum level = spdlog::level::info;
 };

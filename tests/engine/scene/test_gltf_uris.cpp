@@ -30,11 +30,11 @@ constexpr std::string_view kSecret = "SECRET-root:x:0:0:";
 // A model folder (model/) with quad_external.gltf's JSON (its buffer an external
 // quad.bin), and beside it a folder (outside/) holding a copy of that buffer and a
 // secret file of the buffer's size.
-class GltfUris : public ::testing::Test {
+class GltfUris : public test::ScratchFolderTest {
 protected:
     void SetUp() override
     {
-        dir = test::makeScratchFolder("gltf_uris");
+        test::ScratchFolderTest::SetUp();
         model = dir / "model";
         outside = dir / "outside";
         fs::create_directories(model / "sub");
@@ -46,7 +46,6 @@ protected:
         std::ofstream(outside / "secret.bin", std::ios::binary) << secret;
         fs::copy_file(test::gltfFile("quad.bin"), outside / "quad.bin");
     }
-    void TearDown() override { fs::remove_all(dir); }
 
     // The model with buffer 0's URI set to `uri`.
     fs::path withBufferUri(const std::string& uri)
@@ -83,7 +82,7 @@ protected:
         return loadGltf(path, report, options).triangleCount();
     }
 
-    fs::path dir, model, outside;
+    fs::path model, outside;
     nlohmann::json doc;
 };
 

@@ -27,14 +27,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-class GltfWriter : public ::testing::Test {
+class GltfWriter : public test::ScratchFolderTest {
 protected:
-    void SetUp() override
-    {
-        dir = test::makeScratchFolder("gltf_writer");
-    }
-    void TearDown() override { fs::remove_all(dir); }
-
     std::vector<std::string> filesInDir() const
     {
         std::vector<std::string> names;
@@ -42,8 +36,6 @@ protected:
         std::sort(names.begin(), names.end());
         return names;
     }
-
-    fs::path dir;
 };
 
 tinygltf::Model load(const fs::path& path)
