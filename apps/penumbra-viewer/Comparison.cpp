@@ -1,14 +1,16 @@
 #include "Comparison.h"
 
 #include "penumbra/core/Error.h"
-#include "penumbra/frame/FrameRenderer.h"
+#include "penumbra/core/ShortText.h"
+#include "penumbra/metrics/DebugImage.h"
 #include "penumbra/metrics/Images.h"
-#include "penumbra/plugin/PluginRegistry.h"
+#include "penumbra/plugin/Params.h"
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include <memory>
+#include <algorithm>
+#include <cmath>
 
 namespace penumbra::viewer {
 
@@ -43,112 +45,165 @@ std::vector<metrics::VisibilityComparison> compareStacks(const std::vector<std::
     return out;
 }
 
-ComparisonWorker::ComparisonWorker(gpu::ContextOptions options, std::vector<std::filesystem::path> pluginSearchPath)
-    : options_(std::move(options)), pluginSearchPath_(std::move(pluginSearchPath))
+std::optional<CompareView> parseCompareView(std::string_view word)
 {
-    options_.presentation.reset();  // B is read back, never shown through a swapchain of its own
-    thread_ = std::thread([this] { run(); });
+    if (word == "a") return CompareView::A;
+    if (word == "b") return CompareView::B;
+    if (word == "split") return CompareView::Split;
+    if (word == "difference") return CompareView::Difference;
+    return std::nullopt;
 }
 
-ComparisonWorker::~ComparisonWorker()
+Comparison::Comparison(MakeDrawer makeDrawer) : makeDrawer_(std::move(makeDrawer)) {}
+
+void Comparison::start(const std::string& technique, size_t lightCount, const std::vector<std::filesystem::path>& pluginSearchPath)
 {
-    {
-        std::lock_guard<std::mutex> lock(mutex_);
-        stop_ = true;
-        waiting_.reset();
-        progress_.cancelled = true;
+    if (!drawer_) {
+        pluginSearchPath_ = pluginSearchPath;
+        drawer_ = makeDrawer_(pluginSearchPath_);
     }
-    wake_.notify_all();
-    thread_.join();
-}
-
-void ComparisonWorker::request(ComparisonRequest request)
-{
-    {
-        std::lock_guard<std::mutex> lock(mutex_);
-        waiting_ = std::move(request);
-        busy_ = true;
+    on_ = true;
+    bShadows_.assign(lightCount, {});
+    for (config::ShadowSettings& b : bShadows_) {
+        b.technique = technique;
+        b.required = true;
+        // The reference's 256 rays a pixel take a minute at 1280 x 720 on a CPU: 16 for a
+        // first look (raise it in the panel).
+        if (technique == "reference") b.setParam("samples", 16, "viewer: B reference.samples");
     }
-    wake_.notify_all();
+    drawer_->cancel();
+    forgetB();
 }
 
-void ComparisonWorker::cancel()
+void Comparison::stop()
 {
-    std::lock_guard<std::mutex> lock(mutex_);
-    waiting_.reset();
-    done_.reset();
-    ++generation_;
-    progress_.cancelled = true;  // a pass that polls (the reference's tracing) stops at its next row
+    on_ = false;
+    if (drawer_) drawer_->cancel();
 }
 
-double ComparisonWorker::busySeconds() const
+void Comparison::settingsChanged()
 {
-    if (!busy_) return 0.0;
-    const int64_t now = std::chrono::steady_clock::now().time_since_epoch().count();
-    return double(now - startedNs_.load()) * 1e-9;
+    result_.reset();
+    requestedKey_.clear();
+    if (drawer_) drawer_->cancel();
 }
 
-std::optional<ComparisonResult> ComparisonWorker::take()
+void Comparison::setParam(const config::ParamOverride& o, const std::string& where, plugin::PluginRegistry& plugins)
 {
-    std::lock_guard<std::mutex> lock(mutex_);
-    std::optional<ComparisonResult> out = std::move(done_);
-    done_.reset();
-    return out;
+    std::vector<config::ShadowSettings> changed = bShadows_;
+    bool used = false;
+    for (config::ShadowSettings& b : changed) {
+        if (b.technique != o.technique) continue;
+        b.setParam(o.param, o.value, fmt::format("{}: compare-set {}.{}", where, o.technique, o.param));
+        plugin::resolveParams(plugins.load(b.technique), b);  // throws naming where
+        used = true;
+    }
+    if (!used) {
+        throw Error(fmt::format("{}: compare-set: B uses no \"{}\" (compare TECHNIQUE first)", where, core::shortText(o.technique)));
+    }
+    bShadows_ = std::move(changed);
+    settingsChanged();
 }
 
-void ComparisonWorker::run()
+bool Comparison::usePlugins(const std::vector<std::filesystem::path>& pluginSearchPath)
 {
-    // The worker's own device, registry and scene: nothing of the window's is touched
-    // from this thread.
-    std::unique_ptr<gpu::Context> context;
-    std::unique_ptr<plugin::PluginRegistry> plugins;
-    std::unique_ptr<scene::Scene> scene;
-    std::string sceneKey;
-    const plugin::ProgressScope progress(progress_);
-    for (;;) {
-        ComparisonRequest request;
-        uint64_t generation = 0;
-        {
-            std::unique_lock<std::mutex> lock(mutex_);
-            wake_.wait(lock, [&] { return stop_ || waiting_.has_value(); });
-            if (stop_) break;
-            request = std::move(*waiting_);
-            waiting_.reset();
-            generation = generation_;
-            startedNs_ = std::chrono::steady_clock::now().time_since_epoch().count();
-            progress_.passes = 0;
-            progress_.fraction = 0.0;
-            progress_.cancelled = false;
+    pluginSearchPath_ = pluginSearchPath;
+    if (!drawer_) return false;
+    retiredValidationMessages_ += drawer_->validationMessages();
+    drawer_ = makeDrawer_(pluginSearchPath_);
+    forgetB();
+    return true;
+}
+
+void Comparison::cancel()
+{
+    if (drawer_) drawer_->cancel();
+    requestedKey_ = viewKey_;
+}
+
+// B's last image, error and view: asked for again once the view rests.
+void Comparison::forgetB()
+{
+    result_.reset();
+    bError_.clear();
+    requestedKey_.clear();
+    viewKey_.clear();
+}
+
+bool Comparison::current() const { return result_ && !viewKey_.empty() && result_->viewKey == viewKey_; }
+
+uint32_t Comparison::validationMessages() const
+{
+    return retiredValidationMessages_ + (drawer_ ? drawer_->validationMessages() : 0);
+}
+
+std::string Comparison::update(const config::RenderConfig& shownView, float timeS, Clock::time_point now,
+                               const std::function<std::vector<std::vector<float>>()>& readAVisibility)
+{
+    if (!on_ || !drawer_) return {};
+    std::string notice;
+    if (bShadows_.size() != shownView.lights.size()) {
+        start(bShadows_.empty() ? "reference" : bShadows_.front().technique, shownView.lights.size(), pluginSearchPath_);
+    }
+    lights_ = shownView.lights;
+    const std::string key = viewKey(shownView, timeS);
+    if (key != viewKey_) {
+        viewKey_ = key;
+        stillSince_ = now;
+        bError_.clear();
+    }
+    if (std::optional<ComparisonResult> r = drawer_->take()) {
+        if (!r->error.empty()) {
+            if (r->viewKey == key) bError_ = r->error;
+            notice = "B: " + r->error;
+        } else {
+            result_ = std::move(*r);
+            ++bImageVersion_;
+            errorsDirty_ = true;
+            spdlog::info("B drawn in {:.2f} s", result_->seconds);
         }
-        ComparisonResult result;
-        result.viewKey = request.viewKey;
-        const auto start = std::chrono::steady_clock::now();
-        try {
-            if (!context) context = std::make_unique<gpu::Context>(options_);
-            if (!plugins) plugins = std::make_unique<plugin::PluginRegistry>(pluginSearchPath_);
-            // The scene is built again only when its source changed.
-            const std::string key = config::configJson(request.config, "/")["scene"].dump();
-            if (!scene || key != sceneKey) {
-                scene.reset();
-                config::RenderConfig c = request.config;
-                scene = std::make_unique<scene::Scene>(config::buildScene(c.scene));
-                sceneKey = key;
-            }
-            // Posed as A is (the animation starts from the rest pose at every request).
-            config::RenderConfig posed = request.config;
-            if (config::animated(request.config)) config::poseScene(request.config, request.timeS, posed, *scene);
-            frame::FrameRenderer renderer(*context, *scene, posed, *plugins);
-            renderer.renderFrame();
-            result.images = app::captureFrame(renderer);
-        } catch (const std::exception& e) {
-            result.error = e.what();
-        }
-        if (context) validationMessages_ = context->validationMessageCount();
-        result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        std::lock_guard<std::mutex> lock(mutex_);
-        if (generation == generation_) done_ = std::move(result);
-        busy_ = waiting_.has_value();
     }
+    // Asked for once the view has rested: not for every step of a drag.
+    if (!current() && requestedKey_ != key && now - stillSince_ >= kRestBeforeRequest) {
+        drawer_->request({withShadows(shownView, bShadows_), timeS, key});
+        requestedKey_ = key;
+    }
+    if (errorsDirty_ && current()) {
+        aVisibility_ = readAVisibility();
+        errors_ = compareStacks(aVisibility_, result_->images, lights_);
+        updateDifferenceImage();
+        errorsDirty_ = false;
+    }
+    return notice;
+}
+
+void Comparison::setSplitAt(float fraction) { splitAt_ = std::clamp(fraction, 0.0f, 1.0f); }
+
+void Comparison::setDifference(int light, float scale)
+{
+    differenceLight_ = light;
+    differenceScale_ = scale;
+    updateDifferenceImage();
+}
+
+// |V_A - V_B| of one light, in false colour over [0, scale]; pixels not compared 0.
+void Comparison::updateDifferenceImage()
+{
+    if (!current() || aVisibility_.empty() || lights_.empty()) return;
+    const app::FrameImages& b = result_->images;
+    const size_t l = size_t(std::clamp(differenceLight_, 0, int(std::min(aVisibility_.size(), lights_.size())) - 1));
+    const metrics::PixelMask mask = app::reachMask(lights_[l].light, b.width, b.height, b.positions);
+    metrics::DebugImageValues diff;
+    diff.width = b.width;
+    diff.height = b.height;
+    diff.values.resize(size_t(diff.width) * diff.height);
+    for (size_t i = 0; i < diff.values.size(); ++i) {
+        diff.values[i] = mask.covered[i] ? std::abs(aVisibility_[l][i] - b.visibility[l][i]) : 0.0f;
+    }
+    // A scale of 0 would map every difference to the top of the ramp.
+    const double scale = std::max(double(differenceScale_), 1e-6);
+    differenceRgba_ = metrics::debugImageRgba(diff, metrics::DebugMapping::FalseColor, {0.0, scale});
+    ++differenceVersion_;
 }
 
 } // namespace penumbra::viewer

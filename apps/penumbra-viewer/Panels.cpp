@@ -121,11 +121,11 @@ void Viewer::drawPanels()
     ImGui::PopItemWidth();
     ImGui::End();
     drawPixelInspector();
-    if (compareOn_ && bCurrent() && viewMode_ == ViewMode::Difference) drawDifferenceColourBar();
+    if (comparison_.shows(CompareView::Difference)) drawDifferenceColourBar();
     // Split view: where A ends and B begins, and which is which.
-    if (compareOn_ && bCurrent() && viewMode_ == ViewMode::Split && viewRect_.extent.width > 0) {
+    if (comparison_.shows(CompareView::Split) && viewRect_.extent.width > 0) {
         const float s = io.DisplayFramebufferScale.x > 0.0f ? 1.0f / io.DisplayFramebufferScale.x : 1.0f;
-        const float x = (float(viewRect_.offset.x) + splitAt_ * float(viewRect_.extent.width)) * s;
+        const float x = (float(viewRect_.offset.x) + comparison_.splitAt() * float(viewRect_.extent.width)) * s;
         const float y0 = float(viewRect_.offset.y) * s, y1 = float(viewRect_.offset.y + int32_t(viewRect_.extent.height)) * s;
         ImDrawList* draw = ImGui::GetForegroundDrawList();
         draw->AddLine(ImVec2(x, y0), ImVec2(x, y1), IM_COL32(255, 255, 255, 200), 2.0f * uiScale_);
@@ -520,14 +520,13 @@ void Viewer::drawAnimationPanel()
 void Viewer::drawComparePanel()
 {
     if (!panelHeader("Compare", false)) return;
-    bool on = compareOn_;
+    bool on = comparison_.on();
     if (ImGui::Checkbox("compare with a second stack (B)", &on)) {
         try {
             if (on) {
                 startComparison("reference");
             } else {
-                compareOn_ = false;
-                if (comparison_) comparison_->cancel();
+                comparison_.stop();
             }
         } catch (const std::exception& e) {
             message_ = e.what();
@@ -535,11 +534,12 @@ void Viewer::drawComparePanel()
     }
     tooltip("B draws the same view with other techniques (the ray-traced reference by default) on a worker thread, "
             "once the view has rested; the table gives the shown stack's error against it");
-    if (!compareOn_) return;
+    if (!comparison_.on()) return;
     const auto& lights = session_->config().lights;
-    for (size_t i = 0; i < bShadows_.size() && i < lights.size(); ++i) {
+    std::vector<config::ShadowSettings>& bShadows = comparison_.bShadows();
+    for (size_t i = 0; i < bShadows.size() && i < lights.size(); ++i) {
         ImGui::PushID(int(1000 + i));
-        config::ShadowSettings& b = bShadows_[i];
+        config::ShadowSettings& b = bShadows[i];
         const std::string label = fmt::format("B for {}", lights[i].name);
         bool changed = false;
         if (ImGui::BeginCombo(label.c_str(), b.technique.c_str())) {
@@ -572,44 +572,45 @@ void Viewer::drawComparePanel()
             }
             ImGui::TreePop();
         }
-        if (changed) {
-            bResult_.reset();
-            requestedKey_.clear();
-            comparison_->cancel();
-        }
+        if (changed) comparison_.settingsChanged();
         ImGui::PopID();
     }
-    if (comparison_->busy()) {
-        frameProgressBar("B", comparison_->progressPasses(), comparison_->progressFraction(), comparison_->busySeconds(),
-                         -ImGui::GetFontSize() * 5.0f);
+    if (const DrawerProgress progress = comparison_.progress(); progress.busy) {
+        frameProgressBar("B", progress.passes, progress.fraction, progress.seconds, -ImGui::GetFontSize() * 5.0f);
         ImGui::SameLine();
-        if (ImGui::Button("Cancel")) {
-            comparison_->cancel();
-            requestedKey_ = lastViewKey_;  // not asked again until the view or B changes
-        }
-    } else if (bCurrent()) {
-        ImGui::Text("B: drawn in %.2f s for this view", bResult_->seconds);
-    } else if (!bError_.empty()) {
-        ImGui::TextWrapped("B failed: %s", bError_.c_str());
+        if (ImGui::Button("Cancel")) comparison_.cancel();
+    } else if (const ComparisonResult* b = comparison_.result()) {
+        ImGui::Text("B: drawn in %.2f s for this view", b->seconds);
+    } else if (!comparison_.bError().empty()) {
+        ImGui::TextWrapped("B failed: %s", comparison_.bError().c_str());
     } else {
         ImGui::TextUnformatted("B: waiting for the view to rest");
     }
-    int mode = int(viewMode_);
-    ImGui::RadioButton("A", &mode, int(ViewMode::A));
+    int mode = int(comparison_.view());
+    ImGui::RadioButton("A", &mode, int(CompareView::A));
     ImGui::SameLine();
-    ImGui::RadioButton("B", &mode, int(ViewMode::B));
+    ImGui::RadioButton("B", &mode, int(CompareView::B));
     ImGui::SameLine();
-    ImGui::RadioButton("split", &mode, int(ViewMode::Split));
+    ImGui::RadioButton("split", &mode, int(CompareView::Split));
     ImGui::SameLine();
-    ImGui::RadioButton("difference", &mode, int(ViewMode::Difference));
-    viewMode_ = ViewMode(mode);
-    if (viewMode_ == ViewMode::Split) ImGui::SliderFloat("split at", &splitAt_, 0.05f, 0.95f, "%.2f");
-    if (viewMode_ == ViewMode::Difference) {
-        bool redraw = ImGui::SliderInt("light", &differenceLight_, 0, std::max(int(lights.size()) - 1, 0));
-        redraw |= ImGui::SliderFloat("saturates at |dV|", &differenceScale_, 0.01f, 1.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
-        if (redraw) updateDifferenceImage();
+    ImGui::RadioButton("difference", &mode, int(CompareView::Difference));
+    comparison_.setView(CompareView(mode));
+    if (comparison_.view() == CompareView::Split) {
+        float splitAt = comparison_.splitAt();
+        if (ImGui::SliderFloat("split at", &splitAt, 0.05f, 0.95f, "%.2f")) comparison_.setSplitAt(splitAt);
     }
-    if (bCurrent() && !stackErrors_.empty() &&
+    if (comparison_.view() == CompareView::Difference) {
+        int light = comparison_.differenceLight();
+        float scale = comparison_.differenceScale();
+        bool redraw = ImGui::SliderInt("light", &light, 0, std::max(int(lights.size()) - 1, 0));
+        redraw |= ImGui::SliderFloat("saturates at |dV|", &scale, 0.01f, 1.0f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
+        if (redraw) {
+            comparison_.setDifference(light, scale);
+            uploadComparisonImages();
+        }
+    }
+    const std::vector<metrics::VisibilityComparison>& errors = comparison_.errors();
+    if (comparison_.current() && !errors.empty() &&
         ImGui::BeginTable("errors", 6, ImGuiTableFlags_RowBg | ImGuiTableFlags_SizingStretchProp)) {
         ImGui::TableSetupColumn("light");
         ImGui::TableSetupColumn("RMSE");
@@ -618,8 +619,8 @@ void Viewer::drawComparePanel()
         ImGui::TableSetupColumn("penumbra");
         ImGui::TableSetupColumn("lit");
         ImGui::TableHeadersRow();
-        for (size_t l = 0; l < stackErrors_.size() && l < lights.size(); ++l) {
-            const metrics::VisibilityComparison& e = stackErrors_[l];
+        for (size_t l = 0; l < errors.size() && l < lights.size(); ++l) {
+            const metrics::VisibilityComparison& e = errors[l];
             ImGui::TableNextRow();
             ImGui::TableNextColumn();
             ImGui::TextUnformatted(lights[l].name.c_str());
@@ -802,8 +803,9 @@ void Viewer::drawDifferenceColourBar()
                             IM_COL32(rgba[4 * i], rgba[4 * i + 1], rgba[4 * i + 2], 255));
     }
     const ImU32 text = IM_COL32(255, 255, 255, 235);
-    const std::string high = fmt::format("{:.2f}", differenceScale_), mid = fmt::format("|dV| of {}", 
-        session_->shownConfig().lights.at(size_t(std::clamp(differenceLight_, 0, int(session_->shownConfig().lights.size()) - 1))).name);
+    const auto& lights = session_->shownConfig().lights;
+    const std::string high = fmt::format("{:.2f}", comparison_.differenceScale()),
+                      mid = fmt::format("|dV| of {}", lights.at(size_t(std::clamp(comparison_.differenceLight(), 0, int(lights.size()) - 1))).name);
     draw->AddText(ImVec2(low.x, low.y + height), text, "0");
     draw->AddText(ImVec2(low.x + 0.5f * (width - ImGui::CalcTextSize(mid.c_str()).x), low.y + height), text, mid.c_str());
     draw->AddText(ImVec2(low.x + width - ImGui::CalcTextSize(high.c_str()).x, low.y + height), text, high.c_str());
@@ -879,7 +881,7 @@ std::string Viewer::pixelReport(uint32_t x, uint32_t y)
     std::string text = fmt::format("pixel ({}, {})\ncolour {} {} {}", x, y, inspected_->color[0], inspected_->color[1],
                                    inspected_->color[2]);
     // Against B (its image is of this view, so of this size): both values and their difference.
-    const app::FrameImages* b = compareOn_ && bCurrent() ? &bResult_->images : nullptr;
+    const app::FrameImages* b = comparison_.on() && comparison_.current() ? &comparison_.result()->images : nullptr;
     const size_t pixel = size_t(y) * r.width() + x;
     for (size_t l = 0; l < inspected_->visibility.size() && l < session_->config().lights.size(); ++l) {
         const float a = inspected_->visibility[l];

@@ -1,13 +1,8 @@
 #include "Viewer.h"
 
-#include "VisibilityExr.h"  // apps/penumbra: the CLI's float V output
-
-#include "penumbra/config/Overrides.h"
 #include "penumbra/core/Error.h"
-#include "penumbra/core/ShortText.h"
 #include "penumbra/io/Png.h"
 #include "penumbra/metrics/Images.h"
-#include "penumbra/plugin/Params.h"
 
 #define GLFW_INCLUDE_NONE
 #define GLFW_INCLUDE_VULKAN
@@ -21,9 +16,6 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <cctype>
-#include <set>
-#include <charconv>
 #include <chrono>
 #include <cmath>
 
@@ -55,52 +47,6 @@ gpu::Presentation glfwPresentation()
         return glfwGetPhysicalDevicePresentationSupport(instance, device, family) == GLFW_TRUE;
     };
     return presentation;
-}
-
-float parseFloat(const std::string& text, const ScriptCommand& command)
-{
-    float value = 0.0f;
-    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-    if (ec != std::errc() || end != text.data() + text.size() || !std::isfinite(value)) {
-        throw Error(fmt::format("{}: {}: expected a finite number, got \"{}\"", command.where, command.words[0],
-                                core::shortText(text)));
-    }
-    return value;
-}
-
-int parseInt(const std::string& text, const ScriptCommand& command, int lo, int hi)
-{
-    int value = 0;
-    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-    if (ec != std::errc() || end != text.data() + text.size() || value < lo || value > hi) {
-        throw Error(fmt::format("{}: {}: expected a whole number in [{}, {}], got \"{}\"", command.where, command.words[0],
-                                lo, hi, core::shortText(text)));
-    }
-    return value;
-}
-
-void expectWords(const ScriptCommand& command, size_t count, const char* usage)
-{
-    if (command.words.size() != count) {
-        throw Error(fmt::format("{}: {}: expected `{}`", command.where, command.words[0], usage));
-    }
-}
-
-// `VERB on|off`: anything else is an error, not "off".
-bool parseOnOff(const ScriptCommand& command, const char* usage)
-{
-    expectWords(command, 2, usage);
-    if (command.words[1] != "on" && command.words[1] != "off") {
-        throw Error(fmt::format("{}: {}: expected `{}`, got \"{}\"", command.where, command.words[0], usage,
-                                core::shortText(command.words[1])));
-    }
-    return command.words[1] == "on";
-}
-
-glm::vec3 parseVec3(const ScriptCommand& command, size_t first)
-{
-    return {parseFloat(command.words[first], command), parseFloat(command.words[first + 1], command),
-            parseFloat(command.words[first + 2], command)};
 }
 
 } // namespace
@@ -147,7 +93,10 @@ float TimingHistory::median(const std::deque<float>& values)
     return v[v.size() / 2];
 }
 
-Viewer::Viewer(const ViewerOptions& options) : options_(options)
+Viewer::Viewer(const ViewerOptions& options)
+    : options_(options), comparison_([this](const std::vector<fs::path>& pluginSearchPath) {
+          return std::make_unique<ComparisonWorker>(options_.context, pluginSearchPath);
+      })
 {
     gpu::ContextOptions contextOptions = options.context;
     contextOptions.presentation = glfwPresentation();
@@ -242,7 +191,7 @@ void Viewer::fitFrameIntoWorkArea(const VkRect2D& workArea)
 
 Viewer::~Viewer()
 {
-    comparison_.reset();  // joins its thread (after the frame in flight)
+    comparison_.stop();
     if (context_ && context_->device()) vkDeviceWaitIdle(context_->device());
     debugUpload_.reset();
     bUpload_.reset();
@@ -278,7 +227,7 @@ int Viewer::run()
         frame();
     }
     vkDeviceWaitIdle(context_->device());
-    const uint32_t bMessages = retiredBValidationMessages_ + (comparison_ ? comparison_->validationMessages() : 0);
+    const uint32_t bMessages = comparison_.validationMessages();
     if (bMessages > 0) {
         spdlog::error("the Vulkan validation layer reported {} message(s) on the comparison's device", bMessages);
         if (exitCode_ == 0) exitCode_ = 3;
@@ -361,11 +310,8 @@ void Viewer::frame()
                 reloadedPlugins_.push_back(pluginReloader_->freshRegistry());
                 session_->usePlugins(*reloadedPlugins_.back());
                 // B too: a new worker whose registry opens the fresh copies (B's settings stay).
-                if (comparison_) {
-                    retiredBValidationMessages_ += comparison_->validationMessages();
-                    comparison_ = std::make_unique<ComparisonWorker>(options_.context, reloadedPlugins_.back()->searchPath());
+                if (comparison_.usePlugins(reloadedPlugins_.back()->searchPath())) {
                     spdlog::info("B: a new worker with the plugins of {}", reloadedPlugins_.back()->searchPath().front().string());
-                    forgetB();
                 }
             } catch (const std::exception& e) {
                 message_ = e.what();
@@ -394,7 +340,7 @@ void Viewer::frame()
         updateComparison();
     } catch (const std::exception& e) {
         message_ = fmt::format("B: {}", e.what());  // the window goes on with A alone
-        compareOn_ = false;
+        comparison_.stop();
     }
     if (message_ != messageBefore) panelsDirty_ = true;
     if (const std::vector<fs::path> folders = session_->shaderFolders(); folders != shaderWatcher_.folders()) {
@@ -518,7 +464,7 @@ void Viewer::stopRecording()
 
 void Viewer::afterRender()
 {
-    errorsDirty_ = true;  // A changed: its error against B is computed again
+    comparison_.aChanged();
     history_.add(session_->lastTimings());
     // A slow frame is kept as shown: while the next one draws, the renderer's own images
     // are the frame in flight's (drawBusyFrame shows this copy). A fast one costs no copy.
@@ -602,15 +548,15 @@ std::vector<ViewBlit> Viewer::viewBlits() const
     const frame::FrameRenderer& r = session_->renderer();
     const ViewBlit a{&r.executor().image("color"), r.executor().finalLayout("color"), viewRect_};
     // B's modes show B only when it is of the view A shows; until then, A.
-    if (compareOn_ && bCurrent() && viewMode_ != ViewMode::A) {
-        if (viewMode_ == ViewMode::B) return {{&bUpload_->image(), UploadedImage::kLayout, viewRect_}};
-        if (viewMode_ == ViewMode::Difference && !differenceUpload_->empty()) {
+    if (comparison_.replacesA()) {
+        if (comparison_.view() == CompareView::B) return {{&bUpload_->image(), UploadedImage::kLayout, viewRect_}};
+        if (comparison_.view() == CompareView::Difference && !differenceUpload_->empty()) {
             return {{&differenceUpload_->image(), UploadedImage::kLayout, viewRect_}};
         }
-        if (viewMode_ == ViewMode::Split) {
+        if (comparison_.view() == CompareView::Split) {
             // A left of the split, B right of it, each the matching part of its image.
             const uint32_t w = r.width(), h = r.height();
-            const uint32_t cut = std::clamp(uint32_t(std::lround(splitAt_ * float(w))), 1u, w - 1);
+            const uint32_t cut = std::clamp(uint32_t(std::lround(comparison_.splitAt() * float(w))), 1u, w - 1);
             const uint32_t cutTarget = uint32_t(std::lround(float(cut) / float(w) * float(viewRect_.extent.width)));
             ViewBlit left = a, right{&bUpload_->image(), UploadedImage::kLayout, viewRect_};
             left.source = {{0, 0}, {cut, h}};
@@ -660,89 +606,36 @@ bool Viewer::debugImageBlit(VkExtent2D image, VkRect2D& target, VkRect2D& source
     return true;
 }
 
-bool Viewer::bCurrent() const { return bResult_ && bResult_->viewKey == lastViewKey_ && !lastViewKey_.empty(); }
-
 void Viewer::startComparison(const std::string& technique)
 {
     if (technique != config::kNoShadowTechnique) session_->plugins().load(technique);  // throws PluginError naming it
-    compareOn_ = true;
-    bShadows_.assign(session_->config().lights.size(), {});
-    for (config::ShadowSettings& b : bShadows_) {
-        b.technique = technique;
-        b.required = true;
-        // The reference's 256 rays a pixel take a minute at 1280 x 720 on a CPU: 16 for a
-        // first look (raise it in the panel).
-        if (technique == "reference") b.setParam("samples", 16, "viewer: B reference.samples");
-    }
-    if (!comparison_) comparison_ = std::make_unique<ComparisonWorker>(options_.context, session_->plugins().searchPath());
-    comparison_->cancel();
-    forgetB();
-}
-
-// B's last image, error and view: asked for again once the view rests.
-void Viewer::forgetB()
-{
-    bResult_.reset();
-    bError_.clear();
-    requestedKey_.clear();
-    lastViewKey_.clear();
+    comparison_.start(technique, session_->config().lights.size(), session_->plugins().searchPath());
 }
 
 void Viewer::updateComparison()
 {
-    if (!compareOn_ || !comparison_ || session_->framesRendered() == 0) return;
-    const auto now = std::chrono::steady_clock::now();
-    if (bShadows_.size() != session_->shownConfig().lights.size()) {
-        startComparison(bShadows_.empty() ? "reference" : bShadows_.front().technique);  // lights added or removed
-    }
-    const std::string key = viewKey(session_->shownView(), session_->time());
-    if (key != lastViewKey_) {
-        lastViewKey_ = key;
-        stillSince_ = now;
-        bError_.clear();
-    }
-    if (std::optional<ComparisonResult> r = comparison_->take()) {
-        if (!r->error.empty()) {
-            if (r->viewKey == key) bError_ = r->error;
-            message_ = "B: " + r->error;
-        } else {
-            bResult_ = std::move(*r);
-            bUpload_->set(bResult_->images.width, bResult_->images.height, bResult_->images.color);
-            errorsDirty_ = true;
-            spdlog::info("B drawn in {:.2f} s", bResult_->seconds);
-        }
-    }
-    // Asked for once the view has rested: not for every step of a drag.
-    if (!bCurrent() && requestedKey_ != key && now - stillSince_ >= std::chrono::milliseconds(400)) {
-        comparison_->request({withShadows(session_->shownView(), bShadows_), session_->time(), key});
-        requestedKey_ = key;
-    }
-    if (errorsDirty_ && bCurrent()) {
+    if (session_->framesRendered() == 0) return;
+    const std::string notice = comparison_.update(session_->shownView(), session_->time(), std::chrono::steady_clock::now(), [this] {
         const frame::FrameRenderer& r = session_->renderer();
-        aVisibility_.clear();
-        for (size_t l = 0; l < r.lightCount(); ++l) aVisibility_.push_back(r.readVisibility(l));
-        stackErrors_ = compareStacks(aVisibility_, bResult_->images, session_->shownConfig().lights);
-        updateDifferenceImage();
-        errorsDirty_ = false;
-    }
+        std::vector<std::vector<float>> visibility;
+        for (size_t l = 0; l < r.lightCount(); ++l) visibility.push_back(r.readVisibility(l));
+        return visibility;
+    });
+    if (!notice.empty()) message_ = notice;
+    uploadComparisonImages();
 }
 
-// |V_A - V_B| of one light, in false colour over [0, scale]; pixels not compared 0.
-void Viewer::updateDifferenceImage()
+// B's image and the difference image into the view's images, when they changed.
+void Viewer::uploadComparisonImages()
 {
-    if (!bCurrent() || aVisibility_.empty()) return;
-    const app::FrameImages& b = bResult_->images;
-    const size_t l = size_t(std::clamp(differenceLight_, 0, int(aVisibility_.size()) - 1));
-    const metrics::PixelMask mask = app::reachMask(session_->shownConfig().lights.at(l).light, b.width, b.height, b.positions);
-    metrics::DebugImageValues diff;
-    diff.width = b.width;
-    diff.height = b.height;
-    diff.values.resize(size_t(diff.width) * diff.height);
-    for (size_t i = 0; i < diff.values.size(); ++i) {
-        diff.values[i] = mask.covered[i] ? std::abs(aVisibility_[l][i] - b.visibility[l][i]) : 0.0f;
+    if (const ComparisonResult* b = comparison_.result(); b && bUploaded_ != comparison_.bImageVersion()) {
+        bUpload_->set(b->images.width, b->images.height, b->images.color);
+        bUploaded_ = comparison_.bImageVersion();
     }
-    differenceRgba_ = metrics::debugImageRgba(diff, metrics::DebugMapping::FalseColor, {0.0, double(differenceScale_)});
-    differenceUpload_->set(diff.width, diff.height, differenceRgba_);
+    if (const ComparisonResult* b = comparison_.result(); b && differenceUploaded_ != comparison_.differenceVersion()) {
+        differenceUpload_->set(b->images.width, b->images.height, comparison_.differenceRgba());
+        differenceUploaded_ = comparison_.differenceVersion();
+    }
 }
 
 // Keys are GLFW key codes: Dear ImGui 1.86 (Debian 12) indexes io.KeysDown by the backend's codes.
@@ -761,7 +654,7 @@ void Viewer::handleInput()
                         mouse.y * fbScale >= float(viewRect_.offset.y) &&
                         mouse.y * fbScale < float(viewRect_.offset.y + int32_t(viewRect_.extent.height));
     const ImVec2 d = io.MouseDelta;
-    if (!session_->shownImage().empty() && shownValues_ && !(compareOn_ && bCurrent() && viewMode_ != ViewMode::A)) {
+    if (!session_->shownImage().empty() && shownValues_ && !comparison_.replacesA()) {
         // A debug image: the wheel zooms about the cursor, a drag pans; the camera stays.
         if (ImGui::IsMouseDown(ImGuiMouseButton_Left)) debugPan_ += glm::dvec2(d.x, d.y) * double(fbScale);
         if (inView && io.MouseWheel != 0.0f) {
@@ -818,31 +711,19 @@ void Viewer::moveCamera(const scene::Camera& camera)
     }
 }
 
-size_t Viewer::lightIndex(const std::string& nameOrIndex, const ScriptCommand& command) const
-{
-    const auto& lights = session_->config().lights;
-    for (size_t i = 0; i < lights.size(); ++i) {
-        if (lights[i].name == nameOrIndex || std::to_string(i) == nameOrIndex) return i;
-    }
-    std::string names;
-    for (const auto& l : lights) names += (names.empty() ? "" : ", ") + l.name;
-    throw Error(fmt::format("{}: {}: no light \"{}\"; the lights are {} (or their index)", command.where, command.words[0],
-                            core::shortText(nameOrIndex), names));
-}
-
 std::vector<uint8_t> Viewer::viewPixels(uint32_t& width, uint32_t& height)
 {
     // What the view shows: B or the difference in those compare modes, else the debug
     // image shown, else the frame.
-    if (compareOn_ && bCurrent() && viewMode_ == ViewMode::B) {
-        width = bResult_->images.width;
-        height = bResult_->images.height;
-        return bResult_->images.color;
+    if (comparison_.shows(CompareView::B)) {
+        width = comparison_.result()->images.width;
+        height = comparison_.result()->images.height;
+        return comparison_.result()->images.color;
     }
-    if (compareOn_ && bCurrent() && viewMode_ == ViewMode::Difference && !differenceRgba_.empty()) {
-        width = bResult_->images.width;
-        height = bResult_->images.height;
-        return differenceRgba_;
+    if (comparison_.shows(CompareView::Difference) && !comparison_.differenceRgba().empty()) {
+        width = comparison_.result()->images.width;
+        height = comparison_.result()->images.height;
+        return comparison_.differenceRgba();
     }
     if (!session_->shownImage().empty() && shownValues_) {
         width = shownValues_->width;
@@ -898,13 +779,13 @@ bool Viewer::runScriptUntilFrame()
         waitUntil_ = nullptr;
     }
     if (waitCompare_) {
-        if (!bError_.empty()) {
-            spdlog::error("wait-compare: B could not be drawn: {}", bError_);
+        if (!comparison_.bError().empty()) {
+            spdlog::error("wait-compare: B could not be drawn: {}", comparison_.bError());
             exitCode_ = 1;
             quit_ = true;
             return false;
         }
-        if (!(bCurrent() && !errorsDirty_)) {
+        if (!comparison_.ready()) {
             if (std::chrono::steady_clock::now() < waitCompareDeadline_) return true;
             spdlog::error("wait-compare: B was not drawn within 600 s");
             exitCode_ = 1;
@@ -917,7 +798,7 @@ bool Viewer::runScriptUntilFrame()
         const ScriptCommand& command = options_.script[scriptNext_++];
         panelsDirty_ = true;  // the panels show what the command changed
         try {
-            runCommand(command);
+            commands().run(*this, command);
         } catch (const std::exception& e) {
             // A script is a test or a batch job: the first failure ends it, with where.
             const std::string what = e.what();
@@ -932,331 +813,16 @@ bool Viewer::runScriptUntilFrame()
     return true;
 }
 
-void Viewer::runCommand(const ScriptCommand& command)
-{
-    const std::string& verb = command.words[0];
-    config::RenderConfig& c = session_->config();
-    if (verb == "quit") {
-        expectWords(command, 1, "quit");
-        quit_ = true;
-    } else if (verb == "frames") {
-        expectWords(command, 2, "frames N");
-        framesToRun_ = parseInt(command.words[1], command, 1, 100000);
-    } else if (verb == "open") {
-        expectWords(command, 2, "open FILE");
-        session_->open(command.words[1]);
-        homeCamera_ = session_->config().camera;
-        history_ = {};
-    } else if (verb == "size") {
-        expectWords(command, 3, "size WIDTH HEIGHT");
-        fixedSize_ = std::make_pair(uint32_t(parseInt(command.words[1], command, 1, 16384)),
-                                    uint32_t(parseInt(command.words[2], command, 1, 16384)));
-        fitRenderSize();
-    } else if (verb == "window") {
-        expectWords(command, 3, "window WIDTH HEIGHT");
-        glfwSetWindowSize(window_, parseInt(command.words[1], command, 64, 16384), parseInt(command.words[2], command, 64, 16384));
-    } else if (verb == "camera") {
-        expectWords(command, 7, "camera PX PY PZ TX TY TZ");
-        scene::Camera camera = session_->viewCamera();
-        camera.position = parseVec3(command, 1);
-        camera.target = parseVec3(command, 4);
-        const glm::vec3 view = camera.target - camera.position;
-        if (!(glm::length(view) > 0.0f)) {
-            throw Error(fmt::format("{}: camera: the target must differ from the position", command.where));
-        }
-        // As the config reader requires: a view along the up axis has no image orientation.
-        if (glm::length(glm::cross(glm::normalize(view), glm::normalize(camera.up))) < 1e-4f) {
-            throw Error(fmt::format("{}: camera: the view must not be parallel to the up axis ({}, {}, {})", command.where,
-                                    camera.up.x, camera.up.y, camera.up.z));
-        }
-        moveCamera(camera);
-    } else if (verb == "orbit") {
-        expectWords(command, 3, "orbit YAW_DEG PITCH_DEG");
-        moveCamera(orbit(session_->viewCamera(), parseFloat(command.words[1], command), parseFloat(command.words[2], command)));
-    } else if (verb == "dolly") {
-        expectWords(command, 2, "dolly FACTOR");
-        const float factor = parseFloat(command.words[1], command);
-        if (!(factor > 0.0f)) throw Error(fmt::format("{}: dolly: the factor must be > 0", command.where));
-        moveCamera(dolly(session_->viewCamera(), factor, sceneRadius()));
-    } else if (verb == "camera-track") {
-        expectWords(command, 2, "camera-track follow|free");
-        if (!hasCameraTrack(c.animation)) {
-            throw Error(fmt::format("{}: camera-track: the config has no camera track (/camera/...) to follow", command.where));
-        }
-        if (command.words[1] != "follow" && command.words[1] != "free") {
-            throw Error(fmt::format("{}: camera-track: expected follow or free, got \"{}\"", command.where,
-                                    core::shortText(command.words[1])));
-        }
-        session_->setCameraFollow(command.words[1] == "follow" ? CameraFollow::Track : CameraFollow::Free);
-    } else if (verb == "print-camera") {
-        // The pose drawn last and the one the camera panel showed: a test holds them equal.
-        expectWords(command, 1, "print-camera");
-        session_->renderIfChanged(false);
-        const scene::Camera& d = session_->drawnCamera();
-        fmt::print("camera {} drawn {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} panel {:.6g} {:.6g} {:.6g} {:.6g} {:.6g} {:.6g}\n",
-                   session_->followsCameraTrack() ? "follow" : "free", d.position.x, d.position.y, d.position.z, d.target.x,
-                   d.target.y, d.target.z, panelCamera_.position.x, panelCamera_.position.y, panelCamera_.position.z,
-                   panelCamera_.target.x, panelCamera_.target.y, panelCamera_.target.z);
-        std::fflush(stdout);
-    } else if (verb == "set") {
-        // As `penumbra render --set`: every light that uses the technique.
-        expectWords(command, 2, "set TECHNIQUE.PARAM=VALUE");
-        const config::ParamOverride o = config::parseParamOverride(command.words[1]);
-        bool used = false;
-        for (size_t i = 0; i < c.lights.size(); ++i) {
-            if (c.lights[i].shadow.technique != o.technique) continue;
-            session_->setParam(i, o.param, o.value, fmt::format("{}: set {}.{}", command.where, o.technique, o.param));
-            used = true;
-        }
-        if (!used) throw Error(fmt::format("{}: set: no light uses the technique \"{}\"", command.where, core::shortText(o.technique)));
-    } else if (verb == "param") {
-        expectWords(command, 4, "param LIGHT NAME VALUE");
-        const size_t light = lightIndex(command.words[1], command);
-        nlohmann::json value = nlohmann::json::parse(command.words[3], nullptr, false);
-        if (value.is_discarded()) value = command.words[3];
-        session_->setParam(light, command.words[2], value, fmt::format("{}: param {}", command.where, command.words[2]));
-    } else if (verb == "technique") {
-        expectWords(command, 3, "technique LIGHT NAME");
-        session_->setTechnique(lightIndex(command.words[1], command), command.words[2]);
-    } else if (verb == "culling") {
-        expectWords(command, 2, "culling MODE");
-        c.culling = config::parseCullingMode(command.words[1]);
-        session_->changed(Change::Renderer);
-    } else if (verb == "light") {
-        // light LIGHT position|direction|target X Y Z, light LIGHT intensity V
-        if (command.words.size() < 4) throw Error(fmt::format("{}: light: expected `light LIGHT FIELD VALUE...`", command.where));
-        config::LightConfig& l = c.lights.at(lightIndex(command.words[1], command));
-        const std::string& field = command.words[2];
-        if (field == "intensity") {
-            expectWords(command, 4, "light LIGHT intensity VALUE");
-            const float v = parseFloat(command.words[3], command);
-            if (v < 0.0f) throw Error(fmt::format("{}: light: the intensity must be >= 0", command.where));
-            l.light.intensity = v;
-        } else if (field == "position" || field == "direction" || field == "target") {
-            expectWords(command, 6, "light LIGHT position|direction|target X Y Z");
-            const glm::vec3 v = parseVec3(command, 3);
-            if (field == "position") {
-                l.light.position = v;
-                if (l.target && glm::length(*l.target - v) > 0.0f) l.light.direction = glm::normalize(*l.target - v);
-            } else {
-                const glm::vec3 axis = field == "target" ? v - l.light.position : v;
-                if (!(glm::length(axis) > 0.0f)) throw Error(fmt::format("{}: light: the {} gives no direction", command.where, field));
-                l.light.direction = glm::normalize(axis);
-                l.target = field == "target" ? std::optional<glm::vec3>(v) : std::nullopt;
-            }
-        } else {
-            throw Error(fmt::format("{}: light: unknown field \"{}\"; expected position, direction, target or intensity",
-                                    command.where, core::shortText(field)));
-        }
-        session_->changed(Change::View);
-    } else if (verb == "show") {
-        if (command.words.size() < 2 || command.words.size() > 3) throw Error(fmt::format("{}: show: expected `show IMAGE [linear|log|false-color]` or `show color`", command.where));
-        // The image's own default mapping (afterRender: false colour for a classification,
-        // else linear; automatic range), at zoom 1, unless the command names one.
-        session_->showImage(command.words[1] == "color" ? std::string() : command.words[1]);
-        resetDebugView();
-        if (command.words.size() == 3) mapping_ = metrics::parseDebugMapping(command.words[2]);
-        debugMappingChosen_ = command.words.size() == 3;
-    } else if (verb == "continuous") {
-        continuous_ = parseOnOff(command, "continuous on|off");
-    } else if (verb == "vsync") {
-        presenter_->setVsync(parseOnOff(command, "vsync on|off"));
-    } else if (verb == "ui") {
-        showUi_ = parseOnOff(command, "ui on|off");
-    } else if (verb == "panel") {
-        expectWords(command, 3, "panel NAME open|closed");
-        static const std::set<std::string> names{"file",      "scene",   "camera",       "render", "lights",
-                                                 "animation", "compare", "debug images", "timings"};
-        const std::string name = panelKey(command.words[1]);
-        if (!names.contains(name)) {
-            throw Error(fmt::format("{}: panel \"{}\": expected one of file, scene, camera, render, lights, animation, "
-                                    "compare, \"debug images\" or timings",
-                                    command.where, core::shortText(command.words[1])));
-        }
-        if (command.words[2] != "open" && command.words[2] != "closed") {
-            throw Error(fmt::format("{}: panel {} \"{}\": expected open or closed", command.where, name,
-                                    core::shortText(command.words[2])));
-        }
-        panelOpen_[name] = command.words[2] == "open";
-    } else if (verb == "panel-layer") {
-        presenter_->setPanelLayer(parseOnOff(command, "panel-layer on|off"));
-    } else if (verb == "screenshot") {
-        expectWords(command, 2, "screenshot FILE.png|FILE.jpg");
-        writeScreenshot(command.words[1], false);
-    } else if (verb == "screenshot-window") {
-        expectWords(command, 2, "screenshot-window FILE.png|FILE.jpg");
-        writeScreenshot(command.words[1], true);
-    } else if (verb == "save") {
-        expectWords(command, 2, "save FILE.json");
-        session_->renderIfChanged(false);
-        session_->save(command.words[1]);
-    } else if (verb == "compare") {
-        expectWords(command, 2, "compare TECHNIQUE|off");
-        if (command.words[1] == "off") {
-            compareOn_ = false;
-            if (comparison_) comparison_->cancel();
-        } else {
-            startComparison(command.words[1]);
-        }
-    } else if (verb == "compare-set") {
-        expectWords(command, 2, "compare-set TECHNIQUE.PARAM=VALUE");
-        const config::ParamOverride o = config::parseParamOverride(command.words[1]);
-        bool used = false;
-        for (config::ShadowSettings& b : bShadows_) {
-            if (b.technique != o.technique) continue;
-            config::ShadowSettings trial = b;
-            trial.setParam(o.param, o.value, fmt::format("{}: compare-set {}.{}", command.where, o.technique, o.param));
-            plugin::resolveParams(session_->plugins().load(trial.technique), trial);  // throws naming where
-            b = std::move(trial);
-            used = true;
-        }
-        if (!used) {
-            throw Error(fmt::format("{}: compare-set: B uses no \"{}\" (compare TECHNIQUE first)", command.where,
-                                    core::shortText(o.technique)));
-        }
-        bResult_.reset();
-        requestedKey_.clear();
-        if (comparison_) comparison_->cancel();
-    } else if (verb == "compare-view") {
-        expectWords(command, 2, "compare-view a|b|split|difference");
-        const std::string& m = command.words[1];
-        if (m == "a") viewMode_ = ViewMode::A;
-        else if (m == "b") viewMode_ = ViewMode::B;
-        else if (m == "split") viewMode_ = ViewMode::Split;
-        else if (m == "difference") viewMode_ = ViewMode::Difference;
-        else throw Error(fmt::format("{}: compare-view: \"{}\" is not a, b, split or difference", command.where, core::shortText(m)));
-    } else if (verb == "inspect") {
-        // The pixel inspector's text for a pixel of the frame, one `inspect` line per row.
-        expectWords(command, 3, "inspect X Y");
-        session_->renderIfChanged(false);
-        const frame::FrameRenderer& r = session_->renderer();
-        const std::string text = pixelReport(uint32_t(parseInt(command.words[1], command, 0, int(r.width()) - 1)),
-                                             uint32_t(parseInt(command.words[2], command, 0, int(r.height()) - 1)));
-        for (size_t at = 0; at <= text.size();) {
-            const size_t end = std::min(text.find('\n', at), text.size());
-            fmt::print("inspect {}\n", text.substr(at, end - at));
-            at = end + 1;
-        }
-        std::fflush(stdout);
-    } else if (verb == "cancel-after") {
-        // A frame of A still drawing after SECONDS is cancelled (as its Cancel button does).
-        expectWords(command, 2, "cancel-after SECONDS");
-        const float seconds = parseFloat(command.words[1], command);
-        if (seconds < 0.0f) throw Error(fmt::format("{}: cancel-after: the time must be >= 0", command.where));
-        cancelAfterS_ = seconds;
-    } else if (verb == "wait-compare") {
-        expectWords(command, 1, "wait-compare");
-        if (!compareOn_) throw Error(fmt::format("{}: wait-compare: no comparison (compare TECHNIQUE first)", command.where));
-        waitCompare_ = true;
-        waitCompareDeadline_ = std::chrono::steady_clock::now() + std::chrono::seconds(600);
-    } else if (verb == "errors") {
-        // The shown stack's error against B, per light, as the Compare panel shows it.
-        expectWords(command, 1, "errors");
-        if (!bCurrent()) throw Error(fmt::format("{}: errors: B is not drawn for this view (wait-compare first)", command.where));
-        const auto& lights = session_->shownConfig().lights;
-        for (size_t l = 0; l < stackErrors_.size(); ++l) {
-            const metrics::VisibilityComparison& e = stackErrors_[l];
-            fmt::print("error {} pixels {} rmse {:.6g} mae {:.6g} max {:.6g} above_0.05 {:.6g} umbra {:.6g} penumbra {:.6g} lit {:.6g} "
-                       "ssim {:.6g}\n",
-                       lights[l].name, e.all.pixels, e.all.rmse, e.all.mae, e.all.maxAbsError, e.all.percentAbove(0),
-                       e.region(metrics::Region::Umbra).rmse, e.region(metrics::Region::Penumbra).rmse,
-                       e.region(metrics::Region::Lit).rmse, e.ssim);
-        }
-        std::fflush(stdout);
-    } else if (verb == "record") {
-        expectWords(command, 2, "record start|stop");
-        if (command.words[1] == "start") {
-            startRecording();
-        } else if (command.words[1] == "stop") {
-            if (!recording_) throw Error(fmt::format("{}: record stop: not recording", command.where));
-            stopRecording();
-        } else {
-            throw Error(fmt::format("{}: record: expected start or stop, got \"{}\"", command.where, core::shortText(command.words[1])));
-        }
-    } else if (verb == "time") {
-        expectWords(command, 2, "time SECONDS");
-        const float t = parseFloat(command.words[1], command);
-        if (t < 0.0f || t > session_->duration()) {
-            throw Error(fmt::format("{}: time: {} is outside the animation's [0, {}] s", command.where, t, session_->duration()));
-        }
-        session_->setTime(t);
-    } else if (verb == "play") {
-        playing_ = parseOnOff(command, "play on|off");
-    } else if (verb == "wait-for" || verb == "wait-error" || verb == "wait-no-error") {
-        // For tests that edit files while the viewer runs: frames go on until FILE exists,
-        // or the viewer shows an error with TEXT, or none (hot reload polls the disk).
-        if (verb == "wait-no-error") {
-            expectWords(command, 1, "wait-no-error");
-            waitUntil_ = [this] { return session_->lastError().empty(); };
-        } else {
-            expectWords(command, 2, verb == "wait-for" ? "wait-for FILE" : "wait-error TEXT");
-            const std::string arg = command.words[1];
-            if (verb == "wait-for") {
-                waitUntil_ = [arg] {
-                    std::error_code ec;
-                    return fs::exists(arg, ec);
-                };
-            } else {
-                waitUntil_ = [this, arg] { return session_->lastError().find(arg) != std::string::npos; };
-            }
-        }
-        waitWhat_ = fmt::format("{}: {}", command.where, fmt::join(command.words, " "));
-        waitDeadline_ = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-    } else if (verb == "expect-error") {
-        expectWords(command, 2, "expect-error TEXT");
-        session_->renderIfChanged(false);
-        if (session_->lastError().find(command.words[1]) == std::string::npos) {
-            throw Error(fmt::format("{}: expected an error with \"{}\", the viewer shows {}", command.where, core::shortText(command.words[1]),
-                                    session_->lastError().empty() ? "none" : "\"" + session_->lastError() + "\""));
-        }
-    } else if (verb == "expect-no-error") {
-        expectWords(command, 1, "expect-no-error");
-        session_->renderIfChanged(false);
-        if (!session_->lastError().empty()) throw Error(fmt::format("{}: the viewer shows an error: {}", command.where, session_->lastError()));
-    } else if (verb == "save-visibility") {
-        expectWords(command, 2, "save-visibility FILE.exr");
-        session_->renderIfChanged(false);
-        frame::FrameRenderer& r = session_->renderer();
-        std::vector<std::vector<float>> visibility;
-        for (size_t l = 0; l < r.lightCount(); ++l) visibility.push_back(r.readVisibility(l));
-        app::writeVisibilityExr(command.words[1], r.width(), r.height(), session_->config().lights, visibility);
-        spdlog::info("wrote {} (V of {} light(s))", command.words[1], visibility.size());
-    } else if (verb == "widgets") {
-        // The technique parameter widgets of the panels last drawn, one per line on stdout.
-        expectWords(command, 1, "widgets");
-        for (const std::string& w : drawnParamWidgets_) fmt::print("widget {}\n", w);
-        std::fflush(stdout);
-    } else if (verb == "timings") {
-        // Prints the rolling medians, as the panel shows them.
-        expectWords(command, 1, "timings");
-        for (const std::string& pass : history_.order) {
-            spdlog::info("timing {} gpu {:.3f} ms cpu {:.3f} ms", pass, TimingHistory::median(history_.gpuMs[pass]),
-                         TimingHistory::median(history_.cpuMs[pass]));
-        }
-        spdlog::info("timing frame {:.3f} ms, sum of passes {:.3f} ms, viewer (panels + present) {:.3f} ms, last rebuild "
-                     "(an edit to its first frame) {:.3f} ms",
-                     TimingHistory::median(history_.frameMs), TimingHistory::median(history_.sumGpuMs),
-                     TimingHistory::median(history_.viewerMs), session_->lastRebuildMs());
-        const size_t built = size_t(std::count_if(history_.panelsCpuMs.begin(), history_.panelsCpuMs.end(),
-                                                  [](float ms) { return ms > 0.0f; }));
-        spdlog::info("timing shown frame {:.3f} ms (the loop's wall clock, median)", TimingHistory::median(history_.shownMs));
-        spdlog::info("timing panels {:.3f} ms CPU + {:.3f} ms GPU a shown frame (means; built in {} of the last {} "
-                     "frames, panel layer {}), {:.2f} % of the frame",
-                     TimingHistory::mean(history_.panelsCpuMs), TimingHistory::mean(history_.panelsGpuMs), built,
-                     history_.panelsCpuMs.size(), presenter_->panelLayer() ? "on" : "off", history_.panelsShare());
-    } else {
-        throw Error(fmt::format("{}: unknown command \"{}\"; expected open, size, window, camera, orbit, dolly, set, param, "
-                                "camera-track, print-camera, technique, culling, light, show, continuous, vsync, ui, frames, screenshot, "
-                                "screenshot-window, save, save-visibility, compare, compare-set, compare-view, wait-compare, cancel-after, inspect, errors, "
-                                "wait-for, "
-                                "wait-error, wait-no-error, expect-error, expect-no-error, record, time, play, widgets, timings, "
-                                "panel, panel-layer or quit",
-                                command.where, core::shortText(verb)));
-    }
-}
-
 int runViewer(const ViewerOptions& options)
 {
+    // Every command's verb and argument count before the window opens: a typo in a long
+    // script costs no start, and shows without a display too.
+    try {
+        for (const ScriptCommand& command : options.script) Viewer::commands().list().check(command);
+    } catch (const Error& e) {
+        spdlog::error("{}", e.what());
+        return 1;
+    }
     glfwSetErrorCallback(onGlfwError);
     if (!glfwInit()) {
         spdlog::error("cannot open a window: {}{}", glfwErrorText.empty() ? "GLFW failed to initialise" : glfwErrorText,

@@ -1,9 +1,11 @@
 #pragma once
 // penumbra-viewer: a window (GLFW, Vulkan swapchain: Presenter.h) showing one Session
 // (Session.h: a config, its scene, the FrameRenderer) with Dear ImGui panels to edit it,
-// driven by the mouse and keys or by a script (Script.h). Viewer.cpp has the loop, the
-// input and the script commands; Panels.cpp the panels.
+// driven by the mouse and keys or by a script (Script.h). Viewer.cpp has the loop and the
+// input, ViewerCommands.cpp the script commands (one table: CommandTable.h), Panels.cpp the
+// panels; the A/B comparison's state is Comparison.h's.
 #include "CameraControl.h"
+#include "CommandTable.h"
 #include "Comparison.h"
 #include "PluginReloader.h"
 #include "Presenter.h"
@@ -68,6 +70,11 @@ public:
     ~Viewer();
     int run();
 
+    // The script commands (ViewerCommands.cpp): what runCommand dispatches through, what
+    // runViewer checks a script against before the window opens, and what
+    // `--list-commands` prints for docs/viewer.md.
+    static const CommandTable<Viewer>& commands();
+
 private:
     // Viewer.cpp
     void frame();
@@ -81,7 +88,9 @@ private:
     static std::string panelKey(std::string name);  // a panel's name as `panel` takes it: lower case
     void handleInput();
     bool runScriptUntilFrame();  // false when the script quit
-    void runCommand(const ScriptCommand& command);
+    void printTimings();         // `timings`
+    // `wait-for` and its kind: frames run until `condition` holds (at most 120 s).
+    void waitUntil(const ScriptCommand& command, std::function<bool()> condition);
     void fitRenderSize();
     void afterRender();
     std::vector<ViewBlit> viewBlits() const;
@@ -184,11 +193,10 @@ private:
     float flySpeedExponent_ = 0.0f;
     bool continuous_ = false;
     bool showUi_ = true;
+    std::map<std::string, bool> panelOpen_;  // `panel NAME open|closed` to apply, by lower-case name
     // Input events since start (GLFW's callbacks count them) and the count the last
     // panels saw; a change the panels show that no input made (a script command, a new
     // frame after an edit, a message) sets panelsDirty_.
-    uint32_t retiredBValidationMessages_ = 0;  // of comparison workers replaced after a plugin reload
-    std::map<std::string, bool> panelOpen_;  // `panel NAME open|closed` to apply, by lower-case name
     uint64_t inputEvents_ = 0;
     uint64_t inputEventsSeen_ = 0;
     bool panelsDirty_ = true;
@@ -211,32 +219,17 @@ private:
     std::chrono::steady_clock::time_point recordStart_{};
     config::AnimationTrack recordedPosition_, recordedTarget_;
 
-    // The second stack, B (Comparison.h): what it draws per light, its latest image for
-    // the current view, and the shown stack's (A's) error against it.
-    enum class ViewMode { A, B, Split, Difference };
-    bool compareOn_ = false;
-    std::vector<config::ShadowSettings> bShadows_;
-    std::unique_ptr<ComparisonWorker> comparison_;
-    std::optional<ComparisonResult> bResult_;
-    std::vector<metrics::VisibilityComparison> stackErrors_;
-    bool errorsDirty_ = false;
-    std::string lastViewKey_, requestedKey_;
-    std::chrono::steady_clock::time_point stillSince_{};
-    ViewMode viewMode_ = ViewMode::A;
-    float splitAt_ = 0.5f;
-    int differenceLight_ = 0;
-    float differenceScale_ = 0.5f;
+    // The second stack, B (Comparison.h), and its images as the view shows them (uploaded
+    // when their versions move on).
+    Comparison comparison_;
     std::unique_ptr<UploadedImage> bUpload_, differenceUpload_;
-    std::vector<std::vector<float>> aVisibility_;  // A's V when the errors were computed
-    std::vector<uint8_t> differenceRgba_;
-    std::string bError_;                           // B failed for the current view: why
+    uint64_t bUploaded_ = 0, differenceUploaded_ = 0;
     bool waitCompare_ = false;  // `wait-compare`: frames run until B of the current view is in
     std::chrono::steady_clock::time_point waitCompareDeadline_{};
+    // B drawing every light with `technique` (a plugin that does not load throws, naming it).
     void startComparison(const std::string& technique);
-    void forgetB();
     void updateComparison();
-    void updateDifferenceImage();
-    bool bCurrent() const;  // B is of the view A shows
+    void uploadComparisonImages();
 
     size_t scriptNext_ = 0;
     // `wait-for FILE`, `wait-error TEXT`, `wait-no-error`: frames run until it holds.

@@ -40,6 +40,13 @@ int runCommandLine(int argc, char** argv)
     cli.add_flag("--validation", validation,
                  "Enable the Vulkan validation layer; exit 3 if it reports anything (env PENUMBRA_VALIDATION=1)");
     cli.add_flag("-v,--verbose", verbose, "Log debug detail");
+    cli.add_flag_callback(
+        "--list-commands",
+        [] {
+            fmt::print("{}", viewer::Viewer::commands().list().markdown());
+            throw CLI::Success();
+        },
+        "Print the script commands as docs/viewer.md's table (Markdown) and exit");
     try {
         cli.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -99,6 +99,21 @@ protected:
     }
 
     std::string config(const std::string& name) const { return (penumbra::test::sourceDir() / "config" / name).string(); }
+
+    struct ScriptError {
+        std::string script, expected;  // the script, and a part of its error message
+    };
+    // Each script, run on config/default.json, ends with exit 1 and its message (a `quit`
+    // after it: a script that does not fail ends too).
+    void expectScriptErrors(const std::vector<ScriptError>& cases, const std::string& prefix = xvfb()) const
+    {
+        for (const ScriptError& bad : cases) {
+            SCOPED_TRACE(bad.script);
+            const RunResult v = viewer(config("default.json"), bad.script + "; quit", prefix);
+            EXPECT_EQ(v.exitCode, 1) << v.err;
+            EXPECT_NE(v.err.find(bad.expected), std::string::npos) << v.err;
+        }
+    }
 };
 
 // A session's edits, then the screenshot, V and the saved config; `penumbra render` of the
@@ -234,10 +249,7 @@ TEST_F(ViewerTest, ADebugImageIsShownAtItsOwnSizeAndItsPassesRunOnlyWhileShown)
 
 TEST_F(ViewerTest, ScriptErrorsNameTheCommandAndEndTheRunWithExit1)
 {
-    struct Bad {
-        std::string script, expected;
-    };
-    const Bad cases[] = {
+    expectScriptErrors({
         {"frames 1; set hard.pcf_kernel=999", "--exec 2"},
         {"frames 1; set hard.pcf_kernel=999", "pcf_kernel"},
         {"frames 1; set hard.no_such_param=1", "no_such_param"},
@@ -246,21 +258,42 @@ TEST_F(ViewerTest, ScriptErrorsNameTheCommandAndEndTheRunWithExit1)
         {"orbit ten 5", "expected a finite number, got \"ten\""},
         {"camera 0 10 0 0 0 0", "parallel to the up axis"},
         {"size 0 10", "expected a whole number in [1, 16384]"},
-        {"fly away", "unknown command \"fly\""},
         {"show no.such.image", "no.such.image"},
         {"save /no/such/folder/x.json", "/no/such/folder"},
-        {"ui of", "expected `ui on|off`, got \"of\""},
-        {"panel-layer yes", "expected `panel-layer on|off`"},
-        {"panel shadows open", "panel \"shadows\": expected one of"},
+        {"ui of", "ui: expected on or off, got \"of\""},
+        {"panel-layer yes", "panel-layer: expected on or off, got \"yes\""},
+        {"panel shadows open", "panel: \"shadows\": expected one of"},
         {"panel timings shut", "expected open or closed"},
         {"frames 1; screenshot view.bmp", "an image is written as .png or .jpg (.jpeg)"},
-    };
-    for (const Bad& bad : cases) {
-        SCOPED_TRACE(bad.script);
-        const RunResult v = viewer(config("default.json"), bad.script + "; quit");
-        EXPECT_EQ(v.exitCode, 1) << v.err;
-        EXPECT_NE(v.err.find(bad.expected), std::string::npos) << v.err;
-    }
+    });
+}
+
+// docs/viewer.md's command list is the table's (`--list-commands`), row for row.
+TEST_F(ViewerTest, TheCommandListIsTheTablesOwn)
+{
+    const RunResult list = run(fmt::format("'{}' --list-commands", penumbra::test::viewerExecutable().string()));
+    ASSERT_EQ(list.exitCode, 0) << list.err;
+    ASSERT_NE(list.out.find("| `quit` |"), std::string::npos) << list.out;
+    const std::string doc = slurp(penumbra::test::sourceDir() / "docs" / "viewer.md");
+    const size_t start = doc.find("| command | what it does |");
+    ASSERT_NE(start, std::string::npos) << "docs/viewer.md has no command table";
+    const size_t end = doc.find("\n\n", start);
+    EXPECT_EQ(doc.substr(start, end - start + 1), list.out)
+        << "docs/viewer.md's command table differs from the viewer's: paste `penumbra-viewer --list-commands`";
+}
+
+// Every command's verb and argument count are checked before the window opens: these fail
+// without a display, naming the command (the window would have said "cannot open a window").
+TEST_F(ViewerTest, AScriptIsCheckedAgainstTheTableBeforeTheWindowOpens)
+{
+    const std::string noDisplay = "env -u DISPLAY -u WAYLAND_DISPLAY";
+    expectScriptErrors({{"frames 1; zoom in", "--exec 2: unknown command \"zoom\"; the commands are open, size,"},
+                        {"frames 1; wait-compar", "unknown command \"wait-compar\" (did you mean \"wait-compare\"?)"},
+                        {"orbit 10", "--exec 1: orbit: expected `orbit YAW PITCH`, got 1 argument"},
+                        {"light sun intensity",
+                         "expected `light LIGHT position|direction|target X Y Z` or `light LIGHT intensity V`"},
+                        {"quit now", "quit: expected `quit` with no arguments"}},
+                       noDisplay);
 }
 
 TEST_F(ViewerTest, WithoutADisplayItSaysSoAndExits1)

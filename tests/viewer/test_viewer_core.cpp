@@ -1,13 +1,17 @@
 // The viewer's parts that need no window (apps/penumbra-viewer/): camera moves
-// (CameraControl.h) at scene scales from 1e-3 to 1e5 and camera tracks left out, script parsing (Script.h), shader
-// watching (ShaderWatcher.h) and the panels' layer geometry (PanelLayer.h) on Dear ImGui's
-// own draw data.
+// (CameraControl.h) at scene scales from 1e-3 to 1e5 and camera tracks left out, script
+// parsing (Script.h) and its command table (CommandTable.h), the A/B comparison's state
+// with a drawer that answers at once (Comparison.h), shader watching (ShaderWatcher.h)
+// and the panels' layer geometry (PanelLayer.h) on Dear ImGui's own draw data.
 #include "CameraControl.h"
+#include "CommandTable.h"
+#include "Comparison.h"
 #include "PanelLayer.h"
 #include "Script.h"
 #include "ShaderWatcher.h"
 
 #include "penumbra/core/Error.h"
+#include "penumbra/metrics/DebugImage.h"
 
 #include <gtest/gtest.h>
 
@@ -147,6 +151,302 @@ TEST(ViewerScript, WordsQuotesCommentsAndWhereEachCommandCameFrom)
             << err.what();
     }
     std::filesystem::remove(fifo);
+}
+
+namespace {
+
+// What a table's handlers act on in these tests.
+struct Recorder {
+    std::vector<std::string> ran;
+};
+
+const CommandTable<Recorder>& recorderCommands()
+{
+    static const CommandTable<Recorder> table{
+        {{"orbit", {"YAW PITCH"}, "turns the camera"}, [](Recorder& r, const ScriptCommand& c) { r.ran.push_back(c.words[0]); }},
+        {{"show", {"IMAGE [linear|log]", "color"}, "shows an image"},
+         [](Recorder& r, const ScriptCommand& c) { r.ran.push_back(c.words[0] + std::to_string(c.words.size() - 1)); }},
+        {{"quit", {}, "closes the window"}, [](Recorder& r, const ScriptCommand& c) { r.ran.push_back(c.words[0]); }},
+    };
+    return table;
+}
+
+std::string errorOf(const CommandTable<Recorder>& table, const std::string& text)
+{
+    Recorder r;
+    try {
+        table.run(r, parseScript(text, "--exec", true).at(0));
+    } catch (const Error& e) {
+        EXPECT_TRUE(r.ran.empty()) << "a handler ran for a command the table refused: " << text;
+        return e.what();
+    }
+    return {};
+}
+
+} // namespace
+
+TEST(ViewerCommands, TheTableDispatchesChecksArgumentCountsAndNamesEveryVerb)
+{
+    const CommandTable<Recorder>& table = recorderCommands();
+    Recorder r;
+    for (const ScriptCommand& c : parseScript("orbit 10 5; show shadow.depth; show shadow.depth log; show color; quit", "--exec", true)) {
+        table.run(r, c);
+    }
+    EXPECT_EQ(r.ran, (std::vector<std::string>{"orbit", "show1", "show2", "show1", "quit"}));
+
+    // An unknown verb: where, the verb, every verb, and the closest within two edits.
+    EXPECT_EQ(errorOf(table, "orbitt 10 5"),
+              "--exec 1: unknown command \"orbitt\" (did you mean \"orbit\"?); the commands are orbit, show, quit");
+    EXPECT_EQ(errorOf(table, "fly away"), "--exec 1: unknown command \"fly\"; the commands are orbit, show, quit");
+    // A count no form takes: the verb and its forms.
+    EXPECT_EQ(errorOf(table, "orbit 10"), "--exec 1: orbit: expected `orbit YAW PITCH`, got 1 argument");
+    EXPECT_EQ(errorOf(table, "show a b c"),
+              "--exec 1: show: expected `show IMAGE [linear|log]` or `show color`, got 3 arguments");
+    EXPECT_EQ(errorOf(table, "quit now"), "--exec 1: quit: expected `quit` with no arguments, got 1 argument");
+
+    // A verb twice is the table's own mistake.
+    EXPECT_THROW(CommandList({{"quit", {}, "a"}, {"quit", {}, "b"}}), Error);
+}
+
+TEST(ViewerCommands, TheMarkdownListHasARowPerVerbWithItsFormsAndPipesEscaped)
+{
+    EXPECT_EQ(recorderCommands().list().markdown(), "| command | what it does |\n"
+                                                    "|---|---|\n"
+                                                    "| `orbit YAW PITCH` | turns the camera |\n"
+                                                    "| `show IMAGE [linear\\|log]`, `show color` | shows an image |\n"
+                                                    "| `quit` | closes the window |\n");
+}
+
+namespace {
+
+// B's drawer as the comparison sees it, answering when the test says: what it was asked.
+struct DrawerLog {
+    std::vector<std::vector<std::filesystem::path>> made;  // the search path of each drawer made
+    std::vector<ComparisonRequest> requests;
+    size_t cancels = 0;
+    std::optional<ComparisonResult> finished;
+};
+
+class FakeDrawer final : public BDrawer {
+public:
+    explicit FakeDrawer(DrawerLog& log) : log_(log) {}
+    void request(ComparisonRequest request) override { log_.requests.push_back(std::move(request)); }
+    void cancel() override { ++log_.cancels; }
+    DrawerProgress progress() const override { return {}; }
+    std::optional<ComparisonResult> take() override { return std::exchange(log_.finished, std::nullopt); }
+    uint32_t validationMessages() const override { return 1; }
+
+private:
+    DrawerLog& log_;
+};
+
+Comparison::MakeDrawer fakeDrawers(DrawerLog& log)
+{
+    return [&log](const std::vector<std::filesystem::path>& searchPath) {
+        log.made.push_back(searchPath);
+        return std::make_unique<FakeDrawer>(log);
+    };
+}
+
+// A 2 x 1 view of geometry under one directional light.
+config::RenderConfig twoPixelView()
+{
+    config::RenderConfig c;
+    c.width = 2;
+    c.height = 1;
+    c.lights.resize(1);
+    c.lights[0].name = "sun";
+    c.lights[0].light.type = scene::LightType::Directional;
+    return c;
+}
+
+// B's frame for `key`: every pixel geometry, V as given.
+ComparisonResult bFrame(const std::string& key, std::vector<float> visibility)
+{
+    ComparisonResult r;
+    r.viewKey = key;
+    r.images.width = uint32_t(visibility.size());
+    r.images.height = 1;
+    r.images.color.assign(4 * visibility.size(), 128);
+    r.images.positions.assign(4 * visibility.size(), 1.0f);  // w = 1: geometry
+    r.images.visibility = {std::move(visibility)};
+    return r;
+}
+
+using namespace std::chrono_literals;
+using ReadA = std::function<std::vector<std::vector<float>>()>;
+
+// The view rests from t0 on, B is asked for and answers with V = `bVisibility`.
+void restAndDrawB(Comparison& comparison, DrawerLog& log, const config::RenderConfig& view, const ReadA& readA,
+                  std::vector<float> bVisibility, Comparison::Clock::time_point t0)
+{
+    comparison.update(view, 0.0f, t0, readA);
+    comparison.update(view, 0.0f, t0 + 1s, readA);
+    ASSERT_FALSE(log.requests.empty());
+    log.finished = bFrame(log.requests.back().viewKey, std::move(bVisibility));
+    comparison.update(view, 0.0f, t0 + 2s, readA);
+}
+
+} // namespace
+
+TEST(Comparison, BIsAskedForOnceTheViewRestsAndShownOnlyForTheViewItWasDrawnFor)
+{
+    DrawerLog log;
+    Comparison comparison(fakeDrawers(log));
+    EXPECT_FALSE(comparison.on());
+    comparison.start("hard", 1, {"/plugins"});
+    ASSERT_EQ(log.made.size(), 1u);
+    EXPECT_EQ(log.made[0], (std::vector<std::filesystem::path>{"/plugins"}));
+
+    const config::RenderConfig view = twoPixelView();
+    int aReads = 0;
+    const auto readA = [&] {
+        ++aReads;
+        return std::vector<std::vector<float>>{{1.0f, 0.5f}};
+    };
+    const auto t0 = Comparison::Clock::now();
+    comparison.update(view, 0.0f, t0, readA);
+    comparison.update(view, 0.0f, t0 + Comparison::kRestBeforeRequest - 1ms, readA);
+    EXPECT_TRUE(log.requests.empty()) << "B was asked for before the view rested";
+    comparison.update(view, 0.0f, t0 + Comparison::kRestBeforeRequest, readA);
+    comparison.update(view, 0.0f, t0 + 2s, readA);
+    ASSERT_EQ(log.requests.size(), 1u) << "one request per view";
+    const ComparisonRequest& asked = log.requests[0];
+    EXPECT_EQ(asked.viewKey, viewKey(view, 0.0f));
+    ASSERT_EQ(asked.config.lights.size(), 1u);
+    EXPECT_EQ(asked.config.lights[0].shadow.technique, "hard");
+    EXPECT_EQ(asked.config.lights[0].shadow.required, true);  // a B that cannot run is an error, not unshadowed
+    EXPECT_FALSE(comparison.current());
+
+    // B's image: A's error against it, read once, as compare computes it.
+    log.finished = bFrame(asked.viewKey, {0.5f, 0.5f});
+    const uint64_t versionBefore = comparison.bImageVersion();
+    comparison.update(view, 0.0f, t0 + 3s, readA);
+    ASSERT_TRUE(comparison.current());
+    EXPECT_TRUE(comparison.ready());
+    EXPECT_NE(comparison.bImageVersion(), versionBefore);
+    ASSERT_EQ(comparison.errors().size(), 1u);
+    EXPECT_EQ(comparison.errors()[0].all.pixels, 2u);
+    EXPECT_NEAR(comparison.errors()[0].all.maxAbsError, 0.5, 1e-6);
+    EXPECT_NEAR(comparison.errors()[0].all.rmse, std::sqrt(0.125), 1e-6);
+    comparison.update(view, 0.0f, t0 + 4s, readA);
+    EXPECT_EQ(aReads, 1) << "A's V is read only when A or B changed";
+    comparison.aChanged();
+    EXPECT_FALSE(comparison.ready());
+    comparison.update(view, 0.0f, t0 + 5s, readA);
+    EXPECT_EQ(aReads, 2);
+
+    comparison.setView(CompareView::B);
+    EXPECT_TRUE(comparison.replacesA());
+    EXPECT_TRUE(comparison.shows(CompareView::B));
+
+    // The view moves: B is of the old view, not shown, and asked for again once it rests.
+    config::RenderConfig moved = view;
+    moved.camera.position.x += 1.0f;
+    comparison.update(moved, 0.0f, t0 + 6s, readA);
+    EXPECT_FALSE(comparison.current());
+    EXPECT_FALSE(comparison.replacesA()) << "B of another view replaced A";
+    EXPECT_EQ(comparison.result(), nullptr);
+    EXPECT_EQ(log.requests.size(), 1u);
+    // A late result for the old view is not shown either.
+    log.finished = bFrame(asked.viewKey, {0.0f, 0.0f});
+    comparison.update(moved, 0.0f, t0 + 6s + Comparison::kRestBeforeRequest, readA);
+    EXPECT_FALSE(comparison.current());
+    ASSERT_EQ(log.requests.size(), 2u);
+    EXPECT_EQ(log.requests[1].viewKey, viewKey(moved, 0.0f));
+
+    // B fails for this view: said once, and kept for wait-compare.
+    log.finished = ComparisonResult{log.requests[1].viewKey, {}, 0.0, "the reference ran out of memory"};
+    EXPECT_EQ(comparison.update(moved, 0.0f, t0 + 8s, readA), "B: the reference ran out of memory");
+    EXPECT_EQ(comparison.bError(), "the reference ran out of memory");
+    EXPECT_FALSE(comparison.ready());
+
+    comparison.stop();
+    EXPECT_FALSE(comparison.on());
+    EXPECT_FALSE(comparison.replacesA());
+}
+
+TEST(Comparison, ChangedSettingsCancelAndPluginReloadsAskForBAgain)
+{
+    DrawerLog log;
+    Comparison comparison(fakeDrawers(log));
+    comparison.start("reference", 1, {"/plugins"});
+    const nlohmann::json* samples = comparison.bShadows().at(0).param("samples");
+    ASSERT_NE(samples, nullptr);
+    EXPECT_EQ(*samples, 16) << "B's reference starts at 16 rays a pixel";
+    const config::RenderConfig view = twoPixelView();
+    const ReadA readA = [] { return std::vector<std::vector<float>>{{1.0f, 1.0f}}; };
+    const auto t0 = Comparison::Clock::now();
+    restAndDrawB(comparison, log, view, readA, {1.0f, 1.0f}, t0);
+    ASSERT_EQ(log.requests.size(), 1u);
+    ASSERT_TRUE(comparison.current());
+
+    // An edit of B's settings: the frame in flight is cancelled and B asked for at once
+    // (the view has rested already), with the new settings.
+    const size_t cancels = log.cancels;
+    comparison.bShadows()[0].technique = "pcss";
+    comparison.settingsChanged();
+    EXPECT_GT(log.cancels, cancels);
+    EXPECT_FALSE(comparison.current());
+    comparison.update(view, 0.0f, t0 + 2s, readA);
+    ASSERT_EQ(log.requests.size(), 2u);
+    EXPECT_EQ(log.requests[1].config.lights[0].shadow.technique, "pcss");
+
+    // Cancel: not asked again until the view or B changes.
+    comparison.cancel();
+    comparison.update(view, 0.0f, t0 + 5s, readA);
+    EXPECT_EQ(log.requests.size(), 2u);
+
+    // A plugin reload: a new drawer with the fresh copies, B's settings kept, B asked for anew.
+    EXPECT_TRUE(comparison.usePlugins({"/fresh"}));
+    ASSERT_EQ(log.made.size(), 2u);
+    EXPECT_EQ(log.made[1], (std::vector<std::filesystem::path>{"/fresh"}));
+    EXPECT_EQ(comparison.validationMessages(), 2u) << "the replaced drawer's messages count too";
+    comparison.update(view, 0.0f, t0 + 6s, readA);
+    comparison.update(view, 0.0f, t0 + 6s + Comparison::kRestBeforeRequest, readA);
+    ASSERT_EQ(log.requests.size(), 3u);
+    EXPECT_EQ(log.requests[2].config.lights[0].shadow.technique, "pcss");
+
+    // A light added: B draws it too, with B's technique.
+    config::RenderConfig twoLights = view;
+    twoLights.lights.push_back(view.lights[0]);
+    twoLights.lights[1].name = "fill";
+    comparison.update(twoLights, 0.0f, t0 + 7s, readA);
+    ASSERT_EQ(comparison.bShadows().size(), 2u);
+    EXPECT_EQ(comparison.bShadows()[1].technique, "pcss");
+}
+
+TEST(Comparison, TheDifferenceImageIsAbsoluteDVInFalseColourOverItsScale)
+{
+    DrawerLog log;
+    Comparison comparison(fakeDrawers(log));
+    comparison.start("hard", 1, {});
+    const config::RenderConfig view = twoPixelView();
+    restAndDrawB(comparison, log, view, [] { return std::vector<std::vector<float>>{{1.0f, 0.25f}}; }, {0.5f, 0.25f},
+                 Comparison::Clock::now());
+    ASSERT_TRUE(comparison.current());
+
+    // The false-colour ramp's ends: |dV| at the scale and 0.
+    const auto ramp = [](float value) {
+        metrics::DebugImageValues one;
+        one.width = one.height = 1;
+        one.values = {value};
+        return metrics::debugImageRgba(one, metrics::DebugMapping::FalseColor, {0.0, 1.0});
+    };
+    const uint64_t before = comparison.differenceVersion();
+    comparison.setDifference(0, 0.5f);
+    EXPECT_NE(comparison.differenceVersion(), before);
+    std::vector<uint8_t> expected = ramp(1.0f);
+    const std::vector<uint8_t> zero = ramp(0.0f);
+    expected.insert(expected.end(), zero.begin(), zero.end());
+    EXPECT_EQ(comparison.differenceRgba(), expected);
+    // Twice the scale: |dV| = 0.5 sits in the middle of the ramp.
+    comparison.setDifference(0, 1.0f);
+    const std::vector<uint8_t> middle = ramp(0.5f);
+    EXPECT_TRUE(std::equal(middle.begin(), middle.end(), comparison.differenceRgba().begin()));
+
+    EXPECT_EQ(parseCompareView("split"), CompareView::Split);
+    EXPECT_EQ(parseCompareView("B"), std::nullopt);
 }
 
 TEST(ShaderWatcher, SeesEditsAdditionsAndRemovalsOfShadersOnlyOnce)

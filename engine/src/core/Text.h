@@ -1,20 +1,11 @@
 #pragma once
-// Text helpers for messages: "did you mean" suggestions for misspelt names (config keys,
-// plugin parameters, technique names), what kind of file a path names.
-#include <cstddef>
+// Text helpers for messages: "did you mean" suggestions for misspelt names (public, for the
+// apps too: penumbra/core/ClosestMatch.h), what kind of file a path names.
+#include "penumbra/core/ClosestMatch.h"
+
 #include <filesystem>
-#include <string>
-#include <string_view>
-#include <vector>
 
 namespace penumbra::core {
-
-// Levenshtein distance: insertions, deletions and substitutions each cost 1.
-size_t editDistance(std::string_view a, std::string_view b);
-
-// The candidate closest to `word` when it is within `maxDistance` edits (a likely typo),
-// else an empty string. Ties go to the earlier candidate.
-std::string closestMatch(std::string_view word, const std::vector<std::string>& candidates, size_t maxDistance = 2);
 
 // What a file that is not a regular one is, for "<path>: is a FIFO (named pipe), expected
 // ...": "a directory", "a FIFO (named pipe)", "a socket", "a block device", ...
