@@ -1,8 +1,8 @@
 #pragma once
 // Viewer scripts: what `penumbra-viewer --script FILE` and `--exec "..."` run, one command
 // per line (or per `;` in --exec), words split at blanks, "double quotes" around a word
-// with blanks, `#` to the end of the line a comment. Viewer.cpp runs them between frames;
-// docs/viewer.md lists the commands.
+// with blanks, `#` to the end of the line a comment. Viewer.cpp runs them between frames
+// through the command table (CommandTable.h, ViewerCommands.cpp), which docs/viewer.md lists.
 #include <filesystem>
 #include <string>
 #include <vector>

@@ -70,7 +70,7 @@ public:
     ~Viewer();
     int run();
 
-    // The script commands (ViewerCommands.cpp): what runCommand dispatches through, what
+    // The script commands (ViewerCommands.cpp): what the script runs through, what
     // runViewer checks a script against before the window opens, and what
     // `--list-commands` prints for docs/viewer.md.
     static const CommandTable<Viewer>& commands();
