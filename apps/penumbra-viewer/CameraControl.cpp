@@ -33,16 +33,6 @@ glm::vec3 turn(const glm::vec3& direction, const glm::vec3& up, float yawDeg, fl
 
 } // namespace
 
-const char* cameraModeName(CameraMode mode)
-{
-    switch (mode) {
-    case CameraMode::Fly: return "fly";
-    case CameraMode::FirstPerson: return "first-person";
-    case CameraMode::Orbit: break;
-    }
-    return "orbit";
-}
-
 scene::Camera orbit(const scene::Camera& camera, float yawDeg, float pitchDeg)
 {
     scene::Camera c = camera;

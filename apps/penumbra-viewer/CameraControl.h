@@ -11,7 +11,6 @@ namespace penumbra::viewer {
 // Orbit: about the target. Fly: look around and move along the view. First person: the
 // same, but moving on the horizontal plane (up stays up).
 enum class CameraMode { Orbit, Fly, FirstPerson };
-const char* cameraModeName(CameraMode mode);
 
 // Turns the camera about its target: yaw about the up axis, pitch raises the eye (degrees).
 // The pitch stops 1 degree short of the poles, where the view would flip.

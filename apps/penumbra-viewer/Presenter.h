@@ -86,7 +86,6 @@ public:
     bool vsync() const { return vsync_; }
     VkExtent2D extent() const { return extent_; }
     VkFormat format() const { return format_; }
-    VkPresentModeKHR presentMode() const { return presentMode_; }
 
 private:
     void release();

@@ -35,9 +35,6 @@ public:
     void update(const scene::Light& light, const scene::Aabb& sceneBounds) override;
     void registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io) override;
 
-    uint32_t sampleCount() const { return sampleCount_; }
-    uint32_t mapsPerBatch() const { return mapsPerBatch_; }
-
 private:
     // The samples of one batch: a grid of their maps' atlases in one depth image.
     struct Batch {

@@ -30,7 +30,6 @@ IndirectCommandArena::Region IndirectCommandArena::store(std::span<const VkDrawI
     const Region region{buffer.handle(), used_ * stride};
     std::memcpy(static_cast<std::byte*>(buffer.mapped()) + region.offset, commands.data(), commands.size_bytes());
     used_ += commands.size();
-    storedThisFrame_ += commands.size();
     return region;
 }
 
@@ -38,7 +37,6 @@ void IndirectCommandArena::beginFrame()
 {
     current_ = 0;
     used_ = 0;
-    storedThisFrame_ = 0;
 }
 
 } // namespace penumbra::render

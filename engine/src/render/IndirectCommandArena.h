@@ -36,17 +36,12 @@ public:
     // has finished every command buffer recorded with them.
     void beginFrame();
 
-    // Buffers allocated so far and the commands stored since beginFrame(): for tests.
-    size_t bufferCount() const { return buffers_.size(); }
-    uint64_t storedThisFrame() const { return storedThisFrame_; }
-
 private:
     gpu::Context& context_;
     uint32_t commandsPerBuffer_;
     std::vector<gpu::Buffer> buffers_;
     size_t current_ = 0;    // the buffer being filled
     uint64_t used_ = 0;     // commands in it
-    uint64_t storedThisFrame_ = 0;
 };
 
 } // namespace penumbra::render
