@@ -107,9 +107,10 @@ def missing_file_problems(root):
 
 def help_flags(program, *command):
     """The flags `program command --help` lists (both spellings of "-o,--output")."""
-    result = subprocess.run([program, *command, "--help"], capture_output=True, text=True, timeout=60)
+    result = subprocess.run([program, *command, "--help"], capture_output=True, text=True, errors="replace",
+                            timeout=60)
     if result.returncode != 0:
-        raise RuntimeError(f"{program} {' '.join(command)} --help: exit {result.returncode}: {result.stderr}")
+        raise RuntimeError(f"{' '.join([program, *command])} --help: exit {result.returncode}: {result.stderr.strip()}")
     flags = set()
     for line in result.stdout.splitlines():
         words = line.split()
@@ -185,11 +186,15 @@ def flag_problems(args, flags, where, command):
 
 def command_problems(root, penumbra, viewer):
     programs = {}
-    if penumbra:
-        global_flags, help_text = help_flags(penumbra)
-        programs["penumbra"] = (global_flags, {name: help_flags(penumbra, name)[0] for name in subcommands(help_text)})
-    if viewer:
-        programs["penumbra-viewer"] = (help_flags(viewer)[0], None)
+    try:
+        if penumbra:
+            global_flags, help_text = help_flags(penumbra)
+            programs["penumbra"] = (global_flags,
+                                    {name: help_flags(penumbra, name)[0] for name in subcommands(help_text)})
+        if viewer:
+            programs["penumbra-viewer"] = (help_flags(viewer)[0], None)
+    except (OSError, RuntimeError, subprocess.TimeoutExpired) as e:
+        return [f"cannot read the programs' flags: {e}"]
     problems = []
     for doc in doc_files(root):
         for number, command in quoted_commands(doc.read_text()):
