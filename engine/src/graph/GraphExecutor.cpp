@@ -342,6 +342,11 @@ void GraphExecutor::DeviceResources::resolveImports(const CompiledGraph& graph)
                 throw Error(fmt::format("render graph: imported buffer '{}' is declared {} bytes but the bound "
                                         "buffer has {}",
                                         res.name, res.sizeBytes, found->second->size()));
+            if (res.readBack && !found->second->mapped())
+                throw Error(fmt::format("render graph: imported buffer '{}' is read back by the host "
+                                        "(RenderGraph::readBack) but the bound buffer is not host-visible; create "
+                                        "it with hostVisible = true",
+                                        res.name));
             if (res.hostVisible && !found->second->mapped())
                 throw Error(fmt::format("render graph: imported buffer '{}' is used by the host passes {} but the "
                                         "bound buffer is not host-visible; create it with hostVisible = true",

@@ -32,6 +32,7 @@ std::string describe(const CompiledResource& res)
     if (res.imported) text += ", imported";
     else if (res.memorySlot >= 0) text += fmt::format(", slot {}", res.memorySlot);
     if (res.markedOutput) text += ", output";
+    if (res.readBack) text += ", read back";
     return text;
 }
 

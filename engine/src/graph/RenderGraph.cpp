@@ -277,6 +277,20 @@ void RenderGraph::markOutput(std::string_view resource)
     }
 }
 
+void RenderGraph::readBack(std::string_view buffer)
+{
+    ResourceDecl* decl = findResource(buffer);
+    if (!decl) throw Error(fmt::format("render graph: readBack('{}'): no such resource is declared", buffer));
+    if (decl->isImage || !decl->buffer.imported)
+        throw Error(fmt::format("render graph: readBack('{}'): only an imported buffer can be read back (bound to "
+                                "a host-visible buffer of its owner's); '{}' is {}",
+                                buffer, buffer, decl->isImage ? "an image" : "a transient buffer"));
+    if (!decl->readBack) {
+        decl->readBack = true;
+        ++version_;
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 // Compilation
 
@@ -501,7 +515,8 @@ private:
         std::vector<uint32_t> stack;
         for (uint32_t p = 0; p < passes_.size(); ++p) {
             bool root = passes_[p].sideEffect;
-            for (const ResourceUse& use : uses_[p]) root = root || (use.writes && decl(use.resource).markedOutput);
+            for (const ResourceUse& use : uses_[p])
+                root = root || (use.writes && (decl(use.resource).markedOutput || decl(use.resource).readBack));
             if (root) {
                 live[p] = true;
                 stack.push_back(p);
@@ -529,6 +544,8 @@ private:
             res.isImage = d.isImage;
             res.imported = imported(r);
             res.markedOutput = d.markedOutput;
+            res.readBack = d.readBack;
+            res.hostVisible = d.readBack;
             if (d.isImage) {
                 res.width = d.image.width;
                 res.height = d.image.height;
@@ -673,6 +690,21 @@ private:
                 if (auto barrier = nextBarrier(st, use)) pass.barriersBefore.push_back(*barrier);
             }
         restoreImportedLayouts(out, state);
+        makeReadBacksVisible(out, state);
+    }
+
+    void makeReadBacksVisible(CompiledGraph& out, const std::vector<ResourceState>& state) const
+    {
+        std::vector<bool> written(resources_.size(), false);
+        for (const CompiledPass& pass : out.passes)
+            for (const ResourceUse& use : pass.uses) written[use.resource] = written[use.resource] || use.writes;
+        for (uint32_t r = 0; r < resources_.size(); ++r) {
+            if (!decl(r).readBack || !written[r]) continue;
+            const ResourceState& st = state[r];
+            out.barriersAfter.push_back(Barrier{r, false, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_UNDEFINED,
+                                                st.writeStage | st.readStages, st.writeAccess,
+                                                VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT});
+        }
     }
 
     void restoreImportedLayouts(CompiledGraph& out, std::vector<ResourceState>& state) const

@@ -741,6 +741,48 @@ TEST_F(GraphExecutorTest, TransferHostTransferChainRoundTripsDataExactly)
     EXPECT_NE(compiled.toDot().find("host"), std::string::npos);
 }
 
+// A read-back (RenderGraph::readBack): the frame's result is in the owner's mapped memory
+// once execute() returns, through the graph's barrier alone (no pass of the frame waits
+// for it), and only a host-visible buffer can be bound to one.
+TEST_F(GraphExecutorTest, ReadBackIsInMappedMemoryWhenTheFrameReturns)
+{
+    RenderGraph graph;
+    graph.declareBuffer({"counts", 256, false});
+    graph.declareBuffer({"last counts", 256, true});
+    uint32_t frame = 0;
+    graph.addPass("count", QueueKind::Transfer).write("counts", Usage::TransferDst).execute([&](PassContext& pass) {
+        fill(pass, "counts", 100 + frame);
+    });
+    graph.addPass("copy", QueueKind::Transfer)
+        .read("counts", Usage::TransferSrc)
+        .write("last counts", Usage::TransferDst)
+        .execute([](PassContext& pass) {
+            const VkBufferCopy region{0, 0, 256};
+            vkCmdCopyBuffer(pass.cmd(), pass.buffer("counts").handle(), pass.buffer("last counts").handle(), 1, &region);
+        });
+    graph.readBack("last counts");
+
+    GraphExecutor executor(*context, kNoTimestamps);
+    gpu::Buffer deviceOnly(*context, 256, VK_BUFFER_USAGE_TRANSFER_DST_BIT, false, "device only");
+    executor.bindBuffer("last counts", deviceOnly);
+    const std::string unmapped = errorOf([&] { executor.execute(graph); });
+    EXPECT_NE(unmapped.find("imported buffer 'last counts' is read back by the host (RenderGraph::readBack) but the "
+                            "bound buffer is not host-visible"),
+              std::string::npos)
+        << unmapped;
+
+    gpu::Buffer last(*context, 256, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, "last counts");
+    std::memset(last.mapped(), 0, 256);
+    executor.bindBuffer("last counts", last);
+    for (frame = 1; frame <= 2; ++frame) {
+        executor.execute(graph);
+        std::vector<uint32_t> words(64);
+        std::memcpy(words.data(), last.mapped(), 256);
+        EXPECT_TRUE(allEqual(words, 0, 64, 100 + frame)) << "frame " << frame << ": " << words[0];
+    }
+    EXPECT_TRUE(executor.compiled()->culled.empty()) << "the read-back keeps its writers";
+}
+
 TEST_F(GraphExecutorTest, HostPassNobodyReadsIsCulledAndNeverRuns)
 {
     constexpr VkDeviceSize kBytes = 256;

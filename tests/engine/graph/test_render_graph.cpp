@@ -553,6 +553,72 @@ TEST(RenderGraph, ImportedImagesReturnToTheirInitialLayoutAfterTheFrame)
     EXPECT_NE(after->toText().find("after the last pass:"), std::string::npos);
 }
 
+// A read-back (RenderGraph::readBack) keeps its writers without a side effect, and after
+// the last pass makes the last write visible to the host, after every pass that reads it.
+TEST(RenderGraph, ReadBackKeepsItsWritersAndEndsWithABarrierToTheHost)
+{
+    RenderGraph graph;
+    graph.declareBuffer({"counts", 64, false});
+    graph.declareBuffer({"last counts", 64, true});
+    graph.declareBuffer({"analysis", 64, true});
+    declareColor(graph, "color");
+    graph.addPass("count", QueueKind::Compute).write("counts", Usage::Storage);
+    graph.addPass("copy", QueueKind::Transfer)
+        .read("counts", Usage::TransferSrc)
+        .write("last counts", Usage::TransferDst);
+    graph.addPass("analyze", QueueKind::Compute).write("analysis", Usage::Storage);
+    graph.addPass("use", QueueKind::Compute).read("analysis", Usage::Storage).write("color", Usage::Storage);
+    graph.markOutput("color");
+
+    // Nothing reads "last counts": without the read-back its writers are culled.
+    EXPECT_EQ(passOrder(*graph.compile()), (std::vector<std::string>{"analyze", "use"}));
+    EXPECT_TRUE(graph.compile()->barriersAfter.empty());
+
+    graph.readBack("last counts");
+    graph.readBack("analysis");
+    const auto compiled = graph.compile();
+    EXPECT_EQ(passOrder(*compiled), (std::vector<std::string>{"count", "copy", "analyze", "use"}));
+    EXPECT_TRUE(compiled->culled.empty());
+    ASSERT_EQ(compiled->barriersAfter.size(), 2u);
+    for (const Barrier& b : compiled->barriersAfter) {
+        const CompiledResource& res = compiled->resources[b.resource];
+        SCOPED_TRACE(res.name);
+        EXPECT_FALSE(b.isImage);
+        EXPECT_TRUE(res.readBack);
+        EXPECT_TRUE(res.hostVisible);
+        EXPECT_EQ(b.dstStage, VK_PIPELINE_STAGE_2_HOST_BIT);
+        EXPECT_EQ(b.dstAccess, VK_ACCESS_2_HOST_READ_BIT);
+        if (res.name == "last counts") {  // the copy wrote it last
+            EXPECT_EQ(b.srcStage, VK_PIPELINE_STAGE_2_TRANSFER_BIT);
+            EXPECT_EQ(b.srcAccess, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+        } else {  // written by "analyze", then read by "use": the host waits for both
+            EXPECT_EQ(res.name, "analysis");
+            EXPECT_EQ(b.srcStage, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT);
+            EXPECT_EQ(b.srcAccess, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+        }
+    }
+    EXPECT_NE(compiled->toText().find("read back"), std::string::npos);
+}
+
+TEST(RenderGraph, ReadBackOfAnUnwrittenBufferNeedsNoBarrier)
+{
+    RenderGraph graph;
+    graph.declareBuffer({"table", 64, true});
+    graph.addPass("lookup", QueueKind::Compute, true).read("table", Usage::Storage);
+    graph.readBack("table");
+    EXPECT_TRUE(graph.compile()->barriersAfter.empty());
+}
+
+TEST(RenderGraph, OnlyAnImportedBufferCanBeReadBack)
+{
+    RenderGraph graph;
+    graph.declareBuffer({"transient", 64, false});
+    declareColor(graph, "image");
+    expectThrowContaining([&] { graph.readBack("transient"); }, {"readBack('transient')", "a transient buffer"});
+    expectThrowContaining([&] { graph.readBack("image"); }, {"readBack('image')", "an image"});
+    expectThrowContaining([&] { graph.readBack("missing"); }, {"readBack('missing')", "no such resource"});
+}
+
 // ---------------------------------------------------------------------------------------
 // Printing
 

@@ -132,8 +132,10 @@ struct CompiledResource {
     // untouched imported image stays in its initial layout). UNDEFINED for buffers.
     VkImageLayout finalLayout = VK_IMAGE_LAYOUT_UNDEFINED;
     // Buffers a host pass reads or writes: placed in host-visible, coherent memory and
-    // mapped; never aliased with device-local resources.
+    // mapped; never aliased with device-local resources. Read-back buffers too (bound to
+    // a host-visible buffer of their owner's).
     bool hostVisible = false;
+    bool readBack = false;  // RenderGraph::readBack
 };
 
 // A block of device memory shared by transient resources with disjoint lifetimes.
@@ -150,7 +152,8 @@ struct CompiledGraph {
     std::vector<MemorySlot> memorySlots;
     // After the last pass: imported images whose declared initialLayout is not UNDEFINED
     // go back to it, so that every frame (and the owner outside the graph) starts from
-    // the declared state. The destination scope is all commands: whatever comes next.
+    // the declared state (the destination scope is all commands: whatever comes next);
+    // read-back buffers' last writes are made visible to the host (HOST stage, HOST_READ).
     std::vector<Barrier> barriersAfter;
     VkDeviceSize transientBytesUnaliased = 0;  // sum of aligned transient sizes
     VkDeviceSize transientBytesAliased = 0;    // sum of slot sizes
@@ -194,6 +197,15 @@ public:
     void declareBuffer(const BufferDesc& desc);
     PassBuilder addPass(std::string name, QueueKind queue, bool sideEffect = false);
     void markOutput(std::string_view resource);
+    // The CPU reads `buffer` after the frame (a technique's counters, an analysis the next
+    // frame's CPU work uses): the passes that write it run (it counts as an output), and
+    // after the last pass a barrier makes their writes visible to the host, so that its
+    // owner reads the mapped memory once the frame has finished (GraphExecutor::execute
+    // waits for it), with no wait of its own inside the frame. Only an imported buffer,
+    // bound to a host-visible gpu::Buffer: a transient one's memory is not kept after the
+    // frame. Throws penumbra::Error for an undeclared resource, an image or a transient
+    // buffer.
+    void readBack(std::string_view buffer);
 
     // Orders, culls, computes lifetimes, aliases and derives barriers. Returns the
     // cached result while the declaration has not changed since the last compile.
@@ -220,6 +232,7 @@ private:
         ImageDesc image;
         BufferDesc buffer;
         bool markedOutput = false;
+        bool readBack = false;
     };
     struct AccessDecl {
         std::string resource;
