@@ -129,11 +129,8 @@ private:
 
     void scan(VkCommandBuffer cmd, const gpu::Pipeline& pipeline, const gpu::Image& table)
     {
-        constexpr gpu::MemoryAccess kWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
-        constexpr gpu::MemoryAccess kReadWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                                               VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
         // The last frame's column scan wrote the table: the row scan writes after it.
-        gpu::memoryBarrier(cmd, kReadWrite, kReadWrite);
+        gpu::memoryBarrier(cmd, gpu::access::kComputeStorageReadWrite, gpu::access::kComputeStorageReadWrite);
         const uint32_t scope = timer_.beginScope(cmd, pipeline.name());
         pipeline.bind(cmd);
         gpu::DescriptorPush()
@@ -143,7 +140,7 @@ private:
         Push push{int32_t(width_), int32_t(height_), 0};
         pipeline.pushConstants(cmd, &push, sizeof(push));
         pipeline.dispatchOver(cmd, height_);  // one invocation per row
-        gpu::memoryBarrier(cmd, kWrite, kReadWrite);
+        gpu::memoryBarrier(cmd, gpu::access::kComputeStorageWrite, gpu::access::kComputeStorageReadWrite);
         push.vertical = 1;
         pipeline.pushConstants(cmd, &push, sizeof(push));
         pipeline.dispatchOver(cmd, width_);  // one per column

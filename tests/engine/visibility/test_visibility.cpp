@@ -798,9 +798,6 @@ TEST_F(VisibilityCulling, ReceiverDepthsSpreadOverTheTapsExactly)
         gpu::Buffer depth(*context, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "test.depth");
         const gpu::Buffer prefix(*context, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, "test.prefix");
         std::memcpy(depth.mapped(), texels.data(), bytes);
-        const gpu::MemoryAccess write{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
-        const gpu::MemoryAccess readWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                                          VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
         context->submitAndWait([&](VkCommandBuffer cmd) {
             spread.bind(cmd);
             gpu::DescriptorPush().storageBuffer("Depth", depth).storageBuffer("Prefix", prefix).push(*context, cmd, spread);
@@ -808,9 +805,9 @@ TEST_F(VisibilityCulling, ReceiverDepthsSpreadOverTheTapsExactly)
                 const int32_t push[3] = {c.size, c.radius, vertical};
                 spread.pushConstants(cmd, push, sizeof(push));
                 spread.dispatchOver(cmd, uint32_t(n));
-                gpu::memoryBarrier(cmd, write, readWrite);
+                gpu::memoryBarrier(cmd, gpu::access::kComputeStorageWrite, gpu::access::kComputeStorageReadWrite);
             }
-            gpu::memoryBarrier(cmd, write, {VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT});
+            gpu::memoryBarrier(cmd, gpu::access::kComputeStorageWrite, gpu::access::kHostRead);
         });
         std::vector<uint32_t> spreadTexels(n * n);
         std::memcpy(spreadTexels.data(), depth.mapped(), bytes);

@@ -44,6 +44,18 @@ inline constexpr ImageAccess kComputeSampled{VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OP
 inline constexpr ImageAccess kComputeSampledDepth{VK_IMAGE_LAYOUT_DEPTH_READ_ONLY_OPTIMAL,
                                                   VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                                                   VK_ACCESS_2_SHADER_SAMPLED_READ_BIT};
+
+// Memory scopes (MemoryAccess, for memoryBarrier) of compute dispatches' storage
+// accesses: the dependency between two steps of one pass (a summed-area table's row then
+// column sweep, a pyramid's levels), which the render graph, ordering whole passes, does
+// not see.
+inline constexpr MemoryAccess kComputeStorageWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                                                   VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
+inline constexpr MemoryAccess kComputeStorageReadWrite{
+    VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
+// The host reading mapped memory after the submission's wait (work outside a render
+// graph; in one, RenderGraph::readBack).
+inline constexpr MemoryAccess kHostRead{VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT};
 } // namespace access
 
 } // namespace penumbra::gpu
