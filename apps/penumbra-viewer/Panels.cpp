@@ -6,7 +6,6 @@
 
 #include "penumbra/core/Error.h"
 #include "penumbra/plugin/Params.h"
-#include "penumbra/plugin/ShadowMapParams.h"
 
 #include <fmt/format.h>
 #include <imgui.h>
@@ -409,11 +408,9 @@ void Viewer::drawParamWidgets(const std::string& key, const std::string& lightNa
 {
     const std::string& technique = values.pluginName();
     for (const plugin::ParamSpec& spec : values.specs()) {
-        // An odd-only kernel (the plugin's own check, plugin::mustBeOdd) steps by 2 from
-        // the first odd value of its range.
-        const bool odd = spec.type == plugin::ParamType::Int && plugin::mustBeOdd(technique, spec.name);
-        const int intLo = odd ? int(spec.minValue) | 1 : int(spec.minValue);
-        const int intHi = odd && int(spec.maxValue) % 2 == 0 ? int(spec.maxValue) - 1 : int(spec.maxValue);
+        // An odd-only kernel (ParamSpec::odd: its range's ends are odd) steps by 2.
+        const bool odd = spec.odd;
+        const int intLo = int(spec.minValue), intHi = int(spec.maxValue);
         drawnParamWidgets_.push_back(
             fmt::format("{} {} {} {}{}", lightName, technique, spec.name, plugin::paramTypeName(spec.type),
                         spec.type == plugin::ParamType::Int ? fmt::format(" {}..{} step {}", intLo, intHi, odd ? 2 : 1) : ""));

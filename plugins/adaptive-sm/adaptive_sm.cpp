@@ -28,6 +28,8 @@
 #include "penumbra/gpu/Resources.h"
 #include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
+#include "penumbra/plugin/ComputePipeline.h"
+#include "penumbra/plugin/DebugViews.h"
 #include "penumbra/plugin/GBuffer.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/ShadowMapParams.h"
@@ -45,6 +47,7 @@
 #include <cstring>
 #include <iterator>
 #include <numeric>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -82,12 +85,12 @@ const plugin::ParamSpec kParams[] = {
     {"depth_culling", ParamType::Bool, 1, 0, 1, "",
      "stop a lookup at the first node whose subtree depth range decides it (exact; the thesis' min-max culling)"},
     plugin::kShadowDepthBiasParam,
-    {"slope_bias", ParamType::Float, 2, 0, 1000, "",
-     "slope-scaled depth bias factor (rasterizer, per tile: it follows each tile's texel size), per texel of the "
-     "filter's width"},
-    {"bias_clamp", ParamType::Float, 0, 0, 1, "depth", "largest rasterizer bias, in NDC depth; 0: no clamp"},
-    {"pcf_kernel", ParamType::Int, 1, 1, 7, "texels",
-     "taps per side of a PCF box at the finest node's texel spacing, odd; taps past a tile read its neighbour"},
+    plugin::slopeBiasParam("slope-scaled depth bias factor (rasterizer, per tile: it follows each tile's texel "
+                           "size), per texel of the filter's width"),
+    plugin::kBiasClampParam,
+    plugin::oddKernelParam("pcf_kernel", 1, 7,
+                           "taps per side of a PCF box at the finest node's texel spacing, odd; taps past a tile read "
+                           "its neighbour"),
 };
 
 struct Settings {
@@ -108,7 +111,7 @@ struct Settings {
 Settings readSettings(const plugin::ParamValues& params)
 {
     Settings s;
-    s.pcfKernel = uint32_t(plugin::oddKernelParam(params, "pcf_kernel", "adaptive-sm"));
+    s.pcfKernel = uint32_t(params.getInt("pcf_kernel"));
     s.memoryMib = uint32_t(params.getInt("memory_mib"));
     s.tile = uint32_t(params.getInt("tile_texels"));
     if ((s.tile & (s.tile - 1)) != 0)
@@ -187,13 +190,13 @@ public:
     void instancesMoved(std::span<const uint32_t> instances) override;
     void registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io) override;
     std::vector<plugin::TechniqueFigure> figures() const override;
-    bool grewForLastFrame() override;
+    bool wantsRedraw() override;
 
 private:
     struct Names {
         std::string atlas, ranges, analysis;
     };
-    void calibrateTileCost(const gpu::ShaderCompiler& shaders);
+    void calibrateTileCost(const plugin::TechniqueSetup& setup);
     void readLastAnalysis();
     void refineAndRecordTiles(const graph::PassContext& pass, const Names& names);
     void recordRanges(const graph::PassContext& pass, const Names& names);
@@ -203,7 +206,6 @@ private:
     gpu::Context& context_;
     const render::Casters& casters_;
     const scene::Scene& scene_;
-    const uint32_t lightIndex_;
     const uint32_t width_, height_;  // the G-buffer's
     const Settings settings_;
     render::ShadowMap shadowMap_;  // the light view's frustum (one face) and its ShadowMapData
@@ -224,8 +226,9 @@ private:
     gpu::Pipeline analyze_;
     gpu::Pipeline tileRange_;
     gpu::Pipeline subtreeRange_;
-    gpu::Pipeline debugScreen_;
-    gpu::Pipeline debugLight_;
+    // The debug views (debug.comp DEBUG_VIEW 0 and 1), compiled when first requested.
+    std::optional<plugin::DebugViewPass> debugScreen_;
+    std::optional<plugin::DebugViewPass> debugLight_;
     gpu::Sampler depthSampler_;
     double costPerTexelMs_ = 0.0;  // a
     double costPerTileMs_ = 0.0;   // b
@@ -258,7 +261,6 @@ AdaptiveShadowMap::AdaptiveShadowMap(const plugin::TechniqueSetup& setup)
     : context_(setup.context),
       casters_(setup.casters),
       scene_(setup.scene),
-      lightIndex_(setup.lightIndex),
       width_(std::max(setup.width, 1u)),
       height_(std::max(setup.height, 1u)),
       settings_(readSettings(setup.params)),
@@ -279,52 +281,43 @@ AdaptiveShadowMap::AdaptiveShadowMap(const plugin::TechniqueSetup& setup)
     shadowMap_.setFootprint(render::CasterView::kWholeView);
     for (const render::LightFrustum& f : shadowMap_.frusta()) lightViewProj_.push_back(f.viewProj);
 
-    const std::string name = fmt::format("light{}.adaptive-sm", lightIndex_);
     atlas_ = gpu::Image(context_, {layout_.columns * settings_.tile, layout_.rows * settings_.tile,
                                    render::kShadowDepthFormat,
                                    VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT |
                                        VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                                   name + ".atlas"});
+                                   setup.local("atlas")});
     context_.submitAndWait([&](VkCommandBuffer cmd) {
         gpu::transition(cmd, atlas_, gpu::access::kUndefined, gpu::access::kComputeSampledDepth);
     });
     const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
-    ranges_ = gpu::Buffer(context_, sizeof(glm::vec4) * layout_.slots, storage, false, name + ".ranges");
-    analysis_ = gpu::Buffer(context_, sizeof(NodeAnalysis) * layout_.slots, storage, true, name + ".analysis");
+    ranges_ = gpu::Buffer(context_, sizeof(glm::vec4) * layout_.slots, storage, false, setup.local("ranges"));
+    analysis_ = gpu::Buffer(context_, sizeof(NodeAnalysis) * layout_.slots, storage, true, setup.local("analysis"));
     std::memset(analysis_.mapped(), 0, analysis_.size());
-    nodeTable_ = gpu::Buffer(context_, sizeof(GpuNode) * layout_.slots, storage, true, name + ".nodes");
-    tileList_ = gpu::Buffer(context_, sizeof(uint32_t) * layout_.slots, storage, true, name + ".tile_list");
-    order_ = gpu::Buffer(context_, sizeof(uint32_t) * (kMaxLevels + 1 + layout_.slots), storage, true, name + ".order");
+    nodeTable_ = gpu::Buffer(context_, sizeof(GpuNode) * layout_.slots, storage, true, setup.local("nodes"));
+    tileList_ = gpu::Buffer(context_, sizeof(uint32_t) * layout_.slots, storage, true, setup.local("tile_list"));
+    order_ = gpu::Buffer(context_, sizeof(uint32_t) * (kMaxLevels + 1 + layout_.slots), storage, true, setup.local("order"));
     pageLevel_ = std::min(settings_.maxLevel, kPageLevel);
     pageTable_ = gpu::Buffer(context_, sizeof(int32_t) * shadowMap_.faceCount() << (2 * pageLevel_), storage, true,
-                             name + ".pages");
+                             setup.local("pages"));
     depthSampler_ = render::createShadowDepthSampler(context_);
     instanceBounds_.reserve(scene_.instances.size());
     for (const scene::Instance& instance : scene_.instances) instanceBounds_.push_back(instance.worldBounds);
 
     std::vector<gpu::ShaderDefine> tree = treeDefines();
     std::ranges::copy(shadowMap_.shaderDefines(), std::back_inserter(tree));
-    const auto compute = [&](const char* pass, const char* shader, uint32_t push, std::vector<gpu::ShaderDefine> d) {
-        gpu::ComputePipelineDesc c;
-        c.name = fmt::format("{}.{}", name, pass);
-        c.shader = shader;
-        c.defines = std::move(d);
-        c.pushConstantBytes = push;
-        return gpu::Pipeline(context_, setup.shaders, c);
-    };
     std::vector<gpu::ShaderDefine> query = tree;
     query.push_back({"PCF_KERNEL", std::to_string(settings_.pcfKernel)});
     query.push_back({"ASM_DEPTH_CULLING", settings_.depthCulling ? "1" : "0"});
-    visibility_ = compute("visibility", "visibility.comp", 0, query);
-    analyze_ = compute("analyze", "analyze.comp", sizeof(AnalyzePush), tree);
-    tileRange_ = compute("tile_range", "tile_range.comp", 0, treeDefines());
-    subtreeRange_ = compute("subtree_range", "subtree_range.comp", 0, treeDefines());
+    visibility_ = plugin::createComputePipeline(setup, "visibility", "visibility.comp", query);
+    analyze_ = plugin::createComputePipeline(setup, "analyze", "analyze.comp", tree, sizeof(AnalyzePush));
+    tileRange_ = plugin::createComputePipeline(setup, "tile_range", "tile_range.comp", treeDefines());
+    subtreeRange_ = plugin::createComputePipeline(setup, "subtree_range", "subtree_range.comp", treeDefines());
     std::vector<gpu::ShaderDefine> screen = tree, light = tree;
     screen.push_back({"DEBUG_VIEW", "0"});
     light.push_back({"DEBUG_VIEW", "1"});
-    debugScreen_ = compute("debug_screen", "debug.comp", 0, screen);
-    debugLight_ = compute("debug_light", "debug.comp", 0, light);
-    calibrateTileCost(setup.shaders);
+    debugScreen_.emplace(setup, plugin::computePipelineDesc(setup, "debug_screen", "debug.comp", screen));
+    debugLight_.emplace(setup, plugin::computePipelineDesc(setup, "debug_light", "debug.comp", light));
+    calibrateTileCost(setup);
 }
 
 std::vector<gpu::ShaderDefine> AdaptiveShadowMap::treeDefines() const
@@ -340,14 +333,14 @@ std::vector<gpu::ShaderDefine> AdaptiveShadowMap::treeDefines() const
 // (the render pass, the state). Measured once with GPU timestamps: tiles of three sizes,
 // each cleared and covered by one triangle, five times each; a and b by least squares
 // over the medians, clamped at 0.
-void AdaptiveShadowMap::calibrateTileCost(const gpu::ShaderCompiler& shaders)
+void AdaptiveShadowMap::calibrateTileCost(const plugin::TechniqueSetup& setup)
 {
     gpu::GraphicsPipelineDesc d;
-    d.name = fmt::format("light{}.adaptive-sm.calibrate", lightIndex_);
+    d.name = setup.local("calibrate");
     d.vertexShader = "calibrate.vert";
     d.depthFormat = render::kShadowDepthFormat;
     d.cullMode = VK_CULL_MODE_NONE;
-    const gpu::Pipeline pipeline(context_, shaders, d);
+    const gpu::Pipeline pipeline(context_, setup.shaders, d);
     const uint32_t largest = settings_.tile;
     const gpu::Image target(context_, {largest, largest, render::kShadowDepthFormat,
                                        VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, d.name + ".target"});
@@ -543,9 +536,7 @@ void AdaptiveShadowMap::recordRanges(const graph::PassContext& pass, const Names
             .storageBuffer("AsmTileList", tileList_)
             .push(context_, cmd, tileRange_);
         vkCmdDispatch(cmd, uint32_t(drawnThisFrame_.size()), 1, 1);
-        gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT},
-                           {VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                            VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT});
+        gpu::memoryBarrier(cmd, gpu::access::kComputeStorageWrite, gpu::access::kComputeStorageReadWrite);
     }
     // Subtree ranges change with new tiles and with evictions; otherwise they stand.
     if (drawnThisFrame_.empty() && !treeChanged_) return;
@@ -579,8 +570,9 @@ void AdaptiveShadowMap::registerPasses(graph::RenderGraph& graph, const plugin::
         .write(names.ranges, graph::Usage::Storage)
         .execute([this, names](graph::PassContext& pass) { recordRanges(pass, names); });
 
-    // The analysis is read by the next draw's CPU step: a side effect for the graph.
-    graph::PassBuilder analyze = graph.addPass(io.local("analyze"), graph::QueueKind::Compute, true);
+    // The analysis is read back by the next draw's CPU step.
+    graph.readBack(names.analysis);
+    graph::PassBuilder analyze = graph.addPass(io.local("analyze"), graph::QueueKind::Compute);
     plugin::readGBuffer(analyze, io.gbuffer);
     analyze.read(names.atlas, graph::Usage::Sampled)
         .write(names.analysis, graph::Usage::Storage)
@@ -599,8 +591,6 @@ void AdaptiveShadowMap::registerPasses(graph::RenderGraph& graph, const plugin::
             analyze_.pushConstants(cmd, &push, sizeof(push));
             // One invocation per analyzed pixel (analyze.comp maps it to its pixel).
             analyze_.dispatchOver(cmd, (width_ + settings_.analyzeStride - 1) / settings_.analyzeStride, height_);
-            gpu::memoryBarrier(cmd, {VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT},
-                               {VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT});
             analysisPending_ = true;
         });
 
@@ -616,49 +606,29 @@ void AdaptiveShadowMap::registerPasses(graph::RenderGraph& graph, const plugin::
         .read(names.ranges, graph::Usage::Storage);
 
     // Debug views: the screen's tile levels, and the light view's resident tiles and
-    // benefits (after this frame's analysis).
-    const std::string level = io.local("tile_level"), resident = io.local("resident_tiles"),
-                      benefit = io.local("tile_benefit");
-    graph.declareImage({level, width_, height_, VK_FORMAT_R32_SFLOAT});
+    // benefits (after this frame's analysis), culled unless requested.
+    constexpr plugin::DebugImage kScreen[] = {{"tile_level", "tileLevel"}};
+    constexpr plugin::DebugImage kLight[] = {{"resident_tiles", "residentTiles"}, {"tile_benefit", "tileBenefit"}};
+    const auto bindTree = [this](const graph::PassContext&, gpu::DescriptorPush& descriptors, const gpu::Pipeline&) {
+        descriptors.storageBuffer("shadowMapBuffer", shadowMap_.buffer())
+            .storageBuffer("AsmNodes", nodeTable_)
+            .storageBuffer("AsmPages", pageTable_);
+    };
+    debugScreen_->addOverGBuffer(graph, io, io.local("debug_screen"), kScreen, bindTree)
+        .read(names.atlas, graph::Usage::Sampled);
     // One face at 512², or the six cube faces at 256² each in 3 x 2 cells.
     const bool cube = shadowMap_.faceCount() > 1;
     const uint32_t lightWidth = cube ? 3 * kDebugLightTexels / 2 : kDebugLightTexels;
-    graph.declareImage({resident, lightWidth, kDebugLightTexels, VK_FORMAT_R32_SFLOAT});
-    graph.declareImage({benefit, lightWidth, kDebugLightTexels, VK_FORMAT_R32_SFLOAT});
-    graph::PassBuilder screen = graph.addPass(io.local("debug_screen"), graph::QueueKind::Compute);
-    plugin::readGBuffer(screen, io.gbuffer);
-    screen.read(names.atlas, graph::Usage::Sampled)
-        .write(level, graph::Usage::Storage)
-        .execute([this, io, level](graph::PassContext& pass) {
-            debugScreen_.bind(pass.cmd());
-            gpu::DescriptorPush descriptors;
-            plugin::bindGBuffer(pass, io.gbuffer, descriptors);
-            descriptors.storageImage("tileLevel", pass.image(level))
-                .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
-                .storageBuffer("AsmNodes", nodeTable_)
-                .storageBuffer("AsmPages", pageTable_)
-                .push(context_, pass.cmd(), debugScreen_);
-            debugScreen_.dispatchOver(pass.cmd(), pass.image(level));
-        });
-    graph.addPass(io.local("debug_light"), graph::QueueKind::Compute)
-        .read(names.analysis, graph::Usage::Storage)
-        .write(resident, graph::Usage::Storage)
-        .write(benefit, graph::Usage::Storage)
-        .execute([this, resident, benefit, names](graph::PassContext& pass) {
-            debugLight_.bind(pass.cmd());
-            gpu::DescriptorPush()
-                .storageImage("residentTiles", pass.image(resident))
-                .storageImage("tileBenefit", pass.image(benefit))
-                .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
-                .storageBuffer("AsmNodes", nodeTable_)
-                .storageBuffer("AsmPages", pageTable_)
-                .storageBuffer("AsmAnalysis", pass.buffer(names.analysis))
-                .push(context_, pass.cmd(), debugLight_);
-            debugLight_.dispatchOver(pass.cmd(), pass.image(resident));
-        });
+    const auto bindAnalysis = [bindTree, names](const graph::PassContext& pass, gpu::DescriptorPush& descriptors,
+                                                const gpu::Pipeline& pipeline) {
+        bindTree(pass, descriptors, pipeline);
+        descriptors.storageBuffer("AsmAnalysis", pass.buffer(names.analysis));
+    };
+    debugLight_->addOverTexels(graph, io, io.local("debug_light"), kLight, lightWidth, kDebugLightTexels, bindAnalysis)
+        .read(names.analysis, graph::Usage::Storage);
 }
 
-bool AdaptiveShadowMap::grewForLastFrame()
+bool AdaptiveShadowMap::wantsRedraw()
 {
     readLastAnalysis();
     if (settleRound_ < settings_.settleRounds && tree_.wantsMore(settings_.minBenefit)) {

@@ -17,6 +17,9 @@
 #include "penumbra/gpu/Resources.h"
 #include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
+#include "penumbra/plugin/ClearPass.h"
+#include "penumbra/plugin/ComputePipeline.h"
+#include "penumbra/plugin/DebugViews.h"
 #include "penumbra/plugin/GBuffer.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/ShadowMapParams.h"
@@ -57,7 +60,8 @@ constexpr const char* kCoherenceNames[] = {"model", "always"};
 
 // The debug images the debug_views pass writes (visibility.comp DEBUG_IMAGES), each
 // io.local(name): requested by name, else the pass is culled and costs nothing.
-constexpr const char* kDebugImages[] = {"kernel", "visited", "coherence"};
+constexpr plugin::DebugImage kDebugImages[] = {
+    {"kernel", "kernelOut"}, {"visited", "visitedOut"}, {"coherence", "coherenceOut"}};
 
 // packets.comp's result per pixel: (V or -1, class, reads, kernel side).
 constexpr VkFormat kPacketsFormat = VK_FORMAT_R32G32B32A32_SFLOAT;
@@ -419,13 +423,12 @@ private:
     // One shadow map's worth: the light's own, or one sub-light's (§5).
     struct View {
         View(const plugin::TechniqueSetup& setup, SubLight first, uint32_t resolution, uint32_t guardTexels,
-             const std::string& technique)
+             const std::string& technique, const std::string& lightBufferName)
             : sub(std::move(first)),
               shadowMap(render::ShadowMapSetup{setup.context, setup.shaders, setup.casters, sub.light,
                                                setup.sceneBounds, setup.lightIndex},
                         resolution, technique, guardTexels),
-              lightBuffer(setup.context, sizeof(LightData), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true,
-                          fmt::format("light{}.{}.light", setup.lightIndex, technique))
+              lightBuffer(setup.context, sizeof(LightData), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, lightBufferName)
         {
         }
         SubLight sub;  // the (sub-)light its map is drawn from, and its shape
@@ -448,8 +451,6 @@ private:
                         const ViewNames& names, const gpu::Pipeline& pipeline) const;
     void recordPackets(const graph::PassContext& pass, const plugin::LightPassIo& io, size_t view,
                        const ViewNames& names) const;
-    void recordDebugViews(const graph::PassContext& pass, const plugin::LightPassIo& io, size_t view,
-                          const ViewNames& names);
     const render::ShadowMap& firstMap() const { return views_.front()->shadowMap; }
     glm::ivec2 atlasSize() const { return {int(firstMap().atlasWidth()), int(firstMap().atlasHeight())}; }
 
@@ -466,9 +467,8 @@ private:
     gpu::Pipeline mssmLevel0_;  // level 0, from the depth map
     gpu::Pipeline visibility_;
     std::optional<gpu::Pipeline> packets_;  // with packets larger than 1 x 1
-    const gpu::ShaderCompiler& shaders_;
-    gpu::ComputePipelineDesc debugViewsDesc_;
-    std::optional<gpu::Pipeline> debugViews_;
+    // The visibility shader with DEBUG_IMAGES, writing every view's debug images.
+    std::optional<plugin::DebugViewPass> debugViews_;
     gpu::Sampler compareSampler_;
     gpu::Sampler depthSampler_;
     uint32_t width_ = 0, height_ = 0;  // V_l's
@@ -478,7 +478,6 @@ BackprojectionShadow::BackprojectionShadow(const plugin::TechniqueSetup& setup)
     : context_(setup.context),
       settings_(readSettings(setup.params)),
       levels_(mssmLevels(settings_.maxKernel)),
-      shaders_(setup.shaders),
       width_(setup.width),
       height_(setup.height)
 {
@@ -504,27 +503,21 @@ BackprojectionShadow::BackprojectionShadow(const plugin::TechniqueSetup& setup)
     const uint32_t guard = render::kernelGuardTexels(0.5f * float(settings_.maxKernel) + 2.0f, settings_.resolution);
     const std::vector<SubLight> subs = subLights(setup.light);
     for (size_t k = 0; k < subs.size(); ++k) {
-        const std::string technique = subs.size() > 1 ? fmt::format("backprojection.view{}", k) : "backprojection";
-        views_.push_back(std::make_unique<View>(setup, subs[k], settings_.resolution, guard, technique));
+        const std::string view = subs.size() > 1 ? fmt::format("view{}", k) : "";
+        views_.push_back(std::make_unique<View>(setup, subs[k], settings_.resolution, guard,
+                                                view.empty() ? "backprojection" : "backprojection." + view,
+                                                setup.local(view.empty() ? "light" : view + ".light")));
     }
     checkDevice();
     if (context_.deviceInfo().type == "cpu") loopBudget_ = kCpuPacketLoopBudget;
-    const std::string name = fmt::format("light{}.backprojection.", setup.lightIndex);
+    mssm_ = plugin::createComputePipeline(setup, "mssm", "mssm.comp", {{"MSSM_LEVEL0", "0"}}, sizeof(MssmPush));
+    mssmLevel0_ =
+        plugin::createComputePipeline(setup, "mssm_level0", "mssm.comp", {{"MSSM_LEVEL0", "1"}}, sizeof(MssmPush));
 
-    gpu::ComputePipelineDesc c;
-    c.name = name + "mssm";
-    c.shader = "mssm.comp";
-    c.pushConstantBytes = sizeof(MssmPush);
-    c.defines = {{"MSSM_LEVEL0", "0"}};
-    mssm_ = gpu::Pipeline(context_, setup.shaders, c);
-    c.name = name + "mssm_level0";
-    c.defines = {{"MSSM_LEVEL0", "1"}};
-    mssmLevel0_ = gpu::Pipeline(context_, setup.shaders, c);
-
-    c.name = name + "visibility";
-    c.shader = "visibility.comp";
-    c.defines = {{"TRAVERSAL", std::to_string(uint32_t(settings_.traversal))},
-                 {"PACKET", std::to_string(settings_.packet)}};
+    gpu::ComputePipelineDesc c = plugin::computePipelineDesc(
+        setup, "visibility", "visibility.comp",
+        {{"TRAVERSAL", std::to_string(uint32_t(settings_.traversal))}, {"PACKET", std::to_string(settings_.packet)}},
+        sizeof(VisibilityPush));
     if (views_.size() > 1) c.defines.push_back({"VIEWS", std::to_string(views_.size())});
     if (layers_ > 1) c.defines.push_back({"LAYERS", std::to_string(layers_)});
     // Every view's map has the light's type: its defines fix it (ShadowMap::update throws
@@ -533,17 +526,12 @@ BackprojectionShadow::BackprojectionShadow(const plugin::TechniqueSetup& setup)
         const std::vector<gpu::ShaderDefine> defines = view->shadowMap.shaderDefines();
         if (view == views_.front()) std::ranges::copy(defines, std::back_inserter(c.defines));
     }
-    c.pushConstantBytes = sizeof(VisibilityPush);
     visibility_ = gpu::Pipeline(context_, setup.shaders, c);
-    if (settings_.packet > 1) {
-        gpu::ComputePipelineDesc p = c;
-        p.name = name + "packets";
-        p.shader = "packets.comp";
-        packets_.emplace(context_, setup.shaders, p);
-    }
-    debugViewsDesc_ = c;
-    debugViewsDesc_.name = name + "debug_views";
-    debugViewsDesc_.defines.push_back({"DEBUG_IMAGES", "1"});
+    if (settings_.packet > 1)
+        packets_.emplace(plugin::createComputePipeline(setup, "packets", "packets.comp", c.defines, c.pushConstantBytes));
+    c.defines.push_back({"DEBUG_IMAGES", "1"});
+    debugViews_.emplace(setup,
+                        plugin::computePipelineDesc(setup, "debug_views", c.shader, c.defines, c.pushConstantBytes));
 
     compareSampler_ = render::createShadowCompareSampler(context_);
     depthSampler_ = render::createShadowDepthSampler(context_);
@@ -613,13 +601,7 @@ void BackprojectionShadow::registerPasses(graph::RenderGraph& graph, const plugi
     if (views_.size() > 1) {
         const std::string start = io.local("view0.sum");
         graph.declareImage({start, width_, height_, plugin::kVisibilityFormat});
-        graph.addPass(start, graph::QueueKind::Compute)
-            .write(start, graph::Usage::TransferDst)
-            .execute([start](graph::PassContext& pass) {
-                const VkClearColorValue zero{};
-                const VkImageSubresourceRange all{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-                vkCmdClearColorImage(pass.cmd(), pass.image(start).handle(), pass.layout(start), &zero, 1, &all);
-            });
+        plugin::ClearPass(graph, start).image(start, {});
     }
     for (size_t k = 0; k < views_.size(); ++k) addViewPasses(graph, io, k);
 }
@@ -679,23 +661,22 @@ void BackprojectionShadow::addViewPasses(graph::RenderGraph& graph, const plugin
     if (packets_) visibility.read(names.packets, graph::Usage::Storage);
     if (!before.empty()) visibility.read(before, graph::Usage::Storage);
 
-    // The debug views: nothing reads their images, so the graph culls the pass unless one
-    // of them is requested (FrameRenderer::requestImage, render --debug-image).
-    graph::PassBuilder debug = graph.addPass(io.local(names.prefix + "debug_views"), graph::QueueKind::Compute);
-    plugin::readGBuffer(debug, io.gbuffer);
+    // The view's debug views, culled unless one of their images is requested.
+    std::vector<std::string> debugNames;
+    std::vector<plugin::DebugImage> debugImages;
+    for (const plugin::DebugImage& image : kDebugImages) debugNames.push_back(names.prefix + std::string(image.name));
+    for (size_t i = 0; i < debugNames.size(); ++i) debugImages.push_back({debugNames[i], kDebugImages[i].binding});
+    const auto bindDebug = [this, k, names](const graph::PassContext& pass, gpu::DescriptorPush& descriptors,
+                                            const gpu::Pipeline& pipeline) {
+        if (!names.packets.empty()) descriptors.storageImage("packetsIn", pass.image(names.packets));
+        bindVisibility(pass, descriptors, k, names, pipeline);
+    };
+    graph::PassBuilder debug =
+        debugViews_->addOverGBuffer(graph, io, io.local(names.prefix + "debug_views"), debugImages, bindDebug);
     debug.read(names.map, graph::Usage::Sampled).read(names.mssm, graph::Usage::Storage);
     if (!names.peeled.empty()) debug.read(names.peeled, graph::Usage::Sampled);
     if (packets_) debug.read(names.packets, graph::Usage::Storage);
-    for (const char* image : kDebugImages) {
-        graph.declareImage({io.local(names.prefix + image), width_, height_, VK_FORMAT_R32_SFLOAT});
-        debug.write(io.local(names.prefix + image), graph::Usage::Storage);
-    }
-    debug.execute([this, io, k, names](graph::PassContext& pass) { recordDebugViews(pass, io, k, names); });
 }
-
-constexpr gpu::MemoryAccess kComputeWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
-constexpr gpu::MemoryAccess kComputeReadWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                                              VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
 
 void BackprojectionShadow::recordMssm(const graph::PassContext& pass, const View& view, const ViewNames& names) const
 {
@@ -706,7 +687,7 @@ void BackprojectionShadow::recordMssm(const graph::PassContext& pass, const View
         const std::string& map = layer == 0 ? names.map : names.peeled;
         for (int level = 0; level < levels_; ++level) {
             const gpu::Pipeline& pipeline = level == 0 ? mssmLevel0_ : mssm_;
-            if (level > 0) gpu::memoryBarrier(cmd, kComputeWrite, kComputeReadWrite);
+            if (level > 0) gpu::memoryBarrier(cmd, gpu::access::kComputeStorageWrite, gpu::access::kComputeStorageReadWrite);
             if (level <= 1) {
                 pipeline.bind(cmd);
                 gpu::DescriptorPush descriptors;
@@ -757,24 +738,6 @@ void BackprojectionShadow::recordPackets(const graph::PassContext& pass, const p
         return (pixels + uint32_t(settings_.packet) - 1) / uint32_t(settings_.packet);
     };
     packets_->dispatchOver(cmd, packetsOver(width_), packetsOver(height_));
-}
-
-void BackprojectionShadow::recordDebugViews(const graph::PassContext& pass, const plugin::LightPassIo& io,
-                                            size_t view, const ViewNames& names)
-{
-    if (!debugViews_) debugViews_.emplace(context_, shaders_, debugViewsDesc_);
-    const VkCommandBuffer cmd = pass.cmd();
-    debugViews_->bind(cmd);
-    gpu::DescriptorPush descriptors;
-    plugin::bindGBuffer(pass, io.gbuffer, descriptors);
-    const std::string kernel = io.local(names.prefix + "kernel");
-    descriptors.storageImage("kernelOut", pass.image(kernel))
-        .storageImage("visitedOut", pass.image(io.local(names.prefix + "visited")))
-        .storageImage("coherenceOut", pass.image(io.local(names.prefix + "coherence")));
-    if (!names.packets.empty()) descriptors.storageImage("packetsIn", pass.image(names.packets));
-    bindVisibility(pass, descriptors, view, names, *debugViews_);
-    descriptors.push(context_, cmd, *debugViews_);
-    debugViews_->dispatchOver(cmd, pass.image(kernel));
 }
 
 } // namespace

@@ -6,12 +6,14 @@
 // (visibility.comp). Translucent (BLEND) casters attenuate by 1 - alpha, opaque and
 // alpha-masked ones (above their cutoff) block: one structure for both.
 #include "penumbra/core/Error.h"
-#include "penumbra/gpu/Barrier.h"
 #include "penumbra/gpu/Context.h"
 #include "penumbra/gpu/Pipeline.h"
 #include "penumbra/gpu/Resources.h"
 #include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
+#include "penumbra/plugin/ClearPass.h"
+#include "penumbra/plugin/ComputePipeline.h"
+#include "penumbra/plugin/DebugViews.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/ShadowMapParams.h"
 #include "penumbra/plugin/Technique.h"
@@ -62,7 +64,7 @@ const plugin::ParamSpec kParams[] = {
      "the largest the pool grows to; fragments past it are dropped, counted and warned about"},
     {"epsilon", ParamType::Float, 0.001, 0, 0.5, "",
      "truncation: a list ends at its first node whose transmittance is at most epsilon (error at most epsilon)"},
-    {"pcf_kernel", ParamType::Int, 1, 1, 7, "texels", "taps per side of the filter box, odd: 1, 3, 5, 7"},
+    plugin::oddKernelParam("pcf_kernel", 1, 7, "taps per side of the filter box, odd: 1, 3, 5, 7"),
     {"lookup", ParamType::Enum, double(Lookup::Linked), 0, 0, "",
      "linked: taps start at their neighbour's links (3.5); brute_force: every tap searches its list from the head",
      kLookupNames, uint32_t(std::size(kLookupNames))},
@@ -78,8 +80,7 @@ const plugin::ParamSpec kParams[] = {
      "default); normal_offset: the receiver moved along its normal instead",
      kBiasModeNames, uint32_t(std::size(kBiasModeNames))},
     plugin::kShadowDepthBiasParam,
-    {"slope_bias", ParamType::Float, 2, 0, 1000, "",
-     "bias_mode slope: times the fragment's depth slope, per texel of the filter's width"},
+    plugin::slopeBiasParam("bias_mode slope: times the fragment's depth slope, per texel of the filter's width"),
     {"normal_offset", ParamType::Float, 1.0, 0, 64, "texels",
      "bias_mode normal_offset: the receiver's offset along its normal, in texels at the receiver, per texel of the "
      "filter's width"},
@@ -88,8 +89,8 @@ const plugin::ParamSpec kParams[] = {
 };
 
 // The debug images (debug.comp), R32F over the atlas.
-constexpr const char* kDebugImages[] = {"depth_complexity", "list_length", "transmittance"};
-constexpr const char* kDebugBindings[] = {"complexityOut", "lengthOut", "transmittanceOut"};
+constexpr plugin::DebugImage kDebugImages[] = {
+    {"depth_complexity", "complexityOut"}, {"list_length", "lengthOut"}, {"transmittance", "transmittanceOut"}};
 
 struct Settings {
     uint32_t resolution = 1024;
@@ -110,7 +111,6 @@ struct Settings {
 Settings readSettings(const plugin::ParamValues& params)
 {
     Settings s;
-    const int kernel = plugin::oddKernelParam(params, "pcf_kernel", "deep");
     s.resolution = uint32_t(params.getInt("resolution"));
     s.poolMib = uint32_t(params.getInt("pool_mib"));
     s.maxPoolMib = uint32_t(params.getInt("max_pool_mib"));
@@ -120,7 +120,7 @@ Settings readSettings(const plugin::ParamValues& params)
                                       s.poolMib, s.maxPoolMib, s.poolMib));
     }
     s.epsilon = params.getFloat("epsilon");
-    s.pcfKernel = uint32_t(kernel);
+    s.pcfKernel = uint32_t(params.getInt("pcf_kernel"));
     s.lookup = Lookup(params.getEnumIndex("lookup"));
     s.filter = Filter(params.getEnumIndex("filter"));
     s.esmExponent = params.getFloat("esm_exponent");
@@ -166,11 +166,11 @@ public:
     void update(const scene::Light& light, const scene::Aabb& sceneBounds) override;
     void registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io) override;
     std::vector<plugin::TechniqueFigure> figures() const override;
-    bool grewForLastFrame() override;
+    bool wantsRedraw() override;
 
 private:
     struct Names {
-        std::string heads, nodes, counters, lengths, opaque;
+        std::string heads, nodes, counters, lengths, opaque, lastCounters;
     };
     void recordFragments(const graph::PassContext& pass, const Names& names) const;
     void addLinksPass(graph::RenderGraph& graph, const Names& names, const std::string& name);
@@ -184,14 +184,15 @@ private:
     gpu::Context& context_;
     const render::Casters& casters_;
     const uint32_t lightIndex_;
+    const std::string prefix_;  // "light0.deep."
     const Settings settings_;
     render::ShadowMap shadowMap_;
     gpu::Pipeline fragments_;
     gpu::Pipeline sort_;
     gpu::Pipeline links_;
     gpu::Pipeline visibility_;
-    gpu::Pipeline debug_;
-    gpu::Buffer counters_;  // host-visible: last frame's Counters
+    plugin::DebugViewPass debugViews_;
+    gpu::Buffer counters_;  // host-visible, read back through the graph: the last frame's Counters
     uint32_t capacity_ = 0;  // nodes in the pool: pool_mib's, grown up to max_pool_mib's
     uint32_t deviceMaxMib_ = 0;  // the largest pool the device binds
     bool warnedOverflow_ = false;
@@ -201,10 +202,13 @@ DeepShadow::DeepShadow(const plugin::TechniqueSetup& setup)
     : context_(setup.context),
       casters_(setup.casters),
       lightIndex_(setup.lightIndex),
+      prefix_(setup.prefix),
       settings_(readSettings(setup.params)),
       shadowMap_(setup, settings_.resolution, "deep",
                  settings_.pcfKernel > 1 ? render::kernelGuardTexels(0.5f * float(settings_.pcfKernel), settings_.resolution)
-                                         : 0u)
+                                         : 0u),
+      debugViews_(setup, plugin::computePipelineDesc(setup, "debug_views", "debug.comp", shadowMap_.shaderDefines(),
+                                                     sizeof(float)))
 {
     // The pool is one storage buffer: the device binds at most maxStorageBufferRange bytes
     // of it (lavapipe: 128 MiB, 5,592,405 nodes).
@@ -229,7 +233,7 @@ DeepShadow::DeepShadow(const plugin::TechniqueSetup& setup)
     const std::vector<gpu::ShaderDefine> mapDefines = shadowMap_.shaderDefines();
 
     gpu::GraphicsPipelineDesc f;
-    f.name = fmt::format("light{}.deep.fragments", lightIndex_);
+    f.name = setup.local("fragments");
     f.vertexShader = "engine/shadow_depth.vert";
     f.fragmentShader = "fragments.frag";
     f.defines = {{"ALPHA_MASK", "1"}};
@@ -243,26 +247,17 @@ DeepShadow::DeepShadow(const plugin::TechniqueSetup& setup)
     f.cullMode = VK_CULL_MODE_NONE;  // both sides of every triangle cast, as in the depth maps
     fragments_ = gpu::Pipeline(context_, setup.shaders, f);
 
-    const auto compute = [&](const char* name, const char* shader, uint32_t push, std::vector<gpu::ShaderDefine> d) {
-        gpu::ComputePipelineDesc c;
-        c.name = fmt::format("light{}.deep.{}", lightIndex_, name);
-        c.shader = shader;
-        c.defines = std::move(d);
-        c.pushConstantBytes = push;
-        return gpu::Pipeline(context_, setup.shaders, c);
-    };
-    sort_ = compute("sort", "sort.comp", sizeof(SortPush), {});
-    if (usesLinks()) links_ = compute("links", "links.comp", sizeof(uint32_t), {});
+    sort_ = plugin::createComputePipeline(setup, "sort", "sort.comp", {}, sizeof(SortPush));
+    if (usesLinks()) links_ = plugin::createComputePipeline(setup, "links", "links.comp", {}, sizeof(uint32_t));
     std::vector<gpu::ShaderDefine> lookup = {{"PCF_KERNEL", std::to_string(settings_.pcfKernel)},
                                              {"LOOKUP", std::to_string(uint32_t(settings_.lookup))},
                                              {"FILTER", std::to_string(uint32_t(settings_.filter))},
                                              {"RECEIVER_BIAS", normalOffset ? "1" : "0"}};
     std::ranges::copy(mapDefines, std::back_inserter(lookup));
-    visibility_ = compute("visibility", "visibility.comp", sizeof(VisibilityPush), lookup);
-    debug_ = compute("debug_views", "debug.comp", sizeof(float), mapDefines);
+    visibility_ = plugin::createComputePipeline(setup, "visibility", "visibility.comp", lookup, sizeof(VisibilityPush));
     capacity_ = nodesIn(settings_.poolMib);
     counters_ = gpu::Buffer(context_, sizeof(Counters), VK_BUFFER_USAGE_TRANSFER_DST_BIT, true,
-                            fmt::format("light{}.deep.counters_readback", lightIndex_));
+                            setup.local("last_counters"));
     std::memset(counters_.mapped(), 0, sizeof(Counters));
 }
 
@@ -271,7 +266,8 @@ void DeepShadow::update(const scene::Light& light, const scene::Aabb& sceneBound
     shadowMap_.update(light, sceneBounds);
 }
 
-// The last frame has finished (the executor waits for it): its counters are final.
+// The last frame has finished (the executor waits for it) and its counters were made
+// visible to the host (RenderGraph::readBack).
 Counters DeepShadow::lastCounters() const
 {
     Counters last;
@@ -279,7 +275,7 @@ Counters DeepShadow::lastCounters() const
     return last;
 }
 
-bool DeepShadow::grewForLastFrame()
+bool DeepShadow::wantsRedraw()
 {
     const Counters last = lastCounters();
     if (last.fragments <= capacity_) return false;
@@ -290,16 +286,16 @@ bool DeepShadow::grewForLastFrame()
         // moves a little does not grow it again at once.
         const uint64_t wanted = uint64_t(last.fragments) + last.fragments / 4;
         const uint32_t mib = uint32_t(std::min<uint64_t>((wanted * kNodeBytes + (1u << 20) - 1) >> 20, maxMib));
-        spdlog::info("deep (light {}): pass 'light{}.deep.fragments' appended {} fragments to a pool of {}: the pool "
-                     "grows to {} MiB and the frame is drawn again",
-                     lightIndex_, lightIndex_, last.fragments, capacity_, mib);
+        spdlog::info("deep (light {}): pass '{}fragments' appended {} fragments to a pool of {}: the pool grows to {} "
+                     "MiB and the frame is drawn again",
+                     lightIndex_, prefix_, last.fragments, capacity_, mib);
         capacity_ = nodesIn(mib);
         return true;
     }
     if (!warnedOverflow_) {
-        spdlog::warn("deep (light {}): pass 'light{}.deep.fragments' appended {} fragments to a pool of {} "
-                     "({} MiB: {}): {} were dropped and their texels are lit too much; {}",
-                     lightIndex_, lightIndex_, last.fragments, capacity_, maxMib,
+        spdlog::warn("deep (light {}): pass '{}fragments' appended {} fragments to a pool of {} ({} MiB: {}): {} were "
+                     "dropped and their texels are lit too much; {}",
+                     lightIndex_, prefix_, last.fragments, capacity_, maxMib,
                      maxMib < settings_.maxPoolMib ? "the most this device binds" : "max_pool_mib",
                      last.fragments - capacity_,
                      maxMib < settings_.maxPoolMib ? "lower the resolution" : "raise max_pool_mib");
@@ -392,8 +388,8 @@ void DeepShadow::addLinksPass(graph::RenderGraph& graph, const Names& names, con
 
 void DeepShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPassIo& io)
 {
-    Names names{io.local("heads"), io.local("nodes"), io.local("counters"), io.local("lengths"),
-                io.local("opaque_depth")};
+    const Names names{io.local("heads"),   io.local("nodes"),        io.local("counters"),
+                      io.local("lengths"), io.local("opaque_depth"), io.local("last_counters")};
     // The nearest surface of the casters that let no light through, drawn with the lists'
     // own depths (no bias): the fragment pass keeps only what is in front of it or on it.
     shadowMap_.addOpaqueDepthPass(graph, names.opaque, {});
@@ -405,15 +401,9 @@ void DeepShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
 
     // Every list empty (the head kDeepNone), every counter 0. The whole atlas: the sort
     // and links passes walk every texel, also those the fragment pass does not draw.
-    graph.addPass(io.local("clear"), graph::QueueKind::Graphics)
-        .write(names.heads, graph::Usage::TransferDst)
-        .write(names.counters, graph::Usage::TransferDst)
-        .execute([names](graph::PassContext& pass) {
-            const VkClearColorValue none{.uint32 = {0xFFFFFFFFu, 0, 0, 0}};
-            const VkImageSubresourceRange all{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-            vkCmdClearColorImage(pass.cmd(), pass.image(names.heads).handle(), pass.layout(names.heads), &none, 1, &all);
-            vkCmdFillBuffer(pass.cmd(), pass.buffer(names.counters).handle(), 0, VK_WHOLE_SIZE, 0);
-        });
+    plugin::ClearPass(graph, io.local("clear"))
+        .image(names.heads, {.uint32 = {0xFFFFFFFFu, 0, 0, 0}})
+        .buffer(names.counters, 0);
 
     graph.addPass(io.local("fragments"), graph::QueueKind::Graphics)
         .read(names.opaque, graph::Usage::DepthAttachment)
@@ -461,39 +451,31 @@ void DeepShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
         .read(names.nodes, graph::Usage::Storage)
         .read(names.lengths, graph::Usage::Storage);
 
-    // The debug views: nothing reads their images, so the graph culls the pass unless one
-    // of them is requested (FrameRenderer::requestImage, render --debug-image).
-    graph::PassBuilder debug = graph.addPass(io.local("debug_views"), graph::QueueKind::Compute);
-    debug.read(names.heads, graph::Usage::Storage)
-        .read(names.lengths, graph::Usage::Storage)
-        .read(names.nodes, graph::Usage::Storage);
-    for (const char* image : kDebugImages) {
-        graph.declareImage({io.local(image), w, h, VK_FORMAT_R32_SFLOAT});
-        debug.write(io.local(image), graph::Usage::Storage);
-    }
-    debug.execute([this, names, io](graph::PassContext& pass) {
-        debug_.bind(pass.cmd());
-        gpu::DescriptorPush descriptors;
+    // The debug views, culled unless one of their images is requested.
+    const auto bindDebug = [this, names](const graph::PassContext& pass, gpu::DescriptorPush& descriptors,
+                                         const gpu::Pipeline& pipeline) {
         descriptors.storageImage("heads", pass.image(names.heads))
             .storageImage("lengths", pass.image(names.lengths))
             .storageBuffer("DeepNodes", pass.buffer(names.nodes))
             .storageBuffer("shadowMapBuffer", shadowMap_.buffer());
-        for (size_t i = 0; i < std::size(kDebugImages); ++i)
-            descriptors.storageImage(kDebugBindings[i], pass.image(io.local(kDebugImages[i])));
-        descriptors.push(context_, pass.cmd(), debug_);
-        debug_.pushConstants(pass.cmd(), &settings_.debugDepth, sizeof(float));
-        debug_.dispatchOver(pass.cmd(), pass.image(names.heads));
-    });
+        pipeline.pushConstants(pass.cmd(), &settings_.debugDepth, sizeof(float));
+    };
+    debugViews_.addOverTexels(graph, io, io.local("debug_views"), kDebugImages, w, h, bindDebug)
+        .read(names.heads, graph::Usage::Storage)
+        .read(names.lengths, graph::Usage::Storage)
+        .read(names.nodes, graph::Usage::Storage);
 
-    // The frame's counters, for the next update() and the stats (a side effect: nothing
-    // in the graph reads them).
-    graph.addPass(io.local("counters_readback"), graph::QueueKind::Graphics, true)
+    // The frame's counters, for wantsRedraw() and the figures after the frame.
+    graph.declareBuffer({names.lastCounters, sizeof(Counters), true});
+    io.bindBuffer(names.lastCounters, counters_);
+    graph.readBack(names.lastCounters);
+    graph.addPass(io.local("counters_readback"), graph::QueueKind::Transfer)
         .read(names.counters, graph::Usage::TransferSrc)
-        .execute([this, names](graph::PassContext& pass) {
+        .write(names.lastCounters, graph::Usage::TransferDst)
+        .execute([names](graph::PassContext& pass) {
             const VkBufferCopy region{0, 0, sizeof(Counters)};
-            vkCmdCopyBuffer(pass.cmd(), pass.buffer(names.counters).handle(), counters_.handle(), 1, &region);
-            gpu::memoryBarrier(pass.cmd(), {VK_PIPELINE_STAGE_2_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT},
-                               {VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT});
+            vkCmdCopyBuffer(pass.cmd(), pass.buffer(names.counters).handle(), pass.buffer(names.lastCounters).handle(),
+                            1, &region);
         });
 }
 

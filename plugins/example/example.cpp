@@ -6,13 +6,13 @@
 // full technique (bias modes, filters).
 #include "penumbra/gpu/Pipeline.h"
 #include "penumbra/graph/PassContext.h"
+#include "penumbra/plugin/ComputePipeline.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/ShadowMapParams.h"
 #include "penumbra/plugin/Technique.h"
 #include "penumbra/plugin/VisibilityPass.h"
 #include "penumbra/render/ShadowMap.h"
 
-#include <fmt/format.h>
 
 #include <string>
 
@@ -43,11 +43,9 @@ public:
         // The shader's path is relative: setup.shaders searches this plugin's folder,
         // then the engine's shaders/ (for the #included common/*.glsl). Its bindings
         // come from the shader itself.
-        gpu::ComputePipelineDesc visibility;
-        visibility.name = fmt::format("light{}.example.visibility", setup.lightIndex);
-        visibility.shader = "visibility.comp";
-        visibility.defines = shadowMap_.shaderDefines();  // the map's layout, compiled in
-        visibility_ = gpu::Pipeline(setup.context, setup.shaders, visibility);
+        // Named setup.local("visibility"): "light0.example.visibility".
+        visibility_ = plugin::createComputePipeline(setup, "visibility", "visibility.comp",
+                                                    shadowMap_.shaderDefines());  // the map's layout, compiled in
 
         // Nearest, with the comparison the shader's sampler2DShadow makes (reversed-Z).
         compareSampler_ = render::createShadowCompareSampler(setup.context);

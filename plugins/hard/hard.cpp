@@ -13,13 +13,13 @@
 #include "penumbra/gpu/Resources.h"
 #include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
+#include "penumbra/plugin/ComputePipeline.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/ShadowMapParams.h"
 #include "penumbra/plugin/Technique.h"
 #include "penumbra/plugin/VisibilityPass.h"
 #include "penumbra/render/ShadowMap.h"
 
-#include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
@@ -37,9 +37,9 @@ using plugin::ParamType;
 const plugin::ParamSpec kParams[] = {
     plugin::shadowResolutionParam(2048, 16384),
     plugin::kShadowDepthBiasParam,  // in every bias_mode
-    {"slope_bias", ParamType::Float, 2, 0, 1000, "",
-     "slope-scaled depth bias factor (rasterizer), per texel of the filter's width; bias_mode slope only"},
-    {"bias_clamp", ParamType::Float, 0, 0, 1, "depth", "largest rasterizer bias, in NDC depth; 0: no clamp"},
+    plugin::slopeBiasParam("slope-scaled depth bias factor (rasterizer), per texel of the filter's width; bias_mode "
+                           "slope only"),
+    plugin::kBiasClampParam,
     {"bias_mode", ParamType::Enum, double(BiasMode::Slope), 0, 0, "",
      "constant: depth_bias only; slope: plus slope_bias; normal_offset: receiver moved along its normal; "
      "receiver_plane: per-tap depth from the receiver's plane",
@@ -51,8 +51,7 @@ const plugin::ParamSpec kParams[] = {
      "none: one compare; pcf: pcf_kernel^2 box; poisson: poisson_samples on a disk of filter_radius; "
      "bilinear: 2 x 2 compare with bilinear weights",
      kFilterNames, uint32_t(std::size(kFilterNames))},
-    {"pcf_kernel", ParamType::Int, 3, kPcfKernelMin, kPcfKernelMax, "texels",
-     "filter pcf: taps per side of the box, odd (centred on the receiver)"},
+    plugin::oddKernelParam("pcf_kernel", 3, kPcfKernelMax, "filter pcf: taps per side of the box, odd (centred on the receiver)"),
     {"poisson_samples", ParamType::Int, 16, kPoissonSamplesMin, kPoissonSamplesMax, "",
      "filter poisson: taps on the disk"},
     {"filter_radius", ParamType::Float, 1.5, 0.5, 32, "texels", "filter poisson: disk radius"},
@@ -72,7 +71,6 @@ struct Settings {
 Settings readSettings(const plugin::ParamValues& params)
 {
     Settings s;
-    const int kernel = plugin::oddKernelParam(params, "pcf_kernel", "hard");
     s.resolution = uint32_t(params.getInt("resolution"));
     s.depthBias = params.getFloat("depth_bias");
     s.slopeBias = params.getFloat("slope_bias");
@@ -81,7 +79,7 @@ Settings readSettings(const plugin::ParamValues& params)
     s.filterRadiusTexels = params.getFloat("filter_radius");
     s.variant.bias = BiasMode(params.getEnumIndex("bias_mode"));
     s.variant.filter = Filter(params.getEnumIndex("filter"));
-    s.variant.pcfKernel = uint32_t(kernel);
+    s.variant.pcfKernel = uint32_t(params.getInt("pcf_kernel"));
     s.variant.poissonSamples = uint32_t(params.getInt("poisson_samples"));
     return s;
 }
@@ -142,13 +140,9 @@ HardShadow::HardShadow(const plugin::TechniqueSetup& setup)
     // bilinear 1).
     if (settings_.variant.bias == BiasMode::Constant || settings_.variant.bias == BiasMode::Slope)
         shadowMap_.setOwnDepthCompare(int32_t(std::ceil(0.5f * width - 0.5f)));
-    gpu::ComputePipelineDesc c;
-    c.name = fmt::format("light{}.hard.visibility", setup.lightIndex);
-    c.shader = "visibility.comp";
-    c.defines = visibilityDefines(settings_.variant);
-    std::ranges::copy(shadowMap_.shaderDefines(), std::back_inserter(c.defines));
-    c.pushConstantBytes = sizeof(VisibilityPush);
-    visibility_ = gpu::Pipeline(context_, setup.shaders, c);
+    std::vector<gpu::ShaderDefine> defines = visibilityDefines(settings_.variant);
+    std::ranges::copy(shadowMap_.shaderDefines(), std::back_inserter(defines));
+    visibility_ = plugin::createComputePipeline(setup, "visibility", "visibility.comp", defines, sizeof(VisibilityPush));
 
     // Nearest (one texel per compare) unless the hardware bilinear compare is wanted;
     // points outside the map never reach the sampler (the shader calls them lit).

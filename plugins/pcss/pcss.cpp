@@ -8,13 +8,13 @@
 #include "penumbra/gpu/Pipeline.h"
 #include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
+#include "penumbra/plugin/ComputePipeline.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/ShadowMapParams.h"
 #include "penumbra/plugin/Technique.h"
 #include "penumbra/plugin/VisibilityPass.h"
 #include "penumbra/render/ShadowMap.h"
 
-#include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
@@ -46,8 +46,8 @@ const plugin::ParamSpec kParams[] = {
      "receiver_plane: every tap compares against the receiver's plane at that tap; slope: rasterizer slope bias",
      kBiasModeNames, uint32_t(std::size(kBiasModeNames))},
     plugin::kShadowDepthBiasParam,  // in every bias_mode
-    {"slope_bias", ParamType::Float, 2, 0, 1000, "",
-     "slope-scaled rasterizer depth bias factor; bias_mode slope only (it must cover the widest filter)"},
+    plugin::slopeBiasParam("slope-scaled rasterizer depth bias factor; bias_mode slope only (it must cover the widest "
+                           "filter)"),
 };
 
 struct Settings {
@@ -116,14 +116,11 @@ PcssShadow::PcssShadow(const plugin::TechniqueSetup& setup)
                  render::kernelGuardTexels(std::max(settings_.maxSearchTexels, settings_.maxFilterTexels),
                                            settings_.resolution))
 {
-    gpu::ComputePipelineDesc c;
-    c.name = fmt::format("light{}.pcss.visibility", setup.lightIndex);
-    c.shader = "visibility.comp";
-    c.defines = {{"RECEIVER_BIAS", std::to_string(uint32_t(usesReceiverPlane() ? render::ReceiverBias::Plane
-                                                                                : render::ReceiverBias::None))}};
-    std::ranges::copy(shadowMap_.shaderDefines(), std::back_inserter(c.defines));
-    c.pushConstantBytes = sizeof(PcssPush);
-    visibility_ = gpu::Pipeline(context_, setup.shaders, c);
+    std::vector<gpu::ShaderDefine> defines = {
+        {"RECEIVER_BIAS",
+         std::to_string(uint32_t(usesReceiverPlane() ? render::ReceiverBias::Plane : render::ReceiverBias::None))}};
+    std::ranges::copy(shadowMap_.shaderDefines(), std::back_inserter(defines));
+    visibility_ = plugin::createComputePipeline(setup, "visibility", "visibility.comp", defines, sizeof(PcssPush));
 
     // Every tap reads one texel (at its centre): the search averages texel depths, the
     // filter counts texel compares. Taps never leave the map (the shader clamps them).

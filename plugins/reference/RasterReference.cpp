@@ -2,6 +2,7 @@
 
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Context.h"
+#include "penumbra/plugin/ComputePipeline.h"
 #include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
 
@@ -107,24 +108,14 @@ RasterReference::RasterReference(const plugin::TechniqueSetup& setup, const Rast
 
     sampleMaps_ = gpu::Buffer(context_, VkDeviceSize(sampleCount_) * sizeof(render::ShadowMapData),
                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true,
-                              fmt::format("light{}.reference.sample_maps", lightIndex_));
+                              setup.local("sample_maps"));
 
-    gpu::ComputePipelineDesc c;
-    c.name = fmt::format("light{}.reference.accumulate", lightIndex_);
-    c.shader = "accumulate.comp";
-    c.pushConstantBytes = sizeof(AccumulatePush);
-    accumulate_ = gpu::Pipeline(context_, setup.shaders, c);
+    accumulate_ = plugin::createComputePipeline(setup, "accumulate", "accumulate.comp", {}, sizeof(AccumulatePush));
     // The first batch has no sums to read: a variant without that binding (binding its
     // own output there instead would be a read the graph's barriers do not order).
-    c.name += ".first";
-    c.defines = {{"FIRST_BATCH", "1"}};
-    accumulateFirst_ = gpu::Pipeline(context_, setup.shaders, c);
-    c.defines.clear();
-
-    c.name = fmt::format("light{}.reference.resolve", lightIndex_);
-    c.shader = "resolve.comp";
-    c.pushConstantBytes = 0;
-    resolve_ = gpu::Pipeline(context_, setup.shaders, c);
+    accumulateFirst_ = plugin::createComputePipeline(setup, "accumulate.first", "accumulate.comp",
+                                                     {{"FIRST_BATCH", "1"}}, sizeof(AccumulatePush));
+    resolve_ = plugin::createComputePipeline(setup, "resolve", "resolve.comp");
 
     // One nearest compare per sample: the hard shadow of a point (or direction) of the
     // light; the softness comes from the samples alone.

@@ -10,6 +10,7 @@
 #include "penumbra/gpu/Pipeline.h"
 #include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
+#include "penumbra/plugin/ComputePipeline.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/Technique.h"
 #include "penumbra/plugin/VisibilityPass.h"
@@ -241,40 +242,19 @@ VsmShadow::VsmShadow(const plugin::TechniqueSetup& setup)
                                              : float(settings_.blurs() ? settings_.blurRadius : 0) + 1.0f);
     checkFormat("a storage image read with bilinear filtering",
                 VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT);
-    const std::string name = fmt::format("light{}.vsm.", setup.lightIndex);
     std::vector<gpu::ShaderDefine> defines = momentDefines(settings_);
     std::ranges::copy(shadowMap_.shaderDefines(), std::back_inserter(defines));
-
-    gpu::ComputePipelineDesc c;
-    c.name = name + "moments";
-    c.shader = "moments.comp";
-    c.defines = defines;
-    c.pushConstantBytes = sizeof(glm::vec2);
-    moments_ = gpu::Pipeline(context_, setup.shaders, c);
-
+    moments_ = plugin::createComputePipeline(setup, "moments", "moments.comp", defines, sizeof(glm::vec2));
     if (settings_.blurs()) {
-        c.name = name + "blur";
-        c.shader = "blur.comp";
-        c.defines = defines;
-        c.defines.push_back({"BLUR_KERNEL", settings_.filter == Filter::Gaussian ? "0" : "1"});
-        c.pushConstantBytes = sizeof(BlurPush);
-        blur_ = gpu::Pipeline(context_, setup.shaders, c);
+        std::vector<gpu::ShaderDefine> blur = defines;
+        blur.push_back({"BLUR_KERNEL", settings_.filter == Filter::Gaussian ? "0" : "1"});
+        blur_ = plugin::createComputePipeline(setup, "blur", "blur.comp", blur, sizeof(BlurPush));
     }
-    if (settings_.mips()) {
-        c.name = name + "downsample";
-        c.shader = "downsample.comp";
-        c.defines = defines;
-        c.pushConstantBytes = sizeof(float);
-        downsample_ = gpu::Pipeline(context_, setup.shaders, c);
-    }
-
-    c.name = name + "visibility";
-    c.shader = "visibility.comp";
-    c.defines = defines;
-    c.defines.push_back({"FILTER", std::to_string(settings_.mips() ? uint32_t(settings_.filter) - 1 : 0u)});
-    c.defines.push_back({"LEVELS", std::to_string(levels_)});
-    c.pushConstantBytes = sizeof(VisibilityPush);
-    visibility_ = gpu::Pipeline(context_, setup.shaders, c);
+    if (settings_.mips())
+        downsample_ = plugin::createComputePipeline(setup, "downsample", "downsample.comp", defines, sizeof(float));
+    defines.push_back({"FILTER", std::to_string(settings_.mips() ? uint32_t(settings_.filter) - 1 : 0u)});
+    defines.push_back({"LEVELS", std::to_string(levels_)});
+    visibility_ = plugin::createComputePipeline(setup, "visibility", "visibility.comp", defines, sizeof(VisibilityPush));
 
     depthSampler_ = render::createShadowDepthSampler(context_);
     linearSampler_ = gpu::createSampler(context_, VK_FILTER_LINEAR, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);

@@ -12,7 +12,8 @@
 #include "penumbra/gpu/Pipeline.h"
 #include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
-#include "penumbra/plugin/GBuffer.h"
+#include "penumbra/plugin/ComputePipeline.h"
+#include "penumbra/plugin/DebugViews.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/ShadowMapParams.h"
 #include "penumbra/plugin/Technique.h"
@@ -26,6 +27,7 @@
 #include <iterator>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace penumbra::vssm {
 namespace {
@@ -45,7 +47,8 @@ constexpr const char* kBiasModeNames[] = {"receiver_plane", "slope"};
 // The debug images the debug_views pass writes (visibility.comp DEBUG_IMAGES), each
 // io.local(name): requested by name (penumbra render --debug-image light0.vssm.kernel),
 // else the pass is culled and costs nothing.
-constexpr const char* kDebugImages[] = {"kernel", "classification", "subkernels"};
+constexpr plugin::DebugImage kDebugImages[] = {
+    {"kernel", "kernelOut"}, {"classification", "classificationOut"}, {"subkernels", "subkernelsOut"}};
 
 constexpr int kMaxTreeHeight = 5;  // visibility.comp clamps to it (4^5 leaves)
 
@@ -74,7 +77,7 @@ const plugin::ParamSpec kParams[] = {
      "depth and the rasterizer's slope bias",
      kBiasModeNames, uint32_t(std::size(kBiasModeNames))},
     plugin::kShadowDepthBiasParam,  // in every bias_mode
-    {"slope_bias", ParamType::Float, 2, 0, 1000, "", "slope-scaled rasterizer depth bias factor; bias_mode slope only"},
+    plugin::slopeBiasParam("slope-scaled rasterizer depth bias factor; bias_mode slope only"),
 };
 
 struct Settings {
@@ -200,8 +203,6 @@ private:
     void recordHsm(const graph::PassContext& pass, const std::string& map, const std::string& hsm) const;
     void bindVisibility(const graph::PassContext& pass, gpu::DescriptorPush& descriptors, const std::string& map,
                         const std::string& sat, const std::string& hsm, const gpu::Pipeline& pipeline) const;
-    void recordDebugViews(const graph::PassContext& pass, const plugin::LightPassIo& io, const std::string& map,
-                          const std::string& sat, const std::string& hsm);
     glm::ivec2 atlasSize() const { return {int(shadowMap_.atlasWidth()), int(shadowMap_.atlasHeight())}; }
 
     gpu::Context& context_;
@@ -210,12 +211,8 @@ private:
     gpu::Pipeline sat_;
     gpu::Pipeline hsm_;
     gpu::Pipeline visibility_;
-    // The visibility shader with DEBUG_IMAGES, built when the debug_views pass first runs
-    // (only when one of its images is requested).
-    const gpu::ShaderCompiler& shaders_;
-    gpu::ComputePipelineDesc debugViewsDesc_;
-    std::optional<gpu::Pipeline> debugViews_;
-    uint32_t width_ = 0, height_ = 0;  // V_l's
+    // The visibility shader with DEBUG_IMAGES, writing the debug images.
+    std::optional<plugin::DebugViewPass> debugViews_;
     gpu::Sampler compareSampler_;
     gpu::Sampler depthSampler_;
     float lightSize_ = 0.0f;
@@ -235,39 +232,22 @@ VssmShadow::VssmShadow(const plugin::TechniqueSetup& setup)
       // Kernels reach the limits past a cube edge: boxes there lie in the receiver's face.
       shadowMap_(setup, settings_.resolution, "vssm",
                  render::kernelGuardTexels(std::max(settings_.maxSearchTexels, settings_.maxFilterTexels),
-                                           settings_.resolution)),
-      shaders_(setup.shaders),
-      width_(setup.width),
-      height_(setup.height)
+                                           settings_.resolution))
 {
     checkDevice();
-    const std::string name = fmt::format("light{}.vssm.", setup.lightIndex);
+    sat_ = plugin::createComputePipeline(setup, "sat", "sat.comp", shadowMap_.shaderDefines(), sizeof(SatPush));
+    hsm_ = plugin::createComputePipeline(setup, "hsm", "hsm.comp", shadowMap_.shaderDefines(), sizeof(HsmPush));
 
-    gpu::ComputePipelineDesc c;
-    c.name = name + "sat";
-    c.shader = "sat.comp";
-    c.defines = shadowMap_.shaderDefines();
-    c.pushConstantBytes = sizeof(SatPush);
-    sat_ = gpu::Pipeline(context_, setup.shaders, c);
-
-    c.name = name + "hsm";
-    c.shader = "hsm.comp";
-    c.pushConstantBytes = sizeof(HsmPush);
-    hsm_ = gpu::Pipeline(context_, setup.shaders, c);
-
-    c.name = name + "visibility";
-    c.shader = "visibility.comp";
-    c.defines = {{"RECEIVER_BIAS", std::to_string(uint32_t(settings_.bias == BiasMode::ReceiverPlane
-                                                              ? render::ReceiverBias::Plane
-                                                              : render::ReceiverBias::None))},
-                 {"BLOCKER_SUBDIVISION", std::to_string(uint32_t(settings_.blockerScheme()))},
-                 {"FILTER_SUBDIVISION", std::to_string(uint32_t(settings_.filterScheme()))}};
-    std::ranges::copy(shadowMap_.shaderDefines(), std::back_inserter(c.defines));
-    c.pushConstantBytes = sizeof(VisibilityPush);
-    visibility_ = gpu::Pipeline(context_, setup.shaders, c);
-    debugViewsDesc_ = c;
-    debugViewsDesc_.name = name + "debug_views";
-    debugViewsDesc_.defines.push_back({"DEBUG_IMAGES", "1"});
+    std::vector<gpu::ShaderDefine> defines = {
+        {"RECEIVER_BIAS", std::to_string(uint32_t(settings_.bias == BiasMode::ReceiverPlane ? render::ReceiverBias::Plane
+                                                                                            : render::ReceiverBias::None))},
+        {"BLOCKER_SUBDIVISION", std::to_string(uint32_t(settings_.blockerScheme()))},
+        {"FILTER_SUBDIVISION", std::to_string(uint32_t(settings_.filterScheme()))}};
+    std::ranges::copy(shadowMap_.shaderDefines(), std::back_inserter(defines));
+    visibility_ = plugin::createComputePipeline(setup, "visibility", "visibility.comp", defines, sizeof(VisibilityPush));
+    defines.push_back({"DEBUG_IMAGES", "1"});
+    debugViews_.emplace(setup, plugin::computePipelineDesc(setup, "debug_views", "visibility.comp", defines,
+                                                           sizeof(VisibilityPush)));
 
     compareSampler_ = render::createShadowCompareSampler(context_);
     depthSampler_ = render::createShadowDepthSampler(context_);
@@ -340,37 +320,16 @@ void VssmShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
         .read(sat, graph::Usage::Storage)
         .read(hsm, graph::Usage::Storage);
 
-    // The debug views: nothing reads their images, so the graph culls the pass unless one
-    // of them is requested (FrameRenderer::requestImage, render --debug-image).
-    graph::PassBuilder debug = graph.addPass(io.local("debug_views"), graph::QueueKind::Compute);
-    plugin::readGBuffer(debug, io.gbuffer);
-    debug.read(map, graph::Usage::Sampled).read(sat, graph::Usage::Storage).read(hsm, graph::Usage::Storage);
-    for (const char* image : kDebugImages) {
-        graph.declareImage({io.local(image), width_, height_, VK_FORMAT_R32_SFLOAT});
-        debug.write(io.local(image), graph::Usage::Storage);
-    }
-    debug.execute([this, io, map, sat, hsm](graph::PassContext& pass) { recordDebugViews(pass, io, map, sat, hsm); });
+    // The debug views, culled unless one of their images is requested.
+    const auto bindDebug = [this, map, sat, hsm](const graph::PassContext& pass, gpu::DescriptorPush& descriptors,
+                                                 const gpu::Pipeline& pipeline) {
+        bindVisibility(pass, descriptors, map, sat, hsm, pipeline);
+    };
+    debugViews_->addOverGBuffer(graph, io, io.local("debug_views"), kDebugImages, bindDebug)
+        .read(map, graph::Usage::Sampled)
+        .read(sat, graph::Usage::Storage)
+        .read(hsm, graph::Usage::Storage);
 }
-
-void VssmShadow::recordDebugViews(const graph::PassContext& pass, const plugin::LightPassIo& io, const std::string& map,
-                                  const std::string& sat, const std::string& hsm)
-{
-    if (!debugViews_) debugViews_.emplace(context_, shaders_, debugViewsDesc_);
-    const VkCommandBuffer cmd = pass.cmd();
-    debugViews_->bind(cmd);
-    gpu::DescriptorPush descriptors;
-    plugin::bindGBuffer(pass, io.gbuffer, descriptors);
-    descriptors.storageImage("kernelOut", pass.image(io.local("kernel")))
-        .storageImage("classificationOut", pass.image(io.local("classification")))
-        .storageImage("subkernelsOut", pass.image(io.local("subkernels")));
-    bindVisibility(pass, descriptors, map, sat, hsm, *debugViews_);
-    descriptors.push(context_, cmd, *debugViews_);
-    debugViews_->dispatchOver(cmd, pass.image(io.local("kernel")));
-}
-
-constexpr gpu::MemoryAccess kComputeWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
-constexpr gpu::MemoryAccess kComputeReadWrite{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                                              VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT};
 
 void VssmShadow::recordSat(const graph::PassContext& pass, const std::string& map, const std::string& sat) const
 {
@@ -385,7 +344,7 @@ void VssmShadow::recordSat(const graph::PassContext& pass, const std::string& ma
     SatPush push{size, 0};
     sat_.pushConstants(cmd, &push, sizeof(push));
     sat_.dispatchOver(cmd, uint32_t(size.y));  // one invocation per row
-    gpu::memoryBarrier(cmd, kComputeWrite, kComputeReadWrite);
+    gpu::memoryBarrier(cmd, gpu::access::kComputeStorageWrite, gpu::access::kComputeStorageReadWrite);
     push.vertical = 1;
     sat_.pushConstants(cmd, &push, sizeof(push));
     sat_.dispatchOver(cmd, uint32_t(size.x));  // one per column
@@ -403,7 +362,7 @@ void VssmShadow::recordHsm(const graph::PassContext& pass, const std::string& ma
     const glm::ivec2 size = atlasSize();
     const int levels = hsmLevelCount(uint32_t(size.x), uint32_t(size.y));
     for (int level = 1; level < levels; ++level) {
-        if (level > 1) gpu::memoryBarrier(cmd, kComputeWrite, kComputeReadWrite);
+        if (level > 1) gpu::memoryBarrier(cmd, gpu::access::kComputeStorageWrite, gpu::access::kComputeStorageReadWrite);
         const HsmPush push{size, level};
         hsm_.pushConstants(cmd, &push, sizeof(push));
         const glm::ivec2 texels = (size + (1 << level) - 1) >> level;

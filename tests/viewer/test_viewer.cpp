@@ -194,7 +194,6 @@ TEST_F(ViewerTest, EveryReflectedParameterOfEveryPluginGetsAWidget)
     for (const json& p : plugins) {
         const std::string name = p["name"];
         // The reference traces rays: at its cheapest, so that the frame stays small.
-        // Two frames: the panels drawn after the technique was made know its odd kernels.
         script += fmt::format("; technique 0 {}; {}frames 2; widgets", name,
                               name == "reference" ? "set reference.samples=1; " : "");
         for (const json& param : p["params"]) {
@@ -215,7 +214,7 @@ TEST_F(ViewerTest, EveryReflectedParameterOfEveryPluginGetsAWidget)
         words >> light >> technique >> param >> type >> range >> stepWord >> step;
         drawn.insert(fmt::format("{} {} {} {}", light, technique, param, type));
         if (param == "pcf_kernel") {
-            // Every plugin refuses an even kernel: its widget offers odd values only.
+            // Every plugin's kernel is odd-only (ParamSpec::odd): its widget offers odd values only.
             ++kernels;
             int lo = 0, hi = 0;
             ASSERT_EQ(std::sscanf(range.c_str(), "%d..%d", &lo, &hi), 2) << line;

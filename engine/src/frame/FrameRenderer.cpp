@@ -5,6 +5,7 @@
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
 #include "frame/LightTable.h"
+#include "penumbra/plugin/ClearPass.h"
 #include "penumbra/plugin/GBuffer.h"
 #include "penumbra/plugin/Params.h"
 #include "penumbra/plugin/VisibilityPass.h"
@@ -306,14 +307,7 @@ bool FrameRenderer::registerTechnique(size_t light)
         return false;
     }
     // No technique: the light is unshadowed, V = 1 (the contract's neutral value).
-    const std::string name = slot.visibility;
-    g.addPass(shadowPassPrefix(light), graph::QueueKind::Graphics)
-        .write(name, graph::Usage::TransferDst)
-        .execute([name](graph::PassContext& pass) {
-            const VkClearColorValue one{{1.0f, 1.0f, 1.0f, 1.0f}};
-            VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-            vkCmdClearColorImage(pass.cmd(), pass.image(name).handle(), pass.layout(name), &one, 1, &range);
-        });
+    plugin::ClearPass(g, shadowPassPrefix(light)).image(slot.visibility, {{1.0f, 1.0f, 1.0f, 1.0f}});
     return true;
 }
 
@@ -385,7 +379,7 @@ FrameTimings FrameRenderer::renderFrame()
     for (uint32_t redraw = 0; redraw < kMaxRedraws; ++redraw) {
         bool grew = false;
         for (LightSlot& slot : lights_)
-            if (slot.instance && slot.instance->grewForLastFrame()) grew = true;
+            if (slot.instance && slot.instance->wantsRedraw()) grew = true;
         if (!grew) break;
         buildGraph();
         resources_->sceneGpu().beginFrame();

@@ -25,7 +25,8 @@ std::string expectation(const ParamSpec& spec)
 {
     switch (spec.type) {
     case ParamType::Bool: return "true or false";
-    case ParamType::Int: return fmt::format("an integer in [{}, {}]", spec.minValue, spec.maxValue);
+    case ParamType::Int:
+        return fmt::format("{} in [{}, {}]", spec.odd ? "an odd integer" : "an integer", spec.minValue, spec.maxValue);
     case ParamType::Float: return fmt::format("a number in [{}, {}]", spec.minValue, spec.maxValue);
     case ParamType::Enum: {
         std::vector<std::string> quoted;
@@ -50,6 +51,7 @@ std::optional<double> convert(const ParamSpec& spec, const json& value)
         const double x = value.get<double>();
         if (!std::isfinite(x) || x < spec.minValue || x > spec.maxValue) return std::nullopt;
         if (spec.type == ParamType::Int && x != std::floor(x)) return std::nullopt;
+        if (spec.odd && std::fmod(x, 2.0) == 0.0) return std::nullopt;
         return x;
     }
     case ParamType::Enum:
@@ -169,6 +171,7 @@ json specToJson(const ParamSpec& spec)
         out["max"] = typedValue(spec, spec.maxValue);
     }
     if (spec.type == ParamType::Enum) out["choices"] = choiceNames(spec);
+    if (spec.odd) out["odd"] = true;
     return out;
 }
 

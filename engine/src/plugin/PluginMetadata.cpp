@@ -113,6 +113,10 @@ PluginMetadata PluginMetadata::fromJson(const json& doc, const fs::path& file)
             spec.defaultValue = number(p, "default");
             spec.minValue = number(p, "min");
             spec.maxValue = number(p, "max");
+            if (p.contains("odd")) {
+                if (!p["odd"].is_boolean()) fail(fmt::format("parameter '{}': 'odd' is not true or false", spec.name));
+                spec.odd = p["odd"].get<bool>();
+            }
             break;
         case ParamType::Enum: {
             if (!p.contains("choices") || !p["choices"].is_array()) fail(fmt::format("parameter '{}': no choices", spec.name));

@@ -128,6 +128,7 @@ void checkParamSpec(const penumbra::plugin::ParamSpec& spec, const std::string& 
 {
     if (!spec.unit) fail(at + ": unit is null (use \"\" when unitless)");
     if (!spec.doc) fail(at + ": doc is null");
+    if (spec.odd && spec.type != ParamType::Int) fail(at + ": only an int can be odd-only (odd)");
     auto finite = [&](double v, const char* what) {
         if (!std::isfinite(v)) fail(fmt::format("{}: {} is not finite", at, what));
     };
@@ -151,6 +152,8 @@ void checkParamSpec(const penumbra::plugin::ParamSpec& spec, const std::string& 
                 if (v != std::floor(v) || v < double(INT_MIN) || v > double(INT_MAX)) {
                     fail(fmt::format("{}: an int's min, default and max must be integers within int, got {}", at, v));
                 }
+                if (spec.odd && std::fmod(v, 2.0) == 0.0)
+                    fail(fmt::format("{}: an odd-only int's min, default and max must be odd, got {}", at, v));
             }
         }
         return;

@@ -240,6 +240,26 @@ TEST(ParamValues, SpecToJsonDescribesEveryField)
         "choices": ["clear", "unshadowed"], "unit": "", "doc": "what to do"})"));
 }
 
+// ParamSpec::odd: a box of taps centred on a texel (plugin::oddKernelParam) refuses even
+// values where they are set, and says so in its JSON.
+TEST(ParamValues, AnOddOnlyIntRefusesEvenValuesNamingWhere)
+{
+    const ParamSpec specs[] = {{"taps", ParamType::Int, 3, 1, 7, "texels", "box side", nullptr, 0, true}};
+    ParamValues v("t", specs, 1);
+    v.set("taps", 5, "a.json: /lights/0/shadow/taps");
+    EXPECT_EQ(v.getInt("taps"), 5);
+    try {
+        v.set("taps", 4, "--set t.taps");
+        ADD_FAILURE() << "4 was accepted";
+    } catch (const ConfigError& e) {
+        EXPECT_TRUE(contains(e.what(), "--set t.taps: must be an odd integer in [1, 7] (plugin t, parameter taps"))
+            << e.what();
+    }
+    EXPECT_EQ(v.getInt("taps"), 5);
+    EXPECT_EQ(plugin::specToJson(specs[0]), json::parse(R"({"name": "taps", "type": "int", "default": 3, "min": 1,
+        "max": 7, "unit": "texels", "doc": "box side", "odd": true})"));
+}
+
 // --- what a plugin's entry returns ---------------------------------------------------
 
 namespace {
@@ -312,6 +332,9 @@ TEST(PluginInfo, RejectsEachMalformedParamSpec)
         {{{"a", ParamType::Enum, 0, 0, 0, "", "d", twice, 2}}, "choice 'a' is listed twice"},
         {{{"a", ParamType::Enum, 0, 0, 0, "", "d", withNull, 2}}, "choice 1 is null or empty"},
         {{{"a", ParamType::Enum, 2, 0, 0, "", "d", twice, 1}}, "an enum's default is a choice index in [0, 1), got 2"},
+        {{{"a", ParamType::Int, 3, 2, 7, "", "d", nullptr, 0, true}},
+         "params[0] 'a': an odd-only int's min, default and max must be odd, got 2"},
+        {{{"a", ParamType::Float, 1, 1, 7, "", "d", nullptr, 0, true}}, "params[0] 'a': only an int can be odd-only"},
     };
     for (const auto& [specs, expected] : cases) {
         const PenumbraPluginInfo info{PENUMBRA_PLUGIN_ABI_VERSION, "x", "1", "s", specs.data(), uint32_t(specs.size()),
@@ -837,6 +860,10 @@ TEST(PluginMetadata, JsonRoundTripsAndDamagedDescriptionsAreInvalidInfo)
     const plugin::PluginMetadata back = plugin::PluginMetadata::fromJson(doc, "/p/penumbra-x.so");
     EXPECT_EQ(back.toJson(), doc);
     EXPECT_EQ(back.defaultParams().toJson(), specValues().toJson());
+    const ParamSpec odd[] = {{"taps", ParamType::Int, 3, 1, 7, "", "d", nullptr, 0, true}};
+    const PenumbraPluginInfo oddInfo{PENUMBRA_PLUGIN_ABI_VERSION, "x", "1", "s", odd, 1, &createNothing, nullptr};
+    const json oddDoc = plugin::PluginMetadata(oddInfo, "/p/penumbra-x.so", "/p/x").toJson();
+    EXPECT_TRUE(plugin::PluginMetadata::fromJson(oddDoc, "/p/penumbra-x.so").defaultParams().specs().at(0).odd);
     for (const auto& [change, what] : std::vector<std::pair<std::function<void(json&)>, std::string>>{
              {[](json& d) { d.erase("name"); }, "'name' is not a string"},
              {[](json& d) { d["params"][1]["type"] = "complex"; }, "unknown parameter type 'complex'"},

@@ -38,7 +38,7 @@ namespace penumbra::frame {
 using PassTiming = graph::PassTiming;
 
 // The most times renderFrame() draws a frame again for techniques that grew their
-// resources or refined what they store for this view (plugin::Technique::grewForLastFrame):
+// resources or refined what they store for this view (plugin::Technique::wantsRedraw):
 // a deep shadow map's pool grows in one redraw, an adaptive shadow map settles a still
 // view in one redraw per quadtree level it adds.
 inline constexpr uint32_t kMaxRedraws = 16;
@@ -85,7 +85,7 @@ public:
 
     // Runs one frame (GraphExecutor::execute: one submission, or one per stretch of GPU
     // passes between host passes) and waits for it; returns the time of every pass. When
-    // a technique grew a resource the frame did not fit in (Technique::grewForLastFrame),
+    // a technique grew a resource the frame did not fit in (Technique::wantsRedraw),
     // the graph is declared again and the frame drawn again, up to kMaxRedraws times.
     FrameTimings renderFrame();
 

@@ -14,7 +14,7 @@
 #include <cstdint>
 #include <iterator>
 
-#define PENUMBRA_PLUGIN_ABI_VERSION 10u
+#define PENUMBRA_PLUGIN_ABI_VERSION 11u
 #define PENUMBRA_PLUGIN_ENTRY_SYMBOL "penumbra_plugin_entry"
 #define PENUMBRA_PLUGIN_EXPORT extern "C" __attribute__((visibility("default")))
 
@@ -37,6 +37,10 @@ struct ParamSpec {
     const char* doc;        // one line
     const char* const* choices = nullptr;  // Enum only
     uint32_t choiceCount = 0;
+    // Int only: odd values only (a box of taps centred on the receiver's texel has no
+    // centre when even); min, default and max must be odd too. An even value is refused
+    // where it is set, and an editor offers the odd values only.
+    bool odd = false;
 };
 
 // Creates a technique for one light. May throw penumbra::Error (bad parameters, a

@@ -22,6 +22,14 @@ constexpr ParamSpec shadowResolutionParam(double defaultTexels, double maxTexels
 inline constexpr ParamSpec kShadowDepthBiasParam{
     "depth_bias", ParamType::Float, 4, 0, 1e6, "r",
     "constant rasterizer depth bias away from the light, in Vulkan's minimum resolvable depth differences r"};
+// The rasterizer's slope-scaled bias factor (`description` says how the technique scales
+// it) and its clamp.
+constexpr ParamSpec slopeBiasParam(const char* description)
+{
+    return {"slope_bias", ParamType::Float, 2, 0, 1000, "", description};
+}
+inline constexpr ParamSpec kBiasClampParam{"bias_clamp", ParamType::Float, 0, 0, 1, "depth",
+                                           "largest rasterizer bias, in NDC depth; 0: no clamp"};
 inline constexpr ParamSpec kLightSizeParam{
     "light_size", ParamType::Float, -1, -1, 1e9, "world or deg",
     "-1: the light's own size (rect: sqrt(w h), disk: diameter, directional: angular_diameter_deg; spot and "
@@ -44,13 +52,11 @@ inline float kernelLimitTexels(float fraction, uint32_t faceTexels) { return fra
 // them (a test for < 0 would take -0.5 silently as -1, the light's own size).
 float lightSizeOverride(const ParamValues& params, std::string_view technique);
 
-// An Int parameter `name` that sizes a box of taps centred on the receiver's texel (PCF):
-// its value, which must be odd; an even one (no centre texel) throws
-// penumbra::ConfigError naming `technique`'s parameter and the odd values beside it.
-int oddKernelParam(const ParamValues& params, std::string_view name, std::string_view technique);
-// Whether oddKernelParam has checked `technique`'s parameter `name` in this process (a
-// technique of that plugin was made): an editor then offers odd values only. ParamSpec
-// cannot say "odd" without a new plugin ABI; the check the plugin runs says it.
-bool mustBeOdd(std::string_view technique, std::string_view name);
+// An Int parameter `name` that sizes a box of taps centred on the receiver's texel (PCF),
+// in taps per side: odd values only (ParamSpec::odd), from 1 to `maxTaps` (odd).
+constexpr ParamSpec oddKernelParam(const char* name, double defaultTaps, double maxTaps, const char* description)
+{
+    return {name, ParamType::Int, defaultTaps, 1, maxTaps, "texels", description, nullptr, 0, true};
+}
 
 } // namespace penumbra::plugin

@@ -15,6 +15,7 @@
 #include <functional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace penumbra::gpu {
@@ -43,6 +44,12 @@ struct TechniqueSetup {
     uint32_t lightIndex = 0;
     uint32_t width = 0;             // the visibility image's size (the output's)
     uint32_t height = 0;
+    // Prefix for the technique's own names (pipelines, buffers, passes, resources), so
+    // that two lights using one technique never collide: "light0.hard.". The same as
+    // LightPassIo::prefix.
+    std::string prefix;
+
+    std::string local(std::string_view name) const { return prefix + std::string(name); }
 
     // What render::ShadowMap takes: `render::ShadowMap map(setup, resolution, "mine")`.
     operator render::ShadowMapSetup() const { return {context, shaders, casters, light, sceneBounds, lightIndex}; }
@@ -107,15 +114,15 @@ public:
     // The figures of the frame that ran last, read after it finished. Default: none.
     virtual std::vector<TechniqueFigure> figures() const { return {}; }
 
-    // Called after every frame, once it finished: true when the technique found a
-    // resource too small for the frame (its results are incomplete) and grew it, or found
-    // what it stores for this view still short of what it can store (an adaptive shadow
-    // map's quadtree, which a still view refines level by level). The
-    // renderer then declares the frame's graph again (registerPasses is called anew, with
-    // the new sizes) and draws the frame again, at most frame::kMaxRedraws times in one
-    // renderFrame(). A technique past its own limit reports that in its figures and
-    // returns false. Default: false.
-    virtual bool grewForLastFrame() { return false; }
+    // Called after every frame, once it finished: true asks for the frame to be drawn
+    // again, because the technique found a resource too small for the frame (its results
+    // are incomplete) and grew it, or found what it stores for this view still short of
+    // what it can store (an adaptive shadow map's quadtree, which a still view refines
+    // level by level). The renderer then declares the frame's graph again
+    // (registerPasses is called anew, with the new sizes) and draws the frame again, at
+    // most frame::kMaxRedraws times in one renderFrame(). A technique past its own limit
+    // reports that in its figures and returns false. Default: false.
+    virtual bool wantsRedraw() { return false; }
 };
 
 } // namespace penumbra::plugin
