@@ -191,7 +191,7 @@ void Viewer::fitFrameIntoWorkArea(const VkRect2D& workArea)
 
 Viewer::~Viewer()
 {
-    comparison_.stop();
+    comparison_.stop();  // B's frame in flight stops at its next row: its worker joins soon after
     if (context_ && context_->device()) vkDeviceWaitIdle(context_->device());
     debugUpload_.reset();
     bUpload_.reset();
