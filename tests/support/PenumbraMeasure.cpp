@@ -61,6 +61,18 @@ double sideEdgeWidth(const RenderedFrame& frame, const std::vector<float>& v, fl
     return rampWidth(samples);
 }
 
+FootShadow footShadow(const RenderedFrame& frame, const std::vector<float>& v, double texelWorld, float umbraMax)
+{
+    FootShadow foot;
+    for (size_t i = 0; i < v.size(); ++i) {
+        const glm::vec3 q = frame.position(i);
+        if (!frame.onGround(i) || std::abs(q.z) > 0.3f || q.x < 0.5f + 4.0f * texelWorld || q.x > 0.65f) continue;
+        ++foot.pixels;
+        foot.notUmbra += v[i] > umbraMax;
+    }
+    return foot;
+}
+
 PenumbraWidths measurePenumbra(const RenderedFrame& frame, const std::vector<float>& v, const PenumbraSetup& p)
 {
     const scene::PenumbraParams params = penumbraParams(p);

@@ -65,6 +65,15 @@ double edgeWidth(const RenderedFrame& frame, const std::vector<float>& v);
 // A box's shadow's side edge (along z > 0, on the ground) in the slice x +- 2 cm.
 double sideEdgeWidth(const RenderedFrame& frame, const std::vector<float>& v, float x);
 
+// The contact shadow of test::boxOnGroundScene() under boxOnGroundConfig()'s light: the
+// ground pixels right behind the box's foot (x from 0.5 + 4 texels of `texelWorld` to
+// 0.65, |z| <= 0.3), and how many of them have V above `umbraMax`.
+struct FootShadow {
+    size_t pixels = 0;
+    size_t notUmbra = 0;
+};
+FootShadow footShadow(const RenderedFrame& frame, const std::vector<float>& v, double texelWorld, float umbraMax);
+
 // A technique's edge width on the penumbra scene, the exact one measured the same way,
 // and the RMSE of V against the exact visibility over the ground and over the penumbra
 // region alone (the ground pixels whose exact V lies in (0.001, 0.999)).

@@ -539,15 +539,9 @@ TEST_F(VssmTest, BlockerTouchingTheReceiverCastsAHardShadow)
     s.maxFilterTexels = 64.0;
     const std::vector<float> v = renderWith(test::boxOnGroundConfig(), s, test::boxOnGroundScene());
     const double texel = 2.0 * 3.0 / 1024.0;  // a texel of the cube face on the ground, at most
-    size_t behindFoot = 0, notUmbra = 0;
-    for (size_t i = 0; i < v.size(); ++i) {
-        const glm::vec3 q = frame->position(i);
-        if (!frame->onGround(i) || std::abs(q.z) > 0.3f || q.x < 0.5f + 4.0f * texel || q.x > 0.65f) continue;
-        ++behindFoot;
-        notUmbra += v[i] > 0.01f;
-    }
-    EXPECT_GT(behindFoot, 100u);
-    EXPECT_EQ(notUmbra, 0u) << "ground pixels right behind the foot that are not umbra (V > 0.01)";
+    const test::FootShadow foot = test::footShadow(*frame, v, texel, 0.01f);
+    EXPECT_GT(foot.pixels, 100u);
+    EXPECT_EQ(foot.notUmbra, 0u) << "ground pixels right behind the foot that are not umbra (V > 0.01)";
     // The side edge widens away from the foot (contact hardening).
     const double nearFoot = test::sideEdgeWidth(*frame, v, 0.6f), farFromFoot = test::sideEdgeWidth(*frame, v, 2.0f);
     EXPECT_LT(nearFoot, 0.85 * farFromFoot) << "near the foot " << nearFoot << ", far " << farFromFoot;
