@@ -9,6 +9,7 @@
 #include "penumbra/core/ShortText.h"
 #include "penumbra/frame/FloorRenderer.h"
 #include "penumbra/frame/FrameRenderer.h"
+#include "penumbra/gpu/ShaderCache.h"
 #include "penumbra/io/Png.h"
 #include "penumbra/metrics/DebugImage.h"
 #include "penumbra/plugin/PluginRegistry.h"
@@ -79,6 +80,18 @@ void writeFrameImage(const std::string& path, const frame::FrameRenderer& render
                  image.width, image.height, image.channels, found.min, found.max,
                  found.nonFinite ? fmt::format(" and {} non-finite (magenta)", found.nonFinite) : "",
                  metrics::debugMappingName(mapping), range.min, range.max);
+}
+
+// What the shaders of this run cost: compiled by glslang, or found in the SPIR-V cache.
+void printShaderCache()
+{
+    const gpu::ShaderCache& cache = gpu::ShaderCache::shared();
+    const gpu::ShaderCacheStats s = cache.stats();
+    fmt::print("shaders ({})\n", cache.folder().empty() ? "cache in memory only" : "cache " + cache.folder().string());
+    fmt::print("  {:<39}{}\n", "compiled", s.compiled);
+    fmt::print("  {:<39}{}\n", "found in memory", s.memoryHits);
+    fmt::print("  {:<39}{}\n", "found on disk", s.diskHits);
+    fmt::print("  {:<39}{}\n", "damaged cache files ignored", s.damagedFiles);
 }
 
 // "-o frames/f{frame:04}.png" writes every measured frame; a plain name, the last one.
@@ -162,6 +175,7 @@ int runRender(const RenderFlags& flags)
         std::vector<std::string> techniques;
         for (size_t l = 0; l < renderer.lightCount(); ++l) techniques.push_back(renderer.techniqueName(l));
         std::fputs(techniqueFiguresText(medianTechniqueFigures(measured), techniques).c_str(), stdout);
+        printShaderCache();
     }
 
     if (outputPerFrame(flags.output)) {
@@ -204,8 +218,9 @@ Command addRenderCommand(CLI::App& app)
                   "drawn once forward)");
     cmd->add_flag("--stats", flags->stats,
                   "Print the median per-frame culling figures (receivers, casters and triangles drawn, nodes "
-                  "visited, queries issued, ms of each step) and each light's technique figures (a deep shadow "
-                  "map's fragments, pool and depth complexity)");
+                  "visited, queries issued, ms of each step), each light's technique figures (a deep shadow "
+                  "map's fragments, pool and depth complexity) and the shaders compiled or found in the SPIR-V "
+                  "cache");
     cmd->add_option("--culling", flags->culling, "Caster culling mode (overrides the config)")
         ->check(CLI::IsMember({"none", "frustum", "light-occlusion", "receiver-mask"}));
     cmd->add_option("--debug-image", flags->debugImage,

@@ -1,7 +1,6 @@
 #include "SceneTracer.h"
 
-#include "Digest.h"
-
+#include "penumbra/core/Digest.h"
 #include "penumbra/core/Error.h"
 
 #include <fmt/format.h>
@@ -139,7 +138,7 @@ SceneTracer::SceneTracer(const scene::Scene& scene) : scene_(scene)
         surfaces_.resize(scene.meshes.size());
         for (size_t m = 0; m < scene.meshes.size(); ++m) {
             const scene::Mesh& mesh = scene.meshes[m];
-            Digest128 hash;
+            core::Digest128 hash;
             if (mesh.material >= scene.materials.size())
                 throw Error(fmt::format("reference: mesh '{}': material {} does not exist ({} materials)", mesh.name,
                                         mesh.material, scene.materials.size()));
@@ -291,7 +290,7 @@ void SceneTracer::refit(std::span<const uint32_t> instances)
 
 void SceneTracer::updateDigest()
 {
-    Digest128 hash;
+    core::Digest128 hash;
     for (const scene::Instance& instance : scene_.instances) {
         hash.value(meshDigests_[instance.mesh]);
         hash.value(scene_.instanceTransform(instance));

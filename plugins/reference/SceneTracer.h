@@ -7,6 +7,7 @@
 // the base colour's alpha at the hit is below the cutoff, as the raster path cuts holes.
 // Translucency is handled in Embree occlusion filter callbacks that collect crossings
 // and reject them so that traversal goes on.
+#include "penumbra/core/Digest.h"
 #include "penumbra/scene/Scene.h"
 
 #include <embree3/rtcore.h>
@@ -72,7 +73,7 @@ public:
     // triangles and texture coordinates, the alpha mode, cutoff, alpha and alpha texture
     // of its material, and every instance's mesh and world transform. Two scenes with
     // equal digests cast the same shadows.
-    std::array<uint64_t, 2> geometryDigest() const { return digest_; }
+    core::Hash128 geometryDigest() const { return digest_; }
 
     // The world-space radius of the scene's bounds (for epsilons relative to its scale).
     float sceneRadius() const { return sceneRadius_; }
@@ -88,8 +89,8 @@ private:
     RTCScene top_ = nullptr;
     std::vector<RTCScene> meshScenes_;  // per mesh; null for a mesh without triangles
     std::vector<std::unique_ptr<SurfaceAlpha>> surfaces_;  // per mesh: what the filters read
-    std::vector<std::array<uint64_t, 2>> meshDigests_;
-    std::array<uint64_t, 2> digest_{};
+    std::vector<core::Hash128> meshDigests_;
+    core::Hash128 digest_{};
     float sceneRadius_ = 0.0f;
 };
 

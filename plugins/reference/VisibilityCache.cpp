@@ -1,11 +1,12 @@
 #include "VisibilityCache.h"
 
+#include "penumbra/core/Digest.h"
 #include "penumbra/core/Error.h"
+#include "penumbra/io/CacheFolder.h"
 #include "penumbra/io/ReadFile.h"
 #include "penumbra/io/StagedFile.h"
 
 #include <fmt/format.h>
-#include <xxhash.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -17,12 +18,6 @@ namespace {
 
 constexpr char kMagic[8] = {'P', 'N', 'B', 'R', 'V', 'I', 'S', '1'};
 constexpr size_t kHeaderBytes = sizeof kMagic + 2 * sizeof(uint64_t) + 2 * sizeof(uint32_t);
-
-std::filesystem::path fromEnvironment(const char* name)
-{
-    const char* value = std::getenv(name);
-    return value && *value ? std::filesystem::path(value) : std::filesystem::path();
-}
 
 template <class T> void append(std::vector<char>& bytes, const T& value)
 {
@@ -41,10 +36,8 @@ template <class T> T readAt(const std::vector<unsigned char>& bytes, size_t offs
 
 std::filesystem::path defaultCacheFolder()
 {
-    if (auto dir = fromEnvironment("PENUMBRA_CACHE_DIR"); !dir.empty()) return dir;
-    if (auto dir = fromEnvironment("XDG_CACHE_HOME"); !dir.empty()) return dir / "penumbra";
-    if (auto dir = fromEnvironment("HOME"); !dir.empty()) return dir / ".cache" / "penumbra";
-    return {};
+    if (const char* dir = std::getenv("PENUMBRA_CACHE_DIR"); dir && *dir) return dir;
+    return io::userCacheFolder();
 }
 
 std::string keyText(const CacheKey& key) { return fmt::format("{:016x}{:016x}", key[1], key[0]); }
@@ -79,7 +72,7 @@ VisibilityCache::Lookup VisibilityCache::load(const CacheKey& key, uint32_t widt
     } else if (readAt<uint32_t>(bytes, 24) != width || readAt<uint32_t>(bytes, 28) != height) {
         result.rejected = fmt::format("{}: holds a {} x {} image, expected {} x {}", path.string(),
                                       readAt<uint32_t>(bytes, 24), readAt<uint32_t>(bytes, 28), width, height);
-    } else if (XXH3_64bits(bytes.data(), checked) != readAt<uint64_t>(bytes, checked)) {
+    } else if (core::checksum64(bytes.data(), checked) != readAt<uint64_t>(bytes, checked)) {
         result.rejected = fmt::format("{}: checksum mismatch (a damaged file)", path.string());
     }
     if (!result.rejected.empty()) return result;
@@ -109,7 +102,7 @@ void VisibilityCache::store(const CacheKey& key, uint32_t width, uint32_t height
     append(bytes, height);
     const auto* payload = reinterpret_cast<const char*>(values.data());
     bytes.insert(bytes.end(), payload, payload + values.size_bytes());
-    append(bytes, XXH3_64bits(bytes.data(), bytes.size()));
+    append(bytes, core::checksum64(bytes.data(), bytes.size()));
 
     io::StagedFile file(fileFor(key));
     std::ofstream out = file.openTemp();

@@ -6,11 +6,13 @@
 //   key                   16 bytes (low, high), checked against the name's
 //   width, height         2 x uint32
 //   V                     width x height float32, row-major, top row first
-//   checksum              uint64, XXH3-64 of everything before it
+//   checksum              uint64, XXH3-64 of everything before it (core::checksum64)
 //
 // Files are written to a temporary name and renamed into place (io::StagedFile), so a
 // reader never sees half a file; a file whose size, format, key, size or checksum is
 // wrong, or that holds a V outside [0, 1], is rejected with the reason and recomputed.
+#include "penumbra/core/Digest.h"
+
 #include <array>
 #include <cstdint>
 #include <filesystem>
@@ -21,10 +23,10 @@
 
 namespace penumbra::reference {
 
-using CacheKey = std::array<uint64_t, 2>;
+using CacheKey = core::Hash128;
 
-// $PENUMBRA_CACHE_DIR, else $XDG_CACHE_HOME/penumbra, else $HOME/.cache/penumbra; empty
-// when none of them is set (no cache then).
+// $PENUMBRA_CACHE_DIR, else the user cache folder (io::userCacheFolder: $XDG_CACHE_HOME/penumbra,
+// else $HOME/.cache/penumbra); empty when none of them is set (no cache then).
 std::filesystem::path defaultCacheFolder();
 
 // A 32-digit hexadecimal rendering of a key, for file names and messages.

@@ -3,13 +3,13 @@
 // compute pass copies the G-buffer's positions and normals into host-visible buffers, a
 // host pass traces stratified shadow rays from every pixel's surface point to the light
 // (or takes V from the disk cache), and a compute pass writes V into V_l (upload.comp).
-#include "Digest.h"
 #include "LightSampling.h"
 #include "RasterReference.h"
 #include "ReferenceStats.h"
 #include "SceneTracer.h"
 #include "VisibilityCache.h"
 
+#include "penumbra/core/Digest.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Pipeline.h"
 #include "penumbra/gpu/Resources.h"
@@ -218,7 +218,7 @@ private:
     // change values (not `cache` or `threads`), and the G-buffer, which holds the camera.
     CacheKey cacheKey(std::span<const std::byte> positions, std::span<const std::byte> normals) const
     {
-        Digest128 digest;
+        core::Digest128 digest;
         digest.bytes(kAlgorithmVersion, sizeof kAlgorithmVersion)
             .value(tracer_.geometryDigest())
             .value(light_.type)

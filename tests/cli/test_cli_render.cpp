@@ -149,6 +149,26 @@ TEST_F(Cli, StatsReportWhatCullingDrew)
     EXPECT_NE(bad.err.find("--culling"), std::string::npos) << bad.err;
 }
 
+// The SPIR-V cache (gpu/ShaderCache.h): a second render of the same config compiles no
+// shader, it reads every one the first compiled from the disk.
+TEST_F(Cli, SecondRenderCompilesNoShader)
+{
+    const std::string cache = fmt::format("XDG_CACHE_HOME='{}'", (dir / "cache").string());
+    const std::string args = fmt::format("render {} -o '{}' --width 32 --height 18 --stats", config("default.json"),
+                                         (dir / "out.png").string());
+    const CliResult first = run(args, cache);
+    ASSERT_EQ(first.exitCode, 0) << first.err;
+    EXPECT_TRUE(has(first.out, fmt::format("  {:<39}{}\n", "found on disk", 0))) << first.out;
+    EXPECT_FALSE(has(first.out, fmt::format("  {:<39}{}\n", "compiled", 0))) << first.out;
+    EXPECT_TRUE(has(first.out, "shaders (cache " + (dir / "cache" / "penumbra" / "spirv").string())) << first.out;
+    const CliResult second = run(args, cache);
+    ASSERT_EQ(second.exitCode, 0) << second.err;
+    EXPECT_TRUE(has(second.out, fmt::format("  {:<39}{}\n", "compiled", 0))) << second.out;
+    EXPECT_FALSE(has(second.out, fmt::format("  {:<39}{}\n", "found on disk", 0))) << second.out;
+    EXPECT_TRUE(has(second.out, fmt::format("  {:<39}{}\n", "damaged cache files ignored", 0))) << second.out;
+    EXPECT_FALSE(has(second.err, "shader cache")) << second.err;
+}
+
 TEST_F(Cli, MissingConfig)
 {
     const CliResult r = run(fmt::format("render '{}/nope.json' -o '{}/out.png'", dir.string(), dir.string()));

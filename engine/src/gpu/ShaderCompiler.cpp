@@ -1,10 +1,12 @@
 #include "penumbra/gpu/ShaderCompiler.h"
 
+#include "penumbra/core/Digest.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/core/ShortText.h"
 #include "penumbra/io/ReadFile.h"
 
 #include "core/BuildTree.h"
+#include "core/LibraryBuildId.h"
 
 #include <glslang/SPIRV/GlslangToSpv.h>
 #include <glslang/Public/ResourceLimits.h>
@@ -13,10 +15,11 @@
 
 #include <dlfcn.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cstdlib>
 #include <memory>
-#include <mutex>
-#include <cctype>
+#include <optional>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -60,26 +63,60 @@ EShLanguage toLanguage(VkShaderStageFlagBits stage)
     }
 }
 
-// Resolves #include: the including file's folder first, then the search path.
-class Includer : public glslang::TShader::Includer {
-public:
-    explicit Includer(const std::vector<fs::path>& searchPath) : searchPath_(searchPath) {}
+// What one #include request resolves to: for #include "x" the including file's folder
+// first, then (for both forms) the search path. The first file that exists is the answer,
+// even when it cannot be read (a FIFO, /proc/self/mem): the inclusion then fails.
+struct ResolvedInclude {
+    std::string name;        // the file, canonical; empty when none was found or readable
+    std::string text;
+    std::string unreadable;  // why a file that exists could not be read, as a line
+};
 
-    IncludeResult* includeLocal(const char* header, const char* includer, size_t depth) override
-    {
-        fs::path dir = fs::path(includer).parent_path();
-        if (!dir.empty()) {
-            if (IncludeResult* r = tryOpen(dir / header)) return r;
+ResolvedInclude resolveInclude(bool local, const std::string& header, const std::string& includer,
+                               const std::vector<fs::path>& searchPath)
+{
+    std::vector<fs::path> candidates;
+    if (const fs::path dir = fs::path(includer).parent_path(); local && !dir.empty()) candidates.push_back(dir / header);
+    for (const fs::path& dir : searchPath) candidates.push_back(dir / header);
+    for (const fs::path& path : candidates) {
+        std::error_code ec;
+        if (!fs::exists(path, ec)) continue;
+        try {
+            std::string text = io::readRegularTextFile(path, kMaxShaderBytes, "a GLSL shader file");
+            return {fs::weakly_canonical(path).string(), std::move(text), {}};
+        } catch (const io::FileReadError& e) {
+            return {{}, {}, fmt::format("\n{}: included shader file {}", core::shortText(path.string()), e.reason())};
         }
-        return includeSystem(header, includer, depth);
     }
+    return {};  // glslang reports "cannot find include file" at the #include line
+}
 
-    IncludeResult* includeSystem(const char* header, const char*, size_t) override
+ShaderInclude recordOf(bool local, const std::string& header, const std::string& includer, const ResolvedInclude& resolved)
+{
+    return {local, header, includer, resolved.name, core::Digest128().text(resolved.text).finish()};
+}
+
+// Whether every #include a cached compile made still gets the same file with the same content.
+bool includesUnchanged(const std::vector<ShaderInclude>& includes, const std::vector<fs::path>& searchPath)
+{
+    return std::all_of(includes.begin(), includes.end(), [&](const ShaderInclude& i) {
+        return recordOf(i.local, i.header, i.includer, resolveInclude(i.local, i.header, i.includer, searchPath)) == i;
+    });
+}
+
+// Answers glslang's #include requests (resolveInclude) and records each with its answer,
+// for the cache. glslang asks includeSystem itself when includeLocal finds nothing.
+class RecordingIncluder : public glslang::TShader::Includer {
+public:
+    explicit RecordingIncluder(const std::vector<fs::path>& searchPath) : searchPath_(searchPath) {}
+
+    IncludeResult* includeLocal(const char* header, const char* includer, size_t) override
     {
-        for (const fs::path& dir : searchPath_) {
-            if (IncludeResult* r = tryOpen(dir / header)) return r;
-        }
-        return nullptr;  // glslang reports "cannot find include file" at the #include line
+        return include(true, header, includer);
+    }
+    IncludeResult* includeSystem(const char* header, const char* includer, size_t) override
+    {
+        return include(false, header, includer);
     }
 
     void releaseInclude(IncludeResult* result) override
@@ -90,27 +127,25 @@ public:
         }
     }
 
+    std::vector<ShaderInclude> takeIncludes() { return std::move(includes_); }
     // Why #included files that exist could not be read (a FIFO, /proc/self/mem), a line
     // each: glslang reports such an #include without the reason.
     const std::string& unreadable() const { return unreadable_; }
 
 private:
-    IncludeResult* tryOpen(const fs::path& path)
+    IncludeResult* include(bool local, const char* header, const char* includer)
     {
-        std::error_code ec;
-        if (!fs::exists(path, ec)) return nullptr;  // the next folder of the search path
-        auto text = std::make_unique<std::string>();
-        try {
-            *text = io::readRegularTextFile(path, kMaxShaderBytes, "a GLSL shader file");
-        } catch (const io::FileReadError& e) {
-            unreadable_ += fmt::format("\n{}: included shader file {}", core::shortText(path.string()), e.reason());
-            return new IncludeResult("", "", 0, nullptr);  // a failed inclusion
-        }
+        ResolvedInclude resolved = resolveInclude(local, header, includer, searchPath_);
+        includes_.push_back(recordOf(local, header, includer, resolved));
+        unreadable_ += resolved.unreadable;
+        if (resolved.name.empty()) return resolved.unreadable.empty() ? nullptr : new IncludeResult("", "", 0, nullptr);
+        auto text = std::make_unique<std::string>(std::move(resolved.text));
         const std::string* data = text.get();
-        return new IncludeResult(fs::weakly_canonical(path).string(), data->data(), data->size(), text.release());
+        return new IncludeResult(resolved.name, data->data(), data->size(), text.release());
     }
 
     const std::vector<fs::path>& searchPath_;
+    std::vector<ShaderInclude> includes_;
     std::string unreadable_;
 };
 
@@ -166,6 +201,64 @@ fs::path installedShaderDir()
     return !ec && fs::is_directory(dir, ec) ? dir : fs::path();
 }
 
+// Every option a compile runs with, in one place: the cache key hashes them all.
+struct CompileOptions {
+    int inputVersion = 100;  // Vulkan GLSL (GL_KHR_vulkan_glsl) version 100
+    glslang::EShTargetClientVersion client = glslang::EShTargetVulkan_1_3;
+    glslang::EShTargetLanguageVersion spirv = glslang::EShTargetSpv_1_6;
+    int defaultVersion = 460;  // for a shader without #version
+    EShMessages messages = static_cast<EShMessages>(EShMsgSpvRules | EShMsgVulkanRules);
+    bool debugInfo = false;
+};
+constexpr CompileOptions kOptions;
+
+// Everything a compile reads besides its #includes (ShaderCache.h): the engine build (its
+// glslang and this code), glslang's version, the options and resource limits, the stage,
+// and the shader's name, defines and source.
+ShaderKey shaderKey(const std::string& source, const std::string& name, EShLanguage language, const std::string& preamble)
+{
+    core::Digest128 d;
+    d.value(ShaderCache::kFormatVersion).text(core::engineBuildId());
+    const glslang::Version version = glslang::GetVersion();
+    d.value(version.major).value(version.minor).value(version.patch).text(version.flavor);
+    d.text(glslang::GetGlslVersionString()).value(glslang::GetKhronosToolId()).value(glslang::GetSpirvGeneratorVersion());
+    d.value(kOptions.inputVersion).value(kOptions.client).value(kOptions.spirv).value(kOptions.defaultVersion);
+    d.value(kOptions.messages).value(kOptions.debugInfo).value(*GetDefaultResources());
+    d.value(language).text(name).text(preamble).text(source);
+    return d.finish();
+}
+
+// glslang's run: throws ShaderCompileError with the formatted diagnostics.
+std::vector<uint32_t> compileWithGlslang(const std::string& source, const std::string& name, EShLanguage language,
+                                         const std::string& preamble, RecordingIncluder& includer)
+{
+    ensureGlslang();
+    glslang::TShader shader(language);
+    const char* text = source.c_str();
+    const int length = static_cast<int>(source.size());
+    const char* names = name.c_str();
+    shader.setStringsWithLengthsAndNames(&text, &length, &names, 1);
+    shader.setPreamble(preamble.c_str());
+    shader.setEnvInput(glslang::EShSourceGlsl, language, glslang::EShClientVulkan, kOptions.inputVersion);
+    shader.setEnvClient(glslang::EShClientVulkan, kOptions.client);
+    shader.setEnvTarget(glslang::EShTargetSpv, kOptions.spirv);
+
+    if (!shader.parse(GetDefaultResources(), kOptions.defaultVersion, false, kOptions.messages, includer)) {
+        throw ShaderCompileError(formatLog(std::string(shader.getInfoLog()) + shader.getInfoDebugLog(), name) +
+                                 includer.unreadable());
+    }
+    glslang::TProgram program;
+    program.addShader(&shader);
+    if (!program.link(kOptions.messages)) {
+        throw ShaderCompileError(formatLog(std::string(program.getInfoLog()) + program.getInfoDebugLog(), name));
+    }
+    std::vector<uint32_t> spirv;
+    glslang::SpvOptions options;
+    options.generateDebugInfo = kOptions.debugInfo;
+    glslang::GlslangToSpv(*program.getIntermediate(language), spirv, &options);
+    return spirv;
+}
+
 } // namespace
 
 VkShaderStageFlagBits stageFromExtension(const fs::path& file)
@@ -195,7 +288,10 @@ fs::path engineShaderDir()
     return core::buildTreeShaderDir();
 }
 
-ShaderCompiler::ShaderCompiler(std::vector<fs::path> searchPath) : searchPath_(std::move(searchPath)) {}
+ShaderCompiler::ShaderCompiler(std::vector<fs::path> searchPath, ShaderCache& cache)
+    : searchPath_(std::move(searchPath)), cache_(&cache)
+{
+}
 
 fs::path ShaderCompiler::resolve(const fs::path& file) const
 {
@@ -222,39 +318,19 @@ std::vector<uint32_t> ShaderCompiler::compileSource(const std::string& source, c
                                                     VkShaderStageFlagBits stage,
                                                     const std::vector<ShaderDefine>& defines) const
 {
-    ensureGlslang();
     const EShLanguage language = toLanguage(stage);
-    glslang::TShader shader(language);
     const std::string name = virtualPath.string();
-    const char* text = source.c_str();
-    const int length = static_cast<int>(source.size());
-    const char* names = name.c_str();
-    shader.setStringsWithLengthsAndNames(&text, &length, &names, 1);
-
     std::string preamble = "#extension GL_GOOGLE_include_directive : require\n";
     for (const ShaderDefine& d : defines) {
         preamble += fmt::format("#define {} {}\n", d.name, d.value);
     }
-    shader.setPreamble(preamble.c_str());
-    shader.setEnvInput(glslang::EShSourceGlsl, language, glslang::EShClientVulkan, 100);
-    shader.setEnvClient(glslang::EShClientVulkan, glslang::EShTargetVulkan_1_3);
-    shader.setEnvTarget(glslang::EShTargetSpv, glslang::EShTargetSpv_1_6);
+    const ShaderKey key = shaderKey(source, name, language, preamble);
+    const auto isCurrent = [&](const std::vector<ShaderInclude>& includes) { return includesUnchanged(includes, searchPath_); };
+    if (std::optional<std::vector<uint32_t>> cached = cache_->find(key, isCurrent)) return std::move(*cached);
 
-    Includer includer(searchPath_);
-    const auto messages = static_cast<EShMessages>(EShMsgSpvRules | EShMsgVulkanRules);
-    if (!shader.parse(GetDefaultResources(), 460, false, messages, includer)) {
-        throw ShaderCompileError(formatLog(std::string(shader.getInfoLog()) + shader.getInfoDebugLog(), name) +
-                                 includer.unreadable());
-    }
-    glslang::TProgram program;
-    program.addShader(&shader);
-    if (!program.link(messages)) {
-        throw ShaderCompileError(formatLog(std::string(program.getInfoLog()) + program.getInfoDebugLog(), name));
-    }
-    std::vector<uint32_t> spirv;
-    glslang::SpvOptions options;
-    options.generateDebugInfo = false;
-    glslang::GlslangToSpv(*program.getIntermediate(language), spirv, &options);
+    RecordingIncluder includer(searchPath_);
+    std::vector<uint32_t> spirv = compileWithGlslang(source, name, language, preamble, includer);
+    cache_->store(key, includer.takeIncludes(), spirv);
     return spirv;
 }
 

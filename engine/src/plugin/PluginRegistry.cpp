@@ -1,5 +1,6 @@
 #include "penumbra/plugin/PluginRegistry.h"
 
+#include "penumbra/io/CacheFolder.h"
 #include "penumbra/plugin/LibraryFile.h"
 
 #include "core/BuildTree.h"
@@ -234,12 +235,9 @@ fs::path defaultPluginScanner()
 
 fs::path defaultScanCacheFile()
 {
-    fs::path folder;
-    // The XDG base directory spec: a relative XDG_CACHE_HOME is invalid and ignored.
-    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && fs::path(xdg).is_absolute()) folder = xdg;
-    else if (const char* home = std::getenv("HOME"); home && fs::path(home).is_absolute()) folder = fs::path(home) / ".cache";
-    else return {};
-    return folder / "penumbra" / fmt::format("plugin-scan-{}.json", PENUMBRA_PLUGIN_ABI_VERSION);
+    const fs::path folder = io::userCacheFolder();
+    if (folder.empty()) return {};
+    return folder / fmt::format("plugin-scan-{}.json", PENUMBRA_PLUGIN_ABI_VERSION);
 }
 
 void checkPluginInfo(const PenumbraPluginInfo& info, const fs::path& file)

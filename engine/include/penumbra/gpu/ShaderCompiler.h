@@ -2,6 +2,11 @@
 // Run-time GLSL -> SPIR-V with the glslang library, so that shaders can be edited
 // without rebuilding. `#include "x.glsl"` resolves against the including file's folder
 // first, then the search path (the engine's shaders/ folder, then a plugin's folder).
+// Compiled SPIR-V is kept in a ShaderCache (by default the one the process shares, on
+// disk between runs): a shader whose source, defines and #included files are unchanged
+// is not compiled again.
+#include "penumbra/gpu/ShaderCache.h"
+
 #include <vulkan/vulkan.h>
 
 #include <cstdint>
@@ -19,11 +24,12 @@ struct ShaderDefine {
 
 class ShaderCompiler {
 public:
-    explicit ShaderCompiler(std::vector<std::filesystem::path> searchPath);
+    explicit ShaderCompiler(std::vector<std::filesystem::path> searchPath, ShaderCache& cache = ShaderCache::shared());
 
     // Compiles `file` (absolute, or relative to the search path) for the stage implied
     // by its extension (.vert .frag .comp .geom .tesc .tese). Throws ShaderCompileError
-    // whose message has one "path:line: error: message" line per diagnostic.
+    // whose message has one "path:line: error: message" line per diagnostic (a shader that
+    // fails is never cached: every run reports its errors).
     std::vector<uint32_t> compile(const std::filesystem::path& file,
                                   const std::vector<ShaderDefine>& defines = {}) const;
 
@@ -37,6 +43,7 @@ public:
 
 private:
     std::vector<std::filesystem::path> searchPath_;
+    ShaderCache* cache_;
 };
 
 // The engine's shader folder: $PENUMBRA_SHADER_DIR; else, for an installed engine,
