@@ -1,7 +1,7 @@
 #pragma once
 // The SPIR-V of every shader compiled, shared by all ShaderCompilers of a process and kept
-// on disk between runs, so that a second run compiles nothing (docs/performance.md,
-// "Shader cache").
+// on disk between runs, so that a second run compiles nothing (README.md, "Layout";
+// docs/performance.md, "Start-up: the SPIR-V cache").
 //
 // An entry is found by a key that ShaderCompiler derives from everything the compile reads
 // besides #included files: the engine build (its GNU build id, which covers the glslang
@@ -11,6 +11,9 @@
 // entry is used only while every one of them still resolves to the same file with the
 // same content. glslang is deterministic, so the same inputs and the same answers to its
 // #include requests make the same SPIR-V: a stale entry cannot be found.
+// (Keying by glslang's preprocessed text would need no recorded #includes, but glslang's
+// preprocessor builds the same built-in symbol tables as a compile, ~120 ms a process:
+// a warm start would save little.)
 //
 // On disk, one file per key, <folder>/<32 hex digits of the key>.spv:
 //
