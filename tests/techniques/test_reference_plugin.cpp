@@ -104,6 +104,19 @@ struct Frame {
         positions = renderer.readPositions();
         normals = renderer.readNormals();
     }
+    // Moves generatePenumbra's occluder by `offset` (an animated frame: the renderer is
+    // told which node moved) and renders.
+    void moveOccluder(glm::vec3 offset)
+    {
+        uint32_t occluder = 0;
+        for (const scene::Instance& instance : scene.instances)
+            if (scene.meshes[instance.mesh].name == "occluder") occluder = instance.node;
+        scene.graph.setLocal(occluder, glm::translate(glm::mat4(1.0f), offset) * scene.graph.local(occluder));
+        const std::vector<uint32_t> moved = scene.updateTransforms();
+        ASSERT_EQ(moved.size(), 1u);
+        renderer.update(config, scene, moved);
+        render();
+    }
     size_t pixels() const { return visibility.size(); }
     bool hasGeometry(size_t i) const { return positions[4 * i + 3] != 0.0f; }
     glm::dvec3 position(size_t i) const { return {positions[4 * i], positions[4 * i + 1], positions[4 * i + 2]}; }
@@ -567,15 +580,7 @@ TEST_F(ReferencePlugin, MovedInstancesAreTracedWhereTheyAreNow)
     const config::RenderConfig cfg = smallRectConfig({{"samples", 16}});
     Frame& frame = render(cfg, scene::generatePenumbra({}));
     const std::vector<float> before = frame.visibility;
-    uint32_t occluder = 0;
-    for (const scene::Instance& instance : frame.scene.instances)
-        if (frame.scene.meshes[instance.mesh].name == "occluder") occluder = instance.node;
-    frame.scene.graph.setLocal(occluder, glm::translate(glm::mat4(1.0f), glm::vec3(0.4f, 0.0f, 0.0f)) *
-                                             frame.scene.graph.local(occluder));
-    const std::vector<uint32_t> moved = frame.scene.updateTransforms();
-    ASSERT_EQ(moved.size(), 1u);
-    frame.renderer.update(frame.config, frame.scene, moved);
-    frame.render();
+    ASSERT_NO_FATAL_FAILURE(frame.moveOccluder({0.4f, 0.0f, 0.0f}));
     EXPECT_NE(frame.visibility, before);
     EXPECT_EQ(render(cfg, frame.scene).visibility, frame.visibility);
 }
@@ -890,15 +895,7 @@ TEST_F(ReferenceBruteForce, FollowsAMovingLightAndMovedCasters)
     EXPECT_EQ(render(frame.config, frame.scene).visibility, frame.visibility);
 
     before = frame.visibility;
-    uint32_t occluder = 0;
-    for (const scene::Instance& instance : frame.scene.instances)
-        if (frame.scene.meshes[instance.mesh].name == "occluder") occluder = instance.node;
-    frame.scene.graph.setLocal(occluder, glm::translate(glm::mat4(1.0f), glm::vec3(0.4f, 0.0f, 0.0f)) *
-                                             frame.scene.graph.local(occluder));
-    const std::vector<uint32_t> moved = frame.scene.updateTransforms();
-    ASSERT_EQ(moved.size(), 1u);
-    frame.renderer.update(frame.config, frame.scene, moved);
-    frame.render();
+    ASSERT_NO_FATAL_FAILURE(frame.moveOccluder({0.4f, 0.0f, 0.0f}));
     EXPECT_NE(frame.visibility, before);
     EXPECT_EQ(render(frame.config, frame.scene).visibility, frame.visibility);
 }
