@@ -280,6 +280,9 @@ std::unique_ptr<frame::FrameRenderer> Session::build()
               : resources_;
     auto renderer = std::make_unique<frame::FrameRenderer>(resources, strict, newPlugins_ ? *newPlugins_ : *plugins_,
                                                            fresh ? nullptr : renderer_.get());
+    // The scene's nodes were posed in place: the shared upload, BVH and kept techniques
+    // take the instances that moved (a renderer of new resources drew them posed already).
+    if (!fresh && !moved.empty()) renderer->update(strict, run_->scene, moved);
     if (!shownImage_.empty()) {
         const std::vector<std::string> names = renderer->imageNames();
         if (std::find(names.begin(), names.end(), shownImage_) != names.end()) renderer->requestImage(shownImage_);

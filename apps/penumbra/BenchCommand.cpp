@@ -17,6 +17,7 @@
 #include "penumbra/core/Error.h"
 #include "penumbra/frame/FloorRenderer.h"
 #include "penumbra/frame/FrameRenderer.h"
+#include "penumbra/frame/SceneResources.h"
 #include "penumbra/io/StagedFile.h"
 #include "penumbra/metrics/ImageComparison.h"
 #include "penumbra/plugin/PluginRegistry.h"
@@ -31,6 +32,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <thread>
 
@@ -276,15 +278,15 @@ struct ReferenceVisibility {
 
 class ReferenceCache {
 public:
-    ReferenceCache(gpu::Context& context, plugin::PluginRegistry& plugins, const ReferenceTechnique& reference)
-        : context_(context), plugins_(plugins), reference_(reference)
+    ReferenceCache(plugin::PluginRegistry& plugins, const ReferenceTechnique& reference)
+        : plugins_(plugins), reference_(reference)
     {
     }
 
     // The reference visibility of each light of `config` (posed at frame 0, drawing
     // `scene`), rendering those not seen before in one frame.
-    std::vector<const ReferenceVisibility*> lookUp(const config::RenderConfig& config, const scene::Scene& scene,
-                                                    Progress& progress)
+    std::vector<const ReferenceVisibility*> lookUp(const config::RenderConfig& config,
+                                                    const std::shared_ptr<frame::SceneResources>& scene, Progress& progress)
     {
         std::vector<std::string> keys;
         config::RenderConfig missing = config;
@@ -306,12 +308,12 @@ public:
     size_t renders() const { return renders_; }
 
 private:
-    void render(const config::RenderConfig& config, const scene::Scene& scene, const std::vector<std::string>& keys,
-                Progress& progress)
+    void render(const config::RenderConfig& config, const std::shared_ptr<frame::SceneResources>& scene,
+                const std::vector<std::string>& keys, Progress& progress)
     {
         progress.clear();
         spdlog::info("reference: rendering {} light(s) with {}", config.lights.size(), reference_.shadow.technique);
-        frame::FrameRenderer renderer(context_, scene, config, plugins_);
+        frame::FrameRenderer renderer(scene, config, plugins_);
         renderer.renderFrame();
         InterruptHandler::check();
         FrameImages images = captureFrame(renderer);
@@ -322,7 +324,6 @@ private:
         ++renders_;
     }
 
-    gpu::Context& context_;
     plugin::PluginRegistry& plugins_;
     const ReferenceTechnique& reference_;
     std::map<std::string, ReferenceVisibility> cache_;
@@ -331,30 +332,74 @@ private:
 
 // ---- measuring one variant ----------------------------------------------------------------
 
+// The scenes of the sweep's variants. Variants over one scene source share its scene and
+// its GPU resources (frame::SceneResources: upload, BVH, shaders, the engine's pipelines),
+// the reference renders too; an animated variant poses a scene of its own. The resources
+// of the last scene and batching drawn are kept, no more, so that a sweep over many
+// scenes holds one on the device at a time.
+class VariantScenes {
+public:
+    explicit VariantScenes(gpu::Context& context) : context_(context) {}
+
+    std::shared_ptr<frame::SceneResources> resources(const scene::Scene& scene, const config::RenderConfig& config)
+    {
+        const render::DrawBatching batching = frame::SceneResources::batchingOf(config);
+        if (!last_ || &last_->scene() != &scene || last_->batching() != batching) {
+            last_.reset();  // before the next one is made: one scene's memory at a time
+            last_ = std::make_shared<frame::SceneResources>(context_, scene, batching);
+        }
+        return last_;
+    }
+    config::SceneCache& scenes() { return scenes_; }
+    // Scenes built for the run: one per scene source of unanimated variants, one per
+    // animated variant.
+    size_t scenesBuilt() const { return scenes_.scenesBuilt() + posedScenes_; }
+    void countPosedScene() { ++posedScenes_; }
+
+private:
+    gpu::Context& context_;
+    config::SceneCache scenes_;
+    size_t posedScenes_ = 0;
+    std::shared_ptr<frame::SceneResources> last_;
+};
+
 struct BenchSession {
     const BenchFlags& flags;
-    gpu::Context& context;
     plugin::PluginRegistry& plugins;
     const config::RunOptions& options;
     ReferenceCache& references;
+    VariantScenes& scenes;
     Progress& progress;
     std::vector<std::string>& warnings;
 };
 
 BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& variant, size_t index)
 {
-    config::PreparedRun run = config::prepareRun(variant.config, session.options);
     // An animated config is measured at its first frame, as `render` shows it, unless the
-    // run walks along its animation (--animate).
-    const bool walk = session.flags.animate && config::animated(run.config);
-    run.poseAtFrame(0);
-    const config::RenderConfig& config = run.config;
-    const scene::Scene& scene = run.scene;
+    // run walks along its animation (--animate); it poses a scene of its own.
+    std::optional<config::PreparedRun> posed;
+    config::RenderConfig unposed;
+    const scene::Scene* scenePtr = nullptr;
+    if (config::animated(variant.config)) {
+        posed.emplace(config::prepareRun(variant.config, session.options));
+        posed->poseAtFrame(0);
+        session.scenes.countPosedScene();
+        scenePtr = &posed->scene;
+    } else {
+        config::RenderConfig c = variant.config;
+        const config::SceneBuild& built = session.scenes.scenes().build(c, session.options);
+        unposed = config::resolveRun(std::move(c), session.options, built);
+        scenePtr = &built.scene;
+    }
+    const bool walk = session.flags.animate && posed.has_value();
+    const config::RenderConfig& config = posed ? posed->config : unposed;
+    const scene::Scene& scene = *scenePtr;
+    const std::shared_ptr<frame::SceneResources> resources = session.scenes.resources(scene, config);
     // Walking, each measured frame looks up its own pose's reference.
     std::vector<const ReferenceVisibility*> references;
-    if (!walk) references = session.references.lookUp(config, scene, session.progress);
+    if (!walk) references = session.references.lookUp(config, resources, session.progress);
 
-    frame::FrameRenderer renderer(session.context, scene, config, session.plugins);
+    frame::FrameRenderer renderer(resources, config, session.plugins);
     for (const std::string& warning : renderer.warnings()) {
         session.progress.clear();
         session.warnings.push_back(fmt::format("variant {} ({}): {}", index, variant.label, warning));
@@ -362,7 +407,7 @@ BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& v
     }
     // The floor of the same config (frame/FloorRenderer.h), drawn after every frame so that
     // both are measured side by side.
-    frame::FloorRenderer floor(session.context, scene, config);
+    frame::FloorRenderer floor(resources->context(), scene, config);
     std::vector<frame::FrameTimings> measured, floorMeasured;
     // Walking: every measured frame's visibility and its pose's reference, stacked frame
     // under frame, so that the errors are over the whole path.
@@ -370,7 +415,7 @@ BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& v
     std::vector<metrics::PixelMask> pathMask(config.lights.size());
     for (uint32_t frame = 0; frame < session.flags.warmup + session.flags.frames; ++frame) {
         if (walk && frame > 0) {
-            const std::vector<uint32_t> moved = run.poseAtFrame(frame);
+            const std::vector<uint32_t> moved = posed->poseAtFrame(frame);
             renderer.update(config, scene, moved);
             floor.update(config, scene, moved);
         }
@@ -381,7 +426,7 @@ BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& v
             floorMeasured.push_back(std::move(floorTimings));
             if (walk) {
                 const FrameImages posed = captureFrame(renderer);
-                references = session.references.lookUp(config, scene, session.progress);
+                references = session.references.lookUp(config, resources, session.progress);
                 for (size_t l = 0; l < config.lights.size(); ++l) {
                     const ReferenceVisibility& r = *references[l];
                     pathVisibility[l].insert(pathVisibility[l].end(), posed.visibility[l].begin(), posed.visibility[l].end());
@@ -453,9 +498,10 @@ BenchVariant measureVariant(BenchSession& session, const config::SweepVariant& v
 
 void printTable(const BenchRun& run)
 {
-    fmt::print("bench {}: {} variant(s), medians of {} frame(s) after {} warm-up; reference {} {} ({} render(s))\n",
-               run.config, run.variants.size(), run.frames, run.warmup, run.reference, run.referenceParams.dump(),
-               run.referenceRenders);
+    fmt::print("bench {}: {} variant(s) over {} scene(s) built, medians of {} frame(s) after {} warm-up; reference {} {} "
+               "({} render(s))\n",
+               run.config, run.variants.size(), run.scenesBuilt, run.frames, run.warmup, run.reference,
+               run.referenceParams.dump(), run.referenceRenders);
     fmt::print("  {:>3} {:<12} {:<12} {:>10} {:>10} {:>8} {:>12} {:>9} {:>9}  {}\n", "#", "light", "technique", "ms",
                "frame ms", "x floor", "memory B", "RMSE", "SSIM", "variant (* Pareto front)");
     for (const BenchVariant& v : run.variants) {
@@ -509,9 +555,10 @@ int runBench(const BenchFlags& flags)
     run.referenceParams = reference.params;
     run.notes = variants.variant(0).config.notes;  // a sweep of /notes: the first variant's
     try {
-        ReferenceCache references(context, plugins, reference);
+        ReferenceCache references(plugins, reference);
+        VariantScenes scenes(context);
         Progress progress(variants.size(), flags.warmup + flags.frames);
-        BenchSession session{flags, context, plugins, options, references, progress, run.warnings};
+        BenchSession session{flags, plugins, options, references, scenes, progress, run.warnings};
         for (size_t i = 0; i < variants.size(); ++i) {
             // Made one at a time: a variant is a copy of the document.
             inPhase(fmt::format("measuring sweep variant {} of {}", i + 1, variants.size()), [&] {
@@ -521,6 +568,7 @@ int runBench(const BenchFlags& flags)
             });
         }
         run.referenceRenders = references.renders();
+        run.scenesBuilt = scenes.scenesBuilt();
     } catch (const Interrupted& interrupted) {
         fmt::print(stderr, "penumbra: interrupted after {} of {} variant(s); nothing written\n", run.variants.size(),
                    variants.size());

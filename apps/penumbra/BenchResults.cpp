@@ -293,6 +293,7 @@ json resultsJson(const BenchRun& run)
             {"warmup", run.warmup},
             {"animated", run.animated},
             {"reference", {{"technique", run.reference}, {"params", run.referenceParams}, {"renders", run.referenceRenders}}},
+            {"scenes_built", run.scenesBuilt},
             {"variants", std::move(variants)},
             {"warnings", run.warnings}};
 }

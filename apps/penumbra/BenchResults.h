@@ -66,6 +66,7 @@ struct BenchRun {
     std::string reference;             // the reference technique
     nlohmann::json referenceParams;
     size_t referenceRenders = 0;       // one per distinct (scene, camera, light) at most
+    size_t scenesBuilt = 0;            // one per scene source (config::SceneCache), one per animated variant
     std::vector<BenchVariant> variants;
     std::vector<std::string> warnings;
     std::vector<std::string> notes;    // the config's "notes", for the summary

@@ -9,6 +9,7 @@
 #include "penumbra/core/Error.h"
 #include "penumbra/core/ShortText.h"
 #include "penumbra/frame/FrameRenderer.h"
+#include "penumbra/frame/SceneResources.h"
 #include "penumbra/io/Png.h"
 #include "penumbra/io/StagedFile.h"
 #include "penumbra/metrics/DifferenceImage.h"
@@ -41,11 +42,12 @@ struct CompareFlags {
 };
 
 // Renders one frame of `config` and reads back what the comparison needs. The renderer
-// is gone when this returns, so that the two renders never hold device memory together.
-FrameImages renderOnce(gpu::Context& context, const scene::Scene& scene, const config::RenderConfig& config,
+// is gone when this returns, so that the two renders never hold their techniques' device
+// memory together; the scene's (`scene`: upload, BVH, the engine's pipelines) is shared.
+FrameImages renderOnce(const std::shared_ptr<frame::SceneResources>& scene, const config::RenderConfig& config,
                        plugin::PluginRegistry& plugins, const char* label, std::vector<std::string>& warnings)
 {
-    frame::FrameRenderer renderer(context, scene, config, plugins);
+    frame::FrameRenderer renderer(scene, config, plugins);
     for (const std::string& warning : renderer.warnings()) {
         spdlog::warn("{} render: {}", label, warning);
         warnings.push_back(fmt::format("{} render: {}", label, warning));
@@ -204,8 +206,10 @@ int runCompare(const CompareFlags& flags)
     gpu::Context context(contextOptions(flags.device));
     spdlog::info("device: {} ({})", context.deviceInfo().name, context.deviceInfo().type);
     std::vector<std::string> warnings;
-    const FrameImages test = renderOnce(context, scene, config, plugins, "test", warnings);
-    const FrameImages ref = renderOnce(context, scene, referenceConfig, plugins, "reference", warnings);
+    const auto resources =
+        std::make_shared<frame::SceneResources>(context, scene, frame::SceneResources::batchingOf(config));
+    const FrameImages test = renderOnce(resources, config, plugins, "test", warnings);
+    const FrameImages ref = renderOnce(resources, referenceConfig, plugins, "reference", warnings);
 
     // Both renders drew the same scene from the same camera: one G-buffer's coverage.
     const metrics::PixelMask mask = metrics::geometryMask(ref.width, ref.height, ref.positions);

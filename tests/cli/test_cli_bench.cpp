@@ -336,6 +336,8 @@ TEST_F(Cli, BenchSweepsTechniquesAndScenesWithOneReferencePerScene)
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const nlohmann::json doc = nlohmann::json::parse(readFile(out / "results.json"));
     EXPECT_EQ(doc["reference"]["renders"], 2) << "one reference per scene, shared by both techniques";
+    EXPECT_EQ(doc["scenes_built"], 2) << "one per scene source, shared by both techniques";
+    EXPECT_TRUE(has(r.out, "4 variant(s) over 2 scene(s) built")) << r.out;
     ASSERT_EQ(doc["variants"].size(), 4u);
     for (size_t v = 0; v < 4; ++v) {
         SCOPED_TRACE(v);

@@ -13,18 +13,26 @@
 
 namespace penumbra::config {
 
-scene::Scene buildScene(RenderConfig& config)
+namespace {
+
+SceneBuild buildSceneOf(const RenderConfig& config)
 {
-    scene::Scene scene;
-    std::vector<scene::GltfLight> fileLights;
+    SceneBuild build;
     try {
-        scene = buildScene(config.scene, &fileLights);
+        build.scene = buildScene(config.scene, &build.fileLights);
     } catch (const ConfigError&) {
         throw;
     } catch (const Error& e) {
         // The error names the part (/scene/parts/1) and what in it; add the config file.
         throw ConfigError(fmt::format("{}: {}", displayPath(config.file), e.what()));
     }
+    return build;
+}
+
+// What buildScene(RenderConfig&) does once the scene is built: the lights of "lights":
+// "scene", the played clips and the node tracks checked against the scene.
+void completeFromScene(RenderConfig& config, const scene::Scene& scene, const std::vector<scene::GltfLight>& fileLights)
+{
     if (config.lightsFromScene) {
         if (fileLights.empty() || fileLights.size() > kMaxLights) {
             throw ConfigError(fmt::format("{}: /lights: \"scene\" needs 1 to {} KHR_lights_punctual lights in the scene's "
@@ -58,27 +66,78 @@ scene::Scene buildScene(RenderConfig& config)
                                           displayPath(config.file), i, core::shortText(name)));
         }
     }
-    return scene;
 }
 
-PreparedRun prepareRun(RenderConfig config, const RunOptions& options)
+void addAllowedRoots(RenderConfig& config, const RunOptions& options)
 {
-    PreparedRun run;
     for (ScenePart& part : config.scene.parts) {
         if (part.kind == ScenePart::Kind::Gltf) {
             part.allowedRoots.insert(part.allowedRoots.end(), options.allowedRoots.begin(), options.allowedRoots.end());
         }
     }
-    run.scene = buildScene(config);
+}
+
+} // namespace
+
+scene::Scene buildScene(RenderConfig& config)
+{
+    SceneBuild build = buildSceneOf(config);
+    completeFromScene(config, build.scene, build.fileLights);
+    return std::move(build.scene);
+}
+
+RenderConfig resolveRun(RenderConfig config, const RunOptions& options, const SceneBuild& built)
+{
+    completeFromScene(config, built.scene, built.fileLights);
     applyParamOverrides(config, options.overridesOfUsedTechniquesOnly ? overridesUsedBy(options.overrides, config)
                                                                        : options.overrides);
     if (options.width) config.width = *options.width;
     if (options.height) config.height = *options.height;
     if (options.frames) config.frames = *options.frames;
     if (options.culling) config.culling = *options.culling;
-    run.rest = config;
-    run.config = std::move(config);
+    return config;
+}
+
+PreparedRun prepareRun(RenderConfig config, const RunOptions& options)
+{
+    addAllowedRoots(config, options);
+    SceneBuild built = buildSceneOf(config);
+    PreparedRun run;
+    run.rest = resolveRun(std::move(config), options, built);
+    run.config = run.rest;
+    run.scene = std::move(built.scene);
     return run;
+}
+
+const SceneBuild& SceneCache::build(RenderConfig& config, const RunOptions& options)
+{
+    addAllowedRoots(config, options);
+    std::string key = sourceKey(config.scene);
+    auto found = scenes_.find(key);
+    if (found == scenes_.end()) {
+        auto built = std::make_unique<SceneBuild>(buildSceneOf(config));
+        found = scenes_.emplace(std::move(key), std::move(built)).first;
+    }
+    return *found->second;
+}
+
+std::string SceneCache::sourceKey(const SceneSource& source)
+{
+    // Every field of every part that buildScene reads; doubles printed exactly (fmt's
+    // shortest round trip), paths absolute.
+    std::string key;
+    for (const ScenePart& part : source.parts) {
+        const PartTransform& t = part.transform;
+        key += fmt::format("{}|{}|{}|{}|", int(part.kind), part.name,
+                           part.kind == ScenePart::Kind::Gltf ? std::filesystem::absolute(part.gltf).string() : "",
+                           part.kind == ScenePart::Kind::Generator ? part.generator : "");
+        for (const auto& [name, value] : part.params) key += fmt::format("{}={};", name, value);
+        key += fmt::format("|{},{},{}|{},{},{},{}|{},{},{}|", t.translation.x, t.translation.y, t.translation.z,
+                           t.rotation.w, t.rotation.x, t.rotation.y, t.rotation.z, t.scale.x, t.scale.y, t.scale.z);
+        for (const std::filesystem::path& root : part.allowedRoots) key += std::filesystem::absolute(root).string() + ";";
+        key += "|" + part.animation + "\n";
+    }
+    return key;
 }
 
 PreparedRun prepareRun(const std::filesystem::path& file, const RunOptions& options)

@@ -11,7 +11,10 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
+#include <memory>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace penumbra::config {
@@ -47,6 +50,37 @@ struct PreparedRun {
 
 // Throws ConfigError naming the file and JSON path (or the flag).
 PreparedRun prepareRun(RenderConfig config, const RunOptions& options);
+
+// A scene as its source builds it, with the lights its glTF files hold.
+struct SceneBuild {
+    scene::Scene scene;
+    std::vector<scene::GltfLight> fileLights;
+};
+
+// prepareRun's config, over a scene built from config.scene (with the options' allowed
+// roots): the lights of "lights": "scene" filled in, the tracks checked against the
+// scene, the overrides and the command line's size, frames and culling applied.
+RenderConfig resolveRun(RenderConfig config, const RunOptions& options, const SceneBuild& built);
+
+// The scenes of one command's runs (bench's variants, compare's test and reference): a
+// scene source is built once - its files loaded and repaired, its generators run - and
+// every run of it takes that scene. Runs that pose the scene (animated ones, config::
+// animated) need one of their own: prepareRun.
+class SceneCache {
+public:
+    // The scene of `config`'s source, built at the first call for that source; adds the
+    // options' allowed roots to `config`'s glTF parts, as prepareRun does. Throws
+    // ConfigError as prepareRun does.
+    const SceneBuild& build(RenderConfig& config, const RunOptions& options);
+    size_t scenesBuilt() const { return scenes_.size(); }
+
+    // What identifies a source: every part's kind, name, file (absolute), generator and
+    // parameters, transform, allowed roots and animation.
+    static std::string sourceKey(const SceneSource& source);
+
+private:
+    std::map<std::string, std::unique_ptr<SceneBuild>> scenes_;
+};
 
 // Whether frames of the config differ: it has tracks, or plays a glTF file's animation.
 bool animated(const RenderConfig& config);
