@@ -491,7 +491,8 @@ protected:
         const render::Casters casters(sceneGpu);
         const gpu::ShaderCompiler shaders({hard.shaderDir, gpu::engineShaderDir()});
         const plugin::TechniqueSetup setup{*context,           shaders,        casters, scene,     params,
-                                           cfg.lights[0].light, scene.bounds(), 0,       cfg.width, cfg.height};
+                                           cfg.lights[0].light, scene.bounds(), 0,       cfg.width, cfg.height,
+                                           "light0.hard."};
         registry->create(hard, setup, "light 0");
     }
 
@@ -522,7 +523,8 @@ TEST_F(HardPluginErrors, ALightThatChangesTypeIsRefusedNamingBothTypes)
     const gpu::ShaderCompiler shaders({hard.shaderDir, gpu::engineShaderDir()});
     const plugin::ParamValues params = hard.defaultParams();
     const plugin::TechniqueSetup setup{*context,           shaders,        casters, scene,     params,
-                                       cfg.lights[0].light, scene.bounds(), 0,       cfg.width, cfg.height};
+                                       cfg.lights[0].light, scene.bounds(), 0,       cfg.width, cfg.height,
+                                       "light0.hard."};
     const std::unique_ptr<plugin::Technique> technique = registry->create(hard, setup, "light 0");
     technique->update(cfg.lights[0].light, scene.bounds());  // the same type: fine
 

@@ -1050,8 +1050,8 @@ protected:
     std::unique_ptr<plugin::Technique> create(const plugin::LoadedPlugin& plugin, const ParamValues& params,
                                               uint32_t lightIndex = 0)
     {
-        const plugin::TechniqueSetup setup{*context, *shaders,       *casters,   scene, params,
-                                           light,    scene.bounds(), lightIndex, 64,    32};
+        const plugin::TechniqueSetup setup{*context,   *shaders, *casters, scene, params, light, scene.bounds(),
+                                           lightIndex, 64,       32,       fmt::format("light{}.{}.", lightIndex, plugin.name())};
         return registry.create(plugin, setup, fmt::format("light {}", lightIndex));
     }
 
