@@ -22,14 +22,15 @@ struct PluginsFlags {
     std::vector<std::string> path;  // searched first, before the default search path
 };
 
-// "5 in [1, 15] texels", "true", "clear of clear|unshadowed": a spec's default and what
-// it may be, from its JSON form so that text and --json agree.
+// "5 in [1, 15] texels", "3 odd in [1, 15] texels", "true", "clear of clear|unshadowed": a
+// spec's default and what it may be, from its JSON form so that text and --json agree.
 std::string describeValues(const plugin::ParamSpec& spec)
 {
     const json j = plugin::specToJson(spec);
     const auto text = [](const json& v) { return v.is_string() ? v.get<std::string>() : v.dump(); };
     std::string out = text(j["default"]);
-    if (j.contains("min")) out += fmt::format(" in [{}, {}]", j["min"].dump(), j["max"].dump());
+    if (j.contains("min"))
+        out += fmt::format("{} in [{}, {}]", j.value("odd", false) ? " odd" : "", j["min"].dump(), j["max"].dump());
     if (j.contains("choices")) out += fmt::format(" of {}", fmt::join(j["choices"].get<std::vector<std::string>>(), "|"));
     if (spec.unit[0]) out += fmt::format(" {}", spec.unit);
     return out;

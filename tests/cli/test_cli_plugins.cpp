@@ -31,6 +31,7 @@ TEST_F(Cli, PluginsListsEveryPluginWithItsParametersAndEveryFailure)
     // The build tree's own plugins (hard, ...) follow on the default path; the count of
     // failures is the test folders' alone.
     EXPECT_TRUE(has(r.out, "hard ")) << r.out;
+    EXPECT_TRUE(has(r.out, "3 odd in [1, 15] texels")) << r.out;  // hard's pcf_kernel: ParamSpec::odd
     EXPECT_TRUE(has(r.out, " plugin(s), 7 file(s) failed to load")) << r.out;
     EXPECT_TRUE(has(r.out, "error [abi-mismatch]: plugin 'abi'")) << r.out;
     EXPECT_TRUE(has(r.out, "built for plugin ABI 9999, this engine has ABI " +
