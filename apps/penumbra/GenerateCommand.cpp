@@ -33,7 +33,7 @@ double millisecondsSince(std::chrono::steady_clock::time_point start)
 int runGenerate(const GenerateFlags& flags)
 {
     // Unknown generators and bad paths fail before any work.
-    const std::vector<scene::GeneratorParameter> known = scene::generatorParameters(flags.generator);
+    const std::vector<scene::GeneratorParam>& known = scene::generatorParameters(flags.generator);
     scene::checkGltfOutput(flags.output);
     if (!(std::isfinite(flags.scale) && flags.scale > 0.0f)) {
         throw Error(fmt::format("--scale must be a finite number > 0, got {}", flags.scale));
@@ -49,7 +49,7 @@ int runGenerate(const GenerateFlags& flags)
         const size_t eq = setting.find('=');
         if (eq == std::string::npos || eq == 0) {
             throw Error(fmt::format("--set '{}': expected name=value, e.g. --set {}={}", core::shortText(setting),
-                                              known.front().name, known.front().defaultValue));
+                                    known.front().name, known.front().defaultValue));
         }
         settings.emplace_back(setting.substr(0, eq), setting.substr(eq + 1));
     }
@@ -66,14 +66,30 @@ int runGenerate(const GenerateFlags& flags)
     return 0;
 }
 
-// The generators and their parameters with defaults, for `penumbra generate --help`.
+// "60 world", "8": a parameter's default and its unit.
+std::string defaultWithUnit(const scene::GeneratorParam& p)
+{
+    return p.unit.empty() ? fmt::format("{}", p.defaultValue) : fmt::format("{} {}", p.defaultValue, p.unit);
+}
+
+// The generators' parameter tables, for `penumbra generate --help`: each parameter's
+// name, default and unit, range, and what it sets.
 std::string generatorHelp()
 {
-    std::string text = "Generators and their parameters (defaults; lengths in world units):\n";
+    std::string text = "Generators and their parameters (name, default, range, what it sets; world: world units):\n";
     for (const std::string& name : scene::generatorNames()) {
-        std::vector<std::string> params;
-        for (const auto& p : scene::generatorParameters(name)) params.push_back(p.name + "=" + p.defaultValue);
-        text += fmt::format("  {}: {}\n", name, fmt::join(params, " "));
+        const std::vector<scene::GeneratorParam>& params = scene::generatorParameters(name);
+        size_t nameWidth = 0, defaultWidth = 0, rangeWidth = 0;
+        for (const scene::GeneratorParam& p : params) {
+            nameWidth = std::max(nameWidth, p.name.size());
+            defaultWidth = std::max(defaultWidth, defaultWithUnit(p).size());
+            rangeWidth = std::max(rangeWidth, scene::describeRange(p).size());
+        }
+        text += fmt::format("  {}:\n", name);
+        for (const scene::GeneratorParam& p : params) {
+            text += fmt::format("    {:<{}}  {:<{}}  {:<{}}  {}\n", p.name, nameWidth, defaultWithUnit(p), defaultWidth,
+                                scene::describeRange(p), rangeWidth, p.doc);
+        }
     }
     return text;
 }

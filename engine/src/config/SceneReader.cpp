@@ -147,13 +147,18 @@ ScenePart readPart(ObjectReader& r, const Locator& locator, const fs::path& conf
     part.generator = r.choice("generator", part.generator, scene::generatorNames());
     if (const json* params = r.find("params")) {
         ObjectReader p(*params, locator, r.path("params"));
-        for (const scene::GeneratorParameter& parameter : scene::generatorParameters(part.generator)) {
+        // Each value checked against the generator's table where the file gives it; the
+        // bounds between parameters are the generator's, when the scene is built.
+        for (const scene::GeneratorParam& parameter : scene::generatorParameters(part.generator)) {
             const json* v = p.find(parameter.name);
             if (!v) continue;
-            if (!v->is_number() && !v->is_boolean() && !v->is_string()) {
-                p.fail(p.path(parameter.name), fmt::format("must be a number, got {}", core::shortJson(*v)));
+            const std::string text = v->is_string() ? v->get<std::string>() : v->dump();
+            if (!(v->is_number() || v->is_string()) || !scene::parseGeneratorValue(parameter, text)) {
+                p.fail(p.path(parameter.name), fmt::format("must be {} (generator {}, parameter {}: {}), got {}",
+                                                           scene::describeRange(parameter), part.generator, parameter.name,
+                                                           parameter.doc, core::shortJson(*v)));
             }
-            part.params.emplace_back(parameter.name, v->is_string() ? v->get<std::string>() : v->dump());
+            part.params.emplace_back(parameter.name, text);
         }
         p.finish(fmt::format("for the {} generator", part.generator));
     }

@@ -1,5 +1,6 @@
 #include "penumbra/scene/Generators.h"
 
+#include "penumbra/core/ClosestMatch.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/core/ShortText.h"
 
@@ -22,8 +23,9 @@ constexpr float kFloatMax = std::numeric_limits<float>::max();
 
 // ---- parameter checks ------------------------------------------------------------------
 
-// Messages name the generator and the parameter as the command line spells it:
-//   "city: block_size must be in [10, 1000], got 2".
+// The checks of bounds that depend on another parameter (each parameter's own range is
+// its table's: checkRanges below). Messages name the generator and the parameter as the
+// command line spells it: "city: sidewalk_width must be in [1.5, 15], got 20".
 // Every float check is written so that NaN fails it.
 class ParamCheck {
 public:
@@ -33,10 +35,6 @@ public:
     {
         throw Error(fmt::format("{}: {} must be {}, got {}", generator_, name, requirement, got));
     }
-    void positive(const char* name, float v) const
-    {
-        if (!(v > 0.0f && v <= kFloatMax)) fail(name, "a finite number > 0", fmt::format("{}", v));
-    }
     void range(const char* name, float v, float lo, float hi) const
     {
         if (!(v >= lo && v <= hi)) fail(name, fmt::format("in [{}, {}]", lo, hi), fmt::format("{}", v));
@@ -45,10 +43,6 @@ public:
     void atLeast(const char* name, float v, const char* other, float lo) const
     {
         if (!(v >= lo && v <= kFloatMax)) fail(name, fmt::format("a finite number >= {} ({})", other, lo), fmt::format("{}", v));
-    }
-    void count(const char* name, uint32_t v, uint32_t lo, uint32_t hi) const
-    {
-        if (v < lo || v > hi) fail(name, fmt::format("in [{}, {}]", lo, hi), fmt::format("{}", v));
     }
     // What the parameters multiply to, checked before anything is built: each may lie in
     // its range while their product exhausts memory (box-field boxes=1000000
@@ -531,99 +525,191 @@ double hiddenFraction(double lightMin, double lightMax, double hiddenMin, double
 
 // ---- generators by name ------------------------------------------------------------------
 
-// The snake_case names (command line, config) of each params struct's fields.
-template <class Visit> void visitParams(BoxGridParams& p, Visit&& visit)
+// One row of a generator's table: the reflected parameter and the params struct's field
+// it sets (a uint32_t for a whole number, a float otherwise).
+template <class Params> struct Field {
+    GeneratorParam param;
+    uint32_t Params::*whole = nullptr;
+    float Params::*real = nullptr;
+};
+
+// A float's shortest decimal form as a double (0.1f: 0.1, not 0.10000000149), so that a
+// default reads as the struct's source writes it.
+double decimal(float v)
 {
-    visit("columns", p.columns);
-    visit("rows", p.rows);
-    visit("box_size", p.boxSize);
-    visit("spacing", p.spacing);
-    visit("min_height", p.minHeight);
-    visit("max_height", p.maxHeight);
-    visit("sphere_radius", p.sphereRadius);
-    visit("sphere_segments", p.sphereSegments);
-    visit("plane_size", p.planeSize);
-    visit("seed", p.seed);
+    double d = 0.0;
+    const std::string text = fmt::format("{}", v);
+    std::from_chars(text.data(), text.data() + text.size(), d);
+    return d;
 }
 
-template <class Visit> void visitParams(PenumbraParams& p, Visit&& visit)
+template <class Params>
+Field<Params> whole(const char* name, uint32_t Params::*member, uint32_t lo, uint32_t hi, const char* doc)
 {
-    visit("occluder_size", p.occluderSize);
-    visit("occluder_thickness", p.occluderThickness);
-    visit("occluder_height", p.occluderHeight);
-    visit("ground_size", p.groundSize);
+    return {{name, true, double(Params{}.*member), double(lo), double(hi), false, "", doc}, member, nullptr};
 }
 
-template <class Visit> void visitParams(CityParams& p, Visit&& visit)
+template <class Params> Field<Params> seed(uint32_t Params::*member)
 {
-    visit("blocks", p.blocks);
-    visit("block_size", p.blockSize);
-    visit("street_width", p.streetWidth);
-    visit("sidewalk_width", p.sidewalkWidth);
-    visit("lots_per_side", p.lotsPerSide);
-    visit("min_height", p.minHeight);
-    visit("max_height", p.maxHeight);
-    visit("setback_chance", p.setbackChance);
-    visit("car_density", p.carDensity);
-    visit("tree_chance", p.treeChance);
-    visit("seed", p.seed);
+    return whole("seed", member, 0, std::numeric_limits<uint32_t>::max(), "seed of the generator's random choices");
 }
 
-template <class Visit> void visitParams(HairParams& p, Visit&& visit)
+// A float in [lo, hi] (hi = kFloatMax: any finite value from lo).
+template <class Params>
+Field<Params> real(const char* name, float Params::*member, float lo, float hi, const char* unit, const char* doc)
 {
-    visit("strands", p.strands);
-    visit("segments", p.segments);
-    visit("head_radius", p.headRadius);
-    visit("strand_length", p.strandLength);
-    visit("length_jitter", p.lengthJitter);
-    visit("strand_width", p.strandWidth);
-    visit("gravity", p.gravity);
-    visit("waviness", p.waviness);
-    visit("scalp_angle_deg", p.scalpAngleDeg);
-    visit("alpha", p.alpha);
-    visit("seed", p.seed);
+    return {{name, false, decimal(Params{}.*member), decimal(lo), decimal(hi), false, unit, doc}, nullptr, member};
 }
 
-template <class Visit> void visitParams(BoxFieldParams& p, Visit&& visit)
+// A float > 0 (and at most hi): a length, a size.
+template <class Params>
+Field<Params> positive(const char* name, float Params::*member, const char* unit, const char* doc, float hi = kFloatMax)
 {
-    visit("boxes", p.boxes);
-    visit("box_size", p.boxSize);
-    visit("spacing", p.spacing);
-    visit("min_height", p.minHeight);
-    visit("max_height", p.maxHeight);
-    visit("face_divisions", p.faceDivisions);
-    visit("margin", p.margin);
-    visit("seed", p.seed);
+    Field<Params> f = real(name, member, 0.0f, hi, unit, doc);
+    f.param.aboveMin = true;
+    return f;
 }
 
-template <class Visit> void visitParams(FenceParams& p, Visit&& visit)
+// The snake_case names (command line, config) of each params struct's fields, with their
+// ranges; bounds that depend on another parameter are checked by the generator itself.
+const std::vector<Field<BoxGridParams>>& fields(const BoxGridParams*)
 {
-    visit("holes_x", p.holesX);
-    visit("holes_y", p.holesY);
-    visit("cell", p.cell);
-    visit("bar_width", p.barWidth);
-    visit("thickness", p.thickness);
-    visit("tilt_deg", p.tiltDeg);
-    visit("elevation", p.elevation);
-    visit("ground_size", p.groundSize);
+    using P = BoxGridParams;
+    static const std::vector<Field<P>> table = {
+        whole("columns", &P::columns, 1, 1024, "boxes along x"),
+        whole("rows", &P::rows, 1, 1024, "boxes along z"),
+        positive("box_size", &P::boxSize, "world", "footprint edge of a box"),
+        positive("spacing", &P::spacing, "world", "centre-to-centre distance of the boxes"),
+        positive("min_height", &P::minHeight, "world", "the lowest box height"),
+        positive("max_height", &P::maxHeight, "world", "the highest box height; >= min_height"),
+        positive("sphere_radius", &P::sphereRadius, "world", "radius of the sphere"),
+        whole("sphere_segments", &P::sphereSegments, 3, 4096, "segments around the sphere's equator; rings: half as many"),
+        positive("plane_size", &P::planeSize, "world", "side of the square ground plane"),
+        seed(&P::seed),
+    };
+    return table;
 }
 
-void parseValue(const std::string& generator, const std::string& name, const std::string& text, uint32_t& value)
+const std::vector<Field<PenumbraParams>>& fields(const PenumbraParams*)
+{
+    using P = PenumbraParams;
+    static const std::vector<Field<P>> table = {
+        positive("occluder_size", &P::occluderSize, "world", "side of the square occluder"),
+        real("occluder_thickness", &P::occluderThickness, 0.0f, kFloatMax, "world",
+             "<= occluder_size / 10; 0 makes a double-sided quad"),
+        positive("occluder_height", &P::occluderHeight, "world",
+                 "height of the occluder's mid-plane above the ground; > occluder_thickness / 2"),
+        positive("ground_size", &P::groundSize, "world", "side of the square ground plane; >= occluder_size"),
+    };
+    return table;
+}
+
+const std::vector<Field<CityParams>>& fields(const CityParams*)
+{
+    using P = CityParams;
+    static const std::vector<Field<P>> table = {
+        whole("blocks", &P::blocks, 1, 128, "blocks per side of the square city (blocks² in all)"),
+        real("block_size", &P::blockSize, 10.0f, 1000.0f, "world", "edge of a square block, kerb to kerb"),
+        real("street_width", &P::streetWidth, 5.0f, 200.0f, "world", "kerb to kerb between neighbouring blocks"),
+        real("sidewalk_width", &P::sidewalkWidth, 1.5f, 250.0f, "world",
+             "ring inside each block's kerb that holds no building; <= block_size / 4"),
+        whole("lots_per_side", &P::lotsPerSide, 1, 16, "building lots along a block side"),
+        positive("min_height", &P::minHeight, "world", "building heights: most are low, a few are towers"),
+        positive("max_height", &P::maxHeight, "world", "the tallest building; >= min_height", 10000.0f),
+        real("setback_chance", &P::setbackChance, 0.0f, 1.0f, "", "chance of a narrower tier on top (tried twice)"),
+        real("car_density", &P::carDensity, 0.0f, 1.0f, "", "fraction of the 6 m kerbside parking slots with a car"),
+        real("tree_chance", &P::treeChance, 0.0f, 1.0f, "", "chance of a tree in a sidewalk slot without a street light"),
+        seed(&P::seed),
+    };
+    return table;
+}
+
+const std::vector<Field<HairParams>>& fields(const HairParams*)
+{
+    using P = HairParams;
+    static const std::vector<Field<P>> table = {
+        whole("strands", &P::strands, 1, 100000, "strands on the scalp"),
+        whole("segments", &P::segments, 1, 64, "segments per strand"),
+        positive("head_radius", &P::headRadius, "world", "radius of the head (a sphere)"),
+        positive("strand_length", &P::strandLength, "world", "mean root-to-tip length"),
+        real("length_jitter", &P::lengthJitter, 0.0f, 0.9f, "", "lengths are uniform in strand_length × [1 - j, 1 + j]"),
+        positive("strand_width", &P::strandWidth, "world", "ribbon width at the root"),
+        real("gravity", &P::gravity, 0.0f, 1e6f, "1/world", "pull towards -y per unit of length; 0: straight strands"),
+        real("waviness", &P::waviness, 0.0f, 1.0f, "rad", "random turn per segment (standard deviation)"),
+        real("scalp_angle_deg", &P::scalpAngleDeg, 1.0f, 180.0f, "deg", "roots cover the cap within this angle of the top"),
+        real("alpha", &P::alpha, 0.0f, 1.0f, "", "the hair material's base alpha"),
+        seed(&P::seed),
+    };
+    return table;
+}
+
+const std::vector<Field<FenceParams>>& fields(const FenceParams*)
+{
+    using P = FenceParams;
+    static const std::vector<Field<P>> table = {
+        whole("holes_x", &P::holesX, 1, 512, "holes along the width"),
+        whole("holes_y", &P::holesY, 1, 512, "holes along the height"),
+        positive("cell", &P::cell, "world", "centre-to-centre distance of the holes"),
+        positive("bar_width", &P::barWidth, "world", "bars between holes (holes are cell - bar_width square); < cell"),
+        positive("thickness", &P::thickness, "world", "depth of the lattice"),
+        real("tilt_deg", &P::tiltDeg, 0.0f, 90.0f, "deg", "angle to the ground: 90 stands the lattice up, 0 lays it flat"),
+        positive("elevation", &P::elevation, "world",
+                 "height of the lattice's centre above the ground; the lattice may not reach into the ground"),
+        positive("ground_size", &P::groundSize, "world", "side of the square ground plane"),
+    };
+    return table;
+}
+
+const std::vector<Field<BoxFieldParams>>& fields(const BoxFieldParams*)
+{
+    using P = BoxFieldParams;
+    static const std::vector<Field<P>> table = {
+        whole("boxes", &P::boxes, 1, 1000000, "boxes on the field"),
+        positive("box_size", &P::boxSize, "world", "footprint edge of a box"),
+        positive("spacing", &P::spacing, "world", "cell pitch of the grid; > box_size so that boxes never touch"),
+        positive("min_height", &P::minHeight, "world", "the lowest box height"),
+        positive("max_height", &P::maxHeight, "world", "the highest box height; >= min_height"),
+        whole("face_divisions", &P::faceDivisions, 1, 64, "quads per box face side: 12 d² triangles per box (9: 972k triangles in all)"),
+        real("margin", &P::margin, 0.0f, kFloatMax, "world", "ground beyond the field on each side"),
+        seed(&P::seed),
+    };
+    return table;
+}
+
+bool inRange(const GeneratorParam& param, double v)
+{
+    if (param.whole) return v >= param.minValue && v <= param.maxValue;
+    // A float compares as the float the struct holds, against its bounds as floats: a
+    // bound of 0.9 takes the 0.9 a user gives. NaN and infinities fail.
+    const float x = float(v), lo = float(param.minValue), hi = float(param.maxValue);
+    return (param.aboveMin ? x > lo : x >= lo) && x <= hi;
+}
+
+// `text` as a number of the parameter's type (range unchecked), or nullopt.
+std::optional<double> parseNumber(const GeneratorParam& param, std::string_view text)
 {
     const char* end = text.data() + text.size();
-    const auto [ptr, ec] = std::from_chars(text.data(), end, value);
-    if (ec != std::errc() || ptr != end) {
-        throw Error(fmt::format("{}: {} must be a whole number in [0, {}], got '{}'", generator, name,
-                                std::numeric_limits<uint32_t>::max(), core::shortText(text)));
+    if (param.whole) {
+        uint32_t v = 0;
+        const auto [ptr, ec] = std::from_chars(text.data(), end, v);
+        if (ec != std::errc() || ptr != end) return std::nullopt;
+        return double(v);
     }
+    float v = 0.0f;
+    const auto [ptr, ec] = std::from_chars(text.data(), end, v);
+    if (ec != std::errc() || ptr != end) return std::nullopt;
+    return double(v);
 }
 
-void parseValue(const std::string& generator, const std::string& name, const std::string& text, float& value)
+// Every field of `params` inside its range, else the Error that names it: what each
+// generator checks first, whoever filled the struct.
+template <class Params> void checkRanges(const char* generator, const Params& params)
 {
-    const char* end = text.data() + text.size();
-    const auto [ptr, ec] = std::from_chars(text.data(), end, value);
-    if (ec != std::errc() || ptr != end) {
-        throw Error(fmt::format("{}: {} must be a number, got '{}'", generator, name, core::shortText(text)));
+    for (const Field<Params>& f : fields(&params)) {
+        const double v = f.whole ? double(params.*f.whole) : double(params.*f.real);
+        if (inRange(f.param, v)) continue;
+        throw Error(fmt::format("{}: {} must be {}, got {}", generator, f.param.name, describeRange(f.param),
+                                f.whole ? fmt::format("{}", params.*f.whole) : fmt::format("{}", params.*f.real)));
     }
 }
 
@@ -631,40 +717,33 @@ using Settings = std::vector<std::pair<std::string, std::string>>;
 
 struct RegisteredGenerator {
     std::string name;
-    std::function<std::vector<GeneratorParameter>()> parameters;
+    std::vector<GeneratorParam> params;
     std::function<Scene(const Settings&)> generate;
 };
 
 template <class Params> RegisteredGenerator registerGenerator(std::string name, Scene (*generate)(const Params&))
 {
-    auto parameters = [] {
-        Params defaults;
-        std::vector<GeneratorParameter> out;
-        visitParams(defaults, [&](const char* key, const auto& value) { out.push_back({key, fmt::format("{}", value)}); });
-        return out;
-    };
-    auto build = [name, generate, parameters](const Settings& settings) {
-        Params params;
+    std::vector<GeneratorParam> params;
+    for (const Field<Params>& f : fields(static_cast<const Params*>(nullptr))) params.push_back(f.param);
+    auto build = [name, generate](const Settings& settings) {
+        Params values;
         for (const auto& setting : settings) {
-            // Named references, not a structured binding: Clang 14 (the fuzz build)
-            // cannot capture a binding in the lambda below.
-            const auto& key = setting.first;
-            const auto& text = setting.second;
-            bool known = false;
-            visitParams(params, [&](const char* k, auto& value) {
-                if (key != k) return;
-                parseValue(name, key, text, value);
-                known = true;
-            });
-            if (!known) {
-                std::vector<std::string> names;
-                for (const GeneratorParameter& p : parameters()) names.push_back(p.name);
-                throw Error(fmt::format("{}: unknown parameter '{}'; known: {}", name, core::shortText(key), fmt::join(names, ", ")));
+            const GeneratorParam& param = generatorParameter(name, setting.first);  // an unknown one throws
+            const std::optional<double> v = parseNumber(param, setting.second);
+            if (!v) {
+                throw Error(fmt::format("{}: {} must be {}, got '{}'", name, param.name, describeRange(param),
+                                        core::shortText(setting.second)));
+            }
+            // Stored in the struct's type; its range is the generator's first check.
+            for (const Field<Params>& f : fields(&values)) {
+                if (f.param.name != param.name) continue;
+                if (f.whole) values.*f.whole = uint32_t(*v);
+                else values.*f.real = float(*v);
             }
         }
-        return generate(params);
+        return generate(values);
     };
-    return {std::move(name), parameters, build};
+    return {std::move(name), std::move(params), build};
 }
 
 const std::vector<RegisteredGenerator>& registry()
@@ -694,16 +773,9 @@ const RegisteredGenerator& findGenerator(const std::string& name)
 
 Scene generateBoxGrid(const BoxGridParams& p)
 {
+    checkRanges("box-grid", p);
     const ParamCheck check("box-grid");
-    check.count("columns", p.columns, 1, 1024);
-    check.count("rows", p.rows, 1, 1024);
-    check.positive("box_size", p.boxSize);
-    check.positive("spacing", p.spacing);
-    check.positive("min_height", p.minHeight);
     check.atLeast("max_height", p.maxHeight, "min_height", p.minHeight);
-    check.positive("sphere_radius", p.sphereRadius);
-    check.count("sphere_segments", p.sphereSegments, 3, 4096);
-    check.positive("plane_size", p.planeSize);
     // Each box 12 triangles; the sphere at most 2 segments × rings, rings = segments / 2.
     const uint64_t segments = p.sphereSegments;
     check.total("triangles", uint64_t(p.columns) * p.rows * 12 + segments * segments, kMaxGeneratedTriangles,
@@ -743,10 +815,9 @@ Scene generateBoxGrid(const BoxGridParams& p)
 
 Scene generatePenumbra(const PenumbraParams& p)
 {
+    checkRanges("penumbra", p);
     const ParamCheck check("penumbra");
-    check.positive("occluder_size", p.occluderSize);
     check.range("occluder_thickness", p.occluderThickness, 0.0f, 0.1f * p.occluderSize);
-    check.positive("occluder_height", p.occluderHeight);
     if (!(p.occluderHeight > 0.5f * p.occluderThickness)) {
         check.fail("occluder_height", "> occluder_thickness / 2 (the occluder above the ground)",
                    fmt::format("{}", p.occluderHeight));
@@ -799,18 +870,10 @@ double penumbraVisibility(const PenumbraParams& p, const RectAreaLight& light, g
 
 Scene generateCity(const CityParams& p)
 {
+    checkRanges("city", p);
     const ParamCheck check("city");
-    check.count("blocks", p.blocks, 1, 128);
-    check.range("block_size", p.blockSize, 10.0f, 1000.0f);
-    check.range("street_width", p.streetWidth, 5.0f, 200.0f);
     check.range("sidewalk_width", p.sidewalkWidth, 1.5f, 0.25f * p.blockSize);
-    check.count("lots_per_side", p.lotsPerSide, 1, 16);
-    check.positive("min_height", p.minHeight);
     check.atLeast("max_height", p.maxHeight, "min_height", p.minHeight);
-    check.range("max_height", p.maxHeight, p.minHeight, 10000.0f);
-    check.range("setback_chance", p.setbackChance, 0.0f, 1.0f);
-    check.range("car_density", p.carDensity, 0.0f, 1.0f);
-    check.range("tree_chance", p.treeChance, 0.0f, 1.0f);
     // Per block at most 3 tiers a lot, and per kerb slot of its 4 edges a car and a tree
     // (2 instances).
     const uint64_t slots = std::max(1u, uint32_t(p.blockSize / kParkingSlot));
@@ -854,17 +917,12 @@ Scene generateCity(const CityParams& p)
 
 Scene generateBoxField(const BoxFieldParams& p)
 {
+    checkRanges("box-field", p);
     const ParamCheck check("box-field");
-    check.count("boxes", p.boxes, 1, 1000000);
-    check.positive("box_size", p.boxSize);
-    check.positive("spacing", p.spacing);
     if (!(p.spacing > p.boxSize)) {
         check.fail("spacing", fmt::format("> box_size ({}) so that boxes never touch", p.boxSize), fmt::format("{}", p.spacing));
     }
-    check.positive("min_height", p.minHeight);
     check.atLeast("max_height", p.maxHeight, "min_height", p.minHeight);
-    check.count("face_divisions", p.faceDivisions, 1, 64);
-    check.range("margin", p.margin, 0.0f, kFloatMax);
     const uint64_t d = p.faceDivisions;
     check.total("triangles", uint64_t(p.boxes) * 12 * d * d, kMaxGeneratedTriangles, "boxes × 12 × face_divisions²",
                 fmt::format("{} × 12 × {}²", p.boxes, d));
@@ -897,17 +955,7 @@ Scene generateBoxField(const BoxFieldParams& p)
 
 Scene generateHair(const HairParams& p)
 {
-    const ParamCheck check("hair");
-    check.count("strands", p.strands, 1, 100000);
-    check.count("segments", p.segments, 1, 64);
-    check.positive("head_radius", p.headRadius);
-    check.positive("strand_length", p.strandLength);
-    check.range("length_jitter", p.lengthJitter, 0.0f, 0.9f);
-    check.positive("strand_width", p.strandWidth);
-    check.range("gravity", p.gravity, 0.0f, 1e6f);
-    check.range("waviness", p.waviness, 0.0f, 1.0f);
-    check.range("scalp_angle_deg", p.scalpAngleDeg, 1.0f, 180.0f);
-    check.range("alpha", p.alpha, 0.0f, 1.0f);
+    checkRanges("hair", p);
 
     Random rng(p.seed);
     SceneBuilder b("hair");
@@ -929,15 +977,9 @@ Scene generateHair(const HairParams& p)
 
 Scene generateFence(const FenceParams& p)
 {
+    checkRanges("fence", p);
     const ParamCheck check("fence");
-    check.count("holes_x", p.holesX, 1, 512);
-    check.count("holes_y", p.holesY, 1, 512);
-    check.positive("cell", p.cell);
-    check.positive("bar_width", p.barWidth);
     if (!(p.barWidth < p.cell)) check.fail("bar_width", fmt::format("< cell ({})", p.cell), fmt::format("{}", p.barWidth));
-    check.positive("thickness", p.thickness);
-    check.range("tilt_deg", p.tiltDeg, 0.0f, 90.0f);
-    check.positive("ground_size", p.groundSize);
     const float tilt = glm::radians(p.tiltDeg);
     const float height = float(p.holesY) * p.cell + p.barWidth;
     const float lowest = 0.5f * height * std::sin(tilt) + 0.5f * p.thickness * std::cos(tilt);
@@ -985,6 +1027,21 @@ Scene& scaleScene(Scene& scene, float factor)
 
 // ---- by name ---------------------------------------------------------------------------------------
 
+std::string describeRange(const GeneratorParam& param)
+{
+    const bool bounded = param.maxValue < (param.whole ? double(std::numeric_limits<uint32_t>::max()) : double(kFloatMax));
+    if (param.whole) return fmt::format("a whole number in [{}, {}]", param.minValue, param.maxValue);
+    if (!bounded) return fmt::format("a finite number {} {}", param.aboveMin ? ">" : ">=", param.minValue);
+    return fmt::format("a number in {}{}, {}]", param.aboveMin ? "(" : "[", param.minValue, param.maxValue);
+}
+
+std::optional<double> parseGeneratorValue(const GeneratorParam& param, std::string_view text)
+{
+    const std::optional<double> v = parseNumber(param, text);
+    if (!v || !inRange(param, *v)) return std::nullopt;
+    return v;
+}
+
 std::vector<std::string> generatorNames()
 {
     std::vector<std::string> names;
@@ -992,9 +1049,22 @@ std::vector<std::string> generatorNames()
     return names;
 }
 
-std::vector<GeneratorParameter> generatorParameters(const std::string& generator)
+const std::vector<GeneratorParam>& generatorParameters(const std::string& generator)
 {
-    return findGenerator(generator).parameters();
+    return findGenerator(generator).params;
+}
+
+const GeneratorParam& generatorParameter(const std::string& generator, std::string_view name)
+{
+    const std::vector<GeneratorParam>& params = generatorParameters(generator);
+    std::vector<std::string> names;
+    for (const GeneratorParam& p : params) {
+        if (p.name == name) return p;
+        names.push_back(p.name);
+    }
+    const std::string best = core::closestMatch(name, names);
+    throw Error(fmt::format("{}: unknown parameter '{}'{} (known: {})", generator, core::shortText(name),
+                            best.empty() ? "" : fmt::format("; did you mean '{}'?", best), fmt::join(names, ", ")));
 }
 
 Scene generateScene(const std::string& generator, const Settings& settings)

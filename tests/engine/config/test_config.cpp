@@ -486,13 +486,28 @@ TEST(Config, GeneratorParametersAreCheckedByName)
     doc["scene"]["params"] = {{"block", 2}};
     EXPECT_NE(errorOf(doc).find("/scene/params/block: unknown key for the city generator; did you mean \"blocks\"?"),
               std::string::npos) << errorOf(doc);
+    // A value out of its range or not of its type, where the file gives it, with what it
+    // must be from the generator's table.
     doc["scene"]["params"] = {{"blocks", 0}};
+    EXPECT_NE(errorOf(doc).find("/scene/params/blocks: must be a whole number in [1, 128] (generator city, parameter "
+                                "blocks: blocks per side of the square city (blocks² in all)), got 0"),
+              std::string::npos)
+        << errorOf(doc);
+    doc["scene"]["params"] = {{"car_density", "lots"}};
+    EXPECT_NE(errorOf(doc).find("/scene/params/car_density: must be a number in [0, 1] (generator city, "), std::string::npos)
+        << errorOf(doc);
+    doc["scene"]["params"] = {{"seed", true}};
+    EXPECT_NE(errorOf(doc).find("/scene/params/seed: must be a whole number in [0, 4294967295]"), std::string::npos)
+        << errorOf(doc);
+    // A bound between parameters is the generator's, when the scene is built.
+    doc["scene"]["params"] = {{"block_size", 40}, {"sidewalk_width", 20}};
     try {
         config::RenderConfig bad = config::parseConfig(doc, "scene.json");
         config::buildScene(bad);
         FAIL() << "expected ConfigError";
     } catch (const ConfigError& e) {
-        EXPECT_NE(std::string(e.what()).find("scene.json: /scene: city: blocks must be in [1, 128], got 0"), std::string::npos)
+        EXPECT_NE(std::string(e.what()).find("scene.json: /scene: city: sidewalk_width must be in [1.5, 10], got 20"),
+                  std::string::npos)
             << e.what();
     }
     doc["scene"] = {{"generator", "forest"}};

@@ -231,7 +231,8 @@ TEST(SceneParts, EveryBadFieldIsNamed)
         {part("allowed_roots", {"nowhere"}), "/scene/parts/1/allowed_roots/0: folder not found: "},
         {{{"parts", {kSmallGrid, {{"generator", "box-grid"}, {"animation", "wave"}}}}},
          "/scene/parts/1/animation: unknown key for a generator part"},
-        {{{"parts", {model, badParams}}}, "parts.json: /scene/parts/1: box-grid: rows must be in [1, 1024], got 0"},
+        {{{"parts", {model, badParams}}},
+         "parts.json: /scene/parts/1/params/rows: must be a whole number in [1, 1024] (generator box-grid, parameter rows: "},
     };
     for (const auto& [scene, expected] : cases) {
         const std::string message = errorOf(scene);

@@ -1,5 +1,5 @@
-// Procedural scenes: determinism, counts, well-formed meshes, parameter checks (and the
-// config schema's list of the parameters), scale, and the penumbra scene's closed-form
+// Procedural scenes: determinism, counts, well-formed meshes, parameter tables and checks
+// (and the config schema's copy of the tables), scale, and the penumbra scene's closed-form
 // visibility against ray casting.
 #include "ErrorText.h"
 #include "RayCast.h"
@@ -17,6 +17,8 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
+#include <optional>
 #include <tuple>
 
 using namespace penumbra;
@@ -84,39 +86,87 @@ TEST(Generators, ListedByName)
     CityParams city;
     city.blocks = 3;
     EXPECT_TRUE(sameScene(generateScene("city", {{"blocks", "3"}}), generateCity(city)));
-    const std::vector<GeneratorParameter> params = generatorParameters("city");
+    const std::vector<GeneratorParam>& params = generatorParameters("city");
     ASSERT_FALSE(params.empty());
     EXPECT_EQ(params[0].name, "blocks");
-    EXPECT_EQ(params[0].defaultValue, "8");
+    EXPECT_EQ(params[0].defaultValue, 8.0);
+    EXPECT_TRUE(params[0].whole);
 }
 
-// config/schema/penumbra-config.schema.json repeats every generator's parameters for
-// editors; one the schema lacked would make it refuse configs that the engine takes.
-TEST(Generators, ConfigSchemaListsEveryParameterWithItsDefault)
+// The JSON schema's properties of one generator parameter, as the table gives them.
+nlohmann::ordered_json schemaProperty(const GeneratorParam& p)
+{
+    nlohmann::ordered_json j;
+    j["$ref"] = p.whole ? "#/$defs/wholeNumber" : "#/$defs/realNumber";
+    // Whole numbers as JSON integers, as the schema writes them.
+    const auto number = [&](double v) { return p.whole ? nlohmann::ordered_json(uint64_t(v)) : nlohmann::ordered_json(v); };
+    j[p.aboveMin ? "exclusiveMinimum" : "minimum"] = number(p.minValue);
+    if (p.whole || p.maxValue < double(std::numeric_limits<float>::max())) j["maximum"] = number(p.maxValue);
+    j["default"] = number(p.defaultValue);
+    j["description"] = p.unit.empty() ? p.doc : p.doc + " (unit: " + p.unit + ")";
+    return j;
+}
+
+// config/schema/penumbra-config.schema.json holds every generator's parameter table for
+// editors: the same names in the same order, types, ranges, defaults and docs. On a
+// difference the test prints the properties to paste there.
+TEST(Generators, ConfigSchemaHoldsEveryParameterTable)
 {
     std::ifstream in(penumbra::test::sourceDir() / "config/schema/penumbra-config.schema.json");
-    const nlohmann::json schema = nlohmann::json::parse(in);
+    const nlohmann::ordered_json schema = nlohmann::ordered_json::parse(in);
     std::vector<std::string> names = generatorNames();
     names.push_back("null");
     std::vector<std::string> schemaNames;
-    for (const nlohmann::json& name : schema["$defs"]["scene"]["properties"]["generator"]["enum"]) {
+    for (const nlohmann::ordered_json& name : schema["$defs"]["scene"]["properties"]["generator"]["enum"]) {
         schemaNames.push_back(name.is_string() ? name.get<std::string>() : name.dump());
     }
     EXPECT_EQ(schemaNames, names);
     for (const std::string& name : generatorNames()) {
         SCOPED_TRACE(name);
-        const nlohmann::json& properties = schema["$defs"]["generatorParams"][name]["properties"];
-        std::vector<std::string> inSchema, inEngine;
-        for (const auto& [parameter, property] : properties.items()) inSchema.push_back(parameter);
-        for (const GeneratorParameter& p : generatorParameters(name)) {
-            inEngine.push_back(p.name);
-            if (properties.contains(p.name)) {
-                EXPECT_FLOAT_EQ(properties[p.name]["default"].get<float>(), std::stof(p.defaultValue)) << p.name;
-            }
-        }
-        std::sort(inEngine.begin(), inEngine.end());
-        EXPECT_EQ(inSchema, inEngine);  // nlohmann::json keeps object keys sorted
+        nlohmann::ordered_json expected = nlohmann::ordered_json::object();
+        for (const GeneratorParam& p : generatorParameters(name)) expected[p.name] = schemaProperty(p);
+        EXPECT_EQ(schema["$defs"]["generatorParams"][name]["properties"], expected) << "expected:\n" << expected.dump();
     }
+}
+
+// Each kind of parameter refuses a value outside its range, and a value not of its
+// type, naming the generator, the parameter and what it must be.
+TEST(Generators, RangeErrorsSayWhatEachTypeMustBe)
+{
+    const std::vector<std::tuple<std::string, std::string, std::string, std::string>> cases = {
+        {"city", "blocks", "129", "city: blocks must be a whole number in [1, 128], got 129"},
+        {"city", "blocks", "2.5", "city: blocks must be a whole number in [1, 128], got '2.5'"},
+        {"city", "blocks", "-1", "city: blocks must be a whole number in [1, 128], got '-1'"},
+        {"hair", "alpha", "1.5", "hair: alpha must be a number in [0, 1], got 1.5"},
+        {"hair", "alpha", "x", "hair: alpha must be a number in [0, 1], got 'x'"},
+        {"fence", "cell", "0", "fence: cell must be a finite number > 0, got 0"},
+        {"fence", "cell", "inf", "fence: cell must be a finite number > 0, got inf"},
+        {"box-field", "margin", "-0.5", "box-field: margin must be a finite number >= 0, got -0.5"},
+        {"city", "max_height", "20000", "city: max_height must be a number in (0, 10000], got 20000"},
+    };
+    for (const auto& [generator, key, value, expected] : cases) {
+        SCOPED_TRACE(generator + " " + key + "=" + value);
+        EXPECT_EQ(errorOf([&] { generateScene(generator, {{key, value}}); }), expected);
+        const std::optional<double> parsed = parseGeneratorValue(generatorParameter(generator, key), value);
+        EXPECT_FALSE(parsed.has_value());
+    }
+    // The ends of each range are in it; a float bound takes the decimal a user writes.
+    EXPECT_EQ(parseGeneratorValue(generatorParameter("city", "blocks"), "128"), 128.0);
+    EXPECT_EQ(parseGeneratorValue(generatorParameter("hair", "length_jitter"), "0.9"), double(0.9f));
+    EXPECT_EQ(parseGeneratorValue(generatorParameter("box-field", "margin"), "0"), 0.0);
+    // A struct filled in code is checked against the same table.
+    HairParams hair;
+    hair.segments = 65;
+    EXPECT_EQ(errorOf([&] { generateHair(hair); }), "hair: segments must be a whole number in [1, 64], got 65");
+}
+
+TEST(Generators, AnUnknownParameterIsNamedWithTheClosestKnownOne)
+{
+    EXPECT_EQ(errorOf([] { generateScene("fence", {{"hole_x", "4"}}); }),
+              "fence: unknown parameter 'hole_x'; did you mean 'holes_x'? (known: holes_x, holes_y, cell, bar_width, "
+              "thickness, tilt_deg, elevation, ground_size)");
+    EXPECT_EQ(errorOf([] { generatorParameter("penumbra", "light"); }),
+              "penumbra: unknown parameter 'light' (known: occluder_size, occluder_thickness, occluder_height, ground_size)");
 }
 
 TEST(Generators, DeterministicBySeed)
@@ -180,7 +230,9 @@ TEST(Generators, BadParametersAreNamed)
         EXPECT_NE(message.find("got " + value), std::string::npos) << message;
     }
     const std::string unknown = errorOf([] { generateScene("city", {{"blokcs", "4"}}); });
-    EXPECT_NE(unknown.find("city: unknown parameter 'blokcs'; known: blocks, block_size,"), std::string::npos) << unknown;
+    EXPECT_NE(unknown.find("city: unknown parameter 'blokcs'; did you mean 'blocks'? (known: blocks, block_size,"),
+              std::string::npos)
+        << unknown;
     const std::string unparsable = errorOf([] { generateScene("city", {{"blocks", "4x"}}); });
     EXPECT_NE(unparsable.find("city: blocks must be a whole number"), std::string::npos) << unparsable;
     EXPECT_NE(unparsable.find("'4x'"), std::string::npos) << unparsable;

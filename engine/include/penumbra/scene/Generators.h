@@ -5,16 +5,20 @@
 // them at another scale, and generateScene() builds one by name for the command line.
 //
 // Conventions: y is up and the ground is the plane y = 0; lengths are in world units
-// (metres by convention); every params struct's defaults make a sensible scene. An
-// invalid parameter throws penumbra::Error naming the generator, the parameter (by its
-// snake_case name, as `penumbra generate --set` and the config spell it) and the value.
+// (metres by convention); every params struct's defaults make a sensible scene. Each
+// generator's parameters are a table (generatorParameters: type, default, range, unit,
+// doc); an invalid parameter throws penumbra::Error naming the generator, the parameter
+// (by its snake_case name, as `penumbra generate --set` and the config spell it), what
+// it must be and the value.
 // Meshes are shared between instances wherever the geometry repeats.
 #include "penumbra/scene/Scene.h"
 
 #include <glm/glm.hpp>
 
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -181,22 +185,47 @@ Scene generateBoxField(const BoxFieldParams& params);
 // Tested for factors 1e-3 ... 1e5. Throws Error for a non-finite factor or one <= 0.
 Scene& scaleScene(Scene& scene, float factor);
 
-// ---- generators by name, for the command line -------------------------------------
-struct GeneratorParameter {
-    std::string name;          // snake_case, e.g. "block_size"
-    std::string defaultValue;  // as text, e.g. "60"
+// ---- generators by name: their parameters reflected -----------------------------------
+// One parameter of a generator, described as a plugin describes its own (plugin/Plugin.h
+// ParamSpec: name, type, default, range, unit, doc). `penumbra generate --help`, the
+// config reader, the range checks and config/schema/penumbra-config.schema.json (held
+// equal by a test) all read these tables. Not ParamSpec itself: that struct is the
+// plugin ABI's (the scene layer sits below plugin/), and a generator's lengths need a
+// range that leaves its minimum out (> 0).
+struct GeneratorParam {
+    std::string name;          // snake_case, as --set and the config spell it: "block_size"
+    bool whole = false;        // a whole number (the params struct holds a uint32_t), else a float
+    double defaultValue = 0;   // the params struct's default
+    double minValue = 0;       // the range, inclusive ...
+    double maxValue = 0;       // ... (the largest float or uint32_t: finiteness is the only bound)
+    bool aboveMin = false;     // ... but minValue itself is out: a length must be > 0
+    std::string unit;          // "world", "deg", "" when unitless
+    std::string doc;           // one line; a bound that depends on another parameter is here
 };
+
+// What a value of `param` must be, for messages and --help: "a whole number in [1, 128]",
+// "a finite number > 0", "a number in [0, 1]".
+std::string describeRange(const GeneratorParam& param);
+
+// `text` (as --set gives it, a config's string, or a JSON number's text) as a value of
+// `param`: nullopt when it is not a number of the parameter's type inside its range.
+std::optional<double> parseGeneratorValue(const GeneratorParam& param, std::string_view text);
 
 // "box-grid", "penumbra", "city", "hair", "fence", "box-field".
 std::vector<std::string> generatorNames();
 
 // The parameters of `generator` in declaration order. Throws Error for an unknown name.
-std::vector<GeneratorParameter> generatorParameters(const std::string& generator);
+const std::vector<GeneratorParam>& generatorParameters(const std::string& generator);
+
+// Parameter `name` of `generator`. Throws Error for an unknown generator or parameter,
+// with the closest known name ("did you mean") and the list of them.
+const GeneratorParam& generatorParameter(const std::string& generator, std::string_view name);
 
 // Builds `generator` with the parameters named in `settings` (name, value as text)
-// changed from their defaults; a later setting of the same name wins. Throws Error for
-// an unknown generator or parameter (listing the known ones), a value that does not
-// parse as the parameter's type, or an invalid value.
+// changed from their defaults; a later setting of the same name wins. Throws Error
+// naming the generator and the parameter for an unknown generator or parameter, a value
+// that is not of the parameter's type or out of its range ("city: blocks must be a whole
+// number in [1, 128], got 0"), or parameters that do not fit together.
 Scene generateScene(const std::string& generator, const std::vector<std::pair<std::string, std::string>>& settings);
 
 } // namespace penumbra::scene
