@@ -2,13 +2,17 @@
 // names plugin, file and what to do) per way a plugin can fail, the registry still
 // working after each failure, reflected parameters from spec to config to the plugin's
 // own view, and --set overrides. The test plugins are in tests/fixtures/plugins/.
+#include "ErrorText.h"
 #include "ScratchFolder.h"
 #include "TestContext.h"
 #include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/config/Config.h"
 #include "penumbra/config/Overrides.h"
+#include "penumbra/graph/GraphExecutor.h"
 #include "penumbra/graph/RenderGraph.h"
+#include "penumbra/plugin/ComputePipeline.h"
+#include "penumbra/plugin/DebugViews.h"
 #include "penumbra/plugin/LibraryFile.h"
 #include "penumbra/plugin/Params.h"
 #include "penumbra/plugin/PluginRegistry.h"
@@ -1064,6 +1068,30 @@ protected:
 };
 
 } // namespace
+
+// plugin::DebugViewPass compiles its shader on the pass's first run: a debug view nobody
+// requests costs nothing, not even its compile (here of a shader that does not exist).
+TEST_F(Techniques, ADebugViewPassCompilesItsShaderOnlyWhenAnImageIsRequested)
+{
+    const ParamValues params;
+    const plugin::TechniqueSetup setup{*context, *shaders, *casters, scene, params, light, scene.bounds(),
+                                       0,        64,       32,       "light0.mine."};
+    plugin::DebugViewPass debugViews(setup, plugin::computePipelineDesc(setup, "debug_views", "no_such_debug.comp"));
+    plugin::LightPassIo io;
+    io.prefix = setup.prefix;
+    graph::RenderGraph graph;
+    constexpr plugin::DebugImage kImages[] = {{"sizes", "sizesOut"}};
+    debugViews.addOverTexels(graph, io, io.local("debug_views"), kImages, 8, 8, [](auto&&...) {});
+    graph::GraphExecutor executor(*context);
+    executor.execute(graph);
+    ASSERT_EQ(executor.compiled()->culled.size(), 1u);
+    EXPECT_EQ(executor.compiled()->culled[0].name, "light0.mine.debug_views");
+
+    graph.markOutput("light0.mine.sizes");
+    const std::string error = test::errorOf([&] { executor.execute(graph); });
+    EXPECT_NE(error.find("pass 'light0.mine.debug_views'"), std::string::npos) << error;
+    EXPECT_NE(error.find("no_such_debug.comp"), std::string::npos) << error;
+}
 
 TEST_F(Techniques, ConfigParametersReachThePlugin)
 {
