@@ -1,6 +1,7 @@
 #pragma once
-// A folder of the running test's own under the temporary directory, and hostile input
-// written into it: what the tests of file handling share.
+// A folder of the running test's own under the temporary directory (a fixture's
+// WithScratchFolder, or a ScratchFolder a test body holds), and hostile input written into
+// it: what the tests of file handling share.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -12,6 +13,7 @@
 #include <sstream>
 #include <string>
 #include <string_view>
+#include <system_error>
 
 namespace penumbra::test {
 
@@ -28,6 +30,22 @@ inline std::filesystem::path makeScratchFolder(std::string_view prefix)
     std::filesystem::create_directories(dir);
     return dir;
 }
+
+// A scratch folder (makeScratchFolder) that a test body holds, removed when it goes out of
+// scope, however the test ends: for a test without a fixture's folder.
+class ScratchFolder {
+public:
+    explicit ScratchFolder(std::string_view prefix) : path(makeScratchFolder(prefix)) {}
+    ~ScratchFolder()
+    {
+        std::error_code ec;
+        std::filesystem::remove_all(path, ec);
+    }
+    ScratchFolder(const ScratchFolder&) = delete;
+    ScratchFolder& operator=(const ScratchFolder&) = delete;
+
+    const std::filesystem::path path;
+};
 
 // A test with a scratch folder of its own (`dir`, makeScratchFolder named after the test
 // suite), removed after the test. `Base` is the fixture it extends (a GPU test, ...).

@@ -1,3 +1,4 @@
+#include "ScratchFolder.h"
 #include "TestConfigs.h"  // support/: everyVariant
 #include "TestPaths.h"  // support/: the build tree's paths
 
@@ -113,13 +114,12 @@ TEST(Config, IncludeCycleIsNamed)
 TEST(Config, MissingIncludeIsNamed)
 {
     json doc = minimal();
-    const fs::path dir = fs::temp_directory_path() / ("penumbra_cfg_" + std::to_string(::getpid()));
-    fs::create_directories(dir);
+    const test::ScratchFolder scratch("cfg");
+    const fs::path& dir = scratch.path;
     doc["include"] = "nowhere.json";
     std::ofstream(dir / "a.json") << doc.dump();
     const std::string what = loadError(dir / "a.json");
     EXPECT_NE(what.find("a.json: /include: included file not found"), std::string::npos) << what;
-    fs::remove_all(dir);
 }
 
 TEST(Config, SweepExpandsTheCartesianProduct)
@@ -544,8 +544,8 @@ TEST(Config, SceneLightsWithoutANameOrWithATakenOneAreNumbered)
     lights[0].erase("name");
     lights[1]["name"] = "sun";
     lights[2]["name"] = "sun";
-    const fs::path dir = fs::temp_directory_path() / ("penumbra_scene_lights_" + std::to_string(::getpid()));
-    fs::create_directories(dir);
+    const test::ScratchFolder scratch("scene_lights");
+    const fs::path& dir = scratch.path;
     std::ofstream(dir / "named.gltf") << gltf.dump();
     std::ofstream(dir / "config.json") << R"({"scene": {"gltf": "named.gltf"},
         "camera": {"position": [6, 8, 12], "target": [0, 0, 0]}, "lights": "scene"})";
@@ -561,7 +561,6 @@ TEST(Config, SceneLightsWithoutANameOrWithATakenOneAreNumbered)
     EXPECT_EQ(names.count("sun"), 1u);
     EXPECT_EQ(names.count("light0"), 1u);
     for (const std::string& n : names) EXPECT_TRUE(n == "sun" || n.rfind("light", 0) == 0) << n;
-    fs::remove_all(dir);
 }
 
 TEST(Config, CommittedAssetMatchesItsGenerator)

@@ -1,5 +1,6 @@
 // config::configJson / saveConfig (config/ConfigWriter.h): a config written back reads
 // into the same run, for every shipped config and every light type and animation form.
+#include "ScratchFolder.h"
 #include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/config/Config.h"
@@ -17,10 +18,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct TempFolder {
-    fs::path path = fs::temp_directory_path() / ("penumbra_config_writer_" + std::to_string(::getpid()));
-    TempFolder() { fs::create_directories(path / "elsewhere" / "deeper"); }
-    ~TempFolder() { fs::remove_all(path); }
+// A scratch folder with elsewhere/deeper/ in it: places to save a config away from the
+// files it names.
+struct TempFolder : test::ScratchFolder {
+    TempFolder() : ScratchFolder("config_writer") { fs::create_directories(path / "elsewhere" / "deeper"); }
 };
 
 // What a run renders, compared field by field (configJson is itself compared as JSON

@@ -2,6 +2,7 @@
 // A scene made of parts ("scene": {"parts": [...]}): glTF files and generators, each
 // placed by a translation, rotation and scale, combined into one scene graph with one
 // root node per part. No Vulkan device: buildScene is CPU-side.
+#include "ScratchFolder.h"
 #include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/config/Config.h"
@@ -323,7 +324,8 @@ TEST(SceneParts, EachPartPlaysItsOwnAnimation)
 // and the command line's (RunOptions::allowedRoots, --allow-root), as a single glTF does.
 TEST(SceneParts, EveryPartsFileKeepsToItsAllowedRoots)
 {
-    const fs::path dir = fs::temp_directory_path() / ("penumbra_scene_parts_" + std::to_string(::getpid()));
+    const test::ScratchFolder scratch("scene_parts");
+    const fs::path& dir = scratch.path;
     fs::create_directories(dir / "model");
     fs::create_directories(dir / "shared");
     fs::copy_file(test::testDataDir() / "gltf" / "quad.bin", dir / "shared" / "quad.bin", fs::copy_options::overwrite_existing);
@@ -345,7 +347,6 @@ TEST(SceneParts, EveryPartsFileKeepsToItsAllowedRoots)
     EXPECT_EQ(config::prepareRun(config::parseConfig(doc, dir / "c.json"), options).scene.instances.size(), 2u);
     doc["scene"]["parts"][1]["allowed_roots"] = {"shared"};
     EXPECT_EQ(config::prepareRun(config::parseConfig(doc, dir / "c.json"), {}).scene.instances.size(), 2u);
-    fs::remove_all(dir);
 }
 
 // The materials count says what the meshes use: a file with two materials has two,

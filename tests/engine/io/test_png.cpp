@@ -1,3 +1,5 @@
+#include "ScratchFolder.h"
+
 #include "penumbra/core/Error.h"
 #include "penumbra/io/Png.h"
 
@@ -12,18 +14,14 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path tempDir()
-{
-    const fs::path dir = fs::temp_directory_path() / ("penumbra_png_" + std::to_string(::getpid()));
-    fs::create_directories(dir);
-    return dir;
-}
+// Each test's files in a scratch folder of its own (`dir`).
+class Png : public test::ScratchFolderTest {};
 
 } // namespace
 
-TEST(Png, WritesAndReadsBack)
+TEST_F(Png, WritesAndReadsBack)
 {
-    const fs::path file = tempDir() / "rgba.png";
+    const fs::path file = dir / "rgba.png";
     std::vector<uint8_t> rgba = {255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 10, 20, 30, 255};
     io::writePng(file, 2, 2, rgba);
     int w = 0, h = 0, n = 0;
@@ -37,10 +35,9 @@ TEST(Png, WritesAndReadsBack)
     size_t files = 0;
     for ([[maybe_unused]] const auto& e : fs::directory_iterator(file.parent_path())) ++files;
     EXPECT_EQ(files, 1u);
-    fs::remove_all(file.parent_path());
 }
 
-TEST(Png, MissingFolderIsNamed)
+TEST_F(Png, MissingFolderIsNamed)
 {
     try {
         io::writePng("/nonexistent-dir/out.png", 1, 1, {0, 0, 0, 255});
@@ -50,21 +47,19 @@ TEST(Png, MissingFolderIsNamed)
     }
 }
 
-TEST(Png, SizeMismatchIsAnError)
+TEST_F(Png, SizeMismatchIsAnError)
 {
-    EXPECT_THROW(io::writePng(tempDir() / "x.png", 2, 2, {0, 0, 0, 255}), Error);
-    EXPECT_FALSE(fs::exists(tempDir() / "x.png"));
-    fs::remove_all(tempDir());
+    EXPECT_THROW(io::writePng(dir / "x.png", 2, 2, {0, 0, 0, 255}), Error);
+    EXPECT_FALSE(fs::exists(dir / "x.png"));
 }
 
-TEST(Png, DirectoryAsOutputIsAnError)
+TEST_F(Png, DirectoryAsOutputIsAnError)
 {
     EXPECT_THROW(io::checkWritable(fs::temp_directory_path()), Error);
 }
 
-TEST(Png, JpgNamesGetJpegBytes)
+TEST_F(Png, JpgNamesGetJpegBytes)
 {
-    const fs::path dir = tempDir();
     // A flat colour: JPEG's 8x8 blocks hold it within a few levels.
     std::vector<uint8_t> rgba;
     for (int i = 0; i < 16 * 16; ++i) rgba.insert(rgba.end(), {200, 100, 50, 255});
@@ -93,12 +88,10 @@ TEST(Png, JpgNamesGetJpegBytes)
     ASSERT_NE(data, nullptr);
     EXPECT_EQ(n, 4);  // a PNG keeps the alpha channel
     stbi_image_free(data);
-    fs::remove_all(dir);
 }
 
-TEST(Png, OtherImageNamesAreRefusedBeforeAnythingIsWritten)
+TEST_F(Png, OtherImageNamesAreRefusedBeforeAnythingIsWritten)
 {
-    const fs::path dir = tempDir();
     for (const char* name : {"out.bmp", "out", "out.png.txt", "f{frame:04}.tiff"}) {
         SCOPED_TRACE(name);
         try {
@@ -110,5 +103,4 @@ TEST(Png, OtherImageNamesAreRefusedBeforeAnythingIsWritten)
         EXPECT_FALSE(fs::exists(dir / name));
     }
     EXPECT_EQ(io::imageFormatFor("f{frame:04}.jpg"), io::ImageFormat::Jpeg);
-    fs::remove_all(dir);
 }

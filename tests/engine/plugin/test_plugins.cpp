@@ -406,8 +406,8 @@ TEST_F(Registry, GarbageFileIsNotALibrary)
 
 TEST_F(Registry, TruncatedAndEmptyFilesAreNotLibraries)
 {
-    const fs::path dir = fs::temp_directory_path() / fmt::format("penumbra_plugins_{}", ::getpid());
-    fs::create_directories(dir);
+    const test::ScratchFolder scratch("plugins");
+    const fs::path& dir = scratch.path;
     std::ofstream(dir / "penumbra-truncated.so", std::ios::binary) << "\x7f" "ELF\x02\x01";
     std::ofstream(dir / "penumbra-empty.so", std::ios::binary);
     PluginRegistry local({dir, kPlugins});
@@ -421,7 +421,6 @@ TEST_F(Registry, TruncatedAndEmptyFilesAreNotLibraries)
     EXPECT_TRUE(contains(messages["penumbra-truncated.so"], "the ELF header is truncated (6 bytes)"));
     EXPECT_TRUE(contains(messages["penumbra-empty.so"], "it is not an ELF file"));
     EXPECT_EQ(local.load("testgood").name(), "testgood");
-    fs::remove_all(dir);
 }
 
 // Damaged copies of a real plugin, and things named like plugins that are not files
@@ -431,8 +430,8 @@ TEST_F(Registry, TruncatedAndEmptyFilesAreNotLibraries)
 // (scanAll) as for a load by name (render).
 TEST_F(Registry, DamagedLibrariesAndNonFilesAreNotLibrariesEverywhere)
 {
-    const fs::path dir = fs::temp_directory_path() / fmt::format("penumbra_damaged_{}", ::getpid());
-    fs::create_directories(dir);
+    const test::ScratchFolder scratch("damaged");
+    const fs::path& dir = scratch.path;
     std::vector<char> good;
     {
         std::ifstream in(kPlugins / "penumbra-testgood.so", std::ios::binary);
@@ -497,7 +496,6 @@ TEST_F(Registry, DamagedLibrariesAndNonFilesAreNotLibrariesEverywhere)
         }
     }
     EXPECT_EQ(local.load("testgood").name(), "testgood");
-    fs::remove_all(dir);
 }
 
 TEST_F(Registry, DependencyMissingQuotesTheLoader)
@@ -649,22 +647,6 @@ std::vector<char> readBytes(const fs::path& file)
     return std::vector<char>(std::istreambuf_iterator<char>(in), {});
 }
 
-// A folder of its own for one test, removed afterwards.
-struct ScratchFolder {
-    explicit ScratchFolder(const std::string& name)
-        : path(fs::temp_directory_path() / fmt::format("penumbra_{}_{}", name, ::getpid()))
-    {
-        fs::remove_all(path);
-        fs::create_directories(path);
-    }
-    ~ScratchFolder()
-    {
-        std::error_code ec;
-        fs::remove_all(path, ec);
-    }
-    fs::path path;
-};
-
 // The file offset of dynamic entry `tag`'s value in an ELF image; 0 when it has none.
 size_t dynamicValueOffset(const std::vector<char>& elf, int64_t tag)
 {
@@ -691,7 +673,7 @@ size_t dynamicValueOffset(const std::vector<char>& elf, int64_t tag)
 // before dlopen, by name.
 TEST(LibraryFile, DamagedDynamicSectionsAndForeignFilesAreNotLibraries)
 {
-    const ScratchFolder dir("dynamic");
+    const test::ScratchFolder dir("dynamic");
     const std::vector<char> good = readBytes(kPlugins / "penumbra-testgood.so");
     ASSERT_GT(good.size(), 4096u);
     std::map<std::string, std::string> expected;  // file -> what its message says
@@ -775,7 +757,7 @@ PluginError errorOf(const std::function<void()>& fn)
 // dlopens it here.
 TEST(PluginScanner, APluginThatCrashesOrHangsKillsOnlyTheScanner)
 {
-    const ScratchFolder dir("scan_crash");
+    const test::ScratchFolder dir("scan_crash");
     const fs::path crashing = penumbra::test::crashingTestPluginDir();
     PluginRegistry registry({crashing}, scanSettings(dir.path / "cache.json"));
     const PluginError crashes = errorOf([&] { registry.scan("crashes"); });
@@ -812,7 +794,7 @@ TEST(PluginScanner, APluginThatCrashesOrHangsKillsOnlyTheScanner)
 // scanned again; a cache that cannot be read is ignored and rewritten.
 TEST(PluginScanner, ScansAreCachedByFileIdentity)
 {
-    const ScratchFolder dir("scan_cache");
+    const test::ScratchFolder dir("scan_cache");
     fs::create_directories(dir.path / "plugins");
     const fs::path copy = dir.path / "plugins" / "penumbra-testgood.so";
     fs::copy_file(kPlugins / "penumbra-testgood.so", copy);
@@ -1095,10 +1077,8 @@ TEST_F(Techniques, ADebugViewPassCompilesItsShaderOnlyWhenAnImageIsRequested)
 
 TEST_F(Techniques, ConfigParametersReachThePlugin)
 {
-    const fs::path dir = fs::temp_directory_path() / fmt::format("penumbra_plugin_reach_{}", ::getpid());
-    fs::create_directories(dir);
-    config::RenderConfig cfg = writeAndLoad(dir / "two.json", kTwoLights);
-    fs::remove_all(dir);
+    const test::ScratchFolder dir("plugin_reach");
+    config::RenderConfig cfg = writeAndLoad(dir.path / "two.json", kTwoLights);
     config::applyParamOverrides(cfg, config::parseParamOverrides({"testgood.bias=-0.5"}));
 
     const plugin::LoadedPlugin& good = registry.load("testgood");

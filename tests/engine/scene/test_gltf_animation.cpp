@@ -1,5 +1,6 @@
 // glTF animations: read into Scene::animations (scene/NodeAnimation.h), sampled with each
 // interpolation, played by a config ("scene": {"animation": ...}) through poseScene.
+#include "ScratchFolder.h"
 #include "TestPaths.h"  // support/: the build tree's paths
 
 #include "penumbra/config/Config.h"
@@ -137,15 +138,14 @@ TEST(GltfAnimation, AChannelThatCannotPlayIsLeftOutWithAWarningThatNamesIt)
     json gltf = json::parse(in);
     // Times 2 then 0 for the translation, morph weights for another channel.
     gltf["animations"][0]["channels"][1]["target"]["path"] = "weights";
-    const fs::path dir = fs::temp_directory_path() / ("penumbra_anim_" + std::to_string(::getpid()));
-    fs::create_directories(dir);
+    const test::ScratchFolder scratch("anim");
+    const fs::path& dir = scratch.path;
     // The translation sampler gets a decreasing input: 2 (the end of its own times), then 0.
     gltf["accessors"].push_back({{"bufferView", 2}, {"byteOffset", 4}, {"componentType", 5126}, {"count", 2}, {"type", "SCALAR"}});
     gltf["animations"][0]["samplers"][0]["input"] = gltf["accessors"].size() - 1;
     std::ofstream(dir / "broken.gltf") << gltf.dump();
     scene::GltfLoadReport report;
     const scene::Scene s = scene::loadGltf(dir / "broken.gltf", report);
-    fs::remove_all(dir);
     ASSERT_EQ(s.animations.size(), 2u);
     EXPECT_EQ(s.animations[0].channels.size(), 1u);  // the scale channel alone
     std::string all;
