@@ -23,9 +23,6 @@ public:
     // Every 32-bit word of `buffer` to `word`.
     ClearPass& buffer(std::string_view buffer, uint32_t word);
 
-    // The pass, for reads or writes of the technique's own.
-    graph::PassBuilder& pass() { return pass_; }
-
 private:
     struct Targets;
     graph::PassBuilder pass_;
