@@ -5,6 +5,7 @@
 // alpha, at scene scales 1e-3 to 1e5; then determinism, the disk cache, refitting.
 #include "ExactVisibility.h"
 #include "RayCast.h"
+#include "ScratchFolder.h"
 #include "TestConfigs.h"
 #include "TestContext.h"
 
@@ -193,23 +194,21 @@ scene::Light downwardRect(glm::vec3 position, glm::vec2 size)
     return light;
 }
 
-class ReferencePlugin : public test::GpuTest {
+// The plugin's disk cache in the test's scratch folder (cache/, made by the plugin).
+class ReferencePlugin : public test::WithScratchFolder<test::GpuTest> {
 protected:
+    using Base = test::WithScratchFolder<test::GpuTest>;
     void SetUp() override
     {
-        GpuTest::SetUp();
-        cacheDir = fs::temp_directory_path() /
-                   fmt::format("penumbra_reference_{}_{}", ::getpid(),
-                               ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::remove_all(cacheDir);
+        Base::SetUp();
+        cacheDir = dir / "cache";
         setenv("PENUMBRA_CACHE_DIR", cacheDir.c_str(), 1);
     }
     void TearDown() override
     {
         frames.clear();
         unsetenv("PENUMBRA_CACHE_DIR");
-        fs::remove_all(cacheDir);
-        GpuTest::TearDown();
+        Base::TearDown();
     }
     Frame& render(const config::RenderConfig& cfg, scene::Scene scene)
     {

@@ -3,6 +3,8 @@
 // parsing (Script.h) and its command table (CommandTable.h), the A/B comparison's state
 // with a drawer that answers at once (Comparison.h), shader watching (ShaderWatcher.h)
 // and the panels' layer geometry (PanelLayer.h) on Dear ImGui's own draw data.
+#include "ScratchFolder.h"  // support/
+
 #include "CameraControl.h"
 #include "CommandTable.h"
 #include "Comparison.h"
@@ -452,7 +454,8 @@ TEST(Comparison, TheDifferenceImageIsAbsoluteDVInFalseColourOverItsScale)
 TEST(ShaderWatcher, SeesEditsAdditionsAndRemovalsOfShadersOnlyOnce)
 {
     namespace fs = std::filesystem;
-    const fs::path dir = fs::temp_directory_path() / ("penumbra_watch_" + std::to_string(::getpid()));
+    const penumbra::test::ScratchFolder scratch("watch");
+    const fs::path& dir = scratch.path;
     fs::create_directories(dir / "sub");
     std::ofstream(dir / "a.comp") << "void main() {}";
     std::ofstream(dir / "notes.txt") << "not a shader";
@@ -474,7 +477,6 @@ TEST(ShaderWatcher, SeesEditsAdditionsAndRemovalsOfShadersOnlyOnce)
     // Polled at most every interval.
     std::ofstream(dir / "c.frag") << "void main() {}";
     EXPECT_FALSE(watcher.changed(std::chrono::hours(1)));
-    fs::remove_all(dir);
 }
 
 namespace {
