@@ -117,9 +117,9 @@ TEST_F(Cli, LongValuesAreShownShortenedNamingThePlace)
         std::string args;
         std::string where;
     } cases[] = {
-        {fmt::format("validate '{}'", cfg.string()), "long.json: /lights/0/shadow/pcf_kernel: must be an integer"},
+        {fmt::format("validate '{}'", cfg.string()), "long.json: /lights/0/shadow/pcf_kernel: must be an odd integer"},
         {fmt::format("validate {} --set hard.pcf_kernel={}", config("default.json"), longArg),
-         "--set hard.pcf_kernel: must be an integer"},
+         "--set hard.pcf_kernel: must be an odd integer"},
         {fmt::format("render {} -o '{}/out.png' --culling {}", config("default.json"), dir.string(), longArg), "--culling"},
         {fmt::format("render {} -o '{}/out.png' --debug-range {}", config("default.json"), dir.string(), longArg),
          "--debug-range 'yyy"},
