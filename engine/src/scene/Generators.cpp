@@ -685,15 +685,18 @@ bool inRange(const GeneratorParam& param, double v)
     return (param.aboveMin ? x > lo : x >= lo) && x <= hi;
 }
 
-// `text` as a number of the parameter's type (range unchecked), or nullopt.
+// `text` as a number of the parameter's type (range unchecked), or nullopt. A whole
+// number may be written as any integral number (8, 8.0, 1e3), as a plugin's int may,
+// and as JSON Schema's "integer" takes it.
 std::optional<double> parseNumber(const GeneratorParam& param, std::string_view text)
 {
     const char* end = text.data() + text.size();
     if (param.whole) {
-        uint32_t v = 0;
+        double v = 0.0;
         const auto [ptr, ec] = std::from_chars(text.data(), end, v);
         if (ec != std::errc() || ptr != end) return std::nullopt;
-        return double(v);
+        if (!(v >= 0.0 && v <= double(std::numeric_limits<uint32_t>::max())) || v != std::floor(v)) return std::nullopt;
+        return v;
     }
     float v = 0.0f;
     const auto [ptr, ec] = std::from_chars(text.data(), end, v);

@@ -152,6 +152,7 @@ TEST(Generators, RangeErrorsSayWhatEachTypeMustBe)
     }
     // The ends of each range are in it; a float bound takes the decimal a user writes.
     EXPECT_EQ(parseGeneratorValue(generatorParameter("city", "blocks"), "128"), 128.0);
+    EXPECT_EQ(parseGeneratorValue(generatorParameter("city", "blocks"), "8.0"), 8.0) << "an integral number is whole";
     EXPECT_EQ(parseGeneratorValue(generatorParameter("hair", "length_jitter"), "0.9"), double(0.9f));
     EXPECT_EQ(parseGeneratorValue(generatorParameter("box-field", "margin"), "0"), 0.0);
     // A struct filled in code is checked against the same table.
