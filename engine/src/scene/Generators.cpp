@@ -529,8 +529,8 @@ double hiddenFraction(double lightMin, double lightMax, double hiddenMin, double
 // it sets (a uint32_t for a whole number, a float otherwise).
 template <class Params> struct Field {
     GeneratorParam param;
-    uint32_t Params::*whole = nullptr;
-    float Params::*real = nullptr;
+    uint32_t Params::*wholeMember = nullptr;
+    float Params::*realMember = nullptr;
 };
 
 // A float's shortest decimal form as a double (0.1f: 0.1, not 0.10000000149), so that a
@@ -709,10 +709,11 @@ std::optional<double> parseNumber(const GeneratorParam& param, std::string_view 
 template <class Params> void checkRanges(const char* generator, const Params& params)
 {
     for (const Field<Params>& f : fields(&params)) {
-        const double v = f.whole ? double(params.*f.whole) : double(params.*f.real);
+        const double v = f.wholeMember ? double(params.*f.wholeMember) : double(params.*f.realMember);
         if (inRange(f.param, v)) continue;
         throw Error(fmt::format("{}: {} must be {}, got {}", generator, f.param.name, describeRange(f.param),
-                                f.whole ? fmt::format("{}", params.*f.whole) : fmt::format("{}", params.*f.real)));
+                                f.wholeMember ? fmt::format("{}", params.*f.wholeMember)
+                                              : fmt::format("{}", params.*f.realMember)));
     }
 }
 
@@ -740,8 +741,8 @@ template <class Params> RegisteredGenerator registerGenerator(std::string name, 
             // Stored in the struct's type; its range is the generator's first check.
             for (const Field<Params>& f : fields(&values)) {
                 if (f.param.name != param.name) continue;
-                if (f.whole) values.*f.whole = uint32_t(*v);
-                else values.*f.real = float(*v);
+                if (f.wholeMember) values.*f.wholeMember = uint32_t(*v);
+                else values.*f.realMember = float(*v);
             }
         }
         return generate(values);
