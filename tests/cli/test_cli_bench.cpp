@@ -178,7 +178,7 @@ TEST_F(Cli, BenchMeasuresEveryVariantAgainstOneReferenceRender)
                              ">unshadowed</text>", "RMSE against the reference"}) {
         EXPECT_TRUE(has(svg, text)) << text;
     }
-    EXPECT_TRUE(has(r.out, "2 variant(s), medians of 2 frame(s) after 1 warm-up; reference testgood")) << r.out;
+    EXPECT_TRUE(has(r.out, "2 variant(s) over 1 scene(s) built, medians of 2 frame(s) after 1 warm-up; reference testgood")) << r.out;
 
     // Every variant against its floor (apps/penumbra/FloorComparison.h): each pass with
     // the floor draw it is set against and the ratio of the two times; the frame's sum
