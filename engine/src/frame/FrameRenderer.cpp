@@ -333,8 +333,7 @@ void FrameRenderer::update(const config::RenderConfig& config, const scene::Scen
     }
     setCamera(config.camera);
     if (!movedInstances.empty()) {
-        resources_->sceneGpu().updateInstances(context_, scene);
-        visibility_->instancesMoved(movedInstances);
+        resources_->instancesMoved(movedInstances);
         for (LightSlot& slot : lights_)
             if (slot.instance) slot.instance->instancesMoved(movedInstances);
     }

@@ -49,9 +49,18 @@ SceneResources::SceneResources(gpu::Context& context, const scene::Scene& scene,
       sceneGpu_(context, scene, batching),
       casters_(sceneGpu_),
       gbufferPipelines_(makeGBufferPipelines(context, engineShaders_, sceneGpu_)),
-      nearestSampler_(gpu::createSampler(context, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE))
+      nearestSampler_(gpu::createSampler(context, VK_FILTER_NEAREST, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE)),
+      bvh_(std::make_unique<visibility::SceneBvh>(scene))
 {
 }
+
+void SceneResources::instancesMoved(std::span<const uint32_t> moved)
+{
+    sceneGpu_.updateInstances(context_, scene_);
+    bvh_->instancesMoved(scene_, moved);
+}
+
+uint64_t SceneResources::bvhBuilds() const { return 1 + bvh_->rebuilds; }
 
 SceneResources::~SceneResources()
 {
@@ -73,8 +82,8 @@ std::shared_ptr<visibility::Visibility> SceneResources::visibility(config::Culli
 {
     const VisibilityKey key{mode, width, height, focus};
     if (!visibility_ || !(key == visibilityKey_)) {
-        visibility_ = std::make_shared<visibility::Visibility>(context_, engineShaders_, scene_, sceneGpu_, mode, width,
-                                                               height, focus);
+        visibility_ = std::make_shared<visibility::Visibility>(context_, engineShaders_, scene_, sceneGpu_, *bvh_, mode,
+                                                               width, height, focus);
         visibilityKey_ = key;
         ++visibilityBuilds_;
     }

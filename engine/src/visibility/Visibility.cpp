@@ -23,15 +23,25 @@ size_t countMarked(const std::vector<uint8_t>& list) { return size_t(std::count(
 
 } // namespace
 
+SceneBvh::SceneBvh(const scene::Scene& scene) : bvh(scene::instanceWorldBounds(scene.instances)) {}
+
+void SceneBvh::instancesMoved(const scene::Scene& scene, std::span<const uint32_t> moved)
+{
+    const std::vector<scene::Aabb> bounds = scene::instanceWorldBounds(scene.instances);
+    if (bvh.refitOrRebuild(bounds, moved).action == scene::RefitAction::Rebuilt) ++rebuilds;
+}
+
 Visibility::Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders, const scene::Scene& scene,
-                       const render::SceneGpu& sceneGpu, config::CullingMode mode, uint32_t width, uint32_t height,
-                       bool focus)
+                       const render::SceneGpu& sceneGpu, const SceneBvh& bvh, config::CullingMode mode, uint32_t width,
+                       uint32_t height, bool focus)
     : context_(context),
       scene_(scene),
       mode_(mode),
       width_(width),
       height_(height),
-      bvh_(scene::instanceWorldBounds(scene.instances)),
+      sceneBvh_(bvh),
+      bvh_(bvh.bvh),
+      bvhRebuilds_(bvh.rebuilds),
       focusing_(focus)
 {
     if (focusing_ && mode_ != config::CullingMode::LightOcclusion && mode_ != config::CullingMode::ReceiverMask) {
@@ -52,15 +62,6 @@ Visibility::Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders
 
 Visibility::~Visibility() = default;
 
-void Visibility::instancesMoved(std::span<const uint32_t> moved)
-{
-    const std::vector<scene::Aabb> bounds = scene::instanceWorldBounds(scene_.instances);
-    if (bvh_.refitOrRebuild(bounds, moved).action == scene::RefitAction::Rebuilt) {
-        // Node indices changed: last frame's visibility no longer names the same nodes.
-        cameraHistory_ = {};
-        for (auto& [key, view] : lightViews_) view.history = {};
-    }
-}
 
 void Visibility::cullFrustum(const glm::mat4& viewProj, std::vector<uint8_t>& visible) const
 {
@@ -81,6 +82,12 @@ double Visibility::keptFraction(const glm::mat4& viewProj, const std::vector<uin
 
 void Visibility::beginFrame(const glm::mat4& cameraViewProj)
 {
+    if (sceneBvh_.rebuilds != bvhRebuilds_) {
+        // The BVH was rebuilt: last frame's visibility no longer names the same nodes.
+        cameraHistory_ = {};
+        for (auto& [key, view] : lightViews_) view.history = {};
+        bvhRebuilds_ = sceneBvh_.rebuilds;
+    }
     ++frame_;
     stats_ = {};
     const auto start = std::chrono::steady_clock::now();

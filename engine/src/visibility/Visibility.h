@@ -58,22 +58,33 @@ class ShaderCompiler;
 
 namespace penumbra::visibility {
 
+// The scene's instance BVH, one for every visibility service made over the scene (one per
+// output size, culling mode and focusing: frame::SceneResources): built once, refit where
+// instances move. `rebuilds` counts the times its nodes were numbered anew, which ends
+// what a service remembers of them.
+struct SceneBvh {
+    explicit SceneBvh(const scene::Scene& scene);
+    // Instances moved (Scene::updateTransforms): refits, or rebuilds when refitting costs
+    // too much.
+    void instancesMoved(const scene::Scene& scene, std::span<const uint32_t> moved);
+
+    scene::InstanceBvh bvh;
+    uint64_t rebuilds = 0;
+};
+
 class Visibility final : public render::CasterCulling {
 public:
-    // `scene` and `sceneGpu` must outlive the service; `width` x `height` is the camera's
-    // output. `focus`: compute the box of what the camera sees every frame (focus()); needs an
+    // `scene`, `sceneGpu` and `bvh` (the scene's) must outlive the service; `width` x
+    // `height` is the camera's output. `focus`: compute the box of what the camera sees every frame (focus()); needs an
     // occlusion mode, whose camera pass leaves the camera depth.
     Visibility(gpu::Context& context, const gpu::ShaderCompiler& shaders, const scene::Scene& scene,
-               const render::SceneGpu& sceneGpu, config::CullingMode mode, uint32_t width, uint32_t height,
-               bool focus = false);
+               const render::SceneGpu& sceneGpu, const SceneBvh& bvh, config::CullingMode mode, uint32_t width,
+               uint32_t height, bool focus = false);
     ~Visibility();
     Visibility(const Visibility&) = delete;
     Visibility& operator=(const Visibility&) = delete;
 
     config::CullingMode mode() const { return mode_; }
-
-    // Instances moved (Scene::updateTransforms): refits the BVH.
-    void instancesMoved(std::span<const uint32_t> moved);
 
     // Starts a frame: forgets the last frame's caster lists and culls the camera view.
     void beginFrame(const glm::mat4& cameraViewProj);
@@ -130,7 +141,9 @@ private:
     const config::CullingMode mode_;
     const uint32_t width_;
     const uint32_t height_;
-    scene::InstanceBvh bvh_;
+    const SceneBvh& sceneBvh_;
+    const scene::InstanceBvh& bvh_;  // sceneBvh_.bvh
+    uint64_t bvhRebuilds_ = 0;       // sceneBvh_.rebuilds when the histories last named its nodes
     // Occlusion modes: the traversal and the depth it draws into, the camera's and one per
     // light-view resolution; receiver-mask mode: the masks.
     std::unique_ptr<OcclusionTraversal> traversal_;

@@ -130,6 +130,7 @@ TEST_F(SceneEdits, AParameterOfOneLightRecreatesItsTechniqueAlone)
     EXPECT_FALSE(renderer->techniqueKept(1));
     // The scene was uploaded, its BVH built and the shading pipeline made once for both.
     EXPECT_EQ(resources->visibilityBuilds(), 1u);
+    EXPECT_EQ(resources->bvhBuilds(), 1u);
     EXPECT_EQ(resources->pipelinesMade(), 1u);
 }
 
@@ -176,8 +177,9 @@ TEST_F(SceneEdits, TheOutputSizeAndTheCullingRecreateEveryTechniqueOverTheSameSc
         renderer = expectEditDrawsAsAFreshStart(base, culled, config::cullingModeName(mode));
         EXPECT_FALSE(renderer->techniqueKept(0));
     }
-    // A visibility service (its BVH) per output and culling; the scene's upload is shared.
+    // A visibility service per output and culling; the scene's upload and BVH are shared.
     EXPECT_EQ(resources->visibilityBuilds(), 6u);
+    EXPECT_EQ(resources->bvhBuilds(), 1u);
 }
 
 TEST_F(SceneEdits, AddingALightKeepsTheOthersAndRemovingOneRecreatesTheLightsAfterIt)

@@ -20,11 +20,13 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
 namespace penumbra::visibility {
 class Visibility;  // private to the engine (engine/src/visibility/)
+struct SceneBvh;
 }
 
 namespace penumbra::plugin {
@@ -59,8 +61,8 @@ public:
     const gpu::ShaderCompiler& pluginShaders(const std::filesystem::path& pluginShaderDir);
 
     // The visibility service for an output of `width` x `height` culled with `mode` (with
-    // focusing when `focus`): the one made last when it matches, else a new one (the BVH
-    // built again), which a renderer holds as long as it draws.
+    // focusing when `focus`): the one made last when it matches, else a new one over the
+    // scene's BVH, which a renderer holds as long as it draws.
     std::shared_ptr<visibility::Visibility> visibility(config::CullingMode mode, uint32_t width, uint32_t height,
                                                        bool focus);
 
@@ -74,9 +76,14 @@ public:
     // the first read-back.
     const plugin::GBufferExport& gbufferExport();
 
-    // Figures for tests and --stats: visibility services made (a BVH built each),
-    // compute pipelines made.
+    // Instances moved (Scene::updateTransforms, an animated frame): the upload's instance
+    // table and the BVH (refit, or rebuilt) follow them.
+    void instancesMoved(std::span<const uint32_t> moved);
+
+    // Figures for tests: visibility services made, the BVH's builds (one, and one per
+    // rebuild after a move), compute pipelines made.
     uint32_t visibilityBuilds() const { return visibilityBuilds_; }
+    uint64_t bvhBuilds() const;
     uint32_t pipelinesMade() const { return pipelinesMade_; }
 
 private:
@@ -97,6 +104,7 @@ private:
     BaseColorPipelines gbufferPipelines_;
     gpu::Sampler nearestSampler_;
     std::map<std::string, gpu::Pipeline> computePipelines_;
+    std::unique_ptr<visibility::SceneBvh> bvh_;  // before the services that read it
     VisibilityKey visibilityKey_{};
     std::shared_ptr<visibility::Visibility> visibility_;
     std::unique_ptr<plugin::GBufferExport> gbufferExport_;
