@@ -111,7 +111,7 @@ for i in "${!targets[@]}"; do
   else
     status=1
     echo "fuzz: $t: FINDING (exit $rc) after ${execs:-?} executions; log: build/fuzz/$t.log"
-    grep -E 'ERROR|SUMMARY|Test unit written|terminate|what\(\)' "$build/$t.log" | head -20
+    grep -E 'penumbra fuzz:|Assertion|ERROR|SUMMARY|Test unit written|terminate|what\(\)' "$build/$t.log" | head -20
   fi
 done
 exit $status
