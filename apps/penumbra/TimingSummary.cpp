@@ -184,4 +184,42 @@ std::string techniqueFiguresText(const std::vector<std::vector<plugin::Technique
     return text;
 }
 
+std::vector<std::string> lightNames(const config::RenderConfig& config)
+{
+    std::vector<std::string> names;
+    for (const config::LightConfig& light : config.lights) names.push_back(light.name);
+    return names;
+}
+
+std::string lightFatesText(const std::vector<frame::FrameTimings>& frames, const std::vector<std::string>& lightNames)
+{
+    if (frames.empty() || frames.back().lights.empty()) return {};
+    const size_t lights = frames.back().lights.size();
+    struct Count {
+        size_t frames[3] = {0, 0, 0};  // by LightFate
+        const frame::LightDecision* last = nullptr;  // the last frame it was culled or demoted
+    };
+    std::vector<Count> counts(lights);
+    for (const frame::FrameTimings& f : frames) {
+        for (size_t l = 0; l < std::min(lights, f.lights.size()); ++l) {
+            ++counts[l].frames[size_t(f.lights[l].fate)];
+            if (!f.lights[l].why.empty()) counts[l].last = &f.lights[l];
+        }
+    }
+    // The last frame's fates, then who did not draw its shadows in some frame.
+    size_t last[3] = {0, 0, 0};
+    for (const frame::LightDecision& d : frames.back().lights) ++last[size_t(d.fate)];
+    std::string text = fmt::format("lights (last frame): {} shadowed, {} unshadowed, {} culled (of {})\n",
+                                   last[size_t(frame::LightFate::Shadowed)], last[size_t(frame::LightFate::Unshadowed)],
+                                   last[size_t(frame::LightFate::Culled)], lights);
+    for (size_t l = 0; l < lights; ++l) {
+        if (!counts[l].last) continue;
+        const std::string name = l < lightNames.size() ? lightNames[l] : std::string();
+        text += fmt::format("  light {} ('{}'): {} in {} of {} frame(s): {}\n", l, name,
+                            frame::lightFateName(counts[l].last->fate), counts[l].frames[size_t(counts[l].last->fate)],
+                            frames.size(), counts[l].last->why);
+    }
+    return text;
+}
+
 } // namespace penumbra::app

@@ -149,6 +149,35 @@ TEST_F(Cli, StatsReportWhatCullingDrew)
     EXPECT_NE(bad.err.find("--culling"), std::string::npos) << bad.err;
 }
 
+// A light that cannot matter (frame/LightInfluence.h) is culled, and `render --stats`,
+// `--timings` and `graph` say which and why.
+TEST_F(Cli, CulledLightsAreReportedWithTheReason)
+{
+    nlohmann::json doc = nlohmann::json::parse(readFile(penumbra::test::sourceDir() / "config" / "default.json"));
+    nlohmann::json up = doc["lights"][0];
+    up["name"] = "up";
+    up["position"] = {0.0, 12.0, 0.0};
+    up["target"] = {0.5, 20.0, 0.0};
+    doc["lights"].push_back(up);
+    const fs::path file = dir / "two.json";
+    std::ofstream(file) << doc.dump(1);
+    const fs::path png = dir / "out.png";
+    const std::string summary = "lights (last frame): 1 shadowed, 0 unshadowed, 1 culled (of 2)";
+    const std::string line = "light 1 ('up'): culled in 2 of 2 frame(s): its cone (42 degrees from its axis) meets no "
+                             "visible receiver";
+    for (const char* flag : {"--stats", "--timings"}) {
+        const CliResult r = run(fmt::format("render '{}' -o '{}' --width 64 --height 36 --frames 2 {}", file.string(),
+                                            png.string(), flag));
+        ASSERT_EQ(r.exitCode, 0) << r.err;
+        EXPECT_TRUE(has(r.out, summary)) << flag << "\n" << r.out;
+        EXPECT_TRUE(has(r.out, line)) << flag << "\n" << r.out;
+    }
+    const CliResult graph = run(fmt::format("graph '{}' --width 64 --height 36", file.string()));
+    ASSERT_EQ(graph.exitCode, 0) << graph.err;
+    EXPECT_TRUE(has(graph.out, "light 1 ('up'): culled in 1 of 1 frame(s): its cone")) << graph.out;
+    EXPECT_FALSE(has(graph.out, "light1.hard.")) << "a culled light has no passes\n" << graph.out;
+}
+
 // The SPIR-V cache (gpu/ShaderCache.h): a second render of the same config compiles no
 // shader, it reads every one the first compiled from the disk.
 TEST_F(Cli, SecondRenderCompilesNoShader)

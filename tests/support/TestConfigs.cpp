@@ -60,7 +60,8 @@ void scaleConfig(config::RenderConfig& c, float s)
         // thousandth the size straddled every receiver's horizon (V = 0.51 on box sides).
         l.light.sizeWorld *= s;
         l.light.radiusWorld *= s;
-        l.light.intensity *= s * s;
+        // Directional: an irradiance already, the same at every distance.
+        if (l.light.type != scene::LightType::Directional) l.light.intensity *= s * s;
     }
 }
 

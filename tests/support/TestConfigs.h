@@ -26,8 +26,8 @@ std::vector<config::SweepVariant> everyVariant(const config::ConfigDocument& doc
 config::RenderConfig defaultTestConfig();
 
 // The same scene and view at another scale: every length times s, intensities times s²
-// so that irradiance (I / d²) and the image stay the same. Nothing in the engine may
-// depend on absolute units.
+// (but a directional light's, an irradiance) so that irradiance (I / d²) and the image
+// stay the same. Nothing in the engine may depend on absolute units.
 void scaleConfig(config::RenderConfig& c, float s);
 
 // Makes `light` (the default config's spot light) a light of `type`, placed so that it

@@ -246,6 +246,7 @@ TEST_P(ReferenceAtScale, PointLightGivesExactlyTheRayCastersHardShadow)
     scene::Light light;
     light.type = scene::LightType::Point;
     light.position = glm::vec3(0.3f, 4.0f, 0.2f) * s;
+    light.intensity *= s * s;  // the irradiance of scale 1: a light too dim to show is culled
     const Frame& f = render(referenceConfig(64, 48, lookDown(glm::vec3(-1.2f, 5.0f, -0.9f) * s, glm::vec3(0.0f), 40.0f),
                                             light),
                            scene);
@@ -284,7 +285,8 @@ TEST_P(ReferenceAtScale, RectLightMatchesTheAnalyticPenumbra)
 {
     const float s = GetParam();
     const scene::PenumbraParams params = analyticParams(s);
-    const scene::Light light = downwardRect(glm::vec3(0.0f, 4.0f, 0.0f) * s, glm::vec2(0.8f, 0.5f) * s);
+    scene::Light light = downwardRect(glm::vec3(0.0f, 4.0f, 0.0f) * s, glm::vec2(0.8f, 0.5f) * s);
+    light.intensity *= s * s;
     // Oblique enough that some of the umbra shows beside the occluder.
     const scene::Camera camera = lookDown(glm::vec3(1.2f, 5.0f, 0.9f) * s, glm::vec3(0.3f, 0.0f, 0.2f) * s, 36.0f);
     const Frame& f = render(referenceConfig(96, 72, camera, light, {{"samples", 256}}), scene::generatePenumbra(params));
@@ -316,7 +318,8 @@ TEST_P(ReferenceContact, ContactShadowMatchesTheAnalyticPenumbra)
     const float s = GetParam();
     scene::PenumbraParams params = analyticParams(s);
     params.occluderHeight = 1e-3f * s;
-    const scene::Light light = downwardRect(glm::vec3(0.0f, 3.0f, 0.0f) * s, glm::vec2(2.0f, 2.0f) * s);
+    scene::Light light = downwardRect(glm::vec3(0.0f, 3.0f, 0.0f) * s, glm::vec2(2.0f, 2.0f) * s);
+    light.intensity *= s * s;
     // The edge x = 0.5: its penumbra on the ground spans x in [0.5 - 1.7e-4, 0.5 + 5e-4];
     // the part under the occluder is hidden from above.
     const glm::vec3 target = glm::vec3(0.5f + 2e-4f, 0.0f, 0.0f) * s;
@@ -741,6 +744,7 @@ protected:
         light.direction = {0.0f, -1.0f, 0.0f};
         light.tangent = {1.0f, 0.0f, 0.0f};
         light.sizeWorld = glm::vec2(0.8f, 0.5f) * scale;
+        light.intensity *= scale * scale;  // the irradiance of scale 1: a light too dim to show is culled
         const scene::Camera camera =
             lookDown(glm::vec3(1.2f, 5.0f, 0.9f) * scale, glm::vec3(0.3f, 0.0f, 0.2f) * scale, 36.0f);
         const config::RenderConfig traced = referenceConfig(96, 72, camera, light, {{"samples", samples}});

@@ -248,6 +248,13 @@ RenderConfig parseConfig(const ConfigDocument& document)
                                                 cullingModeName(config.culling)));
         }
     }
+    if (const json* culling = r.find("light_culling")) {
+        if (!culling->is_boolean()) {
+            r.fail("/light_culling", fmt::format("must be true or false, got {}", core::shortJson(*culling)));
+        }
+        config.lightCulling = culling->get<bool>();
+    }
+    config.maxShadowedLights = r.integer("max_shadowed_lights", config.maxShadowedLights, 1, kMaxLights);
     config.batchDraws = r.choice("draw_batching", "batched", {"batched", "per-instance"}) == "batched";
     if (const json* out = r.find("output")) {
         ObjectReader o(*out, locator, "/output");

@@ -5,7 +5,6 @@
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
 #include "frame/LightTable.h"
-#include "penumbra/plugin/ClearPass.h"
 #include "penumbra/plugin/GBuffer.h"
 #include "penumbra/plugin/Params.h"
 #include "penumbra/plugin/VisibilityPass.h"
@@ -61,13 +60,14 @@ FrameRenderer::FrameRenderer(std::shared_ptr<SceneResources> resources, const co
         throw Error("FrameRenderer: the scene's resources were made for another draw batching than the config's");
     }
     setCamera(config.camera);
+    lightCulling_ = config.lightCulling;
+    maxShadowedLights_ = config.maxShadowedLights;
     ambient_ = kSkyAmbient;
     background_ = kBackground;
     visibility_ = resources_->visibility(config.culling, width_, height_, config.shadowFocus);
     resources_->casters().setCulling(visibility_.get());
 
     createTechniques(config, previous);
-    createShadingPipeline();
     updateLights(config, scene_.bounds());
     buildGraph();
 }
@@ -81,7 +81,7 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
 
 // The shading pass is compiled for the frame's lights: LIGHT_COUNT, and for each light i
 // VISIBILITY_SLOT_<i>, its element of the visibility[] array, or -1 for a light without
-// a visibility image (technique "none": V = 1 in the shader, no image read).
+// a visibility image this frame (unshadowed or culled: V = 1 in the shader, no image read).
 void FrameRenderer::createShadingPipeline()
 {
     gpu::ComputePipelineDesc s;
@@ -90,7 +90,7 @@ void FrameRenderer::createShadingPipeline()
     s.defines = {{"LIGHT_COUNT", std::to_string(lights_.size())}};
     int slots = 0;
     for (size_t i = 0; i < lights_.size(); ++i)
-        s.defines.push_back({fmt::format("VISIBILITY_SLOT_{}", i), lights_[i].unshadowed ? "-1" : std::to_string(slots++)});
+        s.defines.push_back({fmt::format("VISIBILITY_SLOT_{}", i), lights_[i].drawn() ? std::to_string(slots++) : "-1"});
     s.defines.push_back({"VISIBILITY_COUNT", std::to_string(slots)});
     s.pushConstantBytes = sizeof(ShadingPush);
     shadingPipeline_ = &resources_->computePipeline(s);
@@ -100,6 +100,7 @@ void FrameRenderer::setCamera(const scene::Camera& camera)
 {
     const float aspect = float(width_) / float(height_);
     cameraViewProj_ = render::cameraViewProj(camera, aspect);
+    cameraPosition_ = camera.position;
     // The unprojection, in double: world_h = M^-1 (x, y, depth, 1). For the infinite
     // reversed-Z perspective only the depth column has a w (1 / near), and it holds
     // eye / near, so world = eye + (x c0 + y c1 + c3) / (depth c2.w).
@@ -249,11 +250,15 @@ void FrameRenderer::buildGraph()
 
         bool restart = false;
         for (size_t i = 0; i < lights_.size() && !restart; ++i) {
-            if (lights_[i].unshadowed) continue;
+            if (!lights_[i].drawn()) continue;
             g.declareImage({lights_[i].visibility, width_, height_, kVisibilityFormat});
             restart = !registerTechnique(i);
         }
-        if (restart) continue;
+        if (restart) {
+            decideLights();  // the dropped light is lit unshadowed; another may take its shadows
+            continue;
+        }
+        createShadingPipeline();
 
         graph::PassBuilder shading = g.addPass("shading", graph::QueueKind::Compute);
         shading.read(kGDepth, graph::Usage::Sampled)
@@ -262,53 +267,48 @@ void FrameRenderer::buildGraph()
             .write(kColor, graph::Usage::Storage)
             .execute([this](graph::PassContext& pass) { recordShading(pass); });
         for (const LightSlot& slot : lights_)
-            if (!slot.unshadowed) shading.read(slot.visibility, graph::Usage::Sampled);
+            if (slot.drawn()) shading.read(slot.visibility, graph::Usage::Sampled);
         // The colour image is the frame's result; V_l and the G-buffer surfaces (depth and
         // normal: readPositions, readNormals) are read back by metrics and tests.
         g.markOutput(kColor);
         g.markOutput(kGDepth);
         g.markOutput(kGNormal);
         for (const LightSlot& slot : lights_)
-            if (!slot.unshadowed) g.markOutput(slot.visibility);
+            if (slot.drawn()) g.markOutput(slot.visibility);
         for (const std::string& name : requestedImages_) g.markOutput(name);
         g.compile();
         return;
     }
 }
 
-// Registers light `light`'s technique passes, or the unshadowed fallback. Returns false
-// when the technique failed and was dropped: the graph must be declared again.
+// Registers light `light`'s technique passes. Returns false when the technique failed and
+// was dropped: the graph must be declared again.
 bool FrameRenderer::registerTechnique(size_t light)
 {
     LightSlot& slot = lights_[light];
     graph::RenderGraph& g = *graph_;
-    if (slot.instance) {
-        plugin::LightPassIo io;
-        io.prefix = shadowPassPrefix(light);
-        io.gbuffer = gbufferIo();
-        io.visibility = slot.visibility;
-        io.bindImage = [this](std::string_view name, const gpu::Image& image) { executor_.bindImage(name, image); };
-        io.bindBuffer = [this](std::string_view name, const gpu::Buffer& buffer) { executor_.bindBuffer(name, buffer); };
-        std::string failure;
-        try {
-            slot.created->declaredBy = this;
-            slot.instance->registerPasses(g, io);
-            if (!g.isWritten(slot.visibility)) {
-                failure = fmt::format("registered no pass that writes '{}' (the light's visibility image)",
-                                      slot.visibility);
-            }
-        } catch (const std::exception& e) {
-            failure = fmt::format("exception during registration: {}", e.what());
+    plugin::LightPassIo io;
+    io.prefix = shadowPassPrefix(light);
+    io.gbuffer = gbufferIo();
+    io.visibility = slot.visibility;
+    io.bindImage = [this](std::string_view name, const gpu::Image& image) { executor_.bindImage(name, image); };
+    io.bindBuffer = [this](std::string_view name, const gpu::Buffer& buffer) { executor_.bindBuffer(name, buffer); };
+    std::string failure;
+    try {
+        slot.created->declaredBy = this;
+        slot.instance->registerPasses(g, io);
+        if (!g.isWritten(slot.visibility)) {
+            failure = fmt::format("registered no pass that writes '{}' (the light's visibility image)",
+                                  slot.visibility);
         }
-        if (failure.empty()) return true;
-        const std::string message = fmt::format("plugin '{}' (light {}): {}", slot.technique, light, failure);
-        if (slot.required) throw plugin::PluginError(plugin::PluginErrorKind::RegistrationFailed, message);
-        dropTechnique(light, message);
-        return false;
+    } catch (const std::exception& e) {
+        failure = fmt::format("exception during registration: {}", e.what());
     }
-    // No technique: the light is unshadowed, V = 1 (the contract's neutral value).
-    plugin::ClearPass(g, shadowPassPrefix(light)).image(slot.visibility, {{1.0f, 1.0f, 1.0f, 1.0f}});
-    return true;
+    if (failure.empty()) return true;
+    const std::string message = fmt::format("plugin '{}' (light {}): {}", slot.technique, light, failure);
+    if (slot.required) throw plugin::PluginError(plugin::PluginErrorKind::RegistrationFailed, message);
+    dropTechnique(light, message);
+    return false;
 }
 
 std::string FrameRenderer::shadowPassPrefix(size_t light) const
@@ -332,12 +332,24 @@ void FrameRenderer::update(const config::RenderConfig& config, const scene::Scen
                     "that scene in place (config::applyAnimation, Scene::updateTransforms)");
     }
     setCamera(config.camera);
+    lightCulling_ = config.lightCulling;
+    maxShadowedLights_ = config.maxShadowedLights;
     if (!movedInstances.empty()) {
         resources_->instancesMoved(movedInstances);
         for (LightSlot& slot : lights_)
             if (slot.instance) slot.instance->instancesMoved(movedInstances);
     }
+    const std::vector<LightFate> before = fates();
     updateLights(config, scene.bounds());
+    // A light that left or entered the view, or changed rank: other passes, another shading.
+    if (fates() != before) buildGraph();
+}
+
+std::vector<LightFate> FrameRenderer::fates() const
+{
+    std::vector<LightFate> out;
+    for (const LightSlot& slot : lights_) out.push_back(slot.decision.fate);
+    return out;
 }
 
 void FrameRenderer::updateLights(const config::RenderConfig& config, const scene::Aabb& sceneBounds)
@@ -347,7 +359,30 @@ void FrameRenderer::updateLights(const config::RenderConfig& config, const scene
         currentLights_[i] = config.lights[i].light;
         if (lights_[i].instance) lights_[i].instance->update(currentLights_[i], sceneBounds);
     }
-    writeLightTable(currentLights_, static_cast<LightData*>(lightBuffer_.mapped()));
+    decideLights();
+}
+
+// Which lights can matter to this frame (LightInfluence.h), from the camera, the lights
+// and the instances in view; a culled light's row gets no radiance, so that shading adds
+// exactly nothing for it.
+void FrameRenderer::decideLights()
+{
+    LightCullingInput input;
+    input.cameraViewProj = cameraViewProj_;
+    input.cameraPosition = cameraPosition_;
+    input.exposure = ambient_.w;
+    input.lights = currentLights_;
+    for (const LightSlot& slot : lights_) input.shadowed.push_back(!slot.unshadowed && slot.instance);
+    input.visibleBoxes = resources_->instanceBoxesInView(cameraViewProj_);
+    input.cullLights = lightCulling_;
+    input.maxShadowedLights = maxShadowedLights_;
+    std::vector<LightDecision> decided = frame::decideLights(input);
+    auto* rows = static_cast<LightData*>(lightBuffer_.mapped());
+    writeLightTable(currentLights_, rows);
+    for (size_t i = 0; i < lights_.size(); ++i) {
+        lights_[i].decision = std::move(decided[i]);
+        if (lights_[i].decision.fate == LightFate::Culled) rows[i].radiance = glm::vec4(glm::vec3(0.0f), rows[i].radiance.w);
+    }
 }
 
 FrameTimings FrameRenderer::renderFrame()
@@ -359,7 +394,7 @@ FrameTimings FrameRenderer::renderFrame()
     resources_->casters().setCulling(visibility_.get());
     bool declaredElsewhere = false;
     for (size_t i = 0; i < lights_.size(); ++i) {
-        if (!lights_[i].instance || lights_[i].created->declaredBy == this) continue;
+        if (!lights_[i].drawn() || lights_[i].created->declaredBy == this) continue;
         lights_[i].instance->update(currentLights_[i], scene_.bounds());
         declaredElsewhere = true;
     }
@@ -372,13 +407,13 @@ FrameTimings FrameRenderer::renderFrame()
     if (visibility_->focusing()) {
         // The techniques refit their maps to what the camera sees this frame.
         for (size_t i = 0; i < lights_.size(); ++i)
-            if (lights_[i].instance) lights_[i].instance->update(currentLights_[i], scene_.bounds());
+            if (lights_[i].drawn()) lights_[i].instance->update(currentLights_[i], scene_.bounds());
     }
     executor_.execute(*graph_);
     for (uint32_t redraw = 0; redraw < kMaxRedraws; ++redraw) {
         bool grew = false;
         for (LightSlot& slot : lights_)
-            if (slot.instance && slot.instance->wantsRedraw()) grew = true;
+            if (slot.drawn() && slot.instance->wantsRedraw()) grew = true;
         if (!grew) break;
         buildGraph();
         resources_->sceneGpu().beginFrame();
@@ -389,8 +424,10 @@ FrameTimings FrameRenderer::renderFrame()
     timings.passes = executor_.collectTimings();
     timings.culling = visibility_->stats();
     timings.techniques.resize(lights_.size());
-    for (size_t i = 0; i < lights_.size(); ++i)
-        if (lights_[i].instance) timings.techniques[i] = lights_[i].instance->figures();
+    for (size_t i = 0; i < lights_.size(); ++i) {
+        if (lights_[i].drawn()) timings.techniques[i] = lights_[i].instance->figures();
+        timings.lights.push_back(lights_[i].decision);
+    }
     timings.frameCpuMs = core::msSince(frameStart);
     return timings;
 }
@@ -450,7 +487,7 @@ void FrameRenderer::recordShading(graph::PassContext& pass)
     const VkCommandBuffer cmd = pass.cmd();
     std::vector<const gpu::Image*> visibility;
     for (const LightSlot& slot : lights_)
-        if (!slot.unshadowed) visibility.push_back(&pass.image(slot.visibility));
+        if (slot.drawn()) visibility.push_back(&pass.image(slot.visibility));
     const gpu::Pipeline& shading = *shadingPipeline_;
     shading.bind(cmd);
     gpu::DescriptorPush descriptors;
@@ -508,7 +545,7 @@ metrics::DebugImageValues FrameRenderer::readImage(const std::string& name) cons
 std::vector<float> FrameRenderer::readVisibility(size_t light) const
 {
     const LightSlot& slot = lights_.at(light);
-    if (slot.unshadowed) return std::vector<float>(size_t(width_) * height_, 1.0f);
+    if (!slot.drawn()) return std::vector<float>(size_t(width_) * height_, 1.0f);
     return readFloats(slot.visibility);
 }
 
@@ -523,7 +560,7 @@ FrameRenderer::Pixel FrameRenderer::readPixel(uint32_t x, uint32_t y) const
         gpu::readImage(context_, executor_.image(kColor), executor_.finalLayout(kColor), texel);
     std::memcpy(pixel.color.data(), color.data(), pixel.color.size());
     for (const LightSlot& slot : lights_) {
-        pixel.visibility.push_back(slot.unshadowed ? 1.0f
+        pixel.visibility.push_back(!slot.drawn() ? 1.0f
                                                    : gpu::readImageFloats(context_, executor_.image(slot.visibility),
                                                                           executor_.finalLayout(slot.visibility), texel)
                                                          .at(0));

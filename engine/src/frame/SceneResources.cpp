@@ -62,6 +62,16 @@ void SceneResources::instancesMoved(std::span<const uint32_t> moved)
 
 uint64_t SceneResources::bvhBuilds() const { return 1 + bvh_->rebuilds; }
 
+std::vector<scene::Aabb> SceneResources::instanceBoxesInView(const glm::mat4& viewProj) const
+{
+    std::vector<uint32_t> visible;
+    bvh_->bvh.cullFrustum(scene::frustumFromViewProj(viewProj), visible);
+    std::vector<scene::Aabb> boxes;
+    boxes.reserve(visible.size());
+    for (uint32_t instance : visible) boxes.push_back(scene_.instances[instance].worldBounds);
+    return boxes;
+}
+
 SceneResources::~SceneResources()
 {
     vkDeviceWaitIdle(context_.device());

@@ -738,7 +738,7 @@ plugin::ScanSettings scanSettings(const fs::path& cacheFile, std::chrono::millis
     return settings;
 }
 
-PluginError errorOf(const std::function<void()>& fn)
+PluginError pluginErrorOf(const std::function<void()>& fn)
 {
     try {
         fn();
@@ -760,7 +760,7 @@ TEST(PluginScanner, APluginThatCrashesOrHangsKillsOnlyTheScanner)
     const test::ScratchFolder dir("scan_crash");
     const fs::path crashing = penumbra::test::crashingTestPluginDir();
     PluginRegistry registry({crashing}, scanSettings(dir.path / "cache.json"));
-    const PluginError crashes = errorOf([&] { registry.scan("crashes"); });
+    const PluginError crashes = pluginErrorOf([&] { registry.scan("crashes"); });
     EXPECT_EQ(crashes.kind(), PluginErrorKind::ScanFailed) << crashes.what();
     EXPECT_EQ(crashes.file(), crashing / "penumbra-crashes.so");
     // A scanner built with AddressSanitizer (the sanitizer build's, like this test) reports
@@ -773,17 +773,17 @@ TEST(PluginScanner, APluginThatCrashesOrHangsKillsOnlyTheScanner)
     EXPECT_TRUE(contains(crashes.what(), "plugin 'crashes' (" + (crashing / "penumbra-crashes.so").string() + "): " + died +
                                              " while loading it"))
         << crashes.what();
-    const PluginError early = errorOf([&] { registry.load("crashes-early"); });
+    const PluginError early = pluginErrorOf([&] { registry.load("crashes-early"); });
     EXPECT_EQ(early.kind(), PluginErrorKind::ScanFailed) << early.what();
     EXPECT_TRUE(contains(early.what(), "plugin 'crashes-early' (")) << early.what();
     EXPECT_TRUE(contains(early.what(), died)) << early.what();
-    const PluginError again = errorOf([&] { registry.load("crashes"); });
+    const PluginError again = pluginErrorOf([&] { registry.load("crashes"); });
     EXPECT_EQ(std::string(again.what()), crashes.what()) << "a load by name reports the scan";
     // Nothing failed is cached: a rebuilt plugin is scanned again.
     EXPECT_FALSE(fs::exists(dir.path / "cache.json"));
 
     PluginRegistry impatient({crashing}, scanSettings(dir.path / "cache.json", std::chrono::milliseconds(1500)));
-    const PluginError hangs = errorOf([&] { impatient.scan("hangs"); });
+    const PluginError hangs = pluginErrorOf([&] { impatient.scan("hangs"); });
     EXPECT_EQ(hangs.kind(), PluginErrorKind::ScanFailed) << hangs.what();
     EXPECT_TRUE(contains(hangs.what(), "plugin 'hangs' (")) << hangs.what();
     EXPECT_TRUE(contains(hangs.what(), "the plugin scanner did not finish loading it within 1.5 s and was stopped"));
@@ -824,7 +824,7 @@ TEST(PluginScanner, ScansAreCachedByFileIdentity)
     fs::last_write_time(copy, fs::last_write_time(copy) + std::chrono::seconds(5));
     {
         PluginRegistry registry({dir.path / "plugins"}, noScanner);
-        const PluginError e = errorOf([&] { registry.scan("testgood"); });
+        const PluginError e = pluginErrorOf([&] { registry.scan("testgood"); });
         EXPECT_EQ(e.kind(), PluginErrorKind::ScanFailed);
         EXPECT_TRUE(contains(e.what(), "the plugin scanner " + noScanner.scanner.string() + " cannot be started"));
     }
@@ -858,7 +858,7 @@ TEST(PluginMetadata, JsonRoundTripsAndDamagedDescriptionsAreInvalidInfo)
          }) {
         json damaged = doc;
         change(damaged);
-        const PluginError e = errorOf([&] { plugin::PluginMetadata::fromJson(damaged, "/p/penumbra-x.so"); });
+        const PluginError e = pluginErrorOf([&] { plugin::PluginMetadata::fromJson(damaged, "/p/penumbra-x.so"); });
         EXPECT_EQ(e.kind(), PluginErrorKind::InvalidInfo);
         EXPECT_TRUE(contains(e.what(), what));
     }

@@ -137,6 +137,10 @@ struct SceneSource {
     std::string describe() const;
 };
 
+// The most lights one frame shades: the shading pass binds one visibility image each
+// and reads them with constant indices (shaders/engine/shading.comp).
+inline constexpr uint32_t kMaxLights = 8;
+
 struct RenderConfig {
     std::filesystem::path file;  // where it was read from, for messages
     SceneSource scene;
@@ -150,6 +154,12 @@ struct RenderConfig {
     // Fit directional and spot lights' shadow maps to what the camera sees (the visibility
     // service's "focusing", engine/src/visibility/); needs culling receiver-mask or light-occlusion.
     bool shadowFocus = false;
+    // "light_culling": a light that reaches no receiver the camera sees gets no passes and
+    // no light (frame/LightInfluence.h); false draws every light.
+    bool lightCulling = true;
+    // "max_shadowed_lights": shadows on at most this many lights, the ones that contribute
+    // most to the image; the others are lit unshadowed (1 to kMaxLights).
+    uint32_t maxShadowedLights = kMaxLights;
     // "draw_batching": "batched" (instanced, indirect multi-draws: render::SceneGpu) or
     // "per-instance" (one draw call per instance: the reference batching is checked and
     // measured against).
@@ -170,8 +180,5 @@ RenderConfig parseConfig(const nlohmann::json& json, const std::filesystem::path
 // Reads, merges and validates a config file. Throws ConfigError naming file and path.
 RenderConfig loadConfig(const std::filesystem::path& file);
 
-// The most lights one frame shades: the shading pass binds one visibility image each
-// and reads them with constant indices (shaders/engine/shading.comp).
-inline constexpr uint32_t kMaxLights = 8;
 
 } // namespace penumbra::config

@@ -3,9 +3,11 @@
 // per light, the passes its technique plugin registers, which write the light's
 // visibility image V_l -> the engine's shading pass (reads every V_l) -> colour image.
 // The engine itself contains no shadow technique: a light whose plugin could not be
-// loaded or registered (and is not required) gets V_l = 1 from a clear, with a warning;
-// a light whose technique is "none" (config::kNoShadowTechnique) has no V_l at all and
-// shading takes V = 1 for it.
+// loaded or registered (and is not required) is lit unshadowed, with a warning; a light
+// whose technique is "none" (config::kNoShadowTechnique) has no V_l at all and shading
+// takes V = 1 for it. Before any pass is declared, each frame decides which lights can
+// matter (LightInfluence.h): a culled light has no passes and adds no light, a light
+// beyond max_shadowed_lights is lit unshadowed.
 #include "penumbra/config/Config.h"
 #include "penumbra/frame/BaseColorPipelines.h"
 #include "penumbra/gpu/Context.h"
@@ -18,6 +20,7 @@
 #include "penumbra/plugin/GBuffer.h"
 #include "penumbra/plugin/PluginRegistry.h"
 #include "penumbra/render/Casters.h"
+#include "penumbra/frame/LightInfluence.h"
 #include "penumbra/frame/SceneResources.h"
 #include "penumbra/render/Projection.h"
 #include "penumbra/render/SceneGpu.h"
@@ -50,6 +53,7 @@ struct FrameTimings {
     // Per light (empty for a light without technique): its technique's figures.
     std::vector<std::vector<plugin::TechniqueFigure>> techniques;
     uint32_t redraws = 0;  // draws after the first (a technique grew its resources)
+    std::vector<LightDecision> lights;  // per light: shadowed, unshadowed or culled this frame, and why
 };
 
 class FrameRenderer {
@@ -101,8 +105,9 @@ public:
     // fell back to unshadowed.
     const std::string& techniqueName(size_t light) const { return lights_.at(light).technique; }
     // What the names of a light's shadow passes and resources begin with: its technique's
-    // LightPassIo::prefix ("light0.hard."), or the unshadowed fallback's one pass
-    // ("light0.unshadowed"). For timing and memory per technique.
+    // LightPassIo::prefix ("light0.hard."), or "light0.unshadowed" for a light that fell
+    // back to unshadowed, which names no pass (it has none). For timing and memory per
+    // technique.
     std::string shadowPassPrefix(size_t light) const;
 
     // The frame's graph as compiled (passes in order, culled passes and why, resources
@@ -111,6 +116,10 @@ public:
     const graph::GraphExecutor& executor() const { return executor_; }
     const SceneResources& resources() const { return *resources_; }
     std::shared_ptr<SceneResources> sharedResources() const { return resources_; }
+    // Light `light`'s fate this frame (shadowed, unshadowed or culled, and why), as the
+    // last constructor or update() decided it.
+    const LightDecision& lightDecision(size_t light) const { return lights_.at(light).decision; }
+
     // Whether light `light`'s technique instance was taken from the previous renderer.
     bool techniqueKept(size_t light) const { return lights_.at(light).kept; }
 
@@ -126,7 +135,8 @@ public:
 
     // Read-back after renderFrame(): sRGB RGBA8 rows, top row first.
     std::vector<uint8_t> readColor() const;
-    // V_l, one float per pixel (all 1 for a light whose technique is "none").
+    // V_l, one float per pixel (all 1 for a light without an image this frame: technique
+    // "none", unshadowed by max_shadowed_lights, or culled).
     std::vector<float> readVisibility(size_t light) const;
     // One pixel of both (a pixel inspector's read: two texels copied, not two images):
     // readColor()'s RGBA8 and every light's V at (x, y) < (width(), height()).
@@ -165,6 +175,9 @@ private:
         bool required = false;
         bool unshadowed = false;  // technique "none": no passes, no visibility image
         std::string visibility;  // "light<i>.visibility"
+        LightDecision decision;  // this frame's
+        // Whether its technique draws this frame: it then writes the light's visibility image.
+        bool drawn() const { return !unshadowed && instance && decision.fate == LightFate::Shadowed; }
     };
 
     struct SurfaceFloats {
@@ -183,6 +196,8 @@ private:
     bool registerTechnique(size_t light);
     void dropTechnique(size_t light, const std::string& why);
     void updateLights(const config::RenderConfig& config, const scene::Aabb& sceneBounds);
+    void decideLights();
+    std::vector<LightFate> fates() const;
     void recordGBuffer(graph::PassContext& pass);
     void recordShading(graph::PassContext& pass);
     std::vector<float> readFloats(const std::string& name) const;
@@ -194,6 +209,9 @@ private:
     uint32_t width_ = 0;
     uint32_t height_ = 0;
     glm::mat4 cameraViewProj_{1.0f};
+    glm::vec3 cameraPosition_{0.0f};
+    bool lightCulling_ = true;
+    uint32_t maxShadowedLights_ = config::kMaxLights;
     glm::vec4 ambient_{0.0f};
     glm::vec4 background_{0.0f};
 

@@ -80,6 +80,10 @@ public:
     // table and the BVH (refit, or rebuilt) follow them.
     void instancesMoved(std::span<const uint32_t> moved);
 
+    // The world boxes of the instances in the view frustum of `viewProj` (the BVH's
+    // query): what the camera may see, for deciding which lights can matter.
+    std::vector<scene::Aabb> instanceBoxesInView(const glm::mat4& viewProj) const;
+
     // Figures for tests: visibility services made, the BVH's builds (one, and one per
     // rebuild after a move), compute pipelines made.
     uint32_t visibilityBuilds() const { return visibilityBuilds_; }

@@ -1,0 +1,201 @@
+// Lights that cannot matter cost nothing (frame/LightInfluence.h): a light that reaches no
+// visible receiver gets no passes and adds no light, and the frame is - bit for bit - the
+// frame without it; for every light type, for lights entering and leaving the view over
+// an animation, and for the lights max_shadowed_lights leaves unshadowed.
+#include "PluginFrame.h"
+#include "TestConfigs.h"
+#include "TestContext.h"
+
+#include "penumbra/config/Config.h"
+#include "penumbra/frame/FrameRenderer.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+using namespace penumbra;
+using frame::LightFate;
+
+namespace {
+
+struct Frame {
+    std::vector<uint8_t> color;
+    std::vector<std::string> passes;
+};
+
+Frame draw(frame::FrameRenderer& renderer)
+{
+    const frame::FrameTimings timings = renderer.renderFrame();
+    Frame f{renderer.readColor(), {}};
+    for (const graph::PassTiming& pass : timings.passes) f.passes.push_back(pass.name);
+    return f;
+}
+
+bool hasPassOf(const Frame& frame, const std::string& prefix)
+{
+    return std::any_of(frame.passes.begin(), frame.passes.end(),
+                       [&](const std::string& name) { return name.rfind(prefix, 0) == 0; });
+}
+
+// The largest difference of one colour channel between two RGBA8 images.
+int largestDifference(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b)
+{
+    int largest = a.size() == b.size() ? 0 : 255;
+    for (size_t i = 0; i < std::min(a.size(), b.size()); ++i) largest = std::max(largest, std::abs(int(a[i]) - int(b[i])));
+    return largest;
+}
+
+// A light of `type` that cannot matter to config/default.json's view: what its influence
+// misses is the case each type has.
+config::LightConfig lightThatCannotMatter(scene::LightType type)
+{
+    config::LightConfig light = test::defaultTestConfig().lights[0];
+    light.name = "extra";
+    test::setLightType(light, type);
+    test::setShadow(light, "hard", {});
+    switch (type) {
+    case scene::LightType::Spot:  // above the scene, its cone pointing up
+        light.light.position = {0.0f, 12.0f, 0.0f};
+        light.light.direction = glm::normalize(glm::vec3(0.1f, 1.0f, 0.0f));
+        break;
+    case scene::LightType::Point:  // so far away that its radiance is below the cutoff
+        light.light.position = {0.0f, 10.0f, 5e4f};
+        light.light.intensity = 10.0f;
+        break;
+    case scene::LightType::Rect:
+    case scene::LightType::Disk:  // above the scene, emitting upwards
+        light.light.position = {0.0f, 12.0f, 0.0f};
+        light.light.direction = {0.0f, 1.0f, 0.0f};
+        break;
+    case scene::LightType::Directional:  // switched off
+        light.light.intensity = 0.0f;
+        break;
+    }
+    return light;
+}
+
+// config/default.json at 96 x 54, with a second copy of its spot light named `name` at
+// `position`, aimed at the origin, when `name` is given.
+config::RenderConfig smallDefault(const std::string& name = {}, glm::vec3 position = {})
+{
+    config::RenderConfig config = test::defaultTestConfig();
+    config.width = 96;
+    config.height = 54;
+    if (!name.empty()) {
+        config::LightConfig second = config.lights[0];
+        second.name = name;
+        second.light.position = position;
+        second.light.direction = glm::normalize(-position);
+        config.lights.push_back(second);
+    }
+    return config;
+}
+
+class LightCulling : public test::GpuTest, public ::testing::WithParamInterface<test::LightCase> {};
+
+} // namespace
+
+TEST_P(LightCulling, ALightThatCannotMatterHasNoPassesAndTheFrameIsTheFrameWithoutIt)
+{
+    const test::LightCase& c = GetParam();
+    config::RenderConfig alone = smallDefault();
+    const scene::Scene scene = config::buildScene(alone);
+    config::RenderConfig withExtra = alone;
+    withExtra.lights.push_back(lightThatCannotMatter(c.type));
+
+    frame::FrameRenderer culled(*context, scene, withExtra, test::plugins());
+    const Frame withCulling = draw(culled);
+    EXPECT_EQ(culled.lightDecision(1).fate, LightFate::Culled) << c;
+    EXPECT_FALSE(culled.lightDecision(1).why.empty());
+    EXPECT_EQ(culled.lightDecision(0).fate, LightFate::Shadowed);
+    EXPECT_FALSE(hasPassOf(withCulling, "light1.")) << "the culled light's passes ran";
+    EXPECT_TRUE(hasPassOf(withCulling, "light0.hard."));
+    const std::vector<float> v = culled.readVisibility(1);
+    EXPECT_TRUE(std::all_of(v.begin(), v.end(), [](float x) { return x == 1.0f; })) << "a culled light's V is 1";
+
+    frame::FrameRenderer single(*context, scene, alone, test::plugins());
+    EXPECT_EQ(withCulling.color, draw(single).color) << c << ": not the frame without the light";
+
+    // Drawn after all (light_culling off), the light adds exactly nothing where its
+    // influence is zero (cone, emitting side, zero intensity) and less than a display step
+    // where it is beyond its range: the culling never drops a light that shows.
+    withExtra.lightCulling = false;
+    frame::FrameRenderer drawn(*context, scene, withExtra, test::plugins());
+    const Frame withoutCulling = draw(drawn);
+    EXPECT_TRUE(hasPassOf(withoutCulling, "light1.hard."));
+    if (c.type == scene::LightType::Point) {
+        EXPECT_LE(largestDifference(withCulling.color, withoutCulling.color), 1) << c;
+    } else {
+        EXPECT_EQ(withCulling.color, withoutCulling.color) << c;
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryLightType, LightCulling,
+                         ::testing::Values(test::LightCase{"spot", scene::LightType::Spot},
+                                           test::LightCase{"point", scene::LightType::Point},
+                                           test::LightCase{"rect", scene::LightType::Rect},
+                                           test::LightCase{"disk", scene::LightType::Disk},
+                                           test::LightCase{"directional", scene::LightType::Directional}),
+                         [](const auto& info) { return std::string(info.param.name); });
+
+namespace {
+class LightCullingFrames : public test::GpuTest {};
+}
+
+// A second spot sweeps from the scene up into the sky and back: each frame of the
+// renderer that culls equals, bit for bit, the frame of one that draws every light, and
+// the light is culled and drawn again as it leaves and re-enters.
+TEST_F(LightCullingFrames, ALightLeavingAndEnteringTheViewKeepsEveryFrameExact)
+{
+    config::RenderConfig config = smallDefault("sweeping", {2.0f, 9.0f, 2.0f});
+    test::setShadow(config.lights[1], "pcss", {});
+    const scene::Scene scene = config::buildScene(config);
+    config::RenderConfig everyLight = config;
+    everyLight.lightCulling = false;
+    frame::FrameRenderer culled(*context, scene, config, test::plugins());
+    frame::FrameRenderer drawn(*context, scene, everyLight, test::plugins());
+
+    std::vector<LightFate> fates;
+    const int frames = 9;
+    for (int f = 0; f < frames; ++f) {
+        // From straight down (0) to 160 degrees (pointing up) at frame 4, then back.
+        const float tilt = glm::radians(160.0f * (1.0f - std::abs(float(f - frames / 2)) / float(frames / 2)));
+        for (config::RenderConfig* c : {&config, &everyLight})
+            c->lights[1].light.direction = {std::sin(tilt), -std::cos(tilt), 0.0f};
+        culled.update(config, scene, {});
+        drawn.update(everyLight, scene, {});
+        const Frame a = draw(culled);
+        const Frame b = draw(drawn);
+        EXPECT_EQ(a.color, b.color) << "frame " << f;
+        fates.push_back(culled.lightDecision(1).fate);
+        EXPECT_EQ(hasPassOf(a, "light1."), fates.back() == LightFate::Shadowed) << "frame " << f;
+    }
+    EXPECT_EQ(fates.front(), LightFate::Shadowed);
+    EXPECT_EQ(fates[frames / 2], LightFate::Culled);
+    EXPECT_EQ(fates.back(), LightFate::Shadowed);
+}
+
+// max_shadowed_lights 1 over two shadowed lights: the one contributing less is lit
+// unshadowed - the frame of the same config with its technique "none".
+TEST_F(LightCullingFrames, MaxShadowedLightsLightsTheOthersUnshadowed)
+{
+    config::RenderConfig config = smallDefault("dim", {4.0f, 14.0f, -6.0f});
+    config.lights[1].light.intensity *= 0.2f;
+    const scene::Scene scene = config::buildScene(config);
+    config.maxShadowedLights = 1;
+    frame::FrameRenderer ranked(*context, scene, config, test::plugins());
+    const Frame a = draw(ranked);
+    EXPECT_EQ(ranked.lightDecision(0).fate, LightFate::Shadowed);
+    EXPECT_EQ(ranked.lightDecision(1).fate, LightFate::Unshadowed);
+    EXPECT_NE(ranked.lightDecision(1).why.find("max_shadowed_lights"), std::string::npos);
+    EXPECT_FALSE(hasPassOf(a, "light1."));
+
+    config::RenderConfig none = config;
+    none.maxShadowedLights = config::kMaxLights;
+    test::setShadow(none.lights[1], "none", {});
+    frame::FrameRenderer unshadowed(*context, scene, none, test::plugins());
+    EXPECT_EQ(a.color, draw(unshadowed).color);
+}
