@@ -76,7 +76,7 @@ int runGraph(const GraphFlags& flags)
         text += fmt::format("device memory for transient resources: {} allocated, {} without aliasing ({:.1f}% saved)\n",
                             mebibytes(allocated), mebibytes(unaliased), saved);
         text += cullingSection(timings.culling, run.config.culling);
-        text += lightFatesText({timings}, lightNames(run.config));
+        text += lightFatesText({timings}, run.config.lights);
         std::vector<std::string> techniques;
         for (size_t l = 0; l < renderer.lightCount(); ++l) techniques.push_back(renderer.techniqueName(l));
         text += techniqueFiguresText(timings.techniques, techniques);

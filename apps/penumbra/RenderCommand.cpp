@@ -169,11 +169,11 @@ int runRender(const RenderFlags& flags)
             compareWithFloor(frameSummary, cameraPasses(*renderer.executor().compiled(), renderer.width(), renderer.height()),
                              summarizeFloor(floorMeasured, resolved.lights.size()), anyLightShadowed(renderer));
         printTimings(frameSummary, warmup, &comparison);
-        std::fputs(lightFatesText(measured, lightNames(run.config)).c_str(), stdout);
+        std::fputs(lightFatesText(measured, run.config.lights).c_str(), stdout);
     }
     if (flags.stats) {
         printCulling(medianCulling(measured), config::cullingModeName(run.config.culling));
-        if (!flags.timings) std::fputs(lightFatesText(measured, lightNames(run.config)).c_str(), stdout);
+        if (!flags.timings) std::fputs(lightFatesText(measured, run.config.lights).c_str(), stdout);
         std::vector<std::string> techniques;
         for (size_t l = 0; l < renderer.lightCount(); ++l) techniques.push_back(renderer.techniqueName(l));
         std::fputs(techniqueFiguresText(medianTechniqueFigures(measured), techniques).c_str(), stdout);

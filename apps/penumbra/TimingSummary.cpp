@@ -184,14 +184,7 @@ std::string techniqueFiguresText(const std::vector<std::vector<plugin::Technique
     return text;
 }
 
-std::vector<std::string> lightNames(const config::RenderConfig& config)
-{
-    std::vector<std::string> names;
-    for (const config::LightConfig& light : config.lights) names.push_back(light.name);
-    return names;
-}
-
-std::string lightFatesText(const std::vector<frame::FrameTimings>& frames, const std::vector<std::string>& lightNames)
+std::string lightFatesText(const std::vector<frame::FrameTimings>& frames, const std::vector<config::LightConfig>& lightConfigs)
 {
     if (frames.empty() || frames.back().lights.empty()) return {};
     const size_t lights = frames.back().lights.size();
@@ -214,7 +207,7 @@ std::string lightFatesText(const std::vector<frame::FrameTimings>& frames, const
                                    last[size_t(frame::LightFate::Culled)], lights);
     for (size_t l = 0; l < lights; ++l) {
         if (!counts[l].last) continue;
-        const std::string name = l < lightNames.size() ? lightNames[l] : std::string();
+        const std::string name = l < lightConfigs.size() ? lightConfigs[l].name : std::string();
         text += fmt::format("  light {} ('{}'): {} in {} of {} frame(s): {}\n", l, name,
                             frame::lightFateName(counts[l].last->fate), counts[l].frames[size_t(counts[l].last->fate)],
                             frames.size(), counts[l].last->why);

@@ -85,9 +85,8 @@ std::string techniqueFiguresText(const std::vector<std::vector<plugin::Technique
 
 // Which lights did not draw their shadows over the frames and why (frame/LightInfluence.h):
 // "lights: 1 shadowed, 2 culled over 3" then, per light culled or unshadowed by
-// max_shadowed_lights in any frame, in how many frames and the last frame's reason.
-// `lightNames`: the config's, by light. What `render --timings`, `--stats` and `graph` print.
-std::vector<std::string> lightNames(const config::RenderConfig& config);
-std::string lightFatesText(const std::vector<frame::FrameTimings>& frames, const std::vector<std::string>& lightNames);
+// max_shadowed_lights in any frame, in how many frames and the last frame's reason, named
+// as in `lightConfigs` (the config's). What `render --timings`, `--stats` and `graph` print.
+std::string lightFatesText(const std::vector<frame::FrameTimings>& frames, const std::vector<config::LightConfig>& lightConfigs);
 
 } // namespace penumbra::app

@@ -60,8 +60,6 @@ FrameRenderer::FrameRenderer(std::shared_ptr<SceneResources> resources, const co
         throw Error("FrameRenderer: the scene's resources were made for another draw batching than the config's");
     }
     setCamera(config.camera);
-    lightCulling_ = config.lightCulling;
-    maxShadowedLights_ = config.maxShadowedLights;
     ambient_ = kSkyAmbient;
     background_ = kBackground;
     visibility_ = resources_->visibility(config.culling, width_, height_, config.shadowFocus);
@@ -332,8 +330,6 @@ void FrameRenderer::update(const config::RenderConfig& config, const scene::Scen
                     "that scene in place (config::applyAnimation, Scene::updateTransforms)");
     }
     setCamera(config.camera);
-    lightCulling_ = config.lightCulling;
-    maxShadowedLights_ = config.maxShadowedLights;
     if (!movedInstances.empty()) {
         resources_->instancesMoved(movedInstances);
         for (LightSlot& slot : lights_)
@@ -354,6 +350,8 @@ std::vector<LightFate> FrameRenderer::fates() const
 
 void FrameRenderer::updateLights(const config::RenderConfig& config, const scene::Aabb& sceneBounds)
 {
+    lightCulling_ = config.lightCulling;
+    maxShadowedLights_ = config.maxShadowedLights;
     currentLights_.resize(config.lights.size());
     for (size_t i = 0; i < config.lights.size(); ++i) {
         currentLights_[i] = config.lights[i].light;

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numeric>
 
 namespace penumbra::frame {
 namespace {
@@ -90,8 +89,6 @@ scene::Aabb grown(const scene::Aabb& box, const glm::vec3& camera)
     return out;
 }
 
-std::string rangeText(double range) { return fmt::format("{:.4g}", range); }
-
 } // namespace
 
 const char* lightFateName(LightFate fate)
@@ -166,9 +163,9 @@ std::vector<LightDecision> decideLights(const LightCullingInput& input)
         } else if (boxes.empty()) {
             d.why = "the camera sees no receiver";
         } else if (inShape) {
-            d.why = fmt::format("every visible receiver it reaches lies beyond its range of {} (where its radiance falls "
+            d.why = fmt::format("every visible receiver it reaches lies beyond its range of {:.4g} (where its radiance falls "
                                 "below {:.3g}, half a display step among {} lights)",
-                                rangeText(range), kLightCutoffRadiance, config::kMaxLights);
+                                range, kLightCutoffRadiance, config::kMaxLights);
         } else if (light.type == scene::LightType::Spot) {
             d.why = fmt::format("its cone ({} degrees from its axis) meets no visible receiver", light.outerConeDeg);
         } else if (light.type == scene::LightType::Rect || light.type == scene::LightType::Disk) {
