@@ -524,6 +524,9 @@ int runBench(const BenchFlags& flags)
     const config::SweepVariants variants(document);
     config::RunOptions options = runOptions(flags.run);
     options.overridesOfUsedTechniquesOnly = true;
+    // A bench measures what each technique costs per frame: every pass runs every frame,
+    // also where the scene stands still (keeping it would measure nothing).
+    options.keepUnchanged = false;
 
     plugin::PluginRegistry plugins;
     const ReferenceTechnique reference = loadReferenceTechnique(flags.reference.technique, flags.reference.settings, plugins);

@@ -34,6 +34,7 @@ struct RenderFlags {
     bool timings = false;
     bool stats = false;
     std::optional<std::string> culling;
+    std::optional<bool> keepUnchanged;
     std::string debugImage;       // --debug-image: the output shows this graph image instead of the colour
     std::string debugMapping = "linear";
     std::string debugRange;       // "MIN,MAX"; empty: the image's finite values
@@ -114,6 +115,7 @@ int runRender(const RenderFlags& flags)
     config::RunOptions options = runOptions(flags.run);
     options.frames = flags.frames;
     if (flags.culling) options.culling = config::parseCullingMode(*flags.culling);
+    options.keepUnchanged = flags.keepUnchanged;
     // Fail on a bad output path or image name before spending seconds rendering.
     const std::string firstOutput = outputPerFrame(flags.output) ? framePath(flags.output, 0) : flags.output;
     io::imageFormatFor(firstOutput);
@@ -225,6 +227,10 @@ Command addRenderCommand(CLI::App& app)
                   "cache");
     cmd->add_option("--culling", flags->culling, "Caster culling mode (overrides the config)")
         ->check(CLI::IsMember({"none", "frustum", "light-occlusion", "receiver-mask"}));
+    cmd->add_option("--keep-unchanged", flags->keepUnchanged,
+                    "true: passes whose light, casters, camera and inputs did not change keep their results (a still "
+                    "frame runs nothing; --timings says \"kept\"); false: every pass runs every frame, to time a still "
+                    "frame's work (overrides the config's keep_unchanged, default true)");
     cmd->add_option("--debug-image", flags->debugImage,
                     "Write this image of the frame's graph to the output instead of the colour (a shadow map, a moment "
                     "map, a visibility image: `penumbra graph CONFIG` lists them); its passes run even where nothing "

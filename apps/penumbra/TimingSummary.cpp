@@ -23,6 +23,7 @@ TimingSummary summarizeTimings(const std::vector<frame::FrameTimings>& frames, s
 {
     struct Samples {
         std::vector<double> gpu, cpu;
+        size_t kept = 0;
     };
     std::vector<std::string> order;
     std::map<std::string, Samples, std::less<>> samples;
@@ -34,6 +35,7 @@ TimingSummary summarizeTimings(const std::vector<frame::FrameTimings>& frames, s
             if (!samples.count(pass.name)) order.push_back(pass.name);
             samples[pass.name].gpu.push_back(pass.gpuMs);
             samples[pass.name].cpu.push_back(pass.cpuMs);
+            if (pass.kept) ++samples[pass.name].kept;
             gpu += pass.gpuMs;
             cpu += pass.cpuMs;
             if (hostPasses.count(pass.name)) host += pass.cpuMs;
@@ -51,7 +53,7 @@ TimingSummary summarizeTimings(const std::vector<frame::FrameTimings>& frames, s
         Samples& s = samples[name];
         s.gpu.resize(frames.size(), 0.0);
         s.cpu.resize(frames.size(), 0.0);
-        summary.passes.push_back({name, hostPasses.count(name) > 0, median(s.gpu), median(s.cpu)});
+        summary.passes.push_back({name, hostPasses.count(name) > 0, median(s.gpu), median(s.cpu), s.kept});
     }
     summary.gpuMs = median(std::move(gpuSums));
     summary.cpuMs = median(std::move(cpuSums));
@@ -66,13 +68,23 @@ TimingSummary summarizeTimings(const std::vector<frame::FrameTimings>& frames, s
     return summary;
 }
 
+namespace {
+
+// "kept in 59 of 60 frames" for a pass that kept an earlier frame's results, else "".
+std::string keptText(const PassTimes& pass, size_t frames)
+{
+    return pass.keptFrames == 0 ? std::string() : fmt::format("  kept in {} of {} frames", pass.keptFrames, frames);
+}
+
+} // namespace
+
 void printTimings(const TimingSummary& summary, uint32_t warmup, const FloorComparison* floor)
 {
     fmt::print("timings: median of {} frame(s) after {} warm-up\n", summary.frames, warmup);
     if (!floor) {
         fmt::print("  {:<34} {:>10} {:>12}\n", "pass", "GPU ms", "CPU ms");
         for (const PassTimes& pass : summary.passes)
-            fmt::print("  {:<34} {:>10.3f} {:>12.3f}\n", pass.name, pass.gpuMs, pass.cpuMs);
+            fmt::print("  {:<34} {:>10.3f} {:>12.3f}{}\n", pass.name, pass.gpuMs, pass.cpuMs, keptText(pass, summary.frames));
         fmt::print("  {:<34} {:>10.3f}\n", "sum of passes (GPU)", summary.gpuMs);
         fmt::print("  {:<34} {:>10.3f}\n", "frame wall clock (CPU)", summary.frameWallMs);
         return;
@@ -82,8 +94,8 @@ void printTimings(const TimingSummary& summary, uint32_t warmup, const FloorComp
     for (size_t i = 0; i < summary.passes.size(); ++i) {
         const PassTimes& pass = summary.passes[i];
         const PassAgainstFloor& a = floor->passes.at(i);
-        fmt::print("  {:<34} {:>10.3f} {:>12.3f} {:>9.2f}  {}\n", pass.name, pass.gpuMs, pass.cpuMs, a.multiple,
-                   floorDrawName(a.draw));
+        fmt::print("  {:<34} {:>10.3f} {:>12.3f} {:>9.2f}  {}{}\n", pass.name, pass.gpuMs, pass.cpuMs, a.multiple,
+                   floorDrawName(a.draw), keptText(pass, summary.frames));
     }
     fmt::print("  {:<34} {:>10.3f} {:>12} {:>9.2f}  {} floor frame\n", "sum of passes (GPU)", summary.gpuMs, "",
                floor->frameMultiple, floor->shadowed ? "shadowed" : "unshadowed");

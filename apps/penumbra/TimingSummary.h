@@ -22,6 +22,7 @@ struct PassTimes {
     bool host = false;   // a host pass: its work is cpuMs, it has no GPU time
     double gpuMs = 0.0;  // median GPU time (timestamp queries)
     double cpuMs = 0.0;  // median CPU time of its callback: recording, or a host pass's work
+    size_t keptFrames = 0;  // frames that kept its results from an earlier frame (it ran in none of them: 0 ms)
 };
 
 struct TimingSummary {

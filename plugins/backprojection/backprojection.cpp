@@ -601,7 +601,7 @@ void BackprojectionShadow::registerPasses(graph::RenderGraph& graph, const plugi
     if (views_.size() > 1) {
         const std::string start = io.local("view0.sum");
         graph.declareImage({start, width_, height_, plugin::kVisibilityFormat});
-        plugin::ClearPass(graph, start).image(start, {});
+        plugin::ClearPass(graph, start).image(start, {}).dependsOn(io.lightState);
     }
     for (size_t k = 0; k < views_.size(); ++k) addViewPasses(graph, io, k);
 }
@@ -630,7 +630,7 @@ void BackprojectionShadow::addViewPasses(graph::RenderGraph& graph, const plugin
     graph.declareImage({names.mssm, map.atlasWidth() * uint32_t(layers_), map.atlasHeight() * uint32_t(levels_),
                         kMssmFormat});
     graph::PassBuilder mssm = graph.addPass(names.mssm, graph::QueueKind::Compute);
-    mssm.read(names.map, graph::Usage::Sampled).write(names.mssm, graph::Usage::Storage);
+    mssm.read(names.map, graph::Usage::Sampled).write(names.mssm, graph::Usage::Storage).dependsOn(io.lightState);
     if (!names.peeled.empty()) mssm.read(names.peeled, graph::Usage::Sampled);
     mssm.execute([this, k, names](graph::PassContext& pass) { recordMssm(pass, *views_[k], names); });
 
@@ -643,6 +643,8 @@ void BackprojectionShadow::addViewPasses(graph::RenderGraph& graph, const plugin
         pass.read(names.map, graph::Usage::Sampled)
             .read(names.mssm, graph::Usage::Storage)
             .write(names.packets, graph::Usage::Storage)
+            .dependsOn(io.lightState)
+            .dependsOn(io.cameraState)
             .execute([this, io, k, names](graph::PassContext& p) { recordPackets(p, io, k, names); });
     }
 
@@ -656,7 +658,10 @@ void BackprojectionShadow::addViewPasses(graph::RenderGraph& graph, const plugin
         last ? plugin::addVisibilityPass(graph, io, visibility_, bind)
              : plugin::addVisibilityStepPass(graph, io, io.local(names.prefix + "visibility"), names.out, visibility_,
                                              bind);
-    visibility.read(names.map, graph::Usage::Sampled).read(names.mssm, graph::Usage::Storage);
+    visibility.read(names.map, graph::Usage::Sampled)
+        .read(names.mssm, graph::Usage::Storage)
+        .dependsOn(io.lightState)
+        .dependsOn(io.cameraState);
     if (!names.peeled.empty()) visibility.read(names.peeled, graph::Usage::Sampled);
     if (packets_) visibility.read(names.packets, graph::Usage::Storage);
     if (!before.empty()) visibility.read(before, graph::Usage::Storage);

@@ -173,7 +173,8 @@ private:
         std::string heads, nodes, counters, lengths, opaque, lastCounters;
     };
     void recordFragments(const graph::PassContext& pass, const Names& names) const;
-    void addLinksPass(graph::RenderGraph& graph, const Names& names, const std::string& name);
+    void addLinksPass(graph::RenderGraph& graph, const plugin::LightPassIo& io, const Names& names,
+                      const std::string& name);
     bool usesLinks() const
     {
         return settings_.pcfKernel > 1 && settings_.lookup == Lookup::Linked && settings_.filter != Filter::FirstFragment;
@@ -366,9 +367,11 @@ void DeepShadow::recordFragments(const graph::PassContext& pass, const Names& na
     vkCmdEndRendering(cmd);
 }
 
-void DeepShadow::addLinksPass(graph::RenderGraph& graph, const Names& names, const std::string& name)
+void DeepShadow::addLinksPass(graph::RenderGraph& graph, const plugin::LightPassIo& io, const Names& names,
+                              const std::string& name)
 {
     graph.addPass(name, graph::QueueKind::Compute)
+        .dependsOn(io.lightState)
         .read(names.heads, graph::Usage::Storage)
         .read(names.lengths, graph::Usage::Storage)
         .read(names.nodes, graph::Usage::Storage)
@@ -403,7 +406,8 @@ void DeepShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
     // and links passes walk every texel, also those the fragment pass does not draw.
     plugin::ClearPass(graph, io.local("clear"))
         .image(names.heads, {.uint32 = {0xFFFFFFFFu, 0, 0, 0}})
-        .buffer(names.counters, 0);
+        .buffer(names.counters, 0)
+        .dependsOn(io.lightState);
 
     graph.addPass(io.local("fragments"), graph::QueueKind::Graphics)
         .read(names.opaque, graph::Usage::DepthAttachment)
@@ -412,6 +416,7 @@ void DeepShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
         .write(names.nodes, graph::Usage::Storage)
         .read(names.counters, graph::Usage::Storage)
         .write(names.counters, graph::Usage::Storage)
+        .dependsOn(io.lightState)
         .execute([this, names](graph::PassContext& pass) { recordFragments(pass, names); });
 
     graph.addPass(io.local("sort"), graph::QueueKind::Compute)
@@ -421,6 +426,7 @@ void DeepShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
         .write(names.lengths, graph::Usage::Storage)
         .read(names.counters, graph::Usage::Storage)
         .write(names.counters, graph::Usage::Storage)
+        .dependsOn(io.lightState)
         .execute([this, names](graph::PassContext& pass) {
             sort_.bind(pass.cmd());
             gpu::DescriptorPush()
@@ -436,7 +442,7 @@ void DeepShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
 
     // Links only where the lookup follows them: PCF over the links (one tap, the brute
     // force and the first fragment walk no neighbour's list).
-    if (usesLinks()) addLinksPass(graph, names, io.local("links"));
+    if (usesLinks()) addLinksPass(graph, io, names, io.local("links"));
 
     const auto bind = [this, names](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
         descriptors.storageImage("heads", pass.image(names.heads))
@@ -449,7 +455,9 @@ void DeepShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
     plugin::addVisibilityPass(graph, io, visibility_, bind)
         .read(names.heads, graph::Usage::Storage)
         .read(names.nodes, graph::Usage::Storage)
-        .read(names.lengths, graph::Usage::Storage);
+        .read(names.lengths, graph::Usage::Storage)
+        .dependsOn(io.lightState)
+        .dependsOn(io.cameraState);
 
     // The debug views, culled unless one of their images is requested.
     const auto bindDebug = [this, names](const graph::PassContext& pass, gpu::DescriptorPush& descriptors,
@@ -472,6 +480,7 @@ void DeepShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
     graph.addPass(io.local("counters_readback"), graph::QueueKind::Transfer)
         .read(names.counters, graph::Usage::TransferSrc)
         .write(names.lastCounters, graph::Usage::TransferDst)
+        .dependsOn(io.lightState)
         .execute([names](graph::PassContext& pass) {
             const VkBufferCopy region{0, 0, sizeof(Counters)};
             vkCmdCopyBuffer(pass.cmd(), pass.buffer(names.counters).handle(), pass.buffer(names.lastCounters).handle(),

@@ -73,7 +73,10 @@ public:
             descriptors.sampledImage("shadowMap", pass.image(map), compareSampler_, pass.layout(map))
                 .storageBuffer("shadowMapBuffer", shadowMap_.buffer());
         };
-        plugin::addVisibilityPass(graph, io, visibility_, bind).read(map, graph::Usage::Sampled);
+        plugin::addVisibilityPass(graph, io, visibility_, bind)
+            .read(map, graph::Usage::Sampled)
+            .dependsOn(io.lightState)
+            .dependsOn(io.cameraState);
     }
 
 private:

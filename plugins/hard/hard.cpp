@@ -171,7 +171,10 @@ void HardShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
                                   settings_.filterRadiusTexels};
         visibility_.pushConstants(pass.cmd(), &push, sizeof(push));
     };
-    plugin::addVisibilityPass(graph, io, visibility_, bind).read(map, graph::Usage::Sampled);
+    plugin::addVisibilityPass(graph, io, visibility_, bind)
+        .read(map, graph::Usage::Sampled)
+        .dependsOn(io.lightState)
+        .dependsOn(io.cameraState);
 }
 
 } // namespace

@@ -165,7 +165,10 @@ void PcssShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
                             settings_.blockerSamples, settings_.filterSamples};
         visibility_.pushConstants(pass.cmd(), &push, sizeof(push));
     };
-    plugin::addVisibilityPass(graph, io, visibility_, bind).read(map, graph::Usage::Sampled);
+    plugin::addVisibilityPass(graph, io, visibility_, bind)
+        .read(map, graph::Usage::Sampled)
+        .dependsOn(io.lightState)
+        .dependsOn(io.cameraState);
 }
 
 } // namespace

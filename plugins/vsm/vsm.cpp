@@ -292,6 +292,7 @@ void VsmShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPas
     graph.addPass(moments, graph::QueueKind::Compute)
         .read(depth, graph::Usage::Sampled)
         .write(moments, graph::Usage::Storage)
+        .dependsOn(io.lightState)
         .execute([this, depth, moments](graph::PassContext& pass) { recordMoments(pass, depth, moments); });
 
     // What the lookup reads: the blurred map, the mip chain, or the moments themselves.
@@ -303,10 +304,12 @@ void VsmShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPas
         graph.addPass(io.local("blur_x"), graph::QueueKind::Compute)
             .read(moments, graph::Usage::Storage)
             .write(scratch, graph::Usage::Storage)
+            .dependsOn(io.lightState)
             .execute([this, moments, scratch](graph::PassContext& pass) { recordBlur(pass, moments, scratch, {1, 0}); });
         graph.addPass(io.local("blur_y"), graph::QueueKind::Compute)
             .read(scratch, graph::Usage::Storage)
             .write(blurred, graph::Usage::Storage)
+            .dependsOn(io.lightState)
             .execute([this, scratch, blurred](graph::PassContext& pass) { recordBlur(pass, scratch, blurred, {0, 1}); });
         levels = {blurred};
     }
@@ -316,6 +319,7 @@ void VsmShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPas
         graph.addPass(coarser, graph::QueueKind::Compute)
             .read(finer, graph::Usage::Storage)
             .write(coarser, graph::Usage::Storage)
+            .dependsOn(io.lightState)
             .execute([this, finer, coarser](graph::PassContext& pass) { recordDownsample(pass, finer, coarser); });
         levels.push_back(coarser);
     }
@@ -325,6 +329,7 @@ void VsmShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPas
             bindVisibility(pass, descriptors, levels);
         });
     for (const std::string& level : levels) visibility.read(level, graph::Usage::Sampled);
+    visibility.dependsOn(io.lightState).dependsOn(io.cameraState);
 }
 
 void VsmShadow::recordMoments(const graph::PassContext& pass, const std::string& depth,

@@ -306,10 +306,12 @@ void VssmShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
     graph.addPass(sat, graph::QueueKind::Compute)
         .read(map, graph::Usage::Sampled)
         .write(sat, graph::Usage::Storage)
+        .dependsOn(io.lightState)
         .execute([this, map, sat](graph::PassContext& pass) { recordSat(pass, map, sat); });
     graph.addPass(hsm, graph::QueueKind::Compute)
         .read(map, graph::Usage::Sampled)
         .write(hsm, graph::Usage::Storage)
+        .dependsOn(io.lightState)
         .execute([this, map, hsm](graph::PassContext& pass) { recordHsm(pass, map, hsm); });
 
     const auto bind = [this, map, sat, hsm](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
@@ -318,7 +320,9 @@ void VssmShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
     plugin::addVisibilityPass(graph, io, visibility_, bind)
         .read(map, graph::Usage::Sampled)
         .read(sat, graph::Usage::Storage)
-        .read(hsm, graph::Usage::Storage);
+        .read(hsm, graph::Usage::Storage)
+        .dependsOn(io.lightState)
+        .dependsOn(io.cameraState);
 
     // The debug views, culled unless one of their images is requested.
     const auto bindDebug = [this, map, sat, hsm](const graph::PassContext& pass, gpu::DescriptorPush& descriptors,

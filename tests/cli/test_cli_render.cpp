@@ -71,7 +71,8 @@ TEST_F(Cli, TimingsListEveryPass)
 TEST_F(Cli, TimingsGiveEveryPassAsAMultipleOfTheFloor)
 {
     const fs::path png = dir / "out.png";
-    const CliResult r = run(fmt::format("render {} -o '{}' --width 160 --height 90 --frames 3 --warmup 1 --timings",
+    const CliResult r = run(fmt::format("render {} -o '{}' --width 160 --height 90 --frames 3 --warmup 1 --timings "
+                                        "--keep-unchanged false",
                                         config("default.json"), png.string()));
     ASSERT_EQ(r.exitCode, 0) << r.err;
     // The rule heads the table.
@@ -113,6 +114,29 @@ TEST_F(Cli, TimingsGiveEveryPassAsAMultipleOfTheFloor)
     EXPECT_NEAR(multiple, sum / floorFrame, 0.006 + 0.002 * sum / floorFrame) << r.out;
 }
 
+// A still frame keeps every pass (keep_unchanged): --timings says so, and the image is
+// the one of every pass run; --keep-unchanged false runs them all again.
+TEST_F(Cli, TimingsShowPassesAStillFrameKept)
+{
+    const fs::path kept = dir / "kept.png", ran = dir / "ran.png";
+    const CliResult r = run(fmt::format("render {} -o '{}' --width 96 --height 54 --frames 3 --warmup 1 --timings",
+                                        config("default.json"), kept.string()));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const std::map<std::string, TimingRow> rows = timingRows(r.out);
+    for (const char* name : {"gbuffer", "light0.hard.shadow_map", "light0.hard.visibility", "shading"}) {
+        ASSERT_TRUE(rows.count(name)) << name << "\n" << r.out;
+        EXPECT_EQ(rows.at(name).gpuMs, 0.0) << name;
+        EXPECT_TRUE(has(rows.at(name).against, "kept in 3 of 3 frames")) << name << "\n" << r.out;
+    }
+    const CliResult all = run(fmt::format("render {} -o '{}' --width 96 --height 54 --frames 3 --warmup 1 --timings "
+                                          "--keep-unchanged false",
+                                          config("default.json"), ran.string()));
+    ASSERT_EQ(all.exitCode, 0) << all.err;
+    EXPECT_FALSE(has(all.out, "kept in")) << all.out;
+    EXPECT_GT(timingRows(all.out).at("light0.hard.shadow_map").gpuMs, 0.0) << all.out;
+    EXPECT_EQ(readFile(kept), readFile(ran)) << "the kept frame is not the frame of every pass";
+}
+
 // Warm-up frames run whatever the frame count; without --warmup, one when timing.
 TEST_F(Cli, WarmupAppliesAtOneFrameToo)
 {
@@ -133,7 +157,8 @@ TEST_F(Cli, WarmupAppliesAtOneFrameToo)
 TEST_F(Cli, StatsReportWhatCullingDrew)
 {
     const fs::path png = dir / "out.png";
-    const CliResult none = run(fmt::format("render {} -o '{}' --width 160 --height 90 --frames 2 --stats --culling none",
+    const CliResult none = run(fmt::format("render {} -o '{}' --width 160 --height 90 --frames 2 --stats --culling none "
+                                           "--keep-unchanged false",
                                            config("default.json"), png.string()));
     ASSERT_EQ(none.exitCode, 0) << none.err;
     EXPECT_NE(none.out.find("culling none"), std::string::npos) << none.out;

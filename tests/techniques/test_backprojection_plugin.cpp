@@ -658,10 +658,21 @@ config::RenderConfig platformWithSubLights(uint32_t width, uint32_t height)
 } // namespace
 
 // The views run one after another, so the graph gives their maps one allocation, and
-// their MSSMs one (§5: "only one shadow map and one MSSM are allocated and reused").
+// their MSSMs one (§5: "only one shadow map and one MSSM are allocated and reused"), when
+// nothing is kept from frame to frame (keep_unchanged false). Kept (the default), each
+// view's map and MSSM are persistent, with memory of their own: the time of drawing them
+// again traded for their memory.
 TEST_F(BackprojectionTest, SubLightsReuseOneMapAndOneMssm)
 {
-    render(platformWithSubLights(64, 36), test::platformScene());
+    config::RenderConfig cfg = platformWithSubLights(64, 36);
+    render(cfg, test::platformScene());
+    for (const graph::CompiledResource& r : frame->renderer.compiledGraph().resources) {
+        if (r.name.find(".view") != std::string::npos && r.name.ends_with("shadow_map")) {
+            EXPECT_TRUE(r.persistent) << r.name;
+        }
+    }
+    cfg.keepUnchanged = false;
+    render(cfg, test::platformScene());
     const graph::CompiledGraph& compiled = frame->renderer.compiledGraph();
     for (const char* image : {"shadow_map", "mssm"}) {
         std::set<int> slots;

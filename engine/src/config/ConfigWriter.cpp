@@ -189,6 +189,7 @@ json configJson(const RenderConfig& config, const fs::path& savedAs)
     out["culling"] = cullingModeName(config.culling);
     out["shadow_focus"] = config.shadowFocus;
     out["light_culling"] = config.lightCulling;
+    out["keep_unchanged"] = config.keepUnchanged;
     out["max_shadowed_lights"] = config.maxShadowedLights;
     out["draw_batching"] = config.batchDraws ? "batched" : "per-instance";
     out["output"] = {{"width", config.width}, {"height", config.height}};

@@ -254,6 +254,12 @@ RenderConfig parseConfig(const ConfigDocument& document)
         }
         config.lightCulling = culling->get<bool>();
     }
+    if (const json* keep = r.find("keep_unchanged")) {
+        if (!keep->is_boolean()) {
+            r.fail("/keep_unchanged", fmt::format("must be true or false, got {}", core::shortJson(*keep)));
+        }
+        config.keepUnchanged = keep->get<bool>();
+    }
     config.maxShadowedLights = r.integer("max_shadowed_lights", config.maxShadowedLights, 1, kMaxLights);
     config.batchDraws = r.choice("draw_batching", "batched", {"batched", "per-instance"}) == "batched";
     if (const json* out = r.find("output")) {

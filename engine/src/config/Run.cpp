@@ -95,6 +95,7 @@ RenderConfig resolveRun(RenderConfig config, const RunOptions& options, const Sc
     if (options.height) config.height = *options.height;
     if (options.frames) config.frames = *options.frames;
     if (options.culling) config.culling = *options.culling;
+    if (options.keepUnchanged) config.keepUnchanged = *options.keepUnchanged;
     return config;
 }
 

@@ -51,6 +51,9 @@ FrameRenderer::FrameRenderer(std::shared_ptr<SceneResources> resources, const co
       height_(config.height),
       lightBuffer_(context_, sizeof(LightData) * config::kMaxLights, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true, "lights"),
       gbufferCamera_(context_, sizeof(GBufferCameraData), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, "gbuffer.camera"),
+      castersFollowCamera_(config.culling != config::CullingMode::None || config.shadowFocus),
+      changes_(scene_),
+      keepUnchanged_(config.keepUnchanged),
       executor_(context_)
 {
     if (config.lights.empty() || config.lights.size() > config::kMaxLights) {
@@ -67,6 +70,7 @@ FrameRenderer::FrameRenderer(std::shared_ptr<SceneResources> resources, const co
 
     createTechniques(config, previous);
     updateLights(config, scene_.bounds());
+    noteChanges({});
     buildGraph();
 }
 
@@ -236,6 +240,7 @@ void FrameRenderer::buildGraph()
     for (;;) {
         graph_ = std::make_unique<graph::RenderGraph>();
         graph::RenderGraph& g = *graph_;
+        g.setKeepUnchanged(keepUnchanged_);
         g.declareImage({kGNormal, width_, height_, kGBufferNormalFormat});
         g.declareImage({kGAlbedo, width_, height_, kGBufferAlbedoFormat});
         g.declareImage({kGDepth, width_, height_, kFrameDepthFormat});
@@ -244,6 +249,7 @@ void FrameRenderer::buildGraph()
             .write(kGNormal, graph::Usage::ColorAttachment)
             .write(kGAlbedo, graph::Usage::ColorAttachment)
             .write(kGDepth, graph::Usage::DepthAttachment)
+            .dependsOn(render::kCameraState)
             .execute([this](graph::PassContext& pass) { recordGBuffer(pass); });
 
         bool restart = false;
@@ -263,6 +269,8 @@ void FrameRenderer::buildGraph()
             .read(kGNormal, graph::Usage::Sampled)
             .read(kGAlbedo, graph::Usage::Sampled)
             .write(kColor, graph::Usage::Storage)
+            .dependsOn(render::kCameraState)
+            .dependsOn(kLightTableState)
             .execute([this](graph::PassContext& pass) { recordShading(pass); });
         for (const LightSlot& slot : lights_)
             if (slot.drawn()) shading.read(slot.visibility, graph::Usage::Sampled);
@@ -289,6 +297,8 @@ bool FrameRenderer::registerTechnique(size_t light)
     io.prefix = shadowPassPrefix(light);
     io.gbuffer = gbufferIo();
     io.visibility = slot.visibility;
+    io.lightState = render::lightState(uint32_t(light));
+    io.cameraState = render::kCameraState;
     io.bindImage = [this](std::string_view name, const gpu::Image& image) { executor_.bindImage(name, image); };
     io.bindBuffer = [this](std::string_view name, const gpu::Buffer& buffer) { executor_.bindBuffer(name, buffer); };
     std::string failure;
@@ -337,6 +347,7 @@ void FrameRenderer::update(const config::RenderConfig& config, const scene::Scen
     }
     const std::vector<LightFate> before = fates();
     updateLights(config, scene.bounds());
+    noteChanges(movedInstances);
     // A light that left or entered the view, or changed rank: other passes, another shading.
     if (fates() != before) buildGraph();
 }
@@ -383,6 +394,29 @@ void FrameRenderer::decideLights()
     }
 }
 
+// The versions of the states that passes depend on (FrameChanges.h), for the executor to
+// keep what did not change.
+void FrameRenderer::noteChanges(std::span<const uint32_t> movedInstances)
+{
+    FrameInputs inputs;
+    inputs.cameraViewProj = cameraViewProj_;
+    inputs.lights = currentLights_;
+    inputs.sceneBounds = scene_.bounds();
+    inputs.movedInstances = movedInstances;
+    inputs.castersFollowCamera = castersFollowCamera_;
+    inputs.lightTable = {static_cast<const std::byte*>(lightBuffer_.mapped()), sizeof(LightData) * config::kMaxLights};
+    changes_.update(inputs, scene_);
+}
+
+void FrameRenderer::execute()
+{
+    graph_->setState(render::kCameraState, changes_.camera());
+    graph_->setState(kLightTableState, changes_.lightTable());
+    for (size_t i = 0; i < lights_.size(); ++i) graph_->setState(render::lightState(uint32_t(i)), changes_.light(i));
+    executor_.execute(*graph_);
+    changes_.viewsDrawn(resources_->casters().takeDrawnViews());
+}
+
 FrameTimings FrameRenderer::renderFrame()
 {
     const auto frameStart = std::chrono::steady_clock::now();
@@ -407,7 +441,7 @@ FrameTimings FrameRenderer::renderFrame()
         for (size_t i = 0; i < lights_.size(); ++i)
             if (lights_[i].drawn()) lights_[i].instance->update(currentLights_[i], scene_.bounds());
     }
-    executor_.execute(*graph_);
+    execute();
     for (uint32_t redraw = 0; redraw < kMaxRedraws; ++redraw) {
         bool grew = false;
         for (LightSlot& slot : lights_)
@@ -416,7 +450,7 @@ FrameTimings FrameRenderer::renderFrame()
         buildGraph();
         resources_->sceneGpu().beginFrame();
         visibility_->beginFrame(cameraViewProj_);
-        executor_.execute(*graph_);
+        execute();
         ++timings.redraws;
     }
     timings.passes = executor_.collectTimings();

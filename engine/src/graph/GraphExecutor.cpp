@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <chrono>
 #include <map>
+#include <optional>
 
 namespace penumbra::graph {
 
@@ -113,6 +114,16 @@ struct GraphExecutor::DeviceResources {
     std::vector<int> timerScope;     // per executed pass: its GPU timestamp scope, -1 for none
     bool frameRecorded = false;
     VkCommandBuffer cmd = VK_NULL_HANDLE;  // execute()'s, reused by every segment
+    // Per pass of the compiled graph: the versions of its states when it last ran with
+    // the present resources (nullopt: it has not, or it runs every frame), those of this
+    // frame, and whether it runs this frame.
+    std::vector<std::optional<std::vector<uint64_t>>> ranWith;
+    std::vector<std::optional<std::vector<uint64_t>>> frameVersions;
+    std::vector<char> runs;
+    std::vector<char> kept;  // per executed pass of the last frame, in order: not run
+    // New persistent images, to be put in the layout a frame starts them in before the
+    // next frame's passes (barriers from UNDEFINED).
+    std::vector<Barrier> newPersistent;
     // The names of the GPU passes recorded into the open segment (the compiled graph's:
     // valid while it executes; the vector keeps its capacity, so a frame allocates nothing).
     std::vector<const std::string*> segmentPasses;
@@ -135,6 +146,18 @@ struct GraphExecutor::DeviceResources {
     void releaseTransients();
     void resolveImports(const CompiledGraph& graph);
     void recordBarriers(VkCommandBuffer cmd, const CompiledGraph& graph, const std::vector<Barrier>& barriers);
+    void decideRuns(const RenderGraph& graph, const CompiledGraph& compiled);
+    // After a frame was recorded whole: what ran is what the resources hold now, and the
+    // new persistent images have their layout.
+    void rememberRuns()
+    {
+        for (size_t i = 0; i < runs.size(); ++i)
+            if (runs[i]) ranWith[i] = frameVersions[i];
+        newPersistent.clear();
+    }
+    // A frame that failed part way: none of its results are kept.
+    void forgetRuns() { std::fill(ranWith.begin(), ranWith.end(), std::nullopt); }
+    void recordKept(VkCommandBuffer cmd, const CompiledGraph& graph, const CompiledPass& pass);
 };
 
 void GraphExecutor::DeviceResources::releaseTransients()
@@ -189,6 +212,18 @@ void GraphExecutor::DeviceResources::createTransients(const CompiledGraph& graph
         bytesWithoutAliasing += transientMemory.back().bytes;
     }
     for (uint32_t s = 0; s < graph.memorySlots.size(); ++s) placeSlot(graph, s, requirements);
+    ranWith.assign(graph.passes.size(), std::nullopt);
+    newPersistent.clear();
+    std::vector<VkImageLayout> startLayout(count, VK_IMAGE_LAYOUT_UNDEFINED);
+    for (const CompiledPass& pass : graph.passes)
+        for (const ResourceUse& use : pass.uses) startLayout[use.resource] = use.scope.layout;
+    for (uint32_t r = 0; r < count; ++r) {
+        const CompiledResource& res = graph.resources[r];
+        if (!res.persistent || !res.isImage || res.firstUse < 0 || startLayout[r] == VK_IMAGE_LAYOUT_UNDEFINED) continue;
+        newPersistent.push_back(Barrier{r, true, VK_IMAGE_LAYOUT_UNDEFINED, startLayout[r], VK_PIPELINE_STAGE_2_NONE,
+                                        VK_ACCESS_2_NONE, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                                        VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT});
+    }
     // compile() puts every used transient in a slot; should one be missing, it still
     // gets memory rather than an unbound object.
     for (uint32_t r = 0; r < count; ++r) {
@@ -399,6 +434,56 @@ void GraphExecutor::DeviceResources::recordBarriers(VkCommandBuffer cmd, const C
     vkCmdPipelineBarrier2(cmd, &dependency);
 }
 
+// Which passes run this frame: every pass, except one that may be kept, ran with these
+// resources, sees the versions of its states it ran with, and shares no resource with a
+// pass that writes it this frame (a pass that runs writes what its readers read, and
+// what another writer of the same resource would then overwrite or build on).
+void GraphExecutor::DeviceResources::decideRuns(const RenderGraph& graph, const CompiledGraph& compiled)
+{
+    const size_t count = compiled.passes.size();
+    runs.assign(count, 1);
+    frameVersions.assign(count, std::nullopt);
+    for (size_t i = 0; i < count; ++i) {
+        const CompiledPass& pass = compiled.passes[i];
+        if (pass.keptWhile.empty()) continue;
+        std::vector<uint64_t> versions;
+        for (const std::string& state : pass.keptWhile) {
+            const std::optional<uint64_t> version = graph.stateVersion(state);
+            if (!version) break;
+            versions.push_back(*version);
+        }
+        if (versions.size() != pass.keptWhile.size()) continue;
+        runs[i] = !(ranWith[i] && *ranWith[i] == versions);
+        frameVersions[i] = std::move(versions);
+    }
+    std::vector<char> written(compiled.resources.size());
+    for (bool more = true; more;) {
+        more = false;
+        std::fill(written.begin(), written.end(), 0);
+        for (size_t i = 0; i < count; ++i)
+            if (runs[i])
+                for (const ResourceUse& use : compiled.passes[i].uses) written[use.resource] |= char(use.writes);
+        for (size_t i = 0; i < count; ++i) {
+            if (runs[i]) continue;
+            const auto& uses = compiled.passes[i].uses;
+            if (std::any_of(uses.begin(), uses.end(), [&](const ResourceUse& use) { return written[use.resource] != 0; })) {
+                runs[i] = 1;
+                more = true;
+            }
+        }
+    }
+}
+
+// A kept pass: its barriers still move its resources through the layouts the passes
+// after it expect (a transition from a defined layout keeps the contents).
+void GraphExecutor::DeviceResources::recordKept(VkCommandBuffer cmd, const CompiledGraph& graph, const CompiledPass& pass)
+{
+    recordBarriers(cmd, graph, pass.barriersBefore);
+    cpuMs.push_back(0.0);
+    timerScope.push_back(-1);
+    kept.push_back(1);
+}
+
 // ---------------------------------------------------------------------------------------
 // PassContext
 
@@ -475,6 +560,7 @@ const CompiledGraph& GraphExecutor::prepare(RenderGraph& graph)
     resources.frameRecorded = false;
     resources.cpuMs.clear();
     resources.timerScope.clear();
+    resources.kept.clear();
     const std::shared_ptr<const CompiledGraph> compiled = graph.compile();
     if (compiled != compiled_) {
         compiled_.reset();
@@ -498,6 +584,7 @@ const CompiledGraph& GraphExecutor::prepare(RenderGraph& graph)
     }
     resources.cpuMs.reserve(compiled->passes.size());
     resources.timerScope.reserve(compiled->passes.size());
+    resources.decideRuns(graph, *compiled);
     return *compiled;
 }
 
@@ -521,6 +608,10 @@ void GraphExecutor::recordGpuPass(VkCommandBuffer cmd, RenderGraph& graph, size_
 {
     DeviceResources& resources = *resources_;
     const CompiledPass& pass = compiled_->passes[index];
+    if (!resources.runs[index]) {
+        resources.recordKept(cmd, *compiled_, pass);
+        return;
+    }
     resources.recordBarriers(cmd, *compiled_, pass.barriersBefore);
     resources.context.beginLabel(cmd, pass.name);
     resources.segmentPasses.push_back(&pass.name);
@@ -540,6 +631,7 @@ void GraphExecutor::recordGpuPass(VkCommandBuffer cmd, RenderGraph& graph, size_
     }
     resources.cpuMs.push_back(core::msSince(start));
     resources.timerScope.push_back(scope);
+    resources.kept.push_back(0);
     if (scope >= 0) resources.timer->endScope(cmd, uint32_t(scope));
     resources.context.endLabel(cmd);
 }
@@ -557,6 +649,7 @@ void GraphExecutor::runHostPass(RenderGraph& graph, size_t index)
     runCallback(graph.executeFn(pass.declarationIndex), context, pass, "running on the host");
     resources.cpuMs.push_back(core::msSince(start));
     resources.timerScope.push_back(-1);
+    resources.kept.push_back(0);
 }
 
 void GraphExecutor::execute(RenderGraph& graph)
@@ -573,26 +666,33 @@ void GraphExecutor::execute(RenderGraph& graph)
     }
     resources.beginSegment();
     if (resources.timed) resources.timer->beginFrame(resources.cmd);
-    for (size_t i = 0; i < compiled.passes.size(); ++i) {
-        const CompiledPass& pass = compiled.passes[i];
-        if (pass.queue != QueueKind::Host) {
-            recordGpuPass(resources.cmd, graph, i);
-            if (resources.context.isolatePasses() && i + 1 < compiled.passes.size()) {
-                resources.submitSegment();
-                resources.beginSegment();
+    resources.recordBarriers(resources.cmd, compiled, resources.newPersistent);
+    try {
+        for (size_t i = 0; i < compiled.passes.size(); ++i) {
+            const CompiledPass& pass = compiled.passes[i];
+            if (pass.queue != QueueKind::Host || !resources.runs[i]) {
+                recordGpuPass(resources.cmd, graph, i);
+                if (resources.runs[i] && resources.context.isolatePasses() && i + 1 < compiled.passes.size()) {
+                    resources.submitSegment();
+                    resources.beginSegment();
+                }
+                continue;
             }
-            continue;
+            // The host pass's barriers end the segment before it: their HOST destination
+            // makes the segment's writes available to the host, and the wait makes them
+            // visible. Its own writes reach the next segment through the submission.
+            resources.recordBarriers(resources.cmd, compiled, pass.barriersBefore);
+            resources.submitSegment();
+            runHostPass(graph, i);
+            resources.beginSegment();
         }
-        // The host pass's barriers end the segment before it: their HOST destination
-        // makes the segment's writes available to the host, and the wait makes them
-        // visible. Its own writes reach the next segment through the submission.
-        resources.recordBarriers(resources.cmd, compiled, pass.barriersBefore);
+        resources.recordBarriers(resources.cmd, compiled, compiled.barriersAfter);
         resources.submitSegment();
-        runHostPass(graph, i);
-        resources.beginSegment();
+    } catch (...) {
+        resources.forgetRuns();
+        throw;
     }
-    resources.recordBarriers(resources.cmd, compiled, compiled.barriersAfter);
-    resources.submitSegment();
+    resources.rememberRuns();
     resources.frameRecorded = true;
 }
 
@@ -600,14 +700,21 @@ void GraphExecutor::record(VkCommandBuffer cmd, RenderGraph& graph)
 {
     DeviceResources& resources = *resources_;
     const CompiledGraph& compiled = prepare(graph);
-    for (const CompiledPass& pass : compiled.passes)
-        if (pass.queue == QueueKind::Host)
+    for (size_t i = 0; i < compiled.passes.size(); ++i)
+        if (compiled.passes[i].queue == QueueKind::Host && resources.runs[i])
             throw Error(fmt::format("render graph: pass '{}' is a host pass: record() fills one command buffer and "
                                     "cannot wait for the GPU before it; run the frame with execute()",
-                                    pass.name));
+                                    compiled.passes[i].name));
     if (resources.timed) resources.timer->beginFrame(cmd);
-    for (size_t i = 0; i < compiled.passes.size(); ++i) recordGpuPass(cmd, graph, i);
-    resources.recordBarriers(cmd, compiled, compiled.barriersAfter);
+    resources.recordBarriers(cmd, compiled, resources.newPersistent);
+    try {
+        for (size_t i = 0; i < compiled.passes.size(); ++i) recordGpuPass(cmd, graph, i);
+        resources.recordBarriers(cmd, compiled, compiled.barriersAfter);
+    } catch (...) {
+        resources.forgetRuns();
+        throw;
+    }
+    resources.rememberRuns();
     resources.frameRecorded = true;
 }
 
@@ -624,7 +731,7 @@ std::vector<PassTiming> GraphExecutor::collectTimings() const
     for (size_t i = 0; i < resources.cpuMs.size(); ++i) {
         const int scope = resources.timerScope[i];
         const double gpuMs = scope >= 0 && size_t(scope) < gpuTimes.size() ? gpuTimes[size_t(scope)].gpuMs : 0.0;
-        out.push_back({compiled_->passes[i].name, gpuMs, resources.cpuMs[i]});
+        out.push_back({compiled_->passes[i].name, gpuMs, resources.cpuMs[i], resources.kept[i] != 0});
     }
     return out;
 }

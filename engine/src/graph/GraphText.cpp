@@ -2,6 +2,7 @@
 #include "penumbra/graph/RenderGraph.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <vulkan/vulkan.hpp>
 #include <vulkan/vulkan_to_string.hpp>
 
@@ -30,6 +31,7 @@ std::string describe(const CompiledResource& res)
     text += fmt::format(", {}", mebibytes(res.sizeBytes));
     if (res.hostVisible) text += ", host-visible";
     if (res.imported) text += ", imported";
+    if (res.persistent) text += ", persistent";
     else if (res.memorySlot >= 0) text += fmt::format(", slot {}", res.memorySlot);
     if (res.markedOutput) text += ", output";
     if (res.readBack) text += ", read back";
@@ -73,7 +75,9 @@ std::string CompiledGraph::toText() const
                                    mebibytes(transientBytesAliased), memorySlots.size());
     text += "passes in order:\n";
     for (size_t i = 0; i < passes.size(); ++i) {
-        text += fmt::format("  {} {} ({})\n", i, passes[i].name, queueName(passes[i].queue));
+        text += fmt::format("  {} {} ({}{})\n", i, passes[i].name, queueName(passes[i].queue),
+                            passes[i].keptWhile.empty() ? "" : fmt::format(", kept while {} unchanged",
+                                                                           fmt::join(passes[i].keptWhile, ", ")));
         for (const Barrier& b : passes[i].barriersBefore) text += describe(b, resources);
     }
     if (!barriersAfter.empty()) {

@@ -9,6 +9,7 @@
 #include <vulkan/vulkan_to_string.hpp>
 
 #include <algorithm>
+#include <limits>
 #include <optional>
 #include <queue>
 #include <unordered_map>
@@ -202,6 +203,33 @@ PassBuilder& PassBuilder::execute(ExecuteFn fn)
     return *this;
 }
 
+PassBuilder& PassBuilder::dependsOn(std::string_view state)
+{
+    if (state.empty()) throw Error(fmt::format("render graph: pass '{}' depends on a state without a name", graph_->passes_[pass_].name));
+    std::vector<std::string>& states = graph_->passes_[pass_].states;
+    if (std::find(states.begin(), states.end(), state) == states.end()) {
+        states.emplace_back(state);
+        ++graph_->version_;
+    }
+    return *this;
+}
+
+void RenderGraph::setKeepUnchanged(bool keep)
+{
+    if (keep == keepUnchanged_) return;
+    keepUnchanged_ = keep;
+    ++version_;
+}
+
+void RenderGraph::setState(std::string_view state, uint64_t version) { states_.insert_or_assign(std::string(state), version); }
+
+std::optional<uint64_t> RenderGraph::stateVersion(std::string_view state) const
+{
+    const auto found = states_.find(std::string(state));
+    if (found == states_.end()) return std::nullopt;
+    return found->second;
+}
+
 RenderGraph::ResourceDecl* RenderGraph::findResource(std::string_view name)
 {
     const auto found = resourceIndex_.find(std::string(name));
@@ -297,9 +325,9 @@ void RenderGraph::readBack(std::string_view buffer)
 class GraphCompiler {
 public:
     GraphCompiler(const std::vector<RenderGraph::ResourceDecl>& resources,
-                  const std::vector<RenderGraph::PassDecl>& passes)
-        : resources_(resources), passes_(passes), uses_(passes.size()), preds_(passes.size()),
-          succs_(passes.size())
+                  const std::vector<RenderGraph::PassDecl>& passes, bool keepUnchanged)
+        : resources_(resources), passes_(passes), keepUnchanged_(keepUnchanged), uses_(passes.size()),
+          preds_(passes.size()), succs_(passes.size())
     {}
 
     std::shared_ptr<const CompiledGraph> run()
@@ -318,6 +346,7 @@ public:
             if (live[p]) out->passes.push_back({passes_[p].name, passes_[p].queue, p, uses_[p], {}});
 
         describeResources(*out);
+        findKeptPasses(*out);
         collectUsageFlags(*out, live);
         computeLifetimes(*out);
         assignMemorySlots(*out);
@@ -534,6 +563,37 @@ private:
         return live;
     }
 
+    // The passes that may be kept: those that declared states, less those that write a
+    // resource some pass running every frame also writes (its writes would be lost, or
+    // mixed with a kept result), repeated until no more drop out. What they write is
+    // persistent.
+    void findKeptPasses(CompiledGraph& out) const
+    {
+        if (!keepUnchanged_) return;
+        for (CompiledPass& pass : out.passes) pass.keptWhile = passes_[pass.declarationIndex].states;
+        for (bool dropped = true; dropped;) {
+            dropped = false;
+            std::vector<bool> everyFrame(out.resources.size(), false);
+            for (const CompiledPass& pass : out.passes)
+                for (const ResourceUse& use : pass.uses)
+                    if (use.writes && pass.keptWhile.empty()) everyFrame[use.resource] = true;
+            for (CompiledPass& pass : out.passes) {
+                if (pass.keptWhile.empty()) continue;
+                const bool shared = std::any_of(pass.uses.begin(), pass.uses.end(), [&](const ResourceUse& use) {
+                    return use.writes && everyFrame[use.resource];
+                });
+                if (shared) {
+                    pass.keptWhile.clear();
+                    dropped = true;
+                }
+            }
+        }
+        for (const CompiledPass& pass : out.passes)
+            if (!pass.keptWhile.empty())
+                for (const ResourceUse& use : pass.uses)
+                    if (use.writes && !out.resources[use.resource].imported) out.resources[use.resource].persistent = true;
+    }
+
     void describeResources(CompiledGraph& out) const
     {
         out.resources.resize(resources_.size());
@@ -645,6 +705,7 @@ private:
                 if (largest < 0 || size > out.memorySlots[largest].sizeBytes) largest = s;
             }
             if (best < 0) best = largest;
+            if (res.persistent) best = -1;  // a slot of its own, never reused
             if (best < 0) {
                 best = int(out.memorySlots.size());
                 out.memorySlots.emplace_back().hostVisible = res.hostVisible;
@@ -653,7 +714,7 @@ private:
             MemorySlot& slot = out.memorySlots[best];
             slot.sizeBytes = std::max(slot.sizeBytes, need);
             slot.resources.push_back(r);
-            busyUntil[best] = res.lastUse;
+            busyUntil[best] = res.persistent ? std::numeric_limits<int>::max() : res.lastUse;
             res.memorySlot = best;
             out.transientBytesUnaliased += need;
         }
@@ -670,6 +731,16 @@ private:
                 state[r].writeStage = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
                 state[r].writeAccess = VK_ACCESS_2_MEMORY_WRITE_BIT;
             }
+        // A persistent resource holds the last frame's contents, in the layout of its last
+        // use then (the executor puts a new one there before its first frame); the last
+        // frame's work on it must finish first.
+        for (const CompiledPass& pass : out.passes)
+            for (const ResourceUse& use : pass.uses)
+                if (out.resources[use.resource].persistent) {
+                    state[use.resource].layout = use.scope.layout;
+                    state[use.resource].writeStage = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+                    state[use.resource].writeAccess = VK_ACCESS_2_MEMORY_WRITE_BIT;
+                }
         // The resource that used an aliased slot before: its last accesses must finish
         // before the next resource in the slot overwrites the memory.
         std::vector<int> previousInSlot(resources_.size(), -1);
@@ -759,6 +830,7 @@ private:
 
     const std::vector<RenderGraph::ResourceDecl>& resources_;
     const std::vector<RenderGraph::PassDecl>& passes_;
+    const bool keepUnchanged_;
     std::vector<std::vector<ResourceUse>> uses_;
     std::vector<std::vector<uint32_t>> preds_;
     std::vector<std::vector<uint32_t>> succs_;
@@ -774,7 +846,7 @@ private:
 std::shared_ptr<const CompiledGraph> RenderGraph::compile()
 {
     if (compiled_ && compiledVersion_ == version_) return compiled_;
-    compiled_ = GraphCompiler(resources_, passes_).run();
+    compiled_ = GraphCompiler(resources_, passes_, keepUnchanged_).run();
     compiledVersion_ = version_;
     return compiled_;
 }

@@ -39,4 +39,10 @@ ClearPass& ClearPass::buffer(std::string_view buffer, uint32_t word)
     return *this;
 }
 
+ClearPass& ClearPass::dependsOn(std::string_view state)
+{
+    pass_.dependsOn(state);
+    return *this;
+}
+
 } // namespace penumbra::plugin

@@ -2,13 +2,18 @@
 
 #include "render/CasterCulling.h"
 
+#include <algorithm>
 #include <cstddef>
+#include <utility>
 
 namespace penumbra::render {
+
+std::string lightState(uint32_t light) { return "light" + std::to_string(light); }
 
 void Casters::draw(VkCommandBuffer cmd, const CasterView& view, DrawFilter filter,
                    const std::function<void(const gpu::Image& texture)>& bindTexture) const
 {
+    if (std::find(drawnViews_.begin(), drawnViews_.end(), view) == drawnViews_.end()) drawnViews_.push_back(view);
     if (!culling_) {
         scene_->draw(cmd, filter, bindTexture);
         return;
@@ -19,6 +24,8 @@ void Casters::draw(VkCommandBuffer cmd, const CasterView& view, DrawFilter filte
     const std::vector<uint8_t>* casters = culling_->casters(view);
     culling_->countDraw(scene_->draw(cmd, filter, bindTexture, casters));
 }
+
+std::vector<CasterView> Casters::takeDrawnViews() { return std::exchange(drawnViews_, {}); }
 
 const scene::Aabb* Casters::focus() const { return culling_ ? culling_->focus() : nullptr; }
 

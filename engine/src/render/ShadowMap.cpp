@@ -191,6 +191,7 @@ void ShadowMap::addMapPass(graph::RenderGraph& graph, const std::string& image, 
     graph.declareImage({image, atlasWidth(), atlasHeight(), kShadowDepthFormat});
     graph.addPass(image, graph::QueueKind::Graphics)
         .write(image, graph::Usage::DepthAttachment)
+        .dependsOn(lightState(lightIndex_))
         .execute([this, image, bias, firstView, unmasked](graph::PassContext& pass) {
             const ShadowMapPlacement own{frusta_, {0, 0}, firstView};
             recordLayer(pass, image, bias, {&own, 1}, nullptr, unmasked);
@@ -218,6 +219,7 @@ void ShadowMap::addPeeledDepthPass(graph::RenderGraph& graph, const std::string&
     graph.addPass(image, graph::QueueKind::Graphics)
         .read(nearerLayer, graph::Usage::Sampled)
         .write(image, graph::Usage::DepthAttachment)
+        .dependsOn(lightState(lightIndex_))
         .execute([this, image, nearerLayer, bias, firstView](graph::PassContext& pass) {
             const ShadowMapPlacement own{frusta_, {0, 0}, firstView};
             recordLayer(pass, image, bias, {&own, 1}, &nearerLayer);

@@ -28,6 +28,8 @@ protected:
         cfg.width = 96;
         cfg.height = 64;
         test::setShadow(cfg.lights[0], technique, {{"resolution", resolution}});
+        // Every frame submits every pass: the faults count submissions and passes.
+        cfg.keepUnchanged = false;
         return cfg;
     }
     // The GpuError of rendering `cfg`, or a failure when it renders.

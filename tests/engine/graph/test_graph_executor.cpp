@@ -889,3 +889,163 @@ TEST_F(GraphExecutorTest, HostPassMisuseNamesThePass)
     executor.execute(graph);
     EXPECT_TRUE(allEqual(readWords(*context, executor.buffer("gpu")), 0, 64, 6u));
 }
+
+// Keeping what did not change (PassBuilder::dependsOn): "draw" depends on the light and
+// clears a persistent image to the light's value; "combine" depends on the camera and
+// copies that image, plus the camera's value, into the output; "every" declares no state.
+// Each frame's output must be what running every pass would give, whichever passes ran,
+// under synchronization validation (the kept image's layouts across frames).
+TEST_F(GraphExecutorTest, KeptPassesRunOnlyWhenTheirStatesOrInputsChange)
+{
+    constexpr uint32_t kEdge = 4;
+    constexpr VkDeviceSize kImageBytes = kEdge * kEdge * sizeof(uint32_t);
+    uint32_t lightValue = 10, cameraValue = 100, everyValue = 1000;
+    std::map<std::string, int> calls;
+    const auto build = [&](RenderGraph& graph) {
+        graph.declareImage({"map", kEdge, kEdge, VK_FORMAT_R32_UINT});
+        graph.declareBuffer({"out", kImageBytes + 256, false});
+        graph.declareBuffer({"every", 256, false});
+        graph.addPass("draw", QueueKind::Transfer)
+            .write("map", Usage::TransferDst)
+            .dependsOn("light")
+            .execute([&](PassContext& pass) {
+                ++calls["draw"];
+                clearColor(pass, "map", lightValue);
+            });
+        graph.addPass("combine", QueueKind::Transfer)
+            .read("map", Usage::TransferSrc)
+            .write("out", Usage::TransferDst)
+            .dependsOn("camera")
+            .execute([&](PassContext& pass) {
+                ++calls["combine"];
+                fill(pass, "out", cameraValue, kImageBytes, 256);
+                copyImageToBuffer(pass, "map", "out");
+            });
+        graph.addPass("every", QueueKind::Transfer).write("every", Usage::TransferDst).execute([&](PassContext& pass) {
+            ++calls["every"];
+            fill(pass, "every", everyValue);
+        });
+        graph.markOutput("out");
+        graph.markOutput("every");
+    };
+    RenderGraph graph;
+    build(graph);
+    GraphExecutor executor(*context, kNoTimestamps);
+    const auto frame = [&](const std::string& what, std::map<std::string, int> expectedCalls) {
+        SCOPED_TRACE(what);
+        calls.clear();
+        executor.execute(graph);
+        for (const auto& [pass, count] : expectedCalls) EXPECT_EQ(calls[pass], count) << pass;
+        const std::vector<uint32_t> out = readWords(*context, executor.buffer("out"));
+        EXPECT_TRUE(allEqual(out, 0, kEdge * kEdge, lightValue)) << out[0];
+        EXPECT_TRUE(allEqual(out, kEdge * kEdge, out.size(), cameraValue)) << out.back();
+        EXPECT_TRUE(allEqual(readWords(*context, executor.buffer("every")), 0, 64, everyValue));
+        std::map<std::string, bool> kept;
+        for (const PassTiming& t : executor.collectTimings()) kept[t.name] = t.kept;
+        for (const auto& [pass, count] : expectedCalls) EXPECT_EQ(kept[pass], count == 0) << pass << " kept";
+    };
+
+    frame("a state never set: every pass runs", {{"draw", 1}, {"combine", 1}, {"every", 1}});
+    graph.setState("light", 1);
+    graph.setState("camera", 1);
+    frame("first frame with states", {{"draw", 1}, {"combine", 1}, {"every", 1}});
+    frame("nothing changed", {{"draw", 0}, {"combine", 0}, {"every", 1}});
+    everyValue = 1001;
+    frame("an every-frame pass that nothing kept reads", {{"draw", 0}, {"combine", 0}, {"every", 1}});
+    cameraValue = 101;
+    graph.setState("camera", 2);
+    frame("the camera: combine runs and reads the kept map", {{"draw", 0}, {"combine", 1}, {"every", 1}});
+    lightValue = 11;
+    graph.setState("light", 2);
+    frame("the light: draw runs, and combine, which reads its map", {{"draw", 1}, {"combine", 1}, {"every", 1}});
+    frame("still again", {{"draw", 0}, {"combine", 0}, {"every", 1}});
+
+    // What a kept pass writes has memory of its own; what it reads need not.
+    const CompiledGraph& compiled = *executor.compiled();
+    const CompiledResource& map = compiled.resources.at(size_t(resourceIndex(compiled, "map")));
+    EXPECT_TRUE(map.persistent);
+    ASSERT_GE(map.memorySlot, 0);
+    EXPECT_EQ(compiled.memorySlots.at(size_t(map.memorySlot)).resources.size(), 1u);
+    EXPECT_FALSE(compiled.resources.at(size_t(resourceIndex(compiled, "every"))).persistent);
+
+    // A callback that throws leaves nothing to keep: the next frame runs everything.
+    bool fail = false;
+    RenderGraph failing;
+    build(failing);
+    failing.declareBuffer({"sink", 256, false});
+    failing.addPass("fails", QueueKind::Transfer)
+        .read("out", Usage::TransferSrc)
+        .write("sink", Usage::TransferDst)
+        .execute([&](PassContext& pass) {
+            if (fail) throw Error("boom");
+            fill(pass, "sink", 1);
+        });
+    failing.markOutput("sink");
+    failing.setState("light", 1);
+    failing.setState("camera", 1);
+    GraphExecutor second(*context, kNoTimestamps);
+    second.execute(failing);
+    calls.clear();
+    second.execute(failing);
+    EXPECT_EQ(calls["draw"], 0);
+    fail = true;
+    EXPECT_THROW(second.execute(failing), Error);
+    fail = false;
+    calls.clear();
+    second.execute(failing);
+    EXPECT_EQ(calls["draw"], 1) << "a failed frame's results were kept";
+    EXPECT_EQ(calls["combine"], 1);
+}
+
+// Keeping off (RenderGraph::setKeepUnchanged(false)) runs every pass every frame and
+// keeps nothing persistent; a pass that shares what it writes with a pass that runs every
+// frame is never kept.
+TEST_F(GraphExecutorTest, KeepingOffAndSharedWritesRunEveryFrame)
+{
+    int draws = 0, shares = 0;
+    RenderGraph graph;
+    graph.declareBuffer({"map", 256, false});
+    graph.declareBuffer({"shared", 256, false});
+    graph.declareBuffer({"order", 256, false});  // puts "add" after "clear shared"
+    graph.addPass("draw", QueueKind::Transfer).write("map", Usage::TransferDst).dependsOn("light").execute([&](PassContext& pass) {
+        ++draws;
+        fill(pass, "map", 7);
+    });
+    graph.addPass("clear shared", QueueKind::Transfer)
+        .write("shared", Usage::TransferDst)
+        .write("order", Usage::TransferDst)
+        .execute([&](PassContext& pass) {
+            fill(pass, "shared", 0);
+            fill(pass, "order", 0);
+        });
+    graph.addPass("add", QueueKind::Transfer)
+        .read("map", Usage::TransferSrc)
+        .read("order", Usage::TransferSrc)
+        .write("shared", Usage::TransferDst)
+        .dependsOn("light")
+        .execute([&](PassContext& pass) {
+            ++shares;
+            const VkBufferCopy region{0, 0, 128};
+            vkCmdCopyBuffer(pass.cmd(), pass.buffer("map").handle(), pass.buffer("shared").handle(), 1, &region);
+        });
+    graph.markOutput("shared");
+    graph.setState("light", 1);
+
+    GraphExecutor keeping(*context, kNoTimestamps);
+    for (int frame = 0; frame < 3; ++frame) keeping.execute(graph);
+    EXPECT_EQ(draws, 1);
+    EXPECT_EQ(shares, 3) << "'add' writes what 'clear shared' rewrites every frame";
+    for (const CompiledPass& pass : keeping.compiled()->passes)
+        EXPECT_EQ(pass.keptWhile.empty(), pass.name != "draw") << pass.name;
+    std::vector<uint32_t> words = readWords(*context, keeping.buffer("shared"));
+    EXPECT_TRUE(allEqual(words, 0, 32, 7u));
+    EXPECT_TRUE(allEqual(words, 32, 64, 0u));
+
+    graph.setKeepUnchanged(false);
+    GraphExecutor uncached(*context, kNoTimestamps);
+    draws = shares = 0;
+    for (int frame = 0; frame < 3; ++frame) uncached.execute(graph);
+    EXPECT_EQ(draws, 3);
+    EXPECT_EQ(shares, 3);
+    for (const CompiledResource& res : uncached.compiled()->resources) EXPECT_FALSE(res.persistent) << res.name;
+}

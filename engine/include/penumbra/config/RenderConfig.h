@@ -157,6 +157,11 @@ struct RenderConfig {
     // "light_culling": a light that reaches no receiver the camera sees gets no passes and
     // no light (frame/LightInfluence.h); false draws every light.
     bool lightCulling = true;
+    // "keep_unchanged": a pass whose light, casters, camera and inputs did not change
+    // since it last ran keeps its results instead of running again (a shadow map under a
+    // still light, a still frame's every pass; graph::PassBuilder::dependsOn); false runs
+    // every pass every frame. The images are the same either way.
+    bool keepUnchanged = true;
     // "max_shadowed_lights": shadows on at most this many lights, the ones that contribute
     // most to the image; the others are lit unshadowed (1 to kMaxLights).
     uint32_t maxShadowedLights = kMaxLights;

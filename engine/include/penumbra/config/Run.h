@@ -30,6 +30,7 @@ struct RunOptions {
     std::optional<uint32_t> height;
     std::optional<uint32_t> frames;
     std::optional<CullingMode> culling;
+    std::optional<bool> keepUnchanged;  // the config's "keep_unchanged"
     // --allow-root: folders a glTF scene's URIs may name, added to every glTF part's
     // allowed roots (the config's scene.allowed_roots).
     std::vector<std::filesystem::path> allowedRoots;

@@ -20,6 +20,7 @@
 #include "penumbra/plugin/GBuffer.h"
 #include "penumbra/plugin/PluginRegistry.h"
 #include "penumbra/render/Casters.h"
+#include "penumbra/frame/FrameChanges.h"
 #include "penumbra/frame/LightInfluence.h"
 #include "penumbra/frame/SceneResources.h"
 #include "penumbra/render/Projection.h"
@@ -198,6 +199,8 @@ private:
     void updateLights(const config::RenderConfig& config, const scene::Aabb& sceneBounds);
     void decideLights();
     std::vector<LightFate> fates() const;
+    void noteChanges(std::span<const uint32_t> movedInstances);
+    void execute();
     void recordGBuffer(graph::PassContext& pass);
     void recordShading(graph::PassContext& pass);
     std::vector<float> readFloats(const std::string& name) const;
@@ -223,6 +226,9 @@ private:
     std::vector<scene::Light> currentLights_;  // as the last update() left them
     std::vector<std::string> warnings_;
     std::vector<std::string> requestedImages_;  // marked outputs again when the graph is declared again
+    bool castersFollowCamera_ = false;  // culling or focusing: the casters drawn depend on the camera
+    FrameChanges changes_;
+    bool keepUnchanged_ = true;  // "keep_unchanged"
     std::unique_ptr<graph::RenderGraph> graph_;
     graph::GraphExecutor executor_;
 };

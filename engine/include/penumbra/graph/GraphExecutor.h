@@ -21,6 +21,8 @@ struct PassTiming {
     std::string name;
     double gpuMs = 0.0;  // 0 when GPU timestamps are off, and for host passes
     double cpuMs = 0.0;  // time the execute callback took: recording, or a host pass's work
+    // Not run: its results were kept from an earlier frame (CompiledPass::keptWhile).
+    bool kept = false;
 };
 
 // What one transient resource takes on its own (vkGet*MemoryRequirements, size rounded
@@ -62,6 +64,12 @@ public:
     // each frame starts from the declared state. Throws penumbra::Error naming the pass
     // or resource on misuse (an unbound or mismatched import, an executed pass without a
     // callback, a callback that throws); the frame's remaining passes then do not run.
+    //
+    // A pass that may be kept (CompiledPass::keptWhile) is not run, only its barriers
+    // recorded, when it ran in an earlier frame with the resources as they are, every
+    // state it depends on has the version it had then (RenderGraph::setState), and no
+    // pass that runs this frame writes a resource it reads or writes. Its results are
+    // then what that run left. A frame that throws forgets every run.
     void execute(RenderGraph& graph);
 
     // Records the whole frame into `cmd` (recording, outside a render pass) without

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <unordered_map>
@@ -107,6 +108,11 @@ struct CompiledPass {
     uint32_t declarationIndex = 0;
     std::vector<ResourceUse> uses;
     std::vector<Barrier> barriersBefore;
+    // The states its results depend on besides what it reads (PassBuilder::dependsOn):
+    // the executor keeps them while those states and its inputs are unchanged. Empty: it
+    // runs every frame (it declared none, or it shares a resource it writes with a pass
+    // that runs every frame).
+    std::vector<std::string> keptWhile;
 };
 
 struct CulledPass {
@@ -136,6 +142,10 @@ struct CompiledResource {
     // a host-visible buffer of their owner's).
     bool hostVisible = false;
     bool readBack = false;  // RenderGraph::readBack
+    // Written by a pass that may be kept (CompiledPass::keptWhile): its contents must
+    // survive from frame to frame, so it has memory of its own (a slot no other resource
+    // shares) and starts each frame in the layout it ended the last one in.
+    bool persistent = false;
 };
 
 // A block of device memory shared by transient resources with disjoint lifetimes.
@@ -181,6 +191,16 @@ public:
     // The pass's command recording. Setting it does not change the graph's structure
     // (the compiled graph stays cached).
     PassBuilder& execute(ExecuteFn fn);
+    // Declares that the pass's results depend only on what it reads and on `state` (and
+    // any other state it names): something outside the graph that its callback uses (a
+    // light and the casters it sees, the camera), whose version the frame's owner sets
+    // with RenderGraph::setState. The executor then keeps the pass's results instead of
+    // running it while, since it last ran, every such state kept its version, nothing it
+    // reads was written again and nothing it writes was touched (GraphExecutor::execute).
+    // What it writes is persistent (CompiledResource::persistent). A pass that declares
+    // no state runs every frame, and so does one that shares a resource it writes with
+    // such a pass.
+    PassBuilder& dependsOn(std::string_view state);
 
 private:
     friend class RenderGraph;
@@ -215,6 +235,15 @@ public:
 
     uint64_t version() const { return version_; }
 
+    // The version of a state that passes depend on (PassBuilder::dependsOn); setting it
+    // does not change the declaration (the compiled graph stays cached). A state never
+    // set has no version: the passes that depend on it run every frame.
+    void setState(std::string_view state, uint64_t version);
+    std::optional<uint64_t> stateVersion(std::string_view state) const;
+    // false: no pass is ever kept, whatever it depends on, and nothing is persistent (every
+    // transient may be aliased): every pass runs every frame, in the least memory.
+    void setKeepUnchanged(bool keep);
+
     // Whether any declared pass writes `resource` (before culling).
     bool isWritten(std::string_view resource) const;
     // The declared images that some pass writes, in declaration order (before culling):
@@ -245,6 +274,7 @@ private:
         bool sideEffect;
         std::vector<AccessDecl> accesses;
         ExecuteFn execute;
+        std::vector<std::string> states;  // dependsOn
     };
 
     void addAccess(uint32_t pass, std::string_view resource, Usage usage, Access direction);
@@ -255,6 +285,8 @@ private:
     std::vector<PassDecl> passes_;
     std::unordered_map<std::string, uint32_t> resourceIndex_;
     std::unordered_set<std::string> passNames_;
+    std::unordered_map<std::string, uint64_t> states_;
+    bool keepUnchanged_ = true;
     uint64_t version_ = 0;
     uint64_t compiledVersion_ = 0;
     std::shared_ptr<const CompiledGraph> compiled_;

@@ -22,6 +22,10 @@ public:
     ClearPass& image(std::string_view image, VkClearColorValue value);
     // Every 32-bit word of `buffer` to `word`.
     ClearPass& buffer(std::string_view buffer, uint32_t word);
+    // The clear starts what passes that depend on `state` build on (a list's heads, a
+    // sum): declared with their state, it is kept with them, and runs again whenever one
+    // of them does (graph::PassBuilder::dependsOn).
+    ClearPass& dependsOn(std::string_view state);
 
 private:
     struct Targets;

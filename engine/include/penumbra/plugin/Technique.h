@@ -69,6 +69,18 @@ struct LightPassIo {
     // technique must write every pixel of it in one of its passes (Usage::Storage or
     // Usage::ColorAttachment / TransferDst).
     std::string visibility;
+    // What the technique's passes may depend on, so that the engine keeps their results
+    // while it holds instead of running them again (graph::PassBuilder::dependsOn;
+    // docs/plugins.md, "Keeping what did not change"): `lightState` for a pass whose
+    // results follow from what it reads, the light, the casters the light sees and the
+    // technique's parameters alone (render::lightState: a shadow map's moments, its
+    // summed-area table; render::ShadowMap's depth passes declare it themselves), and
+    // `cameraState` as well for a pass over the G-buffer (the visibility pass). A pass
+    // that also reads state of the technique's own that changes between frames (a
+    // progressive sample count, a table the CPU rewrites) declares neither: it runs every
+    // frame, and so do the passes that read what it writes.
+    std::string lightState;
+    std::string cameraState;
 
     std::string local(std::string_view name) const { return prefix + std::string(name); }
 

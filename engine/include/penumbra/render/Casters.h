@@ -13,6 +13,8 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
+#include <string>
+#include <vector>
 
 namespace penumbra::render {
 
@@ -63,6 +65,19 @@ struct CasterView {
 // Private to the engine (engine/src/render/CasterCulling.h): its visibility service.
 class CasterCulling;
 
+// The render-graph state (graph::PassBuilder::dependsOn) of light `light` as its casters
+// see it: "light0". The engine gives it a new version whenever what a caster pass of the
+// light draws may change: the light, the scene's bounds (frusta are fitted to them), an
+// instance moving into, inside or out of a view the light's casters were drawn in, and,
+// where the casters drawn depend on the camera (receiver-mask culling, focusing), the
+// camera. A pass that depends on it and on nothing else of the frame (a shadow map, its
+// moments, its summed-area table) is kept while it has the same version.
+std::string lightState(uint32_t light);
+// The render-graph state of the camera and what it sees: a new version whenever the
+// camera moves or an instance moves into, inside or out of its view. Passes over the
+// G-buffer (a visibility pass) depend on it.
+inline constexpr const char* kCameraState = "camera";
+
 class Casters {
 public:
     explicit Casters(const SceneGpu& scene) : scene_(&scene) {}
@@ -109,9 +124,14 @@ public:
 
     size_t triangleCount() const { return scene_->triangleCount(); }
 
+    // The views that draw() drew casters for since the last call (each once): the engine
+    // tests moved instances against them to know which lights' casters changed.
+    std::vector<CasterView> takeDrawnViews();
+
 private:
     const SceneGpu* scene_;
     CasterCulling* culling_ = nullptr;
+    mutable std::vector<CasterView> drawnViews_;
 };
 
 } // namespace penumbra::render

@@ -186,7 +186,9 @@ public:
     // kShadowDepthFormat) and the graphics pass named `image` that clears it and draws
     // every face's casters with `bias`. Readers declare it as Usage::Sampled. `firstView`:
     // the CasterView::view of its first face (the others follow), so that a technique
-    // with several maps of one light (sub-lights) gives each its own culled views.
+    // with several maps of one light (sub-lights) gives each its own culled views. The
+    // pass depends on lightState(the light) alone: the engine keeps the map while the
+    // light and its casters are unchanged (as it does the peeled layers).
     void addDepthPass(graph::RenderGraph& graph, const std::string& image, ShadowDepthBias bias,
                       uint32_t firstView = 0) const;
     // The same pass for the casters that block all the light that reaches them: opaque

@@ -109,6 +109,8 @@ struct Light {
     // intensity along the axis / normal (W/sr).
     float intensity = 300.0f;
     glm::vec3 color{1.0f};
+
+    bool operator==(const Light&) const = default;
 };
 
 class Scene {
