@@ -27,6 +27,10 @@ TEST_F(Cli, GraphPrintsPassesInOrderResourcesAndMemory)
     EXPECT_LT(gbuffer, light0);
     EXPECT_LT(light1, shading);
     EXPECT_NE(r.out.find("barrier 'light0.visibility'"), std::string::npos) << r.out;
+    // What may be kept from frame to frame, and on what it depends (keep_unchanged).
+    EXPECT_NE(r.out.find("light0.hard.shadow_map (graphics), kept while light0 unchanged"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("light0.hard.visibility (compute), kept while light0, camera unchanged"), std::string::npos)
+        << r.out;
     EXPECT_NE(r.out.find("light0.visibility: image 160x90 R16Unorm"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("device memory for transient resources:"), std::string::npos) << r.out;
     // The names `render --debug-image` takes, each light's maps among them.

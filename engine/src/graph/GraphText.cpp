@@ -75,7 +75,7 @@ std::string CompiledGraph::toText() const
                                    mebibytes(transientBytesAliased), memorySlots.size());
     text += "passes in order:\n";
     for (size_t i = 0; i < passes.size(); ++i) {
-        text += fmt::format("  {} {} ({}{})\n", i, passes[i].name, queueName(passes[i].queue),
+        text += fmt::format("  {} {} ({}){}\n", i, passes[i].name, queueName(passes[i].queue),
                             passes[i].keptWhile.empty() ? "" : fmt::format(", kept while {} unchanged",
                                                                            fmt::join(passes[i].keptWhile, ", ")));
         for (const Barrier& b : passes[i].barriersBefore) text += describe(b, resources);

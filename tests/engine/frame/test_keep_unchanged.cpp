@@ -26,9 +26,15 @@ namespace {
 struct KeepCase {
     const char* technique;
     test::LightCase light;
+    // Where the casters drawn follow the camera, a camera move draws the maps again.
+    config::CullingMode culling = config::CullingMode::None;
+    bool focus = false;
 };
 
-std::ostream& operator<<(std::ostream& os, const KeepCase& c) { return os << c.technique << "/" << c.light; }
+std::ostream& operator<<(std::ostream& os, const KeepCase& c)
+{
+    return os << c.technique << "/" << c.light << "/" << config::cullingModeName(c.culling) << (c.focus ? "+focus" : "");
+}
 
 uint32_t nodeCalled(const scene::Scene& scene, const std::string& name)
 {
@@ -72,6 +78,8 @@ TEST_P(KeepUnchanged, EveryFrameIsTheUncachedFrameAndStillFramesAreKept)
     test::setLightType(config.lights[0], c.light.type);
     test::setShadow(config.lights[0], c.technique, {{"resolution", 256}});
     config.lights[0].shadow.required = true;
+    config.culling = c.culling;
+    config.shadowFocus = c.focus;
     // A second light, always hard: a light whose passes stay kept while the other's run.
     config::LightConfig second = test::defaultTestConfig().lights[0];
     second.name = "second";
@@ -127,7 +135,11 @@ TEST_P(KeepUnchanged, EveryFrameIsTheUncachedFrameAndStillFramesAreKept)
         }
         if (change == Change::Camera) {
             EXPECT_TRUE(anyNamedFrom(a.ran, "gbuffer"));
-            EXPECT_TRUE(anyNamedFrom(a.kept, "light1.hard.shadow_map")) << "a camera move redrew a light's map";
+            if (c.culling == config::CullingMode::None) {
+                EXPECT_TRUE(anyNamedFrom(a.kept, "light1.hard.shadow_map")) << "a camera move redrew a light's map";
+            } else {
+                EXPECT_TRUE(anyNamedFrom(a.ran, "light1.hard.shadow_map")) << "culled for the old camera, kept";
+            }
         }
         ++frameIndex;
     }
@@ -144,9 +156,21 @@ INSTANTIATE_TEST_SUITE_P(
                                           {"directional", scene::LightType::Directional}};
         for (const char* technique : {"hard", "pcss", "vsm", "vssm", "backprojection", "deep"})
             for (const test::LightCase& light : lights) cases.push_back({technique, light});
+        // Casters culled for what the camera sees, and maps fitted to it.
+        cases.push_back({"hard", lights[0], config::CullingMode::ReceiverMask});
+        cases.push_back({"pcss", lights[1], config::CullingMode::LightOcclusion});
+        cases.push_back({"vsm", lights[4], config::CullingMode::ReceiverMask, true});
+        cases.push_back({"hard", lights[4], config::CullingMode::LightOcclusion, true});
         return cases;
     }()),
-    [](const auto& info) { return std::string(info.param.technique) + "_" + info.param.light.name; });
+    [](const auto& info) {
+        std::string name = std::string(info.param.technique) + "_" + info.param.light.name;
+        if (info.param.culling != config::CullingMode::None) {
+            name += std::string("_") + config::cullingModeName(info.param.culling);
+            std::replace(name.begin(), name.end(), '-', '_');
+        }
+        return info.param.focus ? name + "_focus" : name;
+    });
 
 // FrameChanges on its own: which moves change which state.
 TEST(FrameChanges, MovesChangeOnlyTheStatesThatSeeThem)
