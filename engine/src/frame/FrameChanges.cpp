@@ -1,18 +1,15 @@
 #include "penumbra/frame/FrameChanges.h"
 
-#include "penumbra/scene/Bvh.h"
-
 #include <algorithm>
 #include <cstring>
 
 namespace penumbra::frame {
 
-bool boxMayBeInView(const scene::Aabb& box, const glm::mat4& viewProj)
+bool boxMayBeInView(const scene::Aabb& box, const scene::Frustum& view)
 {
     if (box.empty()) return false;
-    const scene::Frustum frustum = scene::frustumFromViewProj(viewProj);
-    for (uint32_t p = 0; p < frustum.planeCount; ++p) {
-        const glm::vec4& plane = frustum.planes[p];
+    for (uint32_t p = 0; p < view.planeCount; ++p) {
+        const glm::vec4& plane = view.planes[p];
         // The corner furthest along the plane's inward normal: if even it is outside, all are.
         const glm::vec3 far{plane.x >= 0.0f ? box.max.x : box.min.x, plane.y >= 0.0f ? box.max.y : box.min.y,
                             plane.z >= 0.0f ? box.max.z : box.min.z};
@@ -26,9 +23,9 @@ namespace {
 bool sameBounds(const scene::Aabb& a, const scene::Aabb& b) { return a.min == b.min && a.max == b.max; }
 
 // Whether the instance's box before or after its move may lie in the view.
-bool moveSeenBy(const scene::Aabb& before, const scene::Aabb& after, const glm::mat4& viewProj)
+bool moveSeenBy(const scene::Aabb& before, const scene::Aabb& after, const scene::Frustum& view)
 {
-    return boxMayBeInView(before, viewProj) || boxMayBeInView(after, viewProj);
+    return boxMayBeInView(before, view) || boxMayBeInView(after, view);
 }
 
 } // namespace
@@ -44,10 +41,15 @@ void FrameChanges::update(const FrameInputs& inputs, const scene::Scene& scene)
 {
     // The camera: its matrix, and what moved in its view.
     bool cameraChanged = !cameraSeen_ || inputs.cameraViewProj != cameraViewProj_;
-    for (uint32_t i : inputs.movedInstances) {
-        if (i >= boxes_.size() || i >= scene.instances.size()) continue;
-        cameraChanged = cameraChanged || moveSeenBy(boxes_[i], scene.instances[i].worldBounds, inputs.cameraViewProj) ||
-                        (cameraSeen_ && moveSeenBy(boxes_[i], scene.instances[i].worldBounds, cameraViewProj_));
+    if (!cameraChanged && !inputs.movedInstances.empty()) {
+        const scene::Frustum view = scene::frustumFromViewProj(inputs.cameraViewProj);
+        for (uint32_t i : inputs.movedInstances) {
+            if (i >= boxes_.size() || i >= scene.instances.size()) continue;
+            if (moveSeenBy(boxes_[i], scene.instances[i].worldBounds, view)) {
+                cameraChanged = true;
+                break;
+            }
+        }
     }
     if (cameraChanged && cameraSeen_) ++camera_;
     cameraSeen_ = true;
@@ -63,7 +65,7 @@ void FrameChanges::update(const FrameInputs& inputs, const scene::Scene& scene)
         for (uint32_t i : inputs.movedInstances) {
             if (changed) break;
             if (i >= boxes_.size() || i >= scene.instances.size()) continue;
-            changed = std::any_of(state.views.begin(), state.views.end(), [&](const glm::mat4& view) {
+            changed = std::any_of(state.views.begin(), state.views.end(), [&](const scene::Frustum& view) {
                 return moveSeenBy(boxes_[i], scene.instances[i].worldBounds, view);
             });
         }
@@ -91,7 +93,7 @@ void FrameChanges::viewsDrawn(std::span<const render::CasterView> views)
             lights_[view.light].views.clear();
             replaced[view.light] = true;
         }
-        lights_[view.light].views.push_back(view.viewProj);
+        lights_[view.light].views.push_back(scene::frustumFromViewProj(view.viewProj));
     }
 }
 

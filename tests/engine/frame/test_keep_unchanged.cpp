@@ -246,6 +246,8 @@ TEST(FrameChanges, MovesChangeOnlyTheStatesThatSeeThem)
     changes.update(in, scene);
     EXPECT_GT(changes.lightTable(), tableVersion);
 
-    EXPECT_FALSE(frame::boxMayBeInView(scene::Aabb{}, viewProj)) << "an empty box";
-    EXPECT_TRUE(frame::boxMayBeInView(scene.instances[0].worldBounds, viewProj));
+    const scene::Frustum frustum = scene::frustumFromViewProj(viewProj);
+    EXPECT_FALSE(frame::boxMayBeInView(scene::Aabb{}, frustum)) << "an empty box";
+    EXPECT_TRUE(frame::boxMayBeInView(scene.instances[0].worldBounds, frustum));
+    EXPECT_FALSE(frame::boxMayBeInView(scene.instances[1].worldBounds, frustum)) << "behind the camera";
 }

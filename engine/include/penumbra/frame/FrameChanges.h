@@ -14,6 +14,7 @@
 // A version only grows; a state whose inputs did not change keeps its version, and a
 // pass that depends on it keeps its results.
 #include "penumbra/render/Casters.h"
+#include "penumbra/scene/Bvh.h"
 #include "penumbra/scene/Scene.h"
 
 #include <glm/glm.hpp>
@@ -57,7 +58,7 @@ public:
 private:
     struct LightState {
         scene::Light light;
-        std::vector<glm::mat4> views;  // where its casters were drawn last
+        std::vector<scene::Frustum> views;  // where its casters were drawn last
         uint64_t version = 1;
         bool seen = false;
     };
@@ -71,8 +72,8 @@ private:
     uint64_t lightTable_ = 1;
 };
 
-// Whether `box` may overlap the view of `viewProj` (false only when it lies wholly outside
-// one of the view's planes; scene::frustumFromViewProj). An empty box overlaps nothing.
-bool boxMayBeInView(const scene::Aabb& box, const glm::mat4& viewProj);
+// Whether `box` may overlap `view` (false only when it lies wholly outside one of its
+// planes). An empty box overlaps nothing.
+bool boxMayBeInView(const scene::Aabb& box, const scene::Frustum& view);
 
 } // namespace penumbra::frame
