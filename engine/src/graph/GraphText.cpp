@@ -31,8 +31,8 @@ std::string describe(const CompiledResource& res)
     text += fmt::format(", {}", mebibytes(res.sizeBytes));
     if (res.hostVisible) text += ", host-visible";
     if (res.imported) text += ", imported";
-    if (res.persistent) text += ", persistent";
     else if (res.memorySlot >= 0) text += fmt::format(", slot {}", res.memorySlot);
+    if (res.persistent) text += ", persistent";
     if (res.markedOutput) text += ", output";
     if (res.readBack) text += ", read back";
     return text;
