@@ -112,13 +112,13 @@ step "render with the installed penumbra"
 unset PENUMBRA_SHADER_DIR PENUMBRA_PLUGIN_PATH
 (cd "$work" && "$prefix/bin/penumbra" render "$root/config/default.json" -o "$work/installed.png" \
    --width 64 --height 48 >"$work/render.log" 2>&1) || { cat "$work/render.log"; fail "the installed penumbra does not render"; }
-mv "$prefix/share/penumbra/shaders/engine/shading.comp" "$work/shading.comp"
+mv "$prefix/share/penumbra/shaders/engine/shading.glsl" "$work/shading.glsl"
 if (cd "$work" && "$prefix/bin/penumbra" render "$root/config/default.json" -o "$work/no-shader.png" \
       --width 64 --height 48 >"$work/render.log" 2>&1); then
-  fail "the installed penumbra rendered without its installed shading.comp (it reads another shader folder)"
+  fail "the installed penumbra rendered without its installed shading.glsl (it reads another shader folder)"
 fi
 grep -qF "$prefix/share/penumbra/shaders" "$work/render.log" || { cat "$work/render.log"; fail "the shader error does not name the installed folder"; }
-mv "$work/shading.comp" "$prefix/share/penumbra/shaders/engine/shading.comp"
+mv "$work/shading.glsl" "$prefix/share/penumbra/shaders/engine/shading.glsl"
 
 # The installed engine loads the out-of-tree build (ABI check, entry point, name) from
 # PENUMBRA_PLUGIN_PATH.

@@ -49,6 +49,18 @@ std::string cullingSection(const visibility::CullingStats& stats, config::Cullin
     return text;
 }
 
+// The lights whose V_l shading evaluates: no visibility pass, no image.
+std::string visibilityInShadingText(const frame::FrameRenderer& renderer)
+{
+    std::vector<std::string> lights;
+    for (size_t l = 0; l < renderer.lightCount(); ++l)
+        if (renderer.visibilityInShading(l)) lights.push_back(fmt::format("light {} ({})", l, renderer.techniqueName(l)));
+    if (lights.empty()) return {};
+    return fmt::format("visibility evaluated in shading, no image (render --visibility-exr or --debug-image keeps "
+                       "one): {}\n",
+                       fmt::join(lights, ", "));
+}
+
 int runGraph(const GraphFlags& flags)
 {
     config::RenderConfig loaded = loadConfigIgnoringSweep(flags.config, "graph");
@@ -61,6 +73,7 @@ int runGraph(const GraphFlags& flags)
     gpu::Context context(contextOptions(flags.device));
     frame::FrameRenderer renderer(context, run.scene, run.config, plugins);
     for (const std::string& warning : renderer.warnings()) spdlog::warn("{}", warning);
+    renderer.setVisibilityReadBack(false);  // the frame `render` draws
     const frame::FrameTimings timings = renderer.renderFrame();
 
     const graph::CompiledGraph& compiled = renderer.compiledGraph();
@@ -80,7 +93,10 @@ int runGraph(const GraphFlags& flags)
         std::vector<std::string> techniques;
         for (size_t l = 0; l < renderer.lightCount(); ++l) techniques.push_back(renderer.techniqueName(l));
         text += techniqueFiguresText(timings.techniques, techniques);
-        // Every image a pass writes, culled passes' too: requesting one keeps its passes.
+        text += visibilityInShadingText(renderer);
+        // Every image a pass writes, culled passes' too: requesting one keeps its passes
+        // (and the lights' visibility images).
+        renderer.setVisibilityReadBack(true);
         text += fmt::format("debug images (penumbra render --debug-image NAME): {}\n",
                             fmt::join(renderer.imageNames(), ", "));
     }

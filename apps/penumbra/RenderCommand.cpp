@@ -132,6 +132,9 @@ int runRender(const RenderFlags& flags)
     spdlog::info("device: {} ({})", context.deviceInfo().name, context.deviceInfo().type);
     frame::FrameRenderer renderer(context, run.scene, run.config, plugins);
     for (const std::string& warning : renderer.warnings()) spdlog::warn("{}", warning);
+    // Nothing but shading reads the lights' V_l unless an image of them is asked for:
+    // shading then evaluates the visibility functions itself (plugin/VisibilityFunction.h).
+    renderer.setVisibilityReadBack(!flags.visibilityExr.empty() || !flags.debugImage.empty());
     if (!flags.debugImage.empty()) renderer.requestImage(flags.debugImage);
     const config::RenderConfig& resolved = run.rest;
     spdlog::info("scene: {} instances, {} triangles; {}x{}, {} light(s), {} frame(s)", run.scene.instances.size(),

@@ -1,10 +1,11 @@
 // The hard shadow-map technique (README.md next to this file): the engine's shadow map
 // (render/ShadowMap.h: one frustum for spot and directional lights, six cube faces in a
 // 3 x 2 atlas for point, rect and disk lights, seen from their centre), then a compute
-// pass that compares every G-buffer position with the map and writes the light's
-// visibility image V_l. Bias modes and filters are parameters; the filter and
-// receiver-side bias pick a shader variant (visibility_pass.h), the constant and
-// slope-scaled bias are the rasterizer's.
+// visibility function that compares a G-buffer position with the map (visibility.glsl:
+// the engine runs it as the light's visibility pass, or inside shading where nothing else
+// reads V_l). Bias modes and filters are parameters; the filter and receiver-side bias
+// pick a shader variant (visibility_pass.h), the constant and slope-scaled bias are the
+// rasterizer's.
 #include "visibility_pass.h"
 
 #include "penumbra/core/Error.h"
@@ -13,11 +14,10 @@
 #include "penumbra/gpu/Resources.h"
 #include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
-#include "penumbra/plugin/ComputePipeline.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/ShadowMapParams.h"
 #include "penumbra/plugin/Technique.h"
-#include "penumbra/plugin/VisibilityPass.h"
+#include "penumbra/plugin/VisibilityFunction.h"
 #include "penumbra/render/ShadowMap.h"
 
 
@@ -113,7 +113,7 @@ private:
     gpu::Context& context_;
     const Settings settings_;
     render::ShadowMap shadowMap_;
-    gpu::Pipeline visibility_;
+    plugin::VisibilityFunction visibility_;
     gpu::Sampler compareSampler_;
 };
 
@@ -141,8 +141,12 @@ HardShadow::HardShadow(const plugin::TechniqueSetup& setup)
     if (settings_.variant.bias == BiasMode::Constant || settings_.variant.bias == BiasMode::Slope)
         shadowMap_.setOwnDepthCompare(int32_t(std::ceil(0.5f * width - 0.5f)));
     std::vector<gpu::ShaderDefine> defines = visibilityDefines(settings_.variant);
+    if (settings_.variant.offsetsAlongNormal())
+        defines.push_back(plugin::floatDefine("NORMAL_OFFSET_TEXELS", settings_.normalOffsetTexels * width));
+    if (settings_.variant.filter == Filter::Poisson)
+        defines.push_back(plugin::floatDefine("FILTER_RADIUS_TEXELS", settings_.filterRadiusTexels));
     std::ranges::copy(shadowMap_.shaderDefines(), std::back_inserter(defines));
-    visibility_ = plugin::createComputePipeline(setup, "visibility", "visibility.comp", defines, sizeof(VisibilityPush));
+    visibility_ = plugin::VisibilityFunction(setup, "visibility.glsl", defines);
 
     // Nearest (one texel per compare) unless the hardware bilinear compare is wanted;
     // points outside the map never reach the sampler (the shader calls them lit).
@@ -167,14 +171,8 @@ void HardShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
     const auto bind = [this, map](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
         descriptors.sampledImage("shadowMap", pass.image(map), compareSampler_, pass.layout(map))
             .storageBuffer("shadowMapBuffer", shadowMap_.buffer());
-        const VisibilityPush push{settings_.normalOffsetTexels * footprintWidthTexels(settings_),
-                                  settings_.filterRadiusTexels};
-        visibility_.pushConstants(pass.cmd(), &push, sizeof(push));
     };
-    plugin::addVisibilityPass(graph, io, visibility_, bind)
-        .read(map, graph::Usage::Sampled)
-        .dependsOn(io.lightState)
-        .dependsOn(io.cameraState);
+    plugin::addVisibilityFunction(graph, io, visibility_, {map}, bind);
 }
 
 } // namespace

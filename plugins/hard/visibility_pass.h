@@ -1,8 +1,8 @@
 #pragma once
-// The C++ side of visibility.comp: which shader variant a parameter set compiles (the
+// The C++ side of visibility.glsl: which shader variant a parameter set compiles (the
 // filter and the receiver-side bias are chosen by defines, not by branches on uniforms:
-// each variant is straight-line code with its tap count known to the compiler) and the
-// push constants. hard.cpp and the shader tests
+// each variant is straight-line code with its tap count known to the compiler). hard.cpp
+// and the shader tests
 // include it, so that the tests compile exactly the variants the plugin can ask for.
 #include "penumbra/gpu/ShaderCompiler.h"
 #include "penumbra/render/ShadowMap.h"
@@ -47,7 +47,7 @@ struct VisibilityVariant {
     VkFilter samplerFilter() const { return hardwareBilinear() ? VK_FILTER_LINEAR : VK_FILTER_NEAREST; }
 };
 
-// The defines that select `variant` in visibility.comp. Only the defines a variant
+// The defines that select `variant` in visibility.glsl. Only the defines a variant
 // reads are set, so two parameter sets that compile the same code give equal lists.
 inline std::vector<gpu::ShaderDefine> visibilityDefines(const VisibilityVariant& variant)
 {
@@ -57,11 +57,5 @@ inline std::vector<gpu::ShaderDefine> visibilityDefines(const VisibilityVariant&
     if (variant.filter == Filter::Poisson) defines.push_back({"POISSON_SAMPLES", std::to_string(variant.poissonSamples)});
     return defines;
 }
-
-struct VisibilityPush {
-    float normalOffsetTexels = 0.0f;  // RECEIVER_BIAS 1
-    float filterRadiusTexels = 0.0f;  // FILTER 2 (poisson)
-};
-static_assert(sizeof(VisibilityPush) == 8);
 
 } // namespace penumbra::hard

@@ -3,16 +3,16 @@
 // (render/ShadowMap.h), then one compute pass that, per pixel, searches the map for
 // blockers over the region the light covers as seen from the receiver, estimates the
 // penumbra width from the average blocker distance, and filters that many texels of
-// compares with a rotated Poisson disk (visibility.comp).
+// compares with a rotated Poisson disk (visibility.glsl, its visibility function).
 #include "penumbra/gpu/Context.h"
 #include "penumbra/gpu/Pipeline.h"
+#include "penumbra/gpu/Resources.h"
 #include "penumbra/graph/PassContext.h"
 #include "penumbra/graph/RenderGraph.h"
-#include "penumbra/plugin/ComputePipeline.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/ShadowMapParams.h"
 #include "penumbra/plugin/Technique.h"
-#include "penumbra/plugin/VisibilityPass.h"
+#include "penumbra/plugin/VisibilityFunction.h"
 #include "penumbra/render/ShadowMap.h"
 
 
@@ -77,14 +77,12 @@ Settings readSettings(const plugin::ParamValues& params)
     return s;
 }
 
-struct PcssPush {
+// visibility.glsl's PcssLight (std140): what follows the light.
+struct PcssLight {
     float lightSize = 0.0f;  // render::softShadowLightSize()
-    float maxSearchTexels = 0.0f;
-    float maxFilterTexels = 0.0f;
-    uint32_t blockerSamples = 0;
-    uint32_t filterSamples = 0;
+    float pad[3] = {};
 };
-static_assert(sizeof(PcssPush) == 20);
+static_assert(sizeof(PcssLight) == 16);
 
 class PcssShadow final : public plugin::Technique {
 public:
@@ -98,13 +96,15 @@ private:
     // The culling footprint (and, with slope bias, the own-depth taps) of this light's
     // kernels, after each refit of the map.
     void fitFootprint();
+    void setLightSize(float lightSize);
 
     gpu::Context& context_;
     const Settings settings_;
     render::ShadowMap shadowMap_;
-    gpu::Pipeline visibility_;
+    plugin::VisibilityFunction visibility_;
     gpu::Sampler compareSampler_;
     gpu::Sampler depthSampler_;
+    gpu::Buffer lightBuffer_;  // PcssLight
     float lightSize_ = 0.0f;
 };
 
@@ -119,15 +119,20 @@ PcssShadow::PcssShadow(const plugin::TechniqueSetup& setup)
     std::vector<gpu::ShaderDefine> defines = {
         {"RECEIVER_BIAS",
          std::to_string(uint32_t(usesReceiverPlane() ? render::ReceiverBias::Plane : render::ReceiverBias::None))}};
+    defines.push_back({"BLOCKER_SAMPLES", std::to_string(settings_.blockerSamples)});
+    defines.push_back({"FILTER_SAMPLES", std::to_string(settings_.filterSamples)});
+    defines.push_back(plugin::floatDefine("MAX_SEARCH_TEXELS", settings_.maxSearchTexels));
+    defines.push_back(plugin::floatDefine("MAX_FILTER_TEXELS", settings_.maxFilterTexels));
     std::ranges::copy(shadowMap_.shaderDefines(), std::back_inserter(defines));
-    visibility_ = plugin::createComputePipeline(setup, "visibility", "visibility.comp", defines, sizeof(PcssPush));
+    // 8 x 8 tiles: the search and the filter read a disk of the map around each receiver.
+    visibility_ = plugin::VisibilityFunction(setup, "visibility.glsl", defines, 8, 8);
+    lightBuffer_ = gpu::Buffer(context_, sizeof(PcssLight), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, true, setup.local("light"));
 
     // Every tap reads one texel (at its centre): the search averages texel depths, the
     // filter counts texel compares. Taps never leave the map (the shader clamps them).
     compareSampler_ = render::createShadowCompareSampler(context_);
     depthSampler_ = render::createShadowDepthSampler(context_);
-    lightSize_ = render::softShadowLightSize(setup.light, settings_.lightSizeOverride);
-    fitFootprint();
+    setLightSize(render::softShadowLightSize(setup.light, settings_.lightSizeOverride));
     // Only the search and the filter read the map, all within the footprint: with
     // receiver-mask culling the depth pass clears and draws only what they can read.
     shadowMap_.setReadByLookupsOnly(true);
@@ -136,7 +141,13 @@ PcssShadow::PcssShadow(const plugin::TechniqueSetup& setup)
 void PcssShadow::update(const scene::Light& light, const scene::Aabb& sceneBounds)
 {
     shadowMap_.update(light, sceneBounds);
-    lightSize_ = render::softShadowLightSize(light, settings_.lightSizeOverride);
+    setLightSize(render::softShadowLightSize(light, settings_.lightSizeOverride));
+}
+
+void PcssShadow::setLightSize(float lightSize)
+{
+    lightSize_ = lightSize;
+    static_cast<PcssLight*>(lightBuffer_.mapped())->lightSize = lightSize;
     fitFootprint();
 }
 
@@ -160,15 +171,10 @@ void PcssShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
     const auto bind = [this, map](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
         descriptors.sampledImage("shadowCompare", pass.image(map), compareSampler_, pass.layout(map))
             .sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map))
-            .storageBuffer("shadowMapBuffer", shadowMap_.buffer());
-        const PcssPush push{lightSize_, settings_.maxSearchTexels, settings_.maxFilterTexels,
-                            settings_.blockerSamples, settings_.filterSamples};
-        visibility_.pushConstants(pass.cmd(), &push, sizeof(push));
+            .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
+            .uniformBuffer("pcssLight", lightBuffer_);
     };
-    plugin::addVisibilityPass(graph, io, visibility_, bind)
-        .read(map, graph::Usage::Sampled)
-        .dependsOn(io.lightState)
-        .dependsOn(io.cameraState);
+    plugin::addVisibilityFunction(graph, io, visibility_, {map}, bind);
 }
 
 } // namespace

@@ -3,7 +3,7 @@
 // technique with a `variant` parameter. The engine's shadow map (render/ShadowMap.h) is
 // turned into a map of stored values (moments.comp), filtered by a separable blur
 // (blur.comp, twice) or a mip chain (downsample.comp, once per level), and read per
-// pixel by visibility.comp. Every map after the depth map is a transient graph image,
+// pixel by visibility.glsl (its visibility function). Every map after the depth map is a transient graph image,
 // so the graph may alias the blur's scratch with the moments it no longer needs.
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Context.h"
@@ -13,7 +13,7 @@
 #include "penumbra/plugin/ComputePipeline.h"
 #include "penumbra/plugin/Plugin.h"
 #include "penumbra/plugin/Technique.h"
-#include "penumbra/plugin/VisibilityPass.h"
+#include "penumbra/plugin/VisibilityFunction.h"
 #include "penumbra/render/ShadowMap.h"
 
 #include <fmt/format.h>
@@ -51,11 +51,11 @@ constexpr MomentStorage kMomentStorage[] = {{VK_FORMAT_UNDEFINED, "", 0},
                                             {VK_FORMAT_R32G32B32A32_SFLOAT, "rgba32f", 4},
                                             {VK_FORMAT_R16G16B16A16_SFLOAT, "rgba16f", 4}};
 
-// Parameter `filter` (visibility.comp FILTER: gaussian and box are its 0).
+// Parameter `filter` (visibility.glsl FILTER: gaussian and box are its 0).
 enum class Filter : uint32_t { Gaussian, Box, Trilinear, Anisotropic };
 constexpr const char* kFilterNames[] = {"gaussian", "box", "trilinear", "anisotropic"};
 
-constexpr int kMaxLevels = 15;  // visibility.comp: levels of a 16384-texel face
+constexpr int kMaxLevels = 15;  // visibility.glsl: levels of a 16384-texel face
 
 const plugin::ParamSpec kParams[] = {
     {"resolution", ParamType::Int, 1024, 16, 16384, "texels",
@@ -178,16 +178,6 @@ std::vector<gpu::ShaderDefine> momentDefines(const Settings& s)
             {"MOMENT_FORMAT", s.formatName}};
 }
 
-// visibility.comp's push constants.
-struct VisibilityPush {
-    glm::vec2 exponents{0.0f};
-    float minVariance = 0.0f;
-    float bleedingReduction = 0.0f;
-    float lodBias = 0.0f;
-    float maxAnisotropy = 1.0f;
-};
-static_assert(sizeof(VisibilityPush) == 24);
-
 struct BlurPush {
     glm::ivec2 axis{1, 0};
     int32_t radius = 1;
@@ -220,7 +210,7 @@ private:
     gpu::Pipeline moments_;
     gpu::Pipeline blur_;
     gpu::Pipeline downsample_;
-    gpu::Pipeline visibility_;
+    plugin::VisibilityFunction visibility_;
     gpu::Sampler depthSampler_;   // nearest, for texelFetch of the depth map
     gpu::Sampler linearSampler_;  // bilinear lookups of the filtered map
 };
@@ -254,7 +244,14 @@ VsmShadow::VsmShadow(const plugin::TechniqueSetup& setup)
         downsample_ = plugin::createComputePipeline(setup, "downsample", "downsample.comp", defines, sizeof(float));
     defines.push_back({"FILTER", std::to_string(settings_.mips() ? uint32_t(settings_.filter) - 1 : 0u)});
     defines.push_back({"LEVELS", std::to_string(levels_)});
-    visibility_ = plugin::createComputePipeline(setup, "visibility", "visibility.comp", defines, sizeof(VisibilityPush));
+    defines.push_back({"EXPONENTS", fmt::format("vec2({}, {})", plugin::floatLiteral(settings_.exponents.x),
+                                                plugin::floatLiteral(settings_.exponents.y))});
+    defines.push_back(plugin::floatDefine("MIN_VARIANCE", settings_.minVariance));
+    defines.push_back(plugin::floatDefine("BLEEDING_REDUCTION", settings_.bleedingReduction));
+    defines.push_back(plugin::floatDefine("LOD_BIAS", settings_.lodBias));
+    defines.push_back(plugin::floatDefine("MAX_ANISOTROPY", settings_.maxAnisotropy));
+    // 8 x 8 tiles: neighbouring receivers read neighbouring texels of the moment map.
+    visibility_ = plugin::VisibilityFunction(setup, "visibility.glsl", defines, 8, 8);
 
     depthSampler_ = render::createShadowDepthSampler(context_);
     linearSampler_ = gpu::createSampler(context_, VK_FILTER_LINEAR, VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE);
@@ -324,12 +321,10 @@ void VsmShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPas
         levels.push_back(coarser);
     }
 
-    graph::PassBuilder visibility = plugin::addVisibilityPass(
-        graph, io, visibility_, [this, levels](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
-            bindVisibility(pass, descriptors, levels);
-        });
-    for (const std::string& level : levels) visibility.read(level, graph::Usage::Sampled);
-    visibility.dependsOn(io.lightState).dependsOn(io.cameraState);
+    plugin::addVisibilityFunction(graph, io, visibility_, levels,
+                                  [this, levels](const graph::PassContext& pass, gpu::DescriptorPush& descriptors) {
+                                      bindVisibility(pass, descriptors, levels);
+                                  });
 }
 
 void VsmShadow::recordMoments(const graph::PassContext& pass, const std::string& depth,
@@ -380,9 +375,6 @@ void VsmShadow::bindVisibility(const graph::PassContext& pass, gpu::DescriptorPu
     for (const std::string& level : levels) images.push_back(&pass.image(level));
     descriptors.storageBuffer("shadowMapBuffer", shadowMap_.buffer())
         .sampledImages("momentLevels", images, linearSampler_, pass.layout(levels.front()));
-    const VisibilityPush push{settings_.exponents, settings_.minVariance, settings_.bleedingReduction,
-                              settings_.lodBias, settings_.maxAnisotropy};
-    visibility_.pushConstants(pass.cmd(), &push, sizeof(push));
 }
 
 } // namespace

@@ -28,4 +28,13 @@ float sanitizeVisibility(float v)
     return (v >= 0.0) ? min(v, 1.0) : 0.0;
 }
 
+// What a VISIBILITY_FORMAT image holds of v in [0, 1], as a read returns it: where
+// shading evaluates a technique's visibility itself it sees the very value the image
+// would have given (tests/engine/frame/test_visibility_in_shading.cpp checks it against
+// every 16-bit code on the device).
+float visibilityAsStored(float v)
+{
+    return round(v * 65535.0) / 65535.0;
+}
+
 #endif

@@ -63,17 +63,26 @@ TEST_F(Cli, TimingsListEveryPass)
     const CliResult r = run(fmt::format("render {} -o '{}' --width 160 --height 90 --frames 3 --timings", config("default.json"),
                                   png.string()));
     ASSERT_EQ(r.exitCode, 0) << r.err;
-    for (const char* pass : {"gbuffer", "light0.hard.shadow_map", "light0.hard.visibility", "shading", "median of 3 frame(s)"}) {
+    for (const char* pass : {"gbuffer", "light0.hard.shadow_map", "shading", "median of 3 frame(s)"}) {
         EXPECT_NE(r.out.find(pass), std::string::npos) << pass << "\n" << r.out;
     }
+    // Nothing but shading reads V: shading evaluates hard's visibility function, and the
+    // visibility pass is not there. Asked for V, the pass writes it.
+    EXPECT_EQ(r.out.find("light0.hard.visibility"), std::string::npos) << r.out;
+    const fs::path exr = dir / "v.exr";
+    const CliResult withV = run(fmt::format("render {} -o '{}' --width 160 --height 90 --frames 3 --timings --visibility-exr '{}'",
+                                            config("default.json"), png.string(), exr.string()));
+    ASSERT_EQ(withV.exitCode, 0) << withV.err;
+    EXPECT_NE(withV.out.find("light0.hard.visibility"), std::string::npos) << withV.out;
 }
 
 TEST_F(Cli, TimingsGiveEveryPassAsAMultipleOfTheFloor)
 {
     const fs::path png = dir / "out.png";
+    // With V asked for, so that the technique's visibility pass is timed too.
     const CliResult r = run(fmt::format("render {} -o '{}' --width 160 --height 90 --frames 3 --warmup 1 --timings "
-                                        "--keep-unchanged false",
-                                        config("default.json"), png.string()));
+                                        "--keep-unchanged false --visibility-exr '{}'",
+                                        config("default.json"), png.string(), (dir / "v.exr").string()));
     ASSERT_EQ(r.exitCode, 0) << r.err;
     // The rule heads the table.
     EXPECT_TRUE(has(r.out, "x floor: a camera pass (writes an image of the frame's size) over the floor's forward draw, "
@@ -123,7 +132,7 @@ TEST_F(Cli, TimingsShowPassesAStillFrameKept)
                                         config("default.json"), kept.string()));
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const std::map<std::string, TimingRow> rows = timingRows(r.out);
-    for (const char* name : {"gbuffer", "light0.hard.shadow_map", "light0.hard.visibility", "shading"}) {
+    for (const char* name : {"gbuffer", "light0.hard.shadow_map", "shading"}) {
         ASSERT_TRUE(rows.count(name)) << name << "\n" << r.out;
         EXPECT_EQ(rows.at(name).gpuMs, 0.0) << name;
         EXPECT_TRUE(has(rows.at(name).against, "kept in 3 of 3 frames")) << name << "\n" << r.out;

@@ -406,14 +406,14 @@ TEST_F(ViewerTest, AnEditedShaderIsReloadedAndABrokenOneKeepsTheLastFrame)
 {
     const fs::path shaders = dir / "shaders";
     fs::copy(penumbra::test::sourceDir() / "shaders", shaders, fs::copy_options::recursive);
-    const fs::path shading = shaders / "engine" / "shading.comp";
+    const fs::path shading = shaders / "engine" / "shading.glsl";
     const std::string original = slurp(shading);
     const std::string store = "imageStore(outColor, pixel, vec4(display, 1.0));";
-    ASSERT_NE(original.find(store), std::string::npos) << "shading.comp no longer stores `display`: update this test";
+    ASSERT_NE(original.find(store), std::string::npos) << "shading.glsl no longer stores `display`: update this test";
 
     const fs::path a = dir / "a.png", b = dir / "b.png", c = dir / "c.png", log = dir / "viewer.log";
     const std::string script = fmt::format(
-        "size 96 54; frames 2; screenshot {}; wait-for {}; wait-error shading.comp:; screenshot {}; "
+        "size 96 54; frames 2; screenshot {}; wait-for {}; wait-error shading.glsl:; screenshot {}; "
         "wait-for {}; wait-no-error; screenshot {}; quit",
         a.string(), (dir / "go1").string(), b.string(), (dir / "go2").string(), c.string());
     const pid_t pid = startViewer(fmt::format("PENUMBRA_SHADER_DIR='{}'", shaders.string()), config("default.json"), script, log);
@@ -435,7 +435,7 @@ TEST_F(ViewerTest, AnEditedShaderIsReloadedAndABrokenOneKeepsTheLastFrame)
     ASSERT_EQ(WEXITSTATUS(status), 0) << slurp(log);
 
     const std::string out = slurp(log);
-    EXPECT_NE(out.find("shading.comp:"), std::string::npos) << out;
+    EXPECT_NE(out.find("shading.glsl:"), std::string::npos) << out;
     const Png first = readPng(a), broken = readPng(b), fixed = readPng(c);
     ASSERT_EQ(first.rgba.size(), size_t(96 * 54 * 4));
     EXPECT_EQ(broken.rgba, first.rgba) << "the last good frame stays while the shader is broken";

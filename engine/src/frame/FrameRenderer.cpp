@@ -4,6 +4,7 @@
 #include "frame/FrameFormats.h"
 #include "penumbra/core/Error.h"
 #include "penumbra/gpu/Barrier.h"
+#include "penumbra/gpu/GlslNames.h"
 #include "frame/LightTable.h"
 #include "penumbra/plugin/GBuffer.h"
 #include "penumbra/plugin/Params.h"
@@ -82,8 +83,10 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
 }
 
 // The shading pass is compiled for the frame's lights: LIGHT_COUNT, and for each light i
-// VISIBILITY_SLOT_<i>, its element of the visibility[] array, or -1 for a light without
-// a visibility image this frame (unshadowed or culled: V = 1 in the shader, no image read).
+// LIGHT_VISIBILITY_<i> (engine/shading.glsl): 1.0 for a light without V this frame
+// (unshadowed or culled), its element of the visibility[] array, or its technique's
+// visibility function, composed in before shading's body under the prefix "light<i>_"
+// with bindings of its own (kFunctionBindingBase on).
 void FrameRenderer::createShadingPipeline()
 {
     gpu::ComputePipelineDesc s;
@@ -91,10 +94,33 @@ void FrameRenderer::createShadingPipeline()
     s.shader = "engine/shading.comp";
     s.defines = {{"LIGHT_COUNT", std::to_string(lights_.size())}};
     int slots = 0;
-    for (size_t i = 0; i < lights_.size(); ++i)
-        s.defines.push_back({fmt::format("VISIBILITY_SLOT_{}", i), lights_[i].drawn() ? std::to_string(slots++) : "-1"});
+    std::string units, extensions;
+    for (size_t i = 0; i < lights_.size(); ++i) {
+        const LightSlot& slot = lights_[i];
+        std::string visibility = "1.0";
+        if (slot.hasImage()) {
+            visibility = fmt::format("imageVisibility({})", slots++);
+        } else if (slot.inShading) {
+            const std::string prefix = fmt::format("light{}_", i);
+            const gpu::PrefixedUnit unit = gpu::prefixTopLevelNames(
+                slot.inShading->function->preprocessedUnit(functionBindingBase(i)), prefix);
+            for (const std::string& e : unit.extensions)
+                if (extensions.find(e) == std::string::npos) extensions += e + "\n";
+            units += fmt::format("// light {}: {}\n{}", i, slot.inShading->function->shader().string(), unit.text);
+            visibility = fmt::format("fusedVisibility({}techniqueVisibility(pixel, position.xyz, n))", prefix);
+        }
+        s.defines.push_back({fmt::format("LIGHT_VISIBILITY_{}", i), visibility});
+    }
     s.defines.push_back({"VISIBILITY_COUNT", std::to_string(slots)});
     s.pushConstantBytes = sizeof(ShadingPush);
+    if (!units.empty()) {
+        // shading.comp's head, then the functions, then its body.
+        s.source = "#version 460\n" + extensions +
+                   "#define GBUFFER_BINDING 0\n"
+                   "#include \"common/gbuffer.glsl\"\n"
+                   "#include \"common/visibility.glsl\"\n" +
+                   units + "#include \"engine/shading.glsl\"\n";
+    }
     shadingPipeline_ = &resources_->computePipeline(s);
 }
 
@@ -253,16 +279,20 @@ void FrameRenderer::buildGraph()
             .execute([this](graph::PassContext& pass) { recordGBuffer(pass); });
 
         bool restart = false;
+        for (LightSlot& slot : lights_) slot.inShading.reset();
         for (size_t i = 0; i < lights_.size() && !restart; ++i) {
             if (!lights_[i].drawn()) continue;
-            g.declareImage({lights_[i].visibility, width_, height_, kVisibilityFormat});
             restart = !registerTechnique(i);
+            if (!restart && lights_[i].hasImage())
+                g.declareImage({lights_[i].visibility, width_, height_, kVisibilityFormat});
         }
         if (restart) {
             decideLights();  // the dropped light is lit unshadowed; another may take its shadows
             continue;
         }
-        createShadingPipeline();
+        // Made as the frame is first drawn: settings made after the graph is declared
+        // (setVisibilityReadBack) compile no shading that no frame uses.
+        shadingPipeline_ = nullptr;
 
         graph::PassBuilder shading = g.addPass("shading", graph::QueueKind::Compute);
         shading.read(kGDepth, graph::Usage::Sampled)
@@ -272,15 +302,18 @@ void FrameRenderer::buildGraph()
             .dependsOn(render::kCameraState)
             .dependsOn(kLightTableState)
             .execute([this](graph::PassContext& pass) { recordShading(pass); });
-        for (const LightSlot& slot : lights_)
-            if (slot.drawn()) shading.read(slot.visibility, graph::Usage::Sampled);
+        for (const LightSlot& slot : lights_) {
+            if (slot.hasImage()) shading.read(slot.visibility, graph::Usage::Sampled);
+            if (slot.inShading)
+                for (const std::string& read : slot.inShading->sampledReads) shading.read(read, graph::Usage::Sampled);
+        }
         // The colour image is the frame's result; V_l and the G-buffer surfaces (depth and
         // normal: readPositions, readNormals) are read back by metrics and tests.
         g.markOutput(kColor);
         g.markOutput(kGDepth);
         g.markOutput(kGNormal);
         for (const LightSlot& slot : lights_)
-            if (slot.drawn()) g.markOutput(slot.visibility);
+            if (slot.hasImage()) g.markOutput(slot.visibility);
         for (const std::string& name : requestedImages_) g.markOutput(name);
         g.compile();
         return;
@@ -301,11 +334,21 @@ bool FrameRenderer::registerTechnique(size_t light)
     io.cameraState = render::kCameraState;
     io.bindImage = [this](std::string_view name, const gpu::Image& image) { executor_.bindImage(name, image); };
     io.bindBuffer = [this](std::string_view name, const gpu::Buffer& buffer) { executor_.bindBuffer(name, buffer); };
+    if (!visibilityReadBack_) {
+        io.evaluateInShading = [this, light](const plugin::VisibilityInShading& function) {
+            if (!shadingTakesFunction(*function.function)) return false;
+            lights_[light].inShading = function;
+            return true;
+        };
+    }
     std::string failure;
     try {
         slot.created->declaredBy = this;
         slot.instance->registerPasses(g, io);
-        if (!g.isWritten(slot.visibility)) {
+        if (slot.inShading && g.isWritten(slot.visibility)) {
+            failure = fmt::format("wrote '{}' although shading evaluates the light's visibility function",
+                                  slot.visibility);
+        } else if (!slot.inShading && !g.isWritten(slot.visibility)) {
             failure = fmt::format("registered no pass that writes '{}' (the light's visibility image)",
                                   slot.visibility);
         }
@@ -313,10 +356,37 @@ bool FrameRenderer::registerTechnique(size_t light)
         failure = fmt::format("exception during registration: {}", e.what());
     }
     if (failure.empty()) return true;
+    slot.inShading.reset();
     const std::string message = fmt::format("plugin '{}' (light {}): {}", slot.technique, light, failure);
     if (slot.required) throw plugin::PluginError(plugin::PluginErrorKind::RegistrationFailed, message);
     dropTechnique(light, message);
     return false;
+}
+
+// Shading's push descriptors: its own six, one per visibility image, and each function's
+// own, within the 32 that every Vulkan device with push descriptors offers
+// (maxPushDescriptors). Counted as if every light not yet registered had an image.
+bool FrameRenderer::shadingTakesFunction(const plugin::VisibilityFunction& function) const
+{
+    constexpr uint32_t kShadingOwn = 6, kMinMaxPushDescriptors = 32;
+    uint32_t images = 0, descriptors = kShadingOwn + function.descriptorCount();
+    for (const LightSlot& slot : lights_) {
+        if (slot.inShading) descriptors += slot.inShading->function->descriptorCount();
+        else if (slot.drawn()) ++images;
+    }
+    return descriptors + images - 1 <= kMinMaxPushDescriptors;  // the asking light has no image
+}
+
+uint32_t FrameRenderer::functionBindingBase(size_t light)
+{
+    return kFunctionBindingBase + uint32_t(light) * plugin::kMaxVisibilityFunctionBindings;
+}
+
+void FrameRenderer::setVisibilityReadBack(bool readBack)
+{
+    if (readBack == visibilityReadBack_) return;
+    visibilityReadBack_ = readBack;
+    buildGraph();
 }
 
 std::string FrameRenderer::shadowPassPrefix(size_t light) const
@@ -410,6 +480,7 @@ void FrameRenderer::noteChanges(std::span<const uint32_t> movedInstances)
 
 void FrameRenderer::execute()
 {
+    if (!shadingPipeline_) createShadingPipeline();
     graph_->setState(render::kCameraState, changes_.camera());
     graph_->setState(kLightTableState, changes_.lightTable());
     for (size_t i = 0; i < lights_.size(); ++i) graph_->setState(render::lightState(uint32_t(i)), changes_.light(i));
@@ -519,7 +590,7 @@ void FrameRenderer::recordShading(graph::PassContext& pass)
     const VkCommandBuffer cmd = pass.cmd();
     std::vector<const gpu::Image*> visibility;
     for (const LightSlot& slot : lights_)
-        if (slot.drawn()) visibility.push_back(&pass.image(slot.visibility));
+        if (slot.hasImage()) visibility.push_back(&pass.image(slot.visibility));
     const gpu::Pipeline& shading = *shadingPipeline_;
     shading.bind(cmd);
     gpu::DescriptorPush descriptors;
@@ -528,6 +599,12 @@ void FrameRenderer::recordShading(graph::PassContext& pass)
         .storageBuffer("Lights", lightBuffer_)
         .storageImage("outColor", pass.image(kColor));
     if (!visibility.empty()) descriptors.sampledImages("visibility", visibility, resources_->nearestSampler());
+    for (size_t i = 0; i < lights_.size(); ++i) {
+        if (!lights_[i].inShading) continue;
+        descriptors.setNamePrefix(fmt::format("light{}_", i));  // the function's names in shading
+        lights_[i].inShading->bind(pass, descriptors);
+    }
+    descriptors.setNamePrefix({});
     descriptors.push(context_, cmd, shading);
     const ShadingPush push{ambient_, background_};
     shading.pushConstants(cmd, &push, sizeof(push));
@@ -574,10 +651,18 @@ metrics::DebugImageValues FrameRenderer::readImage(const std::string& name) cons
     return values;
 }
 
+std::string FrameRenderer::noVisibilityImage(size_t light) const
+{
+    return fmt::format("light {}: shading evaluates its visibility ({}'s visibility function), so it has no image "
+                       "to read; setVisibilityReadBack(true) keeps one",
+                       light, lights_.at(light).technique);
+}
+
 std::vector<float> FrameRenderer::readVisibility(size_t light) const
 {
     const LightSlot& slot = lights_.at(light);
     if (!slot.drawn()) return std::vector<float>(size_t(width_) * height_, 1.0f);
+    if (slot.inShading) throw Error(noVisibilityImage(light));
     return readFloats(slot.visibility);
 }
 
@@ -591,7 +676,9 @@ FrameRenderer::Pixel FrameRenderer::readPixel(uint32_t x, uint32_t y) const
     const std::vector<std::byte> color =
         gpu::readImage(context_, executor_.image(kColor), executor_.finalLayout(kColor), texel);
     std::memcpy(pixel.color.data(), color.data(), pixel.color.size());
-    for (const LightSlot& slot : lights_) {
+    for (size_t i = 0; i < lights_.size(); ++i) {
+        const LightSlot& slot = lights_[i];
+        if (slot.inShading) throw Error(noVisibilityImage(i));
         pixel.visibility.push_back(!slot.drawn() ? 1.0f
                                                    : gpu::readImageFloats(context_, executor_.image(slot.visibility),
                                                                           executor_.finalLayout(slot.visibility), texel)

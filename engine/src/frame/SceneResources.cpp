@@ -36,7 +36,7 @@ std::string pipelineKey(const gpu::ComputePipelineDesc& desc)
 {
     std::string key = fmt::format("{}|{}|{}", desc.name, desc.shader.string(), desc.pushConstantBytes);
     for (const gpu::ShaderDefine& d : desc.defines) key += fmt::format("|{}={}", d.name, d.value);
-    return key;
+    return key + "|" + desc.source;
 }
 
 } // namespace

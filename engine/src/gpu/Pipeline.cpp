@@ -79,7 +79,14 @@ Pipeline::Pipeline(Context& context, const ShaderCompiler& compiler, const Compu
       name_(desc.name)
 {
     try {
-        const std::vector<uint32_t> spirv = compiler.compile(desc.shader, desc.defines);
+        // Composed source is named as if it lay in the first shader folder: diagnostics
+        // then say which folder's shaders it was composed of.
+        const std::filesystem::path named = desc.shader.is_absolute() || compiler.searchPath().empty()
+                                                ? desc.shader
+                                                : compiler.searchPath().front() / desc.shader;
+        const std::vector<uint32_t> spirv =
+            desc.source.empty() ? compiler.compile(desc.shader, desc.defines)
+                                : compiler.compileSource(desc.source, named, VK_SHADER_STAGE_COMPUTE_BIT, desc.defines);
         reflect(spirv, VK_SHADER_STAGE_COMPUTE_BIT, desc.shader);
         ModuleGuard guard{device_, {createModule(device_, spirv, desc.name)}};
         createLayout(desc.pushConstantBytes);
@@ -258,7 +265,7 @@ void Pipeline::dispatchOver(VkCommandBuffer cmd, const Image& image) const
 DescriptorPush& DescriptorPush::add(std::string_view name, VkDescriptorType type,
                                     std::vector<VkDescriptorImageInfo> images, VkDescriptorBufferInfo buffer)
 {
-    entries_.push_back({std::string(name), type, std::move(images), buffer});
+    entries_.push_back({prefix_ + std::string(name), type, std::move(images), buffer});
     return *this;
 }
 

@@ -228,6 +228,13 @@ ShaderKey shaderKey(const std::string& source, const std::string& name, EShLangu
     return d.finish();
 }
 
+std::string preambleOf(const std::vector<ShaderDefine>& defines)
+{
+    std::string preamble = "#extension GL_GOOGLE_include_directive : require\n";
+    for (const ShaderDefine& d : defines) preamble += fmt::format("#define {} {}\n", d.name, d.value);
+    return preamble;
+}
+
 // glslang's run: throws ShaderCompileError with the formatted diagnostics.
 std::vector<uint32_t> compileWithGlslang(const std::string& source, const std::string& name, EShLanguage language,
                                          const std::string& preamble, RecordingIncluder& includer)
@@ -314,16 +321,38 @@ std::vector<uint32_t> ShaderCompiler::compile(const fs::path& file, const std::v
     return compileSource(readText(path), path, stageFromExtension(path), defines);
 }
 
+std::string ShaderCompiler::preprocess(const std::string& source, const fs::path& virtualPath,
+                                       VkShaderStageFlagBits stage, const std::vector<ShaderDefine>& defines) const
+{
+    ensureGlslang();
+    const std::string name = virtualPath.string();
+    const std::string preamble = preambleOf(defines);
+    glslang::TShader shader(toLanguage(stage));
+    const char* text = source.c_str();
+    const int length = static_cast<int>(source.size());
+    const char* names = name.c_str();
+    shader.setStringsWithLengthsAndNames(&text, &length, &names, 1);
+    shader.setPreamble(preamble.c_str());
+    shader.setEnvInput(glslang::EShSourceGlsl, toLanguage(stage), glslang::EShClientVulkan, kOptions.inputVersion);
+    shader.setEnvClient(glslang::EShClientVulkan, kOptions.client);
+    shader.setEnvTarget(glslang::EShTargetSpv, kOptions.spirv);
+    RecordingIncluder includer(searchPath_);
+    std::string out;
+    if (!shader.preprocess(GetDefaultResources(), kOptions.defaultVersion, ENoProfile, false, false, kOptions.messages,
+                           &out, includer)) {
+        throw ShaderCompileError(formatLog(std::string(shader.getInfoLog()) + shader.getInfoDebugLog(), name) +
+                                 includer.unreadable());
+    }
+    return out;
+}
+
 std::vector<uint32_t> ShaderCompiler::compileSource(const std::string& source, const fs::path& virtualPath,
                                                     VkShaderStageFlagBits stage,
                                                     const std::vector<ShaderDefine>& defines) const
 {
     const EShLanguage language = toLanguage(stage);
     const std::string name = virtualPath.string();
-    std::string preamble = "#extension GL_GOOGLE_include_directive : require\n";
-    for (const ShaderDefine& d : defines) {
-        preamble += fmt::format("#define {} {}\n", d.name, d.value);
-    }
+    const std::string preamble = preambleOf(defines);
     const ShaderKey key = shaderKey(source, name, language, preamble);
     const auto isCurrent = [&](const std::vector<ShaderInclude>& includes) { return includesUnchanged(includes, searchPath_); };
     if (std::optional<std::vector<uint32_t>> cached = cache_->find(key, isCurrent)) return std::move(*cached);

@@ -19,6 +19,7 @@
 #include "penumbra/metrics/DebugImage.h"
 #include "penumbra/plugin/GBuffer.h"
 #include "penumbra/plugin/PluginRegistry.h"
+#include "penumbra/plugin/VisibilityFunction.h"
 #include "penumbra/render/Casters.h"
 #include "penumbra/frame/FrameChanges.h"
 #include "penumbra/frame/LightInfluence.h"
@@ -30,6 +31,7 @@
 #include <map>
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -134,6 +136,16 @@ public:
     void requestImage(const std::string& name);
     metrics::DebugImageValues readImage(const std::string& name) const;
 
+    // Whether the lights' visibility images V_l are there to be read back (readVisibility,
+    // readPixel, debug images): true unless set otherwise. False lets shading evaluate
+    // the visibility of every light whose technique gives it as a function
+    // (plugin/VisibilityFunction.h) as far as shading's descriptors allow; such a light
+    // has no image, and readVisibility / readPixel throw for it. Declares the frame's
+    // graph again when it changes.
+    void setVisibilityReadBack(bool readBack);
+    // Whether shading evaluates light `light`'s visibility this frame (it has no image).
+    bool visibilityInShading(size_t light) const { return lights_.at(light).inShading.has_value(); }
+
     // Read-back after renderFrame(): sRGB RGBA8 rows, top row first.
     std::vector<uint8_t> readColor() const;
     // V_l, one float per pixel (all 1 for a light without an image this frame: technique
@@ -177,8 +189,12 @@ private:
         bool unshadowed = false;  // technique "none": no passes, no visibility image
         std::string visibility;  // "light<i>.visibility"
         LightDecision decision;  // this frame's
-        // Whether its technique draws this frame: it then writes the light's visibility image.
+        // Its technique's visibility function, where shading evaluates it (no image).
+        std::optional<plugin::VisibilityInShading> inShading;
+        // Whether its technique draws this frame: it then gives the light's V_l.
         bool drawn() const { return !unshadowed && instance && decision.fate == LightFate::Shadowed; }
+        // Whether it gives V_l as an image that shading reads.
+        bool hasImage() const { return drawn() && !inShading; }
     };
 
     struct SurfaceFloats {
@@ -190,6 +206,12 @@ private:
                                                     const config::LightConfig& config,
                                                     const plugin::LoadedPlugin& plugin, const nlohmann::json& params) const;
     void createShadingPipeline();
+    bool shadingTakesFunction(const plugin::VisibilityFunction& function) const;
+    // The first binding of light `light`'s visibility function in shading (engine/shading.glsl
+    // uses 0..6).
+    static constexpr uint32_t kFunctionBindingBase = 8;
+    static uint32_t functionBindingBase(size_t light);
+    std::string noVisibilityImage(size_t light) const;
     void setCamera(const scene::Camera& camera);
     plugin::GBufferIo gbufferIo() const;
     SurfaceFloats readSurfaces() const;
@@ -229,6 +251,7 @@ private:
     bool castersFollowCamera_ = false;  // culling or focusing: the casters drawn depend on the camera
     FrameChanges changes_;
     bool keepUnchanged_ = true;  // "keep_unchanged"
+    bool visibilityReadBack_ = true;
     std::unique_ptr<graph::RenderGraph> graph_;
     graph::GraphExecutor executor_;
 };

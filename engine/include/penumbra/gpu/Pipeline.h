@@ -49,6 +49,9 @@ struct ComputePipelineDesc {
     std::filesystem::path shader;
     std::vector<ShaderDefine> defines;
     uint32_t pushConstantBytes = 0;
+    // When not empty, the shader's text, composed by its owner: `shader` then only names
+    // it in diagnostics and is where its relative #includes start.
+    std::string source;
 };
 
 class Pipeline {
@@ -114,6 +117,9 @@ public:
                                   VkImageLayout layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
     DescriptorPush& storageBuffer(std::string_view name, const Buffer& buffer);
     DescriptorPush& uniformBuffer(std::string_view name, const Buffer& buffer);
+    // Prefixed to the names given from here on: a unit that a shader holds under a prefix
+    // (gpu/GlslNames.h) is bound by the names its own source gives.
+    void setNamePrefix(std::string prefix) { prefix_ = std::move(prefix); }
 
     void push(const Context& context, VkCommandBuffer cmd, const Pipeline& pipeline);
 
@@ -128,6 +134,7 @@ private:
                         VkDescriptorBufferInfo buffer = {});
     static uint32_t resolve(const Entry& entry, const Pipeline& pipeline);
     std::vector<Entry> entries_;
+    std::string prefix_;
 };
 
 // An owned VkSampler, destroyed with its owner: a constructor that throws after creating

@@ -38,6 +38,12 @@ public:
                                         VkShaderStageFlagBits stage,
                                         const std::vector<ShaderDefine>& defines = {}) const;
 
+    // `source` preprocessed as compileSource would see it (#includes resolved, macros
+    // expanded, comments gone): GLSL text to compose into another shader
+    // (gpu/GlslNames.h). Never cached. Throws ShaderCompileError.
+    std::string preprocess(const std::string& source, const std::filesystem::path& virtualPath,
+                           VkShaderStageFlagBits stage, const std::vector<ShaderDefine>& defines = {}) const;
+
     std::filesystem::path resolve(const std::filesystem::path& file) const;
     const std::vector<std::filesystem::path>& searchPath() const { return searchPath_; }
 

@@ -26,6 +26,8 @@ class Image;
 
 namespace penumbra::plugin {
 
+struct VisibilityInShading;
+
 // Everything a technique needs when it is created; references stay valid for the
 // technique's lifetime.
 struct TechniqueSetup {
@@ -91,6 +93,10 @@ struct LightPassIo {
     // graph's barriers, like any other resource.
     std::function<void(std::string_view name, const gpu::Image& image)> bindImage;
     std::function<void(std::string_view name, const gpu::Buffer& buffer)> bindBuffer;
+    // Set by the engine where nothing but shading reads V_l: takes a visibility function
+    // into shading (true), and io.visibility is then not written at all. Called by
+    // addVisibilityFunction (plugin/VisibilityFunction.h), not by techniques.
+    std::function<bool(const VisibilityInShading& function)> evaluateInShading;
 };
 
 // One figure of a technique's last frame (memory it used, work it did, what it had to

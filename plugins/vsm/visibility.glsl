@@ -1,7 +1,6 @@
-#version 460
-// The VSM family's lookup: each G-buffer position is projected into the light's map, its
-// normalised depth t compared with the filtered stored values there (moments.glsl
-// momentVisibility), and the result written as V_l (shaders/common/visibility.glsl).
+// The VSM family's lookup, as its visibility function (plugin/VisibilityFunction.h): a
+// G-buffer position is projected into the light's map, and its normalised depth t
+// compared with the filtered stored values there (moments.glsl momentVisibility).
 //
 // Defines (vsm.cpp sets them; compiled on its own: plain VSM, one blurred map):
 //   FILTER   0 blur: one bilinear lookup in the blurred map (blur.comp ran before)
@@ -11,9 +10,9 @@
 //              footprint's long axis, at the level of its short one
 //   LEVELS   mip levels bound (1 for FILTER 0), at most 15
 //   VSM_VARIANT, MOMENT_CHANNELS (moments.glsl)
-#define GBUFFER_BINDING 5  // gDepth, gNormal, GBufferCamera: plugin::bindGBuffer
-#include "common/gbuffer.glsl"
-#include "common/visibility.glsl"
+// and the parameters: EXPONENTS (moments.glsl warpDepth), MIN_VARIANCE (in t^2),
+// BLEEDING_REDUCTION (in [0, 1)), LOD_BIAS (levels added to the footprint's, FILTER 1, 2),
+// MAX_ANISOTROPY (lookups along the footprint, FILTER 2, >= 1).
 #include "moments.glsl"
 
 #define FILTER_BLUR 0
@@ -28,28 +27,23 @@
 #if LEVELS < 1 || LEVELS > 15 || (FILTER == FILTER_BLUR && LEVELS != 1)
 #error LEVELS must be 1 with FILTER 0 and in 1..15 otherwise
 #endif
+#ifndef EXPONENTS
+#define EXPONENTS vec2(0.0)
+#define MIN_VARIANCE 1e-6
+#define BLEEDING_REDUCTION 0.0
+#define LOD_BIAS 0.0
+#define MAX_ANISOTROPY 1.0
+#endif
 
-layout(local_size_x = 8, local_size_y = 8) in;
-
-layout(binding = 1, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
-// The horizon (every filter) and the footprint (mips) read the normal.
 // Level k has faceTexels / 2^k texels per face; each its own image (a graph resource).
-layout(binding = 4) uniform sampler2D momentLevels[LEVELS];
+layout(binding = VISIBILITY_BINDING(0)) uniform sampler2D momentLevels[LEVELS];
 
-#define SHADOW_MAP_BINDING 2
+#define SHADOW_MAP_BINDING VISIBILITY_BINDING(1)
 #define SHADOW_RECEIVER_BIAS 0
 #if FILTER != FILTER_BLUR
 #define SHADOW_SURFACE_NEIGHBOURS
 #endif
 #include "common/shadow_receiver.glsl"
-
-layout(push_constant) uniform Push {
-    vec2 exponents;           // moments.glsl warpDepth
-    float minVariance;        // in t^2
-    float bleedingReduction;  // in [0, 1)
-    float lodBias;            // levels added to the footprint's (FILTER 1, 2)
-    float maxAnisotropy;      // lookups along the footprint (FILTER 2), >= 1
-} pc;
 
 // A bilinear lookup in mip level `level`, kept half a texel of that level inside the
 // face, added to `f` with `weight`. VSM and EVSM: the sampler's bilinear filter. ESM:
@@ -62,16 +56,16 @@ layout(push_constant) uniform Push {
         vec2 st = uv * vec2(textureSize(momentLevels[k], 0)) - 0.5;                     \
         vec2 w = st - floor(st);                                                        \
         vec4 z = textureGather(momentLevels[k], uv, 0); /* (0,1) (1,1) (1,0) (0,0) */   \
-        addToFilter(f, vec4(z.w), (1.0 - w.x) * (1.0 - w.y) * weight, pc.exponents.x);  \
-        addToFilter(f, vec4(z.z), w.x * (1.0 - w.y) * weight, pc.exponents.x);          \
-        addToFilter(f, vec4(z.x), (1.0 - w.x) * w.y * weight, pc.exponents.x);          \
-        addToFilter(f, vec4(z.y), w.x * w.y * weight, pc.exponents.x);                  \
+        addToFilter(f, vec4(z.w), (1.0 - w.x) * (1.0 - w.y) * weight, EXPONENTS.x);  \
+        addToFilter(f, vec4(z.z), w.x * (1.0 - w.y) * weight, EXPONENTS.x);          \
+        addToFilter(f, vec4(z.x), (1.0 - w.x) * w.y * weight, EXPONENTS.x);          \
+        addToFilter(f, vec4(z.y), w.x * w.y * weight, EXPONENTS.x);                  \
         return;                                                                         \
     }
 #else
 #define ADD_LEVEL(k)                                                                    \
     {                                                                                   \
-        addToFilter(f, textureLod(momentLevels[k], uv, 0.0), weight, pc.exponents.x);   \
+        addToFilter(f, textureLod(momentLevels[k], uv, 0.0), weight, EXPONENTS.x);   \
         return;                                                                         \
     }
 #endif
@@ -163,7 +157,7 @@ vec4 filteredMoments(ShadowReceiver r, ivec2 pixel, vec3 p)
 #if FILTER == FILTER_ANISOTROPIC
     // Lookups spaced majorTexels / count along the long axis, each as wide as that
     // spacing or the short axis, whichever is larger (software anisotropic filtering).
-    float count = clamp(ceil(majorTexels / max(minorTexels, 1e-6)), 1.0, pc.maxAnisotropy);
+    float count = clamp(ceil(majorTexels / max(minorTexels, 1e-6)), 1.0, MAX_ANISOTROPY);
     float widthTexels = max(majorTexels / count, minorTexels);
 #else
     float count = 1.0;
@@ -171,7 +165,7 @@ vec4 filteredMoments(ShadowReceiver r, ivec2 pixel, vec3 p)
 #endif
     // Level log2(width): one texel of it covers the footprint. A zero footprint gives
     // log2(1e-6) < 0: the finest level.
-    float lod = clamp(log2(max(widthTexels, 1e-6)) + pc.lodBias, 0.0, float(LEVELS - 1));
+    float lod = clamp(log2(max(widthTexels, 1e-6)) + LOD_BIAS, 0.0, float(LEVELS - 1));
     int finer = int(lod);
     int coarser = min(finer + 1, LEVELS - 1);
     float blend = lod - float(finer);
@@ -181,25 +175,17 @@ vec4 filteredMoments(ShadowReceiver r, ivec2 pixel, vec3 p)
         addLevel(f, r.face, uv, coarser, blend);
     }
 #endif
-    return filterResult(f, pc.exponents.x);
+    return filterResult(f, EXPONENTS.x);
 }
 
 // Straight-line: every pixel runs the same code and the results are selected at the end
-// (common/shadow_map.glsl: uniform loads).
-void main()
+// (common/shadow_map.glsl: uniform loads). The horizon (every filter) and the footprint
+// (mips) read the normal.
+float techniqueVisibility(ivec2 pixel, vec3 position, vec3 normal)
 {
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    ivec2 size = imageSize(visibilityOut);
-    bool inImage = all(lessThan(pixel, size));
-    pixel = min(pixel, size - 1);
-
-    vec4 position = gbufferPosition(pixel);
     ShadowReceiver r;
-    bool inMap = makeShadowReceiver(pixel, position.xyz, 0.0, r);
+    bool inMap = makeShadowReceiver(pixel, position, 0.0, r);
     float t = shadowLinearDepth(r.face, r.depth);
-    float moments = momentVisibility(filteredMoments(r, pixel, position.xyz), t, pc.exponents, pc.minVariance,
-                                     pc.bleedingReduction);
-    float v = shadowVisibilityAboveHorizon(inMap ? moments : 1.0, position.xyz, gbufferNormal(pixel));
-    v = position.w != 0.0 ? v : VISIBILITY_NO_GEOMETRY;
-    if (inImage) imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
+    float moments = momentVisibility(filteredMoments(r, pixel, position), t, EXPONENTS, MIN_VARIANCE, BLEEDING_REDUCTION);
+    return shadowVisibilityAboveHorizon(inMap ? moments : 1.0, position, normal);
 }

@@ -1,5 +1,5 @@
-#version 460
-// Percentage-closer soft shadows (Fernando 2005) for one light, per G-buffer pixel:
+// Percentage-closer soft shadows (Fernando 2005) for one light, per G-buffer pixel, as its
+// visibility function (plugin/VisibilityFunction.h):
 //   1. blocker search: blocker_samples depth taps on a rotated Poisson disk over the
 //      region of the map that the light covers as seen from the receiver; the texels
 //      nearer the light than the receiver are blockers, their mean distance d_b;
@@ -15,36 +15,32 @@
 // search and the filter compares against the receiver's plane at that tap, so a tilted
 // receiver neither finds itself as a blocker nor shadows itself under a wide filter;
 // with 0 the rasterizer's slope bias is all there is.
-#define GBUFFER_BINDING 6  // gDepth, gNormal, GBufferCamera: plugin::bindGBuffer
-#include "common/gbuffer.glsl"
 #include "common/sampling.glsl"
-#include "common/visibility.glsl"
 
-// The plugin always defines it (pcss.cpp); compiled on its own this is the default.
+// The plugin always defines them (pcss.cpp); compiled on its own this is the default.
 #ifndef RECEIVER_BIAS
 #define RECEIVER_BIAS 2
 #endif
+#ifndef BLOCKER_SAMPLES
+#define BLOCKER_SAMPLES 16
+#define FILTER_SAMPLES 16
+#define MAX_SEARCH_TEXELS 32.0
+#define MAX_FILTER_TEXELS 32.0
+#endif
 
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(binding = VISIBILITY_BINDING(0)) uniform sampler2DShadow shadowCompare;
+layout(binding = VISIBILITY_BINDING(1)) uniform sampler2D shadowDepth;  // the same map, raw depths
+// What follows the light (pcss.cpp PcssLight): lights at a position: w_light in world
+// units; directional lights: the penumbra width per unit of receiver-blocker distance,
+// 2 tan(angular diameter / 2).
+layout(std140, binding = VISIBILITY_BINDING(2)) uniform PcssLight {
+    float lightSize;
+} pcssLight;
 
-layout(binding = 1) uniform sampler2DShadow shadowCompare;
-layout(binding = 2, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
-layout(binding = 5) uniform sampler2D shadowDepth;  // the same map, raw depths
-
-#define SHADOW_MAP_BINDING 3
+#define SHADOW_MAP_BINDING VISIBILITY_BINDING(3)
 #define SHADOW_RECEIVER_BIAS RECEIVER_BIAS
 #include "common/shadow_receiver.glsl"
 #include "common/penumbra_estimate.glsl"
-
-layout(push_constant) uniform Push {
-    // Lights at a position: w_light in world units. Directional lights: the penumbra
-    // width per unit of receiver-blocker distance, 2 tan(angular diameter / 2).
-    float lightSize;
-    float maxSearchTexels;
-    float maxFilterTexels;
-    uint blockerSamples;
-    uint filterSamples;
-} pc;
 
 // Step 1: the mean distance of the blockers among `samples` search taps; false when
 // there is none (the receiver sees the whole light). `range`: the face's depthRange.
@@ -66,16 +62,16 @@ bool averageBlockerDistance(ShadowReceiver r, vec4 range, mat2 rotation, float r
     return count > 0u;
 }
 
-// Branch-free outside its loops, and the push constants and the face are loaded before
+// Branch-free outside its loops, and the light's size and the face are loaded before
 // them (common/shadow_map.glsl: uniform loads): every case is computed and selected.
 float pcssVisibility(ShadowReceiver r, ivec2 pixel)
 {
     ShadowFace face = shadowMapData.faces[r.face];
-    float lightSize = pc.lightSize;
-    float maxSearchTexels = pc.maxSearchTexels;
-    float maxFilterTexels = pc.maxFilterTexels;
-    uint blockerSamples = clamp(pc.blockerSamples, 1u, uint(kPoissonDisk.length()));
-    uint filterSamples = clamp(pc.filterSamples, 1u, uint(kPoissonDisk.length()));
+    float lightSize = pcssLight.lightSize;
+    float maxSearchTexels = MAX_SEARCH_TEXELS;
+    float maxFilterTexels = MAX_FILTER_TEXELS;
+    uint blockerSamples = clamp(uint(BLOCKER_SAMPLES), 1u, uint(kPoissonDisk.length()));
+    uint filterSamples = clamp(uint(FILTER_SAMPLES), 1u, uint(kPoissonDisk.length()));
 
     float dReceiver = shadowDistanceInRange(face.depthRange, r.depth);
     mat2 rotation = poissonRotation(pixel);
@@ -95,18 +91,10 @@ float pcssVisibility(ShadowReceiver r, ivec2 pixel)
 
 // Straight-line up to the technique's own search and filter: every pixel runs the same
 // code and the results are selected at the end (common/shadow_map.glsl: uniform loads).
-void main()
+float techniqueVisibility(ivec2 pixel, vec3 position, vec3 normal)
 {
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    ivec2 size = imageSize(visibilityOut);
-    bool inImage = all(lessThan(pixel, size));
-    pixel = min(pixel, size - 1);
-
-    vec4 position = gbufferPosition(pixel);
     ShadowReceiver r;
-    bool inMap = makeShadowReceiver(pixel, position.xyz, 0.0, r);
+    bool inMap = makeShadowReceiver(pixel, position, 0.0, r);
     float pcss = pcssVisibility(r, pixel);
-    float v = shadowVisibilityAboveHorizon(inMap ? pcss : 1.0, position.xyz, gbufferNormal(pixel));
-    v = position.w != 0.0 ? v : VISIBILITY_NO_GEOMETRY;
-    if (inImage) imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
+    return shadowVisibilityAboveHorizon(inMap ? pcss : 1.0, position, normal);
 }

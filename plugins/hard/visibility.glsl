@@ -1,7 +1,7 @@
-#version 460
-// Hard shadow-map lookup for one light: each G-buffer position is projected into the
-// light's depth map and compared, and the fraction of passing compares is written as
-// V_l (shaders/common/visibility.glsl).
+// Hard shadow-map lookup for one light, as its visibility function
+// (plugin/VisibilityFunction.h): a G-buffer position is projected into the light's depth
+// map and compared, and the fraction of passing compares is V_l. The engine runs it as
+// the visibility pass or inside shading.
 //
 // The map is render::ShadowMap's (shaders/common/shadow_map.glsl): reversed-Z, so a
 // receiver is lit where its light-space depth is >= the stored caster depth (the
@@ -18,9 +18,8 @@
 //   RECEIVER_BIAS  0 none (constant and slope-scaled bias are the rasterizer's)
 //                  1 normal offset
 //                  2 receiver plane depth bias
-#define GBUFFER_BINDING 4  // gDepth, gNormal, GBufferCamera: plugin::bindGBuffer
-#include "common/gbuffer.glsl"
-#include "common/visibility.glsl"
+// and its parameters by NORMAL_OFFSET_TEXELS (RECEIVER_BIAS 1) and FILTER_RADIUS_TEXELS
+// (FILTER 2).
 
 #define FILTER_NONE 0
 #define FILTER_PCF 1
@@ -35,6 +34,12 @@
 #ifndef RECEIVER_BIAS
 #define RECEIVER_BIAS 0
 #endif
+#ifndef NORMAL_OFFSET_TEXELS
+#define NORMAL_OFFSET_TEXELS 1.0
+#endif
+#ifndef FILTER_RADIUS_TEXELS
+#define FILTER_RADIUS_TEXELS 1.5
+#endif
 #if FILTER == FILTER_PCF && !defined(PCF_KERNEL)
 #error FILTER 1 (pcf) needs PCF_KERNEL
 #endif
@@ -45,19 +50,11 @@
 #include "common/sampling.glsl"
 #endif
 
-layout(local_size_x = 64, local_size_y = 1) in;  // rows: measured 3-12% faster than 8 x 8 on llvmpipe
+layout(binding = VISIBILITY_BINDING(0)) uniform sampler2DShadow shadowMap;
 
-layout(binding = 1) uniform sampler2DShadow shadowMap;
-layout(binding = 2, VISIBILITY_FORMAT) uniform writeonly image2D visibilityOut;
-
-#define SHADOW_MAP_BINDING 3
+#define SHADOW_MAP_BINDING VISIBILITY_BINDING(1)
 #define SHADOW_RECEIVER_BIAS RECEIVER_BIAS
 #include "common/shadow_receiver.glsl"
-
-layout(push_constant) uniform Push {
-    float normalOffsetTexels;  // RECEIVER_BIAS 1
-    float filterRadiusTexels;  // FILTER 2
-} pc;
 
 float filteredVisibility(ShadowReceiver r, ivec2 pixel)
 {
@@ -75,7 +72,7 @@ float filteredVisibility(ShadowReceiver r, ivec2 pixel)
     mat2 rotation = poissonRotation(pixel);
     float lit = 0.0;
     for (int i = 0; i < POISSON_SAMPLES; ++i)
-        lit += shadowCompareTap(shadowMap, r, rotation * kPoissonDisk[i] * pc.filterRadiusTexels);
+        lit += shadowCompareTap(shadowMap, r, rotation * kPoissonDisk[i] * FILTER_RADIUS_TEXELS);
     return lit / float(POISSON_SAMPLES);
 #elif FILTER == FILTER_BILINEAR && RECEIVER_BIAS != SHADOW_RECEIVER_BIAS_PLANE
     // The sampler's LINEAR filter with compare: four compares weighted bilinearly in
@@ -92,20 +89,12 @@ float filteredVisibility(ShadowReceiver r, ivec2 pixel)
 #endif
 }
 
-// Straight-line: every pixel, seen or not, in the map or not, runs the same code and the
-// results are selected at the end (common/shadow_map.glsl: uniform loads).
-void main()
+// Straight-line: every pixel, in the map or not, runs the same code and the result is
+// selected at the end (common/shadow_map.glsl: uniform loads).
+float techniqueVisibility(ivec2 pixel, vec3 position, vec3 normal)
 {
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    ivec2 size = imageSize(visibilityOut);
-    bool inImage = all(lessThan(pixel, size));
-    pixel = min(pixel, size - 1);
-
-    vec4 position = gbufferPosition(pixel);
     ShadowReceiver r;
-    bool inMap = makeShadowReceiver(pixel, position.xyz, pc.normalOffsetTexels, r);
+    bool inMap = makeShadowReceiver(pixel, position, NORMAL_OFFSET_TEXELS, r);
     float filtered = filteredVisibility(r, pixel);
-    float v = shadowVisibilityAboveHorizon(inMap ? filtered : 1.0, position.xyz, gbufferNormal(pixel));
-    v = position.w != 0.0 ? v : VISIBILITY_NO_GEOMETRY;
-    if (inImage) imageStore(visibilityOut, pixel, vec4(sanitizeVisibility(v)));
+    return shadowVisibilityAboveHorizon(inMap ? filtered : 1.0, position, normal);
 }
