@@ -32,7 +32,7 @@ layout(push_constant) uniform Push {
 // The pipeline is compiled for the frame's lights: LIGHT_COUNT (1..8), and for each light
 // i LIGHT_VISIBILITY_<i>, how its V is had: 1.0 (no shadows), imageVisibility(k) (element
 // k of visibility[]), or fusedVisibility(light<i>_techniqueVisibility(pixel, position.xyz,
-// n)) where shading evaluates the technique's visibility function itself
+// n), position) where shading evaluates the technique's visibility function itself
 // (plugin/VisibilityFunction.h; the frame composes the function in before this file).
 // Each image is read with a constant index: lavapipe has no dynamic indexing of sampler
 // arrays, and a switch over the slots made llvmpipe fetch from all of them (13 ms of 32
@@ -40,7 +40,12 @@ layout(push_constant) uniform Push {
 #define imageVisibility(SLOT) texelFetch(visibility[SLOT], pixel, 0).r
 // What the light's visibility pass would have stored and shading read back: the same
 // pixels whether or not the image exists (engine/visibility_function_pass.glsl).
-#define fusedVisibility(V) visibilityAsStored(sanitizeVisibility(position.w != 0.0 ? (V) : VISIBILITY_NO_GEOMETRY))
+// The function is called as an argument, for every pixel: in a branch (a ?: on the
+// pixel's geometry) llvmpipe would load its every uniform value once per lane.
+float fusedVisibility(float v, vec4 position)
+{
+    return visibilityAsStored(sanitizeVisibility(position.w != 0.0 ? v : VISIBILITY_NO_GEOMETRY));
+}
 #define ADD_LIGHT(I) radiance += lambertRadiance(lights[I], position.xyz, n, albedo, LIGHT_VISIBILITY_##I)
 #ifndef LIGHT_VISIBILITY_0  // compiled on its own (a shader tool): every light unshadowed
 #define LIGHT_VISIBILITY_0 1.0

@@ -107,7 +107,7 @@ void FrameRenderer::createShadingPipeline()
             for (const std::string& e : unit.extensions)
                 if (extensions.find(e) == std::string::npos) extensions += e + "\n";
             units += fmt::format("// light {}: {}\n{}", i, slot.inShading->function->shader().string(), unit.text);
-            visibility = fmt::format("fusedVisibility({}techniqueVisibility(pixel, position.xyz, n))", prefix);
+            visibility = fmt::format("fusedVisibility({}techniqueVisibility(pixel, position.xyz, n), position)", prefix);
         }
         s.defines.push_back({fmt::format("LIGHT_VISIBILITY_{}", i), visibility});
     }
