@@ -61,6 +61,22 @@ std::string visibilityInShadingText(const frame::FrameRenderer& renderer)
                        fmt::join(lights, ", "));
 }
 
+// Where shading added each light in the last frame (FrameRenderer::shadingRegions).
+std::string shadingRegionsText(const frame::FrameRenderer& renderer)
+{
+    const auto& regions = renderer.shadingRegions();
+    const double pixels = double(renderer.width()) * double(renderer.height());
+    std::vector<std::string> lights;
+    for (size_t l = 0; l < renderer.lightCount(); ++l) {
+        double shaded = 0.0;
+        for (const auto& r : regions)
+            if ((r.shaded >> l) & 1u) shaded += double(r.rect.x1 - r.rect.x0) * double(r.rect.y1 - r.rect.y0);
+        lights.push_back(fmt::format("light {} {:.1f}%", l, pixels > 0.0 ? 100.0 * shaded / pixels : 0.0));
+    }
+    return fmt::format("shading: {} rectangle(s); each light added over its screen bounds, share of the pixels: {}\n",
+                       regions.size(), fmt::join(lights, ", "));
+}
+
 int runGraph(const GraphFlags& flags)
 {
     config::RenderConfig loaded = loadConfigIgnoringSweep(flags.config, "graph");
@@ -94,6 +110,7 @@ int runGraph(const GraphFlags& flags)
         for (size_t l = 0; l < renderer.lightCount(); ++l) techniques.push_back(renderer.techniqueName(l));
         text += techniqueFiguresText(timings.techniques, techniques);
         text += visibilityInShadingText(renderer);
+        text += shadingRegionsText(renderer);
         // Every image a pass writes, culled passes' too: requesting one keeps its passes
         // (and the lights' visibility images).
         renderer.setVisibilityReadBack(true);

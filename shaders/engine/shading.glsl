@@ -27,6 +27,7 @@ layout(binding = 6, rgba8) uniform writeonly image2D outColor;
 layout(push_constant) uniform Push {
     vec4 ambient;      // rgb sky irradiance / pi, w = exposure
     vec4 background;   // rgb colour where no geometry is seen
+    ivec4 region;      // xy: the first pixel of this dispatch's rectangle, zw: its size
 } pc;
 
 // The pipeline is compiled for the frame's lights: LIGHT_COUNT (1..8), and for each light
@@ -47,6 +48,10 @@ float fusedVisibility(float v, vec4 position)
     return visibilityAsStored(sanitizeVisibility(position.w != 0.0 ? v : VISIBILITY_NO_GEOMETRY));
 }
 #define ADD_LIGHT(I) radiance += lambertRadiance(lights[I], position.xyz, n, albedo, LIGHT_VISIBILITY_##I)
+// LIGHT_SHADED_<i> 0 leaves light i out: the frame shades each rectangle of the screen
+// with a pipeline for the lights that can reach it (frame/LightInfluence.h
+// lightScreenRect), and a light adds exactly 0 beyond its spot cone, less than a display
+// step beyond its range.
 #ifndef LIGHT_VISIBILITY_0  // compiled on its own (a shader tool): every light unshadowed
 #define LIGHT_VISIBILITY_0 1.0
 #define LIGHT_VISIBILITY_1 1.0
@@ -57,39 +62,50 @@ float fusedVisibility(float v, vec4 position)
 #define LIGHT_VISIBILITY_6 1.0
 #define LIGHT_VISIBILITY_7 1.0
 #endif
+#ifndef LIGHT_SHADED_0
+#define LIGHT_SHADED_0 1
+#define LIGHT_SHADED_1 1
+#define LIGHT_SHADED_2 1
+#define LIGHT_SHADED_3 1
+#define LIGHT_SHADED_4 1
+#define LIGHT_SHADED_5 1
+#define LIGHT_SHADED_6 1
+#define LIGHT_SHADED_7 1
+#endif
 
 void main()
 {
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    ivec2 size = imageSize(outColor);
-    bool inside = all(lessThan(pixel, size));
-    pixel = min(pixel, size - 1);
+    ivec2 local = ivec2(gl_GlobalInvocationID.xy);
+    bool inside = all(lessThan(local, pc.region.zw));
+    ivec2 pixel = pc.region.xy + min(local, pc.region.zw - 1);
 
     vec4 position = gbufferPosition(pixel);
     vec3 n = gbufferNormal(pixel);
     vec3 albedo = texelFetch(gAlbedo, pixel, 0).rgb;
 
     vec3 radiance = lambertSkyAmbient(albedo, n, pc.ambient.rgb);
+#if LIGHT_SHADED_0
     ADD_LIGHT(0);
-#if LIGHT_COUNT > 1
+#endif
+#if LIGHT_COUNT > 1 && LIGHT_SHADED_1
     ADD_LIGHT(1);
 #endif
-#if LIGHT_COUNT > 2
+#if LIGHT_COUNT > 2 && LIGHT_SHADED_2
     ADD_LIGHT(2);
 #endif
-#if LIGHT_COUNT > 3
+#if LIGHT_COUNT > 3 && LIGHT_SHADED_3
     ADD_LIGHT(3);
 #endif
-#if LIGHT_COUNT > 4
+#if LIGHT_COUNT > 4 && LIGHT_SHADED_4
     ADD_LIGHT(4);
 #endif
-#if LIGHT_COUNT > 5
+#if LIGHT_COUNT > 5 && LIGHT_SHADED_5
     ADD_LIGHT(5);
 #endif
-#if LIGHT_COUNT > 6
+#if LIGHT_COUNT > 6 && LIGHT_SHADED_6
     ADD_LIGHT(6);
 #endif
-#if LIGHT_COUNT > 7
+#if LIGHT_COUNT > 7 && LIGHT_SHADED_7
     ADD_LIGHT(7);
 #endif
 #if LIGHT_COUNT > 8

@@ -33,6 +33,13 @@ TEST_F(Cli, GraphPrintsPassesInOrderResourcesAndMemory)
               std::string::npos)
         << r.out;
     EXPECT_EQ(r.out.find("light0.hard.visibility"), std::string::npos) << r.out;
+    // Each light shaded over its screen bounds only: the sky is no light's.
+    const size_t regions = r.out.find("shading: ");
+    ASSERT_NE(regions, std::string::npos) << r.out;
+    const std::string line = r.out.substr(regions, r.out.find('\n', regions) - regions);
+    EXPECT_NE(line.find("rectangle(s); each light added over its screen bounds, share of the pixels: light 0 "), std::string::npos)
+        << line;
+    EXPECT_EQ(line.find("100.0%"), std::string::npos) << line;
     EXPECT_EQ(r.out.find("light0.visibility: image"), std::string::npos) << r.out;
     EXPECT_GT(r.out.find("barrier 'light1.hard.shadow_map' DepthAttachmentOptimal -> DepthReadOnlyOptimal"), shading)
         << r.out;

@@ -32,6 +32,7 @@ struct GBufferCameraData {  // matches GBufferCamera in shaders/common/gbuffer.g
 struct ShadingPush {
     glm::vec4 ambient;
     glm::vec4 background;
+    glm::ivec4 region;  // the dispatch's first pixel and size
 };
 
 // Graph names of the engine's images (plugin::LightPassIo refers to the G-buffer ones).
@@ -82,13 +83,15 @@ FrameRenderer::FrameRenderer(gpu::Context& context, const scene::Scene& scene, c
 {
 }
 
-// The shading pass is compiled for the frame's lights: LIGHT_COUNT, and for each light i
+// The shading pass is compiled for the frame's lights and the lights `shaded` (a bit per
+// light) it adds: LIGHT_COUNT, and for each light i LIGHT_SHADED_<i> and
 // LIGHT_VISIBILITY_<i> (engine/shading.glsl): 1.0 for a light without V this frame
 // (unshadowed or culled), its element of the visibility[] array, or its technique's
 // visibility function, composed in before shading's body under the prefix "light<i>_"
 // with bindings of its own (kFunctionBindingBase on).
-void FrameRenderer::createShadingPipeline()
+const gpu::Pipeline& FrameRenderer::shadingPipeline(uint32_t shaded)
 {
+    if (const auto found = shadingPipelines_.find(shaded); found != shadingPipelines_.end()) return *found->second;
     gpu::ComputePipelineDesc s;
     s.name = "shading";
     s.shader = "engine/shading.comp";
@@ -97,10 +100,11 @@ void FrameRenderer::createShadingPipeline()
     std::string units, extensions;
     for (size_t i = 0; i < lights_.size(); ++i) {
         const LightSlot& slot = lights_[i];
+        const bool adds = (shaded >> i) & 1u;
         std::string visibility = "1.0";
-        if (slot.hasImage()) {
+        if (adds && slot.hasImage()) {
             visibility = fmt::format("imageVisibility({})", slots++);
-        } else if (slot.inShading) {
+        } else if (adds && slot.inShading) {
             const std::string prefix = fmt::format("light{}_", i);
             const gpu::PrefixedUnit unit = gpu::prefixTopLevelNames(
                 slot.inShading->function->preprocessedUnit(functionBindingBase(i)), prefix);
@@ -110,6 +114,7 @@ void FrameRenderer::createShadingPipeline()
             visibility = fmt::format("fusedVisibility({}techniqueVisibility(pixel, position.xyz, n), position)", prefix);
         }
         s.defines.push_back({fmt::format("LIGHT_VISIBILITY_{}", i), visibility});
+        s.defines.push_back({fmt::format("LIGHT_SHADED_{}", i), adds ? "1" : "0"});
     }
     s.defines.push_back({"VISIBILITY_COUNT", std::to_string(slots)});
     s.pushConstantBytes = sizeof(ShadingPush);
@@ -121,7 +126,47 @@ void FrameRenderer::createShadingPipeline()
                    "#include \"common/visibility.glsl\"\n" +
                    units + "#include \"engine/shading.glsl\"\n";
     }
-    shadingPipeline_ = &resources_->computePipeline(s);
+    const gpu::Pipeline& pipeline = resources_->computePipeline(s);
+    shadingPipelines_.emplace(shaded, &pipeline);
+    return pipeline;
+}
+
+// The rectangles shading covers this frame, each with the lights that can reach it
+// (lightScreenRect): the screen cut along every light's rectangle, cells of one row with
+// the same lights joined.
+std::vector<FrameRenderer::ShadingRegion> FrameRenderer::computeShadingRegions() const
+{
+    std::vector<ScreenRect> rects(lights_.size());
+    std::vector<int32_t> xs = {0, int32_t(width_)}, ys = {0, int32_t(height_)};
+    for (size_t i = 0; i < lights_.size(); ++i) {
+        if (lights_[i].decision.fate == LightFate::Culled) continue;  // its row's radiance is 0
+        rects[i] = lightRegions_ ? lightScreenRect(currentLights_[i], ambient_.w, receiversInView_, cameraPosition_,
+                                                   cameraViewProj_, width_, height_)
+                                 : ScreenRect{0, 0, int32_t(width_), int32_t(height_)};
+        if (rects[i].empty()) continue;
+        xs.insert(xs.end(), {rects[i].x0, rects[i].x1});
+        ys.insert(ys.end(), {rects[i].y0, rects[i].y1});
+    }
+    std::sort(xs.begin(), xs.end());
+    xs.erase(std::unique(xs.begin(), xs.end()), xs.end());
+    std::sort(ys.begin(), ys.end());
+    ys.erase(std::unique(ys.begin(), ys.end()), ys.end());
+    std::vector<ShadingRegion> regions;
+    for (size_t y = 0; y + 1 < ys.size(); ++y) {
+        for (size_t x = 0; x + 1 < xs.size(); ++x) {
+            const ScreenRect cell{xs[x], ys[y], xs[x + 1], ys[y + 1]};
+            uint32_t shaded = 0;
+            for (size_t i = 0; i < rects.size(); ++i)
+                if (!rects[i].empty() && rects[i].contains(cell)) shaded |= 1u << i;
+            if (!regions.empty() && regions.back().shaded == shaded && regions.back().rect.y0 == cell.y0 &&
+                regions.back().rect.x1 == cell.x0) {
+                regions.back().rect.x1 = cell.x1;
+            } else {
+                regions.push_back({cell, shaded});
+            }
+        }
+    }
+    return regions;
 }
 
 void FrameRenderer::setCamera(const scene::Camera& camera)
@@ -290,9 +335,9 @@ void FrameRenderer::buildGraph()
             decideLights();  // the dropped light is lit unshadowed; another may take its shadows
             continue;
         }
-        // Made as the frame is first drawn: settings made after the graph is declared
+        // Made as the frames need them: settings made after the graph is declared
         // (setVisibilityReadBack) compile no shading that no frame uses.
-        shadingPipeline_ = nullptr;
+        shadingPipelines_.clear();
 
         graph::PassBuilder shading = g.addPass("shading", graph::QueueKind::Compute);
         shading.read(kGDepth, graph::Usage::Sampled)
@@ -382,6 +427,11 @@ uint32_t FrameRenderer::functionBindingBase(size_t light)
     return kFunctionBindingBase + uint32_t(light) * plugin::kMaxVisibilityFunctionBindings;
 }
 
+void FrameRenderer::setLightRegions(bool regions)
+{
+    lightRegions_ = regions;
+}
+
 void FrameRenderer::setVisibilityReadBack(bool readBack)
 {
     if (readBack == visibilityReadBack_) return;
@@ -452,7 +502,8 @@ void FrameRenderer::decideLights()
     input.exposure = ambient_.w;
     input.lights = currentLights_;
     for (const LightSlot& slot : lights_) input.shadowed.push_back(!slot.unshadowed && slot.instance);
-    input.visibleBoxes = resources_->instanceBoxesInView(cameraViewProj_);
+    receiversInView_ = resources_->instanceBoxesInView(cameraViewProj_);
+    input.visibleBoxes = receiversInView_;
     input.cullLights = lightCulling_;
     input.maxShadowedLights = maxShadowedLights_;
     std::vector<LightDecision> decided = frame::decideLights(input);
@@ -480,7 +531,8 @@ void FrameRenderer::noteChanges(std::span<const uint32_t> movedInstances)
 
 void FrameRenderer::execute()
 {
-    if (!shadingPipeline_) createShadingPipeline();
+    shadingRegions_ = computeShadingRegions();
+    for (const ShadingRegion& region : shadingRegions_) shadingPipeline(region.shaded);
     graph_->setState(render::kCameraState, changes_.camera());
     graph_->setState(kLightTableState, changes_.lightTable());
     for (size_t i = 0; i < lights_.size(); ++i) graph_->setState(render::lightState(uint32_t(i)), changes_.light(i));
@@ -588,27 +640,30 @@ void FrameRenderer::recordGBuffer(graph::PassContext& pass)
 void FrameRenderer::recordShading(graph::PassContext& pass)
 {
     const VkCommandBuffer cmd = pass.cmd();
-    std::vector<const gpu::Image*> visibility;
-    for (const LightSlot& slot : lights_)
-        if (slot.hasImage()) visibility.push_back(&pass.image(slot.visibility));
-    const gpu::Pipeline& shading = *shadingPipeline_;
-    shading.bind(cmd);
-    gpu::DescriptorPush descriptors;
-    plugin::bindGBuffer(pass, gbufferIo(), descriptors);
-    descriptors.sampledImage("gAlbedo", pass.image(kGAlbedo), resources_->nearestSampler(), pass.layout(kGAlbedo))
-        .storageBuffer("Lights", lightBuffer_)
-        .storageImage("outColor", pass.image(kColor));
-    if (!visibility.empty()) descriptors.sampledImages("visibility", visibility, resources_->nearestSampler());
-    for (size_t i = 0; i < lights_.size(); ++i) {
-        if (!lights_[i].inShading) continue;
-        descriptors.setNamePrefix(fmt::format("light{}_", i));  // the function's names in shading
-        lights_[i].inShading->bind(pass, descriptors);
+    for (const ShadingRegion& region : shadingRegions_) {
+        const gpu::Pipeline& shading = shadingPipeline(region.shaded);
+        shading.bind(cmd);
+        gpu::DescriptorPush descriptors;
+        plugin::bindGBuffer(pass, gbufferIo(), descriptors);
+        descriptors.sampledImage("gAlbedo", pass.image(kGAlbedo), resources_->nearestSampler(), pass.layout(kGAlbedo))
+            .storageBuffer("Lights", lightBuffer_)
+            .storageImage("outColor", pass.image(kColor));
+        std::vector<const gpu::Image*> visibility;
+        for (size_t i = 0; i < lights_.size(); ++i) {
+            if (!((region.shaded >> i) & 1u)) continue;
+            if (lights_[i].hasImage()) visibility.push_back(&pass.image(lights_[i].visibility));
+            if (!lights_[i].inShading) continue;
+            descriptors.setNamePrefix(fmt::format("light{}_", i));  // the function's names in shading
+            lights_[i].inShading->bind(pass, descriptors);
+            descriptors.setNamePrefix({});
+        }
+        if (!visibility.empty()) descriptors.sampledImages("visibility", visibility, resources_->nearestSampler());
+        descriptors.push(context_, cmd, shading);
+        const ScreenRect& r = region.rect;
+        const ShadingPush push{ambient_, background_, glm::ivec4(r.x0, r.y0, r.x1 - r.x0, r.y1 - r.y0)};
+        shading.pushConstants(cmd, &push, sizeof(push));
+        shading.dispatchOver(cmd, uint32_t(r.x1 - r.x0), uint32_t(r.y1 - r.y0));
     }
-    descriptors.setNamePrefix({});
-    descriptors.push(context_, cmd, shading);
-    const ShadingPush push{ambient_, background_};
-    shading.pushConstants(cmd, &push, sizeof(push));
-    shading.dispatchOver(cmd, width_, height_);
 }
 
 std::vector<uint8_t> FrameRenderer::readColor() const

@@ -190,4 +190,134 @@ std::vector<LightDecision> decideLights(const LightCullingInput& input)
     return decisions;
 }
 
+namespace {
+
+// Whether `light` can add anything at all in the box: everywhere for point and
+// directional lights; a spot within its cone, a rect or disk light in front of its
+// emitting side. Both are exact zeros of the shading (its spot factor, its emitter
+// cosine); a range is not, so none is used.
+bool mayAddIn(const scene::Light& light, const glm::dvec3& lo, const glm::dvec3& hi)
+{
+    const glm::dvec3 position(light.position);
+    const glm::dvec3 axis = glm::normalize(glm::dvec3(light.direction));
+    if (light.type == scene::LightType::Spot) {
+        const double outer = glm::radians(std::clamp(double(light.outerConeDeg), 0.0, 180.0));
+        return coneMeetsBox(position, axis, outer + kConeSlackRad, lo, hi);
+    }
+    if (light.type == scene::LightType::Rect || light.type == scene::LightType::Disk) {
+        const double slack = kReceiverSlack * (glm::length(hi - lo) + glm::length(position));
+        for (int c = 0; c < 8; ++c) {
+            const glm::dvec3 p((c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z);
+            const double ahead = glm::dot(axis, p - position);
+            if (ahead + slack >= 0.0 || std::isnan(ahead)) return true;
+        }
+        return false;
+    }
+    return true;
+}
+
+// Screen bounds in NDC of the boxes added: their corners in front of the camera, and
+// where their edges cross w = kWMin.
+struct NdcBounds {
+    double xMin = std::numeric_limits<double>::max(), yMin = xMin, xMax = -xMin, yMax = -xMin;
+    bool any = false;
+
+    void add(const glm::dvec4& q)
+    {
+        xMin = std::min(xMin, q.x / q.w);
+        xMax = std::max(xMax, q.x / q.w);
+        yMin = std::min(yMin, q.y / q.w);
+        yMax = std::max(yMax, q.y / q.w);
+        any = true;
+    }
+    void add(const glm::dmat4& viewProj, const glm::dvec3& lo, const glm::dvec3& hi)
+    {
+        constexpr double kWMin = 1e-6;
+        glm::dvec4 clip[8];
+        for (int c = 0; c < 8; ++c)
+            clip[c] = viewProj * glm::dvec4((c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z, 1.0);
+        for (int c = 0; c < 8; ++c) {
+            if (clip[c].w > kWMin) add(clip[c]);
+            for (int bit = 0; bit < 3; ++bit) {
+                const int d = c | (1 << bit);
+                if (d == c) continue;
+                const double a = clip[c].w - kWMin, b = clip[d].w - kWMin;
+                if ((a > 0.0) != (b > 0.0)) add(clip[c] + (clip[d] - clip[c]) * (a / (a - b)));
+            }
+        }
+    }
+    // The part of the screen ([-1, 1]^2) it covers: 1 where it reaches behind the camera.
+    double screenShare() const
+    {
+        if (!any) return 0.0;
+        const double w = std::clamp(xMax, -1.0, 1.0) - std::clamp(xMin, -1.0, 1.0);
+        const double h = std::clamp(yMax, -1.0, 1.0) - std::clamp(yMin, -1.0, 1.0);
+        return std::isfinite(w * h) ? 0.25 * w * h : 1.0;
+    }
+};
+
+// A box larger than this part of the screen is halved, kRegionSplits times at most, and
+// only the halves the light may reach are kept: a ground plane under a spot covers the
+// screen, the cone's part of it does not.
+constexpr double kRegionSplitShare = 1.0 / 64.0;
+constexpr int kRegionSplits = 8;
+
+void addReached(const scene::Light& light, const glm::dmat4& viewProj, const glm::dvec3& lo, const glm::dvec3& hi,
+                int splits, NdcBounds& bounds)
+{
+    if (!mayAddIn(light, lo, hi)) return;
+    const bool bounded = light.type == scene::LightType::Spot || light.type == scene::LightType::Rect ||
+                         light.type == scene::LightType::Disk;
+    if (bounded && splits < kRegionSplits) {
+        NdcBounds own;
+        own.add(viewProj, lo, hi);
+        if (own.screenShare() > kRegionSplitShare) {
+            const glm::dvec3 size = hi - lo;
+            const int side = size.x >= size.y && size.x >= size.z ? 0 : (size.y >= size.z ? 1 : 2);
+            glm::dvec3 midHi = hi, midLo = lo;
+            midHi[side] = midLo[side] = 0.5 * (lo[side] + hi[side]);
+            addReached(light, viewProj, lo, midHi, splits + 1, bounds);
+            addReached(light, viewProj, midLo, hi, splits + 1, bounds);
+            return;
+        }
+    }
+    bounds.add(viewProj, lo, hi);
+}
+
+} // namespace
+
+ScreenRect lightScreenRect(const scene::Light& light, double exposure, std::span<const scene::Aabb> receivers,
+                           const glm::vec3& cameraPosition, const glm::mat4& cameraViewProj, uint32_t width,
+                           uint32_t height)
+{
+    const ScreenRect whole{0, 0, int32_t(width), int32_t(height)};
+    const double scale = radianceScale(light, exposure);
+    if (std::isnan(scale)) return whole;
+    if (!(scale > 0.0)) return {};
+    // Every G-buffer position lies in the box of an instance in view, grown as
+    // decideLights grows it; a pixel without geometry shows the background whatever the
+    // lights add.
+    const glm::dmat4 m(cameraViewProj);
+    NdcBounds bounds;
+    for (const scene::Aabb& receiver : receivers) {
+        if (receiver.empty()) continue;
+        const scene::Aabb box = grown(receiver, cameraPosition);
+        addReached(light, m, glm::dvec3(box.min), glm::dvec3(box.max), 0, bounds);
+    }
+    if (!bounds.any) return {};
+    if (!std::isfinite(bounds.xMin) || !std::isfinite(bounds.xMax) || !std::isfinite(bounds.yMin) ||
+        !std::isfinite(bounds.yMax)) {
+        return whole;
+    }
+    // NDC to pixels (y down, as the camera's projection flips it), one pixel of margin.
+    const auto pixel = [](double ndc, uint32_t size) { return (ndc * 0.5 + 0.5) * double(size); };
+    const auto clampTo = [](double v, uint32_t size) { return int32_t(std::clamp(v, 0.0, double(size))); };
+    ScreenRect r;
+    r.x0 = clampTo(std::floor(pixel(bounds.xMin, width)) - 1.0, width);
+    r.x1 = clampTo(std::ceil(pixel(bounds.xMax, width)) + 1.0, width);
+    r.y0 = clampTo(std::floor(pixel(bounds.yMin, height)) - 1.0, height);
+    r.y1 = clampTo(std::ceil(pixel(bounds.yMax, height)) + 1.0, height);
+    return r.empty() ? ScreenRect{} : r;
+}
+
 } // namespace penumbra::frame

@@ -199,3 +199,84 @@ TEST_F(LightCullingFrames, MaxShadowedLightsLightsTheOthersUnshadowed)
     frame::FrameRenderer unshadowed(*context, scene, none, test::plugins());
     EXPECT_EQ(a.color, draw(unshadowed).color);
 }
+
+// Only the pixels a light reaches (FrameRenderer::setLightRegions): shading adds each light
+// only over its rectangle of the screen, and the frame is, bit for bit, the frame that
+// shades every light everywhere; over spots sweeping across and out of the view, a
+// narrow spot, lights beside and behind the camera, and every light type.
+namespace {
+
+struct RegionCase {
+    const char* name;
+    scene::LightType type;
+    glm::vec3 position;
+    glm::vec3 direction;
+    float outerConeDeg = 50.0f;
+    float intensity = 0.0f;  // 0: the test config's
+    bool smallerThanTheScreen = false;  // where the rectangle must leave pixels out
+};
+
+std::ostream& operator<<(std::ostream& os, const RegionCase& c) { return os << c.name; }
+
+class LightRegions : public test::GpuTest, public ::testing::WithParamInterface<RegionCase> {};
+
+} // namespace
+
+TEST_P(LightRegions, ShadingOnlyTheLightsRectangleGivesTheSameFrame)
+{
+    const RegionCase& c = GetParam();
+    config::RenderConfig config = smallDefault("second", {2.0f, 9.0f, 2.0f});
+    config::LightConfig& l = config.lights[1];
+    test::setLightType(l, c.type);
+    l.light.position = c.position;
+    l.light.direction = glm::normalize(c.direction);
+    l.light.outerConeDeg = c.outerConeDeg;
+    l.light.innerConeDeg = std::min(l.light.innerConeDeg, 0.8f * c.outerConeDeg);
+    if (c.intensity > 0.0f) l.light.intensity = c.intensity;
+    test::setShadow(l, "hard", {});
+    const scene::Scene scene = config::buildScene(config);
+    frame::FrameRenderer regions(*context, scene, config, test::plugins());
+    frame::FrameRenderer everywhere(*context, scene, config, test::plugins());
+    everywhere.setLightRegions(false);
+    for (frame::FrameRenderer* r : {&regions, &everywhere}) r->setVisibilityReadBack(false);
+
+    for (int f = 0; f < 3; ++f) {  // the camera turns a little each frame
+        SCOPED_TRACE(f);
+        config.camera.target += glm::vec3(1.5f * float(f), 0.0f, -0.7f * float(f));
+        regions.update(config, scene, {});
+        everywhere.update(config, scene, {});
+        const Frame a = draw(regions);
+        const Frame b = draw(everywhere);
+        ASSERT_EQ(a.color, b.color) << "largest difference " << largestDifference(a.color, b.color);
+        // The regions cover the screen once.
+        uint64_t covered = 0, lit = 0;
+        for (const auto& region : regions.shadingRegions()) {
+            const uint64_t area = uint64_t(region.rect.x1 - region.rect.x0) * uint64_t(region.rect.y1 - region.rect.y0);
+            covered += area;
+            if ((region.shaded >> 1) & 1u) lit += area;
+        }
+        EXPECT_EQ(covered, uint64_t(config.width) * config.height);
+        ASSERT_EQ(everywhere.shadingRegions().size(), 1u);
+        if (c.smallerThanTheScreen) {
+            EXPECT_LT(lit, covered) << "the light's rectangle is the whole screen";
+        }
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    SpotsPointsAndAreas, LightRegions,
+    ::testing::Values(RegionCase{"narrow_spot", scene::LightType::Spot, {-3.0f, 8.0f, 1.0f}, {0.2f, -1.0f, 0.1f}, 12.0f,
+                                 0.0f, true},
+                      RegionCase{"spot_at_the_edge", scene::LightType::Spot, {9.0f, 6.0f, 0.0f}, {0.6f, -1.0f, 0.0f}, 25.0f,
+                                 0.0f, true},
+                      RegionCase{"spot_over_the_camera", scene::LightType::Spot, {0.0f, 9.0f, 14.0f}, {0.0f, -0.5f, -1.0f},
+                                 70.0f},
+                      RegionCase{"spot_behind_the_camera", scene::LightType::Spot, {0.0f, 4.0f, 30.0f}, {0.0f, -0.1f, -1.0f},
+                                 20.0f},
+                      RegionCase{"dim_point", scene::LightType::Point, {-4.0f, 1.5f, 2.0f}, {0.0f, -1.0f, 0.0f}, 50.0f,
+                                 0.05f, true},
+                      RegionCase{"point", scene::LightType::Point, {2.0f, 5.0f, 2.0f}, {0.0f, -1.0f, 0.0f}},
+                      RegionCase{"rect", scene::LightType::Rect, {2.0f, 6.0f, 2.0f}, {0.0f, -1.0f, 0.0f}},
+                      RegionCase{"disk", scene::LightType::Disk, {-2.0f, 6.0f, 3.0f}, {0.2f, -1.0f, 0.0f}},
+                      RegionCase{"directional", scene::LightType::Directional, {0.0f, 10.0f, 0.0f}, {0.3f, -1.0f, 0.2f}}),
+    [](const auto& info) { return std::string(info.param.name); });

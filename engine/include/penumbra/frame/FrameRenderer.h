@@ -143,6 +143,18 @@ public:
     // has no image, and readVisibility / readPixel throw for it. Declares the frame's
     // graph again when it changes.
     void setVisibilityReadBack(bool readBack);
+    // Whether shading adds each light only over its rectangle of the screen
+    // (frame/LightInfluence.h lightScreenRect): true unless set otherwise. The same image
+    // either way (a spot light adds exactly 0 outside its cone, the others less than a
+    // display step beyond their range); false for comparisons.
+    void setLightRegions(bool regions);
+    // The last frame's shading dispatches: rectangles covering the screen once, each with
+    // the lights (a bit per light) shading added there.
+    struct ShadingRegion {
+        ScreenRect rect;
+        uint32_t shaded = 0;
+    };
+    const std::vector<ShadingRegion>& shadingRegions() const { return shadingRegions_; }
     // Whether shading evaluates light `light`'s visibility this frame (it has no image).
     bool visibilityInShading(size_t light) const { return lights_.at(light).inShading.has_value(); }
 
@@ -205,7 +217,8 @@ private:
     std::shared_ptr<CreatedTechnique> keptTechnique(const FrameRenderer* previous, size_t light,
                                                     const config::LightConfig& config,
                                                     const plugin::LoadedPlugin& plugin, const nlohmann::json& params) const;
-    void createShadingPipeline();
+    const gpu::Pipeline& shadingPipeline(uint32_t shaded);
+    std::vector<ShadingRegion> computeShadingRegions() const;
     bool shadingTakesFunction(const plugin::VisibilityFunction& function) const;
     // The first binding of light `light`'s visibility function in shading (engine/shading.glsl
     // uses 0..6).
@@ -243,7 +256,11 @@ private:
     std::shared_ptr<visibility::Visibility> visibility_;
     gpu::Buffer lightBuffer_;
     gpu::Buffer gbufferCamera_;  // GBufferCamera (common/gbuffer.glsl), rewritten by setCamera
-    const gpu::Pipeline* shadingPipeline_ = nullptr;  // resources_'s, for this layout of lights
+    // resources_'s, for this layout of lights, by the lights they add
+    std::map<uint32_t, const gpu::Pipeline*> shadingPipelines_;
+    std::vector<ShadingRegion> shadingRegions_;  // this frame's
+    std::vector<scene::Aabb> receiversInView_;   // the instances' boxes decideLights saw
+    bool lightRegions_ = true;
     std::vector<LightSlot> lights_;
     std::vector<scene::Light> currentLights_;  // as the last update() left them
     std::vector<std::string> warnings_;

@@ -21,6 +21,7 @@
 
 #include <glm/glm.hpp>
 
+#include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
@@ -80,5 +81,25 @@ struct LightCullingInput {
 
 // Decides each light's fate. Deterministic: ties in importance keep the lower index.
 std::vector<LightDecision> decideLights(const LightCullingInput& input);
+
+// Pixels [x0, x1) x [y0, y1) of a width x height image, top row first.
+struct ScreenRect {
+    int32_t x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+    bool empty() const { return x0 >= x1 || y0 >= y1; }
+    bool contains(const ScreenRect& r) const { return x0 <= r.x0 && y0 <= r.y0 && r.x1 <= x1 && r.y1 <= y1; }
+    bool operator==(const ScreenRect&) const = default;
+};
+
+// The pixels whose receivers `light` can light (frame/FrameRenderer.cpp shades it only
+// there): the screen bounds of the parts of `receivers` (the world boxes of the instances
+// in view: every G-buffer position lies in one) where the shading's light factors can be
+// other than exactly 0 - a spot's cone, the half-space a rect or disk light's emitting
+// side faces, everywhere for the others - grown by kReceiverSlack and kConeSlackRad and
+// one pixel. Boxes larger than 1/64 of the screen are halved (8 times at most) and only
+// the halves the light may reach are kept. Outside it the light adds exactly 0, or the
+// pixel shows the background. Empty for a light of zero intensity or colour.
+ScreenRect lightScreenRect(const scene::Light& light, double exposure, std::span<const scene::Aabb> receivers,
+                           const glm::vec3& cameraPosition, const glm::mat4& cameraViewProj, uint32_t width,
+                           uint32_t height);
 
 } // namespace penumbra::frame
