@@ -119,12 +119,8 @@ const gpu::Pipeline& FrameRenderer::shadingPipeline(uint32_t shaded)
     s.defines.push_back({"VISIBILITY_COUNT", std::to_string(slots)});
     s.pushConstantBytes = sizeof(ShadingPush);
     if (!units.empty()) {
-        // shading.comp's head, then the functions, then its body.
-        s.source = "#version 460\n" + extensions +
-                   "#define GBUFFER_BINDING 0\n"
-                   "#include \"common/gbuffer.glsl\"\n"
-                   "#include \"common/visibility.glsl\"\n" +
-                   units + "#include \"engine/shading.glsl\"\n";
+        // shading.comp's head (the functions' own), then the functions, then its body.
+        s.source = plugin::visibilityFunctionHead(extensions) + units + "#include \"engine/shading.glsl\"\n";
     }
     const gpu::Pipeline& pipeline = resources_->computePipeline(s);
     shadingPipelines_.emplace(shaded, &pipeline);

@@ -1,7 +1,6 @@
 #include "penumbra/plugin/VisibilityFunction.h"
 
 #include "penumbra/core/Error.h"
-#include "penumbra/plugin/GBuffer.h"
 
 #include <fmt/format.h>
 
@@ -17,17 +16,6 @@ namespace fs = std::filesystem;
 // the function's follow.
 constexpr uint32_t kPassFunctionBindingBase = 4;
 
-// What every function is compiled after: the G-buffer's accessors and visibility.glsl.
-// Shading composes the same head (frame/FrameRenderer.cpp), so a function means the
-// same in both.
-std::string functionHead()
-{
-    return "#version 460\n"
-           "#define GBUFFER_BINDING 0\n"
-           "#include \"common/gbuffer.glsl\"\n"
-           "#include \"common/visibility.glsl\"\n";
-}
-
 std::string bindingMacro(uint32_t base)
 {
     return fmt::format("#define VISIBILITY_BINDING(k) ({} + (k))\n", base);
@@ -37,9 +25,17 @@ std::string includeLine(const fs::path& file) { return fmt::format("#include \"{
 
 } // namespace
 
+std::string visibilityFunctionHead(const std::string& extensions)
+{
+    return "#version 460\n" + extensions +
+           "#define GBUFFER_BINDING 0\n"
+           "#include \"common/gbuffer.glsl\"\n"
+           "#include \"common/visibility.glsl\"\n";
+}
+
 std::string visibilityPassSource(const fs::path& function)
 {
-    return functionHead() + bindingMacro(kPassFunctionBindingBase) + includeLine(function) +
+    return visibilityFunctionHead() + bindingMacro(kPassFunctionBindingBase) + includeLine(function) +
            "#include \"engine/visibility_function_pass.glsl\"\n";
 }
 
@@ -88,7 +84,7 @@ VisibilityFunction::VisibilityFunction(const TechniqueSetup& setup, const fs::pa
 std::string VisibilityFunction::preprocessedUnit(uint32_t bindingBase) const
 {
     static constexpr const char* kMarker = "penumbraVisibilityFunctionBegins";
-    const std::string source = functionHead() + fmt::format("const int {} = 1;\n", kMarker) + bindingMacro(bindingBase) +
+    const std::string source = visibilityFunctionHead() + fmt::format("const int {} = 1;\n", kMarker) + bindingMacro(bindingBase) +
                                includeLine(shader_);
     const std::string text = compiler_->preprocess(source, shader_.parent_path() / (shader_.filename().string() + ".unit.comp"),
                                                    VK_SHADER_STAGE_COMPUTE_BIT, defines_);

@@ -70,6 +70,11 @@ private:
     uint32_t descriptorCount_ = 0;
 };
 
+// The head every visibility function is compiled after: #version, `extensions` (whole
+// "#extension" lines), common/gbuffer.glsl at bindings 0..2 and common/visibility.glsl.
+// The visibility pass and shading (which composes its functions after it) share it.
+std::string visibilityFunctionHead(const std::string& extensions = {});
+
 // The visibility pass's source around the function file `function` (a resolved path):
 // what VisibilityFunction compiles, with its defines, as a compute shader named beside it.
 // Shader tests compile a function's variants with it.
