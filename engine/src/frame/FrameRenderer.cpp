@@ -426,6 +426,7 @@ uint32_t FrameRenderer::functionBindingBase(size_t light)
 void FrameRenderer::setLightRegions(bool regions)
 {
     lightRegions_ = regions;
+    shadingRegions_ = computeShadingRegions();
 }
 
 void FrameRenderer::setVisibilityReadBack(bool readBack)
@@ -509,6 +510,9 @@ void FrameRenderer::decideLights()
         lights_[i].decision = std::move(decided[i]);
         if (lights_[i].decision.fate == LightFate::Culled) rows[i].radiance = glm::vec4(glm::vec3(0.0f), rows[i].radiance.w);
     }
+    // Where shading adds each light follows from the same camera, lights and receivers:
+    // decided with them, not every frame.
+    shadingRegions_ = computeShadingRegions();
 }
 
 // The versions of the states that passes depend on (FrameChanges.h), for the executor to
@@ -527,7 +531,6 @@ void FrameRenderer::noteChanges(std::span<const uint32_t> movedInstances)
 
 void FrameRenderer::execute()
 {
-    shadingRegions_ = computeShadingRegions();
     for (const ShadingRegion& region : shadingRegions_) shadingPipeline(region.shaded);
     graph_->setState(render::kCameraState, changes_.camera());
     graph_->setState(kLightTableState, changes_.lightTable());

@@ -148,8 +148,8 @@ public:
     // either way (a spot light adds exactly 0 outside its cone, the others less than a
     // display step beyond their range); false for comparisons.
     void setLightRegions(bool regions);
-    // The last frame's shading dispatches: rectangles covering the screen once, each with
-    // the lights (a bit per light) shading added there.
+    // Shading's dispatches, decided with the lights (constructor, update()): rectangles
+    // covering the screen once, each with the lights (a bit per light) shading adds there.
     struct ShadingRegion {
         ScreenRect rect;
         uint32_t shaded = 0;
@@ -258,7 +258,7 @@ private:
     gpu::Buffer gbufferCamera_;  // GBufferCamera (common/gbuffer.glsl), rewritten by setCamera
     // resources_'s, for this layout of lights, by the lights they add
     std::map<uint32_t, const gpu::Pipeline*> shadingPipelines_;
-    std::vector<ShadingRegion> shadingRegions_;  // this frame's
+    std::vector<ShadingRegion> shadingRegions_;  // decideLights's
     std::vector<scene::Aabb> receiversInView_;   // the instances' boxes decideLights saw
     bool lightRegions_ = true;
     std::vector<LightSlot> lights_;
