@@ -7,6 +7,13 @@
 //
 //   osgshadow_peer SCENE.gltf [--width W] [--height H] [--map TEXELS] [--frames N] [--warmup K]
 //                  [--eye X Y Z] [--target X Y Z] [--fov DEG] [--light-dir X Y Z] [--png OUT.png]
+//                  [--per-pixel]
+//
+// osgShadow::ShadowMap's own shaders light per vertex (the fixed-function pipeline's
+// Gouraud colour) and do one compare per pixel. --per-pixel gives it shaders that do per
+// pixel what Penumbra's shading does (engine/shading.glsl: Lambert from the light's
+// direction and the interpolated normal, the sky ambient, the ACES tone map and the sRGB
+// encoding), so that the two frames can also be set side by side for the same pixel work.
 //
 // The defaults are config/box-field.json's camera, light, output size and map size. A
 // frame is timed from viewer.frame() until glFinish() has returned after its draw (the
@@ -19,6 +26,7 @@
 #include <osg/LightSource>
 #include <osg/Material>
 #include <osg/MatrixTransform>
+#include <osg/Shader>
 #include <osgDB/WriteFile>
 #include <osgShadow/ShadowMap>
 #include <osgShadow/ShadowedScene>
@@ -46,13 +54,14 @@ struct Options {
     double fovDeg = 50.0;
     osg::Vec3 lightDir{-0.55f, -0.7f, -0.45f};  // the direction the light travels
     std::string png;
+    bool perPixel = false;
 };
 
 [[noreturn]] void usage(const std::string& why)
 {
     std::fprintf(stderr, "osgshadow_peer: %s\nusage: osgshadow_peer SCENE.gltf [--width W] [--height H] [--map TEXELS] "
                          "[--frames N] [--warmup K] [--eye X Y Z] [--target X Y Z] [--fov DEG] [--light-dir X Y Z] "
-                         "[--png OUT.png]\n",
+                         "[--png OUT.png] [--per-pixel]\n",
                  why.c_str());
     std::exit(2);
 }
@@ -89,6 +98,7 @@ Options parse(int argc, char** argv)
         else if (a == "--target") o.target = vec3();
         else if (a == "--light-dir") o.lightDir = osg::Vec3(vec3());
         else if (a == "--png") { need(1); o.png = argv[++i]; }
+        else if (a == "--per-pixel") o.perPixel = true;
         else if (!a.empty() && a[0] == '-') usage("unknown option " + a);
         else if (o.scene.empty()) o.scene = a;
         else usage("more than one scene: " + a);
@@ -194,6 +204,42 @@ osg::ref_ptr<osg::Group> loadScene(const std::string& path)
     return root;
 }
 
+// --per-pixel: ShadowMap's texture coordinates are eye-linear texgen on unit 1, which a
+// vertex shader computes itself from the planes ShadowMap sets (gl_EyePlane*[1]).
+constexpr const char* kPerPixelVertex = R"(#version 120
+varying vec3 normalEye;
+void main()
+{
+    vec4 eye = gl_ModelViewMatrix * gl_Vertex;
+    gl_Position = ftransform();
+    normalEye = gl_NormalMatrix * gl_Normal;
+    gl_TexCoord[1] = vec4(dot(eye, gl_EyePlaneS[1]), dot(eye, gl_EyePlaneT[1]), dot(eye, gl_EyePlaneR[1]),
+                          dot(eye, gl_EyePlaneQ[1]));
+}
+)";
+
+// Penumbra's shading of one directional light with intensity 2 and config/box-field.json's
+// sky (engine/shading.glsl, common/lambert.glsl, common/color.glsl), per pixel.
+constexpr const char* kPerPixelFragment = R"(#version 120
+uniform sampler2DShadow osgShadow_shadowTexture;
+uniform mat4 osg_ViewMatrixInverse;
+varying vec3 normalEye;
+void main()
+{
+    vec3 n = normalize(normalEye);
+    vec3 albedo = gl_FrontMaterial.diffuse.rgb;
+    float v = shadow2DProj(osgShadow_shadowTexture, gl_TexCoord[1]).r;
+    float cosTheta = max(dot(n, normalize(gl_LightSource[0].position.xyz)), 0.0);
+    vec3 radiance = albedo / 3.14159265 * 2.0 * (cosTheta * v);
+    float up = (mat3(osg_ViewMatrixInverse) * n).y;
+    radiance += albedo * vec3(0.15, 0.15, 0.17) * (0.6 + 0.4 * up);
+    vec3 x = min(radiance, vec3(1e4));
+    x = clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
+    vec3 srgb = mix(12.92 * x, 1.055 * pow(x, vec3(1.0 / 2.4)) - 0.055, step(vec3(0.0031308), x));
+    gl_FragColor = vec4(srgb, 1.0);
+}
+)";
+
 // Waits for the frame's GL work: the frame is timed up to here. Notes which OpenGL
 // renderer drew it (the context is current only while the frame draws).
 struct FinishCallback : osg::Camera::DrawCallback {
@@ -235,6 +281,10 @@ int main(int argc, char** argv)
         osg::ref_ptr<osgShadow::ShadowMap> technique = new osgShadow::ShadowMap;
         technique->setTextureSize(osg::Vec2s(short(o.map), short(o.map)));
         technique->setLight(source.get());
+        if (o.perPixel) {
+            technique->addShader(new osg::Shader(osg::Shader::VERTEX, kPerPixelVertex));
+            technique->addShader(new osg::Shader(osg::Shader::FRAGMENT, kPerPixelFragment));
+        }
         osg::ref_ptr<osgShadow::ShadowedScene> shadowed = new osgShadow::ShadowedScene(technique.get());
         shadowed->setReceivesShadowTraversalMask(kReceives);
         shadowed->setCastsShadowTraversalMask(kCasts);
@@ -281,9 +331,9 @@ int main(int argc, char** argv)
             if (i >= o.warmup) ms.push_back(elapsed);
         }
         std::printf("renderer: %s\n", finish->renderer.c_str());
-        std::printf("osgShadow::ShadowMap frame: %dx%d, %d^2 map, median of %d frame(s) after %d warm-up: %.3f ms "
+        std::printf("osgShadow::ShadowMap frame%s: %dx%d, %d^2 map, median of %d frame(s) after %d warm-up: %.3f ms "
                     "(min %.3f, max %.3f)\n",
-                    o.width, o.height, o.map, o.frames, o.warmup, median(ms), *std::min_element(ms.begin(), ms.end()),
+                    o.perPixel ? " (per-pixel shading)" : "", o.width, o.height, o.map, o.frames, o.warmup, median(ms), *std::min_element(ms.begin(), ms.end()),
                     *std::max_element(ms.begin(), ms.end()));
         if (image && !osgDB::writeImageFile(*image, o.png)) throw std::runtime_error(o.png + ": could not write it");
     } catch (const std::exception& e) {
