@@ -36,5 +36,5 @@ void main()
     vec2 v00 = hsmTexel(size, level - 1, a), v10 = hsmTexel(size, level - 1, a + ivec2(1, 0));
     vec2 v01 = hsmTexel(size, level - 1, a + ivec2(0, 1)), v11 = hsmTexel(size, level - 1, a + ivec2(1, 1));
     vec2 range = vec2(min(min(v00.x, v10.x), min(v01.x, v11.x)), max(max(v00.y, v10.y), max(v01.y, v11.y)));
-    if (inLevel) hsmTexels[hsmLevelOffset(size, level) + texel.y * levelSize.x + texel.x] = range;
+    if (inLevel) imageStore(hsmImage, hsmLevelOrigin(size, level) + texel, vec4(range, 0.0, 0.0));
 }

@@ -179,14 +179,18 @@ int hsmLevelCount(uint32_t width, uint32_t height)
     return levels;
 }
 
-// The buffer of levels 1 and up.
-VkDeviceSize hsmBytes(uint32_t width, uint32_t height)
+// The image of levels 1 and up (hsm.glsl hsmLevelOrigin): level 1 at the origin, the
+// others in a column to its right. Never wider or taller than the atlas.
+glm::uvec2 hsmImageSize(uint32_t width, uint32_t height)
 {
-    VkDeviceSize texels = 0;
-    for (int level = 1; level < hsmLevelCount(width, height); ++level)
-        texels += VkDeviceSize((width + (1u << level) - 1) >> level) * ((height + (1u << level) - 1) >> level);
-    return std::max<VkDeviceSize>(texels, 1) * 2 * sizeof(float);
+    const auto side = [](uint32_t texels, int level) { return (texels + (1u << level) - 1) >> level; };
+    uint32_t column = 0;
+    for (int level = 2; level < hsmLevelCount(width, height); ++level) column += side(height, level);
+    return {side(width, 1) + side(width, 2), std::max(side(height, 1), column)};
 }
+
+// The bytes of the summed-area table (RGBA32UI, sat.glsl) and the hierarchy (RG32F).
+constexpr VkDeviceSize kSatTexelBytes = 16, kHsmTexelBytes = 8;
 
 class VssmShadow final : public plugin::Technique {
 public:
@@ -257,7 +261,10 @@ VssmShadow::VssmShadow(const plugin::TechniqueSetup& setup)
 }
 
 // The table needs 64-bit integers in shaders, and its box queries fp64 (sat.glsl); both
-// are optional Vulkan features. The hierarchy must fit one storage buffer binding.
+// are optional Vulkan features, and so is the RG32F storage format of the hierarchy. The
+// table is the largest single allocation (16 bytes a texel of the atlas): it must fit
+// the device's largest one. (Image sizes: the depth atlas is checked by ShadowMap, and
+// neither image is larger than it.)
 void VssmShadow::checkDevice() const
 {
     VkPhysicalDeviceFeatures features{};
@@ -267,14 +274,30 @@ void VssmShadow::checkDevice() const
                                       "plugins/vssm/sat.glsl); choose another technique or device",
                                       !features.shaderInt64 ? "shaderInt64" : "shaderFloat64"));
     }
-    VkPhysicalDeviceProperties properties{};
-    vkGetPhysicalDeviceProperties(context_.physicalDevice(), &properties);
-    const VkDeviceSize bytes = hsmBytes(shadowMap_.atlasWidth(), shadowMap_.atlasHeight());
-    if (bytes > properties.limits.maxStorageBufferRange) {
-        throw ConfigError(fmt::format("vssm: resolution: {} texels per face need a {} MiB min-max hierarchy, more "
-                                      "than this device binds as one buffer ({} MiB); use a lower resolution",
-                                      settings_.resolution, bytes >> 20,
-                                      properties.limits.maxStorageBufferRange >> 20));
+    if (!features.shaderStorageImageExtendedFormats) {
+        throw ConfigError("vssm: this device lacks shaderStorageImageExtendedFormats (the min-max hierarchy is an "
+                          "RG32F storage image, plugins/vssm/hsm.glsl); choose another technique or device");
+    }
+    VkPhysicalDeviceMaintenance3Properties maintenance3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
+    VkPhysicalDeviceProperties2 properties{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+    properties.pNext = &maintenance3;
+    vkGetPhysicalDeviceProperties2(context_.physicalDevice(), &properties);
+    const VkDeviceSize texels = VkDeviceSize(shadowMap_.atlasWidth()) * shadowMap_.atlasHeight();
+    if (texels * kSatTexelBytes > maintenance3.maxMemoryAllocationSize) {
+        // The atlas holds `faces` faces of faceTexels() (the resolution and its guard
+        // texels) a side: the largest face that fits, less the same guard, is the
+        // largest resolution (the guard never grows with a lower one).
+        const VkDeviceSize face = VkDeviceSize(shadowMap_.faceTexels()) * shadowMap_.faceTexels();
+        const VkDeviceSize faces = texels / face;
+        const auto largestFace = VkDeviceSize(std::floor(std::sqrt(
+            double(maintenance3.maxMemoryAllocationSize / kSatTexelBytes / faces))));
+        const VkDeviceSize guards = shadowMap_.faceTexels() - settings_.resolution;
+        const VkDeviceSize fits = largestFace > guards ? largestFace - guards : 0;
+        throw ConfigError(fmt::format("vssm: resolution: {} texels per face need a {} MiB summed-area table, more than "
+                                      "this device's largest allocation ({} MiB, maxMemoryAllocationSize); use at "
+                                      "most {}",
+                                      settings_.resolution, (texels * kSatTexelBytes) >> 20,
+                                      maintenance3.maxMemoryAllocationSize >> 20, fits));
     }
 }
 
@@ -302,7 +325,8 @@ void VssmShadow::registerPasses(graph::RenderGraph& graph, const plugin::LightPa
     const uint32_t width = shadowMap_.atlasWidth(), height = shadowMap_.atlasHeight();
     const std::string sat = io.local("sat"), hsm = io.local("hsm");
     graph.declareImage({sat, width, height, VK_FORMAT_R32G32B32A32_UINT});
-    graph.declareBuffer({hsm, hsmBytes(width, height)});
+    const glm::uvec2 hsmSize = hsmImageSize(width, height);
+    graph.declareImage({hsm, hsmSize.x, hsmSize.y, VK_FORMAT_R32G32_SFLOAT});
     graph.addPass(sat, graph::QueueKind::Compute)
         .read(map, graph::Usage::Sampled)
         .write(sat, graph::Usage::Storage)
@@ -360,7 +384,7 @@ void VssmShadow::recordHsm(const graph::PassContext& pass, const std::string& ma
     hsm_.bind(cmd);
     gpu::DescriptorPush()
         .sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map))
-        .storageBuffer("HsmBuffer", pass.buffer(hsm))
+        .storageImage("hsmImage", pass.image(hsm))
         .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
         .push(context_, cmd, hsm_);
     const glm::ivec2 size = atlasSize();
@@ -382,7 +406,7 @@ void VssmShadow::bindVisibility(const graph::PassContext& pass, gpu::DescriptorP
         .storageBuffer("shadowMapBuffer", shadowMap_.buffer())
         .sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map))
         .storageImage("satImage", pass.image(sat))
-        .storageBuffer("HsmBuffer", pass.buffer(hsm));
+        .storageImage("hsmImage", pass.image(hsm));
     const int most = maxNodes(settings_.blockerScheme(), settings_.blockerSubdivisions, settings_.treeHeight) +
                      maxNodes(settings_.filterScheme(), settings_.filterSubdivisions, settings_.treeHeight);
     const VisibilityPush push{atlasSize(),

@@ -64,6 +64,7 @@ config::RenderConfig cityConfig(View view, config::CullingMode mode)
     cfg.width = kCullingWidth;
     cfg.height = kCullingHeight;
     cfg.culling = mode;
+    cfg.keepUnchanged = false;  // every pass every frame: a still frame would keep them and time 0 ms
     const scene::Aabb bounds = city().bounds();
     const glm::vec3 c = bounds.center();
     if (view == View::Street) {

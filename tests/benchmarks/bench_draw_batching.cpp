@@ -61,6 +61,7 @@ config::RenderConfig frameConfig(SceneKind kind, config::CullingMode culling, bo
     config::RenderConfig cfg;
     cfg.culling = culling;
     cfg.batchDraws = batched;
+    cfg.keepUnchanged = false;  // every pass every frame: a still frame would keep them and time 0 ms
     const scene::Aabb bounds = sceneOf(kind).bounds();
     const glm::vec3 c = bounds.center(), e = bounds.max - bounds.min;
     cfg.camera.position = c + glm::vec3(-0.45f * e.x, 0.25f * std::max(e.x, e.z), -0.45f * e.z);

@@ -37,7 +37,8 @@ using bench::registry;
 
 void BM_FrameAgainstFloor(benchmark::State& state, const char* configName)
 {
-    const config::RenderConfig cfg = config::loadConfig(penumbra::test::sourceDir() / "config" / configName);
+    config::RenderConfig cfg = config::loadConfig(penumbra::test::sourceDir() / "config" / configName);
+    cfg.keepUnchanged = false;  // every pass every frame: a still frame would keep them and time 0 ms
     const scene::Scene scene = config::buildScene(cfg.scene);
     frame::FrameRenderer renderer(context(), scene, cfg, registry());
     frame::FloorRenderer floor(context(), scene, cfg);

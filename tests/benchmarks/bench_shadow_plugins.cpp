@@ -59,6 +59,7 @@ void BM_ShadowTechnique(benchmark::State& state, const Technique& technique)
     config::RenderConfig cfg = config::loadConfig(penumbra::test::sourceDir() / "config/default.json");
     cfg.width = 1280;
     cfg.height = 720;
+    cfg.keepUnchanged = false;  // every pass every frame: a still frame would keep them and time 0 ms
     config::ShadowSettings& shadow = cfg.lights[0].shadow;
     shadow = {};
     shadow.technique = technique.plugin;

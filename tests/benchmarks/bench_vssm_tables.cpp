@@ -168,6 +168,7 @@ void BM_VssmTables(benchmark::State& state, const Case& c)
     config::RenderConfig cfg = config::loadConfig(penumbra::test::sourceDir() / "config/default.json");
     cfg.width = 640;
     cfg.height = 360;
+    cfg.keepUnchanged = false;  // every pass every frame: a still frame would keep them and time 0 ms
     cfg.lights = {vssmLight(c)};
     const scene::Scene scene = config::buildScene(cfg.scene);
     frame::FrameRenderer renderer(context(), scene, cfg, registry());

@@ -559,6 +559,74 @@ TEST_F(VssmTest, LargestMapAgreesWithTheRays)
 
 namespace {
 
+VkDeviceSize maxMemoryAllocationSize(const gpu::Context& context)
+{
+    VkPhysicalDeviceMaintenance3Properties maintenance3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
+    VkPhysicalDeviceProperties2 properties{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+    properties.pNext = &maintenance3;
+    vkGetPhysicalDeviceProperties2(context.physicalDevice(), &properties);
+    return maintenance3.maxMemoryAllocationSize;
+}
+
+} // namespace
+
+TEST_F(VssmTest, RectLightMapLargerThanOneStorageBufferAgreesWithTheRays)
+{
+    // A rect light's six faces at the first resolution (in steps of 512) whose min-max
+    // hierarchy (a third of the atlas, 8 bytes a texel) is more than the device binds as
+    // one storage buffer: lavapipe's 128 MiB, 3072^2 here. The hierarchy is an image
+    // (hsm.glsl), so the map is not refused and gives what 1024^2 gives.
+    const VkPhysicalDeviceLimits& limits = context->properties().limits;
+    uint32_t resolution = 1024;
+    while (6.0 * resolution * resolution / 3.0 * 8.0 <= double(limits.maxStorageBufferRange)) resolution += 512;
+    const double satBytes = 6.0 * resolution * resolution * 16.0;
+    if (3 * resolution > limits.maxImageDimension2D || satBytes > double(maxMemoryAllocationSize(*context)))
+        GTEST_SKIP() << "this device binds storage buffers as large as the largest atlas it can make";
+    config::RenderConfig cfg = test::defaultTestConfig();
+    test::setLightType(cfg.lights[0], scene::LightType::Rect);
+    VssmSettings s;
+    s.resolution = int(resolution);
+    const std::vector<float> v = renderWith(cfg, s);
+    expectRayCastAgreement(v, s, fmt::format("rect {}^2", resolution));
+    size_t soft = 0;
+    for (float x : v) soft += x > 0.02f && x < 0.98f;
+    EXPECT_GT(soft, 200u) << "a light with a size casts penumbrae";
+}
+
+TEST_F(VssmTest, TableLargerThanTheLargestAllocationIsRefusedWithTheLargestResolutionThatFits)
+{
+    // A rect light's summed-area table takes 16 bytes a texel of its 3 x 2 atlas: the
+    // first resolution whose table is more than the device allocates at once, while its
+    // atlas is still an image the device can make (lavapipe: 2 GiB, 4736^2).
+    const VkPhysicalDeviceLimits& limits = context->properties().limits;
+    const VkDeviceSize largest = maxMemoryAllocationSize(*context);
+    uint32_t resolution = 1024;
+    while (VkDeviceSize(6) * resolution * resolution * 16 <= largest) resolution += 128;
+    if (3 * (resolution + 64) > limits.maxImageDimension2D)
+        GTEST_SKIP() << "this device allocates a table as large as the largest atlas image it can make";
+    config::RenderConfig cfg = test::defaultTestConfig();
+    test::setLightType(cfg.lights[0], scene::LightType::Rect);
+    VssmSettings s;
+    s.resolution = int(resolution);
+    applyVssm(cfg.lights[0], s);
+    try {
+        render(cfg, config::buildScene(cfg.scene));
+        FAIL() << "a " << resolution << "^2 table was not refused";
+    } catch (const Error& e) {  // the registry's PluginError, naming the plugin and the light
+        const std::string what = e.what();
+        EXPECT_NE(what.find("vssm: resolution"), std::string::npos) << what;
+        EXPECT_NE(what.find("maxMemoryAllocationSize"), std::string::npos) << what;
+        const size_t at = what.find("use at most ");
+        ASSERT_NE(at, std::string::npos) << what;
+        const unsigned long fits = std::stoul(what.substr(at + 12));
+        EXPECT_LT(fits, resolution) << what;
+        EXPECT_GT(fits, resolution - 256) << what << ": the largest that fits, not any that fits";
+        EXPECT_LE(VkDeviceSize(6) * fits * fits * 16, largest) << what;
+    }
+}
+
+namespace {
+
 class VssmScales : public VssmTest, public ::testing::WithParamInterface<std::tuple<float, LightCase>> {};
 
 } // namespace
