@@ -8,6 +8,7 @@
 // exact answer is umbra, with margin (a light 1.5 times as wide, same centre, is still
 // hidden), every technique must be dark: V <= 0.1, except where its README documents
 // otherwise (TiltCase::documentedFromTilt). The reference must match the exact answer.
+#include "ExactVisibility.h"
 #include "PluginFrame.h"
 #include "TestConfigs.h"
 
@@ -34,28 +35,7 @@ constexpr float kLightDistance = 2.0f;  // from the plate's centre
 constexpr float kLightSide = 0.5f;
 constexpr float kUmbraDark = 0.1f;
 
-using Polygon = std::vector<glm::dvec3>;
-
-// The part of `polygon` (planar, convex) where dot(n, x - p) >= 0.
-Polygon clip(const Polygon& polygon, const glm::dvec3& n, const glm::dvec3& p)
-{
-    Polygon out;
-    for (size_t i = 0; i < polygon.size(); ++i) {
-        const glm::dvec3 &a = polygon[i], &b = polygon[(i + 1) % polygon.size()];
-        const double da = glm::dot(n, a - p), db = glm::dot(n, b - p);
-        if (da >= 0.0) out.push_back(a);
-        if ((da >= 0.0) != (db >= 0.0)) out.push_back(a + (b - a) * (da / (da - db)));
-    }
-    return out;
-}
-
-double area(const Polygon& polygon)
-{
-    glm::dvec3 sum(0.0);
-    for (size_t i = 0; i + 2 < polygon.size() + 1 && polygon.size() >= 3; ++i)
-        sum += glm::cross(polygon[i] - polygon[0], polygon[(i + 1) % polygon.size()] - polygon[0]);
-    return 0.5 * glm::length(sum);
-}
+using test::Polygon;
 
 struct TiltedLight {
     glm::dvec3 centre, normal, tangent, bitangent;  // normal: the emitting side (towards the plate)
@@ -82,22 +62,13 @@ TiltedLight tiltedLight(double tiltDeg, glm::dvec2 sides = glm::dvec2(kLightSide
 }
 
 // The share of the light (its polygon scaled by `scale` about its centre) that the plate
-// hides from ground point p: the polygon inside the plate's pyramid from p, beyond the
-// plate's plane.
+// hides from ground point p.
 double hiddenShare(const TiltedLight& light, const glm::dvec3& p, double scale = 1.0)
 {
-    const Polygon whole = light.corners(scale);
-    Polygon hidden = clip(whole, {0.0, 1.0, 0.0}, {0.0, kPlateHeight, 0.0});
     const double s = 0.5;  // the plate's half side
-    const std::array<glm::dvec3, 4> plate{glm::dvec3(-s, kPlateHeight, -s), glm::dvec3(s, kPlateHeight, -s),
-                                          glm::dvec3(s, kPlateHeight, s), glm::dvec3(-s, kPlateHeight, s)};
-    const glm::dvec3 centre(0.0, kPlateHeight, 0.0);
-    for (size_t i = 0; i < 4 && hidden.size() >= 3; ++i) {
-        glm::dvec3 n = glm::cross(plate[i] - p, plate[(i + 1) % 4] - p);
-        if (glm::dot(n, centre - p) < 0.0) n = -n;  // the side the plate's centre is on
-        hidden = clip(hidden, n, p);
-    }
-    return hidden.size() >= 3 ? area(hidden) / area(whole) : 0.0;
+    const Polygon plate{glm::dvec3(-s, kPlateHeight, -s), glm::dvec3(s, kPlateHeight, -s), glm::dvec3(s, kPlateHeight, s),
+                        glm::dvec3(-s, kPlateHeight, s)};
+    return test::hiddenShare(light.corners(scale), plate, p);
 }
 
 // The ground the plate's shadow falls on: the plate's corners projected from the light's
