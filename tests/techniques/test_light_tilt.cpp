@@ -119,7 +119,27 @@ struct TiltCase {
 
 void PrintTo(const TiltCase& c, std::ostream* os) { *os << c.name; }
 
-class LightTilt : public test::PluginGpuTest, public ::testing::WithParamInterface<TiltCase> {};
+// Renders the plate under `light` with `technique`; V of the light.
+class TiltTest : public test::PluginGpuTest {
+protected:
+    std::vector<float> renderUnder(const TiltedLight& light, const char* technique, const nlohmann::json& params,
+                                   uint32_t width = 0, uint32_t height = 0)
+    {
+        config::RenderConfig cfg = tiltConfig(light);
+        if (width > 0) {
+            cfg.width = width;
+            cfg.height = height;
+        }
+        test::setShadow(cfg.lights[0], technique, params);
+        scene::PenumbraParams plate;
+        plate.occluderHeight = kPlateHeight;
+        plate.occluderThickness = 0.0f;
+        render(cfg, scene::generatePenumbra(plate));
+        return frame->checkedVisibility();
+    }
+};
+
+class LightTilt : public TiltTest, public ::testing::WithParamInterface<TiltCase> {};
 
 } // namespace
 
@@ -129,13 +149,7 @@ TEST_P(LightTilt, DeepUmbraIsDark)
     for (double tilt : {0.0, 30.0, 60.0, 80.0}) {
         SCOPED_TRACE(testing::Message() << c.name << ", light tilted " << tilt << "°");
         const TiltedLight light = tiltedLight(tilt);
-        config::RenderConfig cfg = tiltConfig(light);
-        test::setShadow(cfg.lights[0], c.technique, c.params);
-        scene::PenumbraParams plate;
-        plate.occluderHeight = kPlateHeight;
-        plate.occluderThickness = 0.0f;
-        render(cfg, scene::generatePenumbra(plate));
-        const std::vector<float> v = frame->checkedVisibility();
+        const std::vector<float> v = renderUnder(light, c.technique, c.params);
         size_t umbra = 0, bright = 0;
         double sum = 0.0, worst = 0.0, squared = 0.0;
         size_t ground = 0;
@@ -205,7 +219,7 @@ struct WideLightCase {
 
 void PrintTo(const WideLightCase& c, std::ostream* os) { *os << c.name; }
 
-class WideLightTilt : public test::PluginGpuTest, public ::testing::WithParamInterface<WideLightCase> {};
+class WideLightTilt : public TiltTest, public ::testing::WithParamInterface<WideLightCase> {};
 
 } // namespace
 
@@ -215,15 +229,7 @@ TEST_P(WideLightTilt, PenumbraFollowsTheExactAnswer)
     for (double tilt : {0.0, 40.0, 60.0, 70.0, 80.0, 85.0}) {
         SCOPED_TRACE(testing::Message() << c.name << ", light tilted " << tilt << "°");
         const TiltedLight light = tiltedLight(tilt, {1.2, 0.8}, 2.7);
-        config::RenderConfig cfg = tiltConfig(light);
-        cfg.width = 320;
-        cfg.height = 180;
-        test::setShadow(cfg.lights[0], c.technique, c.params);
-        scene::PenumbraParams plate;
-        plate.occluderHeight = kPlateHeight;
-        plate.occluderThickness = 0.0f;
-        render(cfg, scene::generatePenumbra(plate));
-        const std::vector<float> v = frame->checkedVisibility();
+        const std::vector<float> v = renderUnder(light, c.technique, c.params, 320, 180);
         double squared = 0.0, worst = 0.0;
         size_t ground = 0, off = 0;
         for (size_t i = 0; i < v.size(); ++i) {
