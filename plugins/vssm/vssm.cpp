@@ -189,8 +189,8 @@ glm::uvec2 hsmImageSize(uint32_t width, uint32_t height)
     return {side(width, 1) + side(width, 2), std::max(side(height, 1), column)};
 }
 
-// The bytes of the summed-area table (RGBA32UI, sat.glsl) and the hierarchy (RG32F).
-constexpr VkDeviceSize kSatTexelBytes = 16, kHsmTexelBytes = 8;
+// The bytes of a texel of the summed-area table (RGBA32UI, sat.glsl).
+constexpr VkDeviceSize kSatTexelBytes = 16;
 
 class VssmShadow final : public plugin::Technique {
 public:
