@@ -183,6 +183,9 @@ struct Walk {
     ivec2 origin;    // the face's first texel in the atlas
     int faceTexels;
     int layer;       // the depth layer it walks: 0, or 1 (peeledDepth)
+    // The samples' spacing in texels (a power of two): 1, or coarser where the kernel is
+    // wider than the cap (receiverKernel), so that the walk's cells stay within it.
+    int stride;
     ivec2 mssmOrigin;  // the face's first node in mssmImage: a second layer's MSSM lies right of the first's
     float sum;       // of the edges' signed hidden areas (light_area.glsl)
     int fetches;     // depth-map and MSSM reads (the debug image)
@@ -222,11 +225,13 @@ vec2 referenceRange(Walk w, ivec2 a, ivec2 b)
 }
 
 // The 2 x 2 samples of dual cell `cell` in counter-clockwise order (00, 10, 11, 01),
-// clamped into the face.
+// clamped into the face. At a stride s > 1 the cell is one of the coarse grid's: its
+// samples are the texels s apart at s cell and s (cell + 1), a map of 1/s the resolution.
 void cellSamples(inout Walk w, ivec2 cell, out ivec2 s[4], out float depth[4], out bool occ[4])
 {
-    ivec2 b = min(cell + 1, ivec2(w.faceTexels - 1));
-    s = ivec2[4](cell, ivec2(b.x, cell.y), b, ivec2(cell.x, b.y));
+    ivec2 a = min(cell * w.stride, ivec2(w.faceTexels - 1));
+    ivec2 b = min(cell * w.stride + w.stride, ivec2(w.faceTexels - 1));
+    s = ivec2[4](a, ivec2(b.x, a.y), b, ivec2(a.x, b.y));
     [[unroll]] for (int k = 0; k < 4; ++k) {
         depth[k] = sampleDepth(w, s[k]);
         occ[k] = occludes(w, depth[k], sampleUv(w, s[k]));
@@ -244,24 +249,76 @@ int contourExitSide(bool occ[4], int side)
     return occ[(side + 3) % 4] ? side + 2 : side + 3;
 }
 
-// Marching squares on one dual cell (samples s, depths, statuses occ in counter-clockwise
-// order): each edge runs from the midpoint of a side where the boundary leaves the
-// occluders (counter-clockwise) to the next side where it enters them, with the
-// occluders on its left; a saddle keeps its two occluders joined (the free corners are
-// cut off), as centreOccluded() does. An endpoint takes the depth of its side's
-// occluding sample. True when an edge leaves through `side`: its world endpoints a, b.
-bool cellEdge(Walk w, ivec2 s[4], float depth[4], bool occ[4], int side, out vec3 a, out vec3 b)
+// Where the contour crosses the side from the occluding sample `o` to the free sample
+// `f` (texels of one row or column, at most a stride apart): their midpoint on the fine
+// grid (stride 1: o and f are neighbours), else the fine transition found by halving the
+// side (the first found, where thin occluders cross it several times), so that a coarse
+// walk's edges lie where the map's own samples put them, not up to half a stride off.
+// `occDepth`: the occluding sample's depth at the transition. Written out, not as a
+// loop: every loop iteration counts against llvmpipe's limit (backprojection.cpp
+// kCpuMaxKernel), and a halving per end of every edge would pass it.
+void halveSide(inout Walk w, inout ivec2 o, inout ivec2 f, inout float occDepth)
 {
-    a = vec3(0.0);
-    b = vec3(0.0);
+    ivec2 gap = abs(f - o);
+    if (max(gap.x, gap.y) <= 1) return;
+    ivec2 mid = (o + f) / 2;
+    float d = sampleDepth(w, mid);
+    ++w.fetches;
+    bool hides = occludes(w, d, sampleUv(w, mid));
+    o = hides ? mid : o;
+    f = hides ? f : mid;
+    occDepth = hides ? d : occDepth;
+}
+
+// The most halvings of a coarse cell's side (strides up to 2^kMaxRefinements: a kernel
+// of 128 caps, more than a face).
+const int kMaxRefinements = 7;
+
+vec2 sideCrossing(inout Walk w, ivec2 o, ivec2 f, inout float occDepth)
+{
+    halveSide(w, o, f, occDepth);
+    halveSide(w, o, f, occDepth);
+    halveSide(w, o, f, occDepth);
+    halveSide(w, o, f, occDepth);
+    halveSide(w, o, f, occDepth);
+    halveSide(w, o, f, occDepth);
+    halveSide(w, o, f, occDepth);
+    return 0.5 * (sampleUv(w, o) + sampleUv(w, f));
+}
+
+// The map positions (uv) of the edge that leaves the occluders through `side`, and the
+// depths its ends take; false when no edge leaves through it.
+bool edgeUv(inout Walk w, ivec2 s[4], float depth[4], bool occ[4], int side, out vec2 ua, out vec2 ub, out float da,
+            out float db)
+{
+    ua = vec2(0.0);
+    ub = vec2(0.0);
+    da = 0.0;
+    db = 0.0;
     if (!occ[side] || occ[(side + 1) % 4]) return false;
     int next = contourExitSide(occ, side);
     int a0 = side, a1 = (side + 1) % 4, b0 = next % 4, b1 = (next + 1) % 4;
-    vec2 ua = 0.5 * (sampleUv(w, s[a0]) + sampleUv(w, s[a1]));
-    vec2 ub = 0.5 * (sampleUv(w, s[b0]) + sampleUv(w, s[b1]));
-    a = unprojectFace(w.r.face, ua, depth[a0], w.range);
-    b = unprojectFace(w.r.face, ub, depth[b1], w.range);
+    da = depth[a0];
+    db = depth[b1];
+    ua = sideCrossing(w, s[a0], s[a1], da);
+    ub = sideCrossing(w, s[b1], s[b0], db);
     return true;
+}
+
+// Marching squares on one dual cell (samples s, depths, statuses occ in counter-clockwise
+// order): each edge runs from the crossing (sideCrossing) of a side where the boundary
+// leaves the occluders (counter-clockwise) to the next side where it enters them, with
+// the occluders on its left; a saddle keeps its two occluders joined (the free corners are
+// cut off), as centreOccluded() does. An endpoint takes the depth of its side's
+// occluding sample. True when an edge leaves through `side`: its world endpoints a, b.
+bool cellEdge(inout Walk w, ivec2 s[4], float depth[4], bool occ[4], int side, out vec3 a, out vec3 b)
+{
+    vec2 ua, ub;
+    float da, db;
+    bool edge = edgeUv(w, s, depth, occ, side, ua, ub, da, db);
+    a = edge ? unprojectFace(w.r.face, ua, da, w.range) : vec3(0.0);
+    b = edge ? unprojectFace(w.r.face, ub, db, w.range) : vec3(0.0);
+    return edge;
 }
 
 // The hidden area of edge a -> b as the receiver at p sees it: back-projected onto the
@@ -297,13 +354,31 @@ void processCell(inout Walk w, ivec2 cell)
 // (the hard shadow, with the contour's geometry rather than the nearest sample's).
 bool centreOccluded(inout Walk w)
 {
-    vec2 t = w.r.uv * float(w.faceTexels) - 0.5;
-    ivec2 cell = clamp(ivec2(floor(t)), ivec2(0), ivec2(w.faceTexels - 1));
+    vec2 t = (w.r.uv * float(w.faceTexels) - 0.5) / float(w.stride);
+    ivec2 cell = clamp(ivec2(floor(t)), ivec2(0), ivec2((w.faceTexels - 1) / w.stride));
     vec2 f = clamp(t - vec2(cell), 0.0, 1.0);
     ivec2 s[4];
     float depth[4];
     bool occ[4];
     cellSamples(w, cell, s, depth, occ);
+    if (w.stride > 1) {
+        // On the coarse grid the edges' ends are refined (sideCrossing): the receiver is
+        // hidden where it lies on the occluders' side of every edge in its cell (the side
+        // of the edge's occluding corner), or, with none, where the corners occlude.
+        bool inside = occ[0];
+        bool any = false;
+        vec2 uv = w.r.uv;
+        [[unroll]] for (int side = 0; side < 4; ++side) {
+            vec2 ua, ub;
+            float da, db;
+            if (!edgeUv(w, s, depth, occ, side, ua, ub, da, db)) continue;
+            vec2 e = ub - ua, toCorner = sampleUv(w, s[side]) - ua, toPoint = uv - ua;
+            bool same = (e.x * toCorner.y - e.y * toCorner.x) * (e.x * toPoint.y - e.y * toPoint.x) >= 0.0;
+            inside = any ? inside && same : same;
+            any = true;
+        }
+        return inside;
+    }
     // The quadrant's corner k and its neighbours; corner k sits at (kx, ky).
     bool right = f.x >= 0.5, up = f.y >= 0.5;
     int k = up ? (right ? 2 : 3) : (right ? 1 : 0);
@@ -354,38 +429,54 @@ vec2 kernelRange(inout Walk w, ivec4 k)
     return mssmRange(pc.atlasSize, pc.levels, w.mssmOrigin + k.xy, w.mssmOrigin + k.zw);
 }
 
+// Walks kernel k (fine cells, inclusive) on the grid of the walk's stride: its cells are
+// the coarse cells that hold k's. Every receiver runs the same loops, whatever its stride
+// (llvmpipe counts a loop's iterations per SIMD group: two loops, one per stride, would
+// add up).
 void walkKernel(inout Walk w, ivec4 k, int levels)
 {
+    int stride = w.stride;
+    ivec4 c = k / stride;  // the coarse cells
 #if TRAVERSAL == 0
-    for (int y = k.y; y <= k.w; ++y)
-        for (int x = k.x; x <= k.z; ++x) processCell(w, ivec2(x, y));
+    for (int y = c.y; y <= c.w; ++y)
+        for (int x = c.x; x <= c.z; ++x) processCell(w, ivec2(x, y));
 #else
-    ivec2 extent = k.zw - k.xy + 1;
+    // The MSSM's nodes of level log2(stride), anchored at multiples of the stride, cover
+    // a coarse cell's samples and the fine ones between them (its sides' halvings): they
+    // are the walk's leaves, and their ranges prune as the fine walk's do. A kernel wider
+    // than the top level's nodes starts from several of them.
+    int leaf = findMSB(stride);
+    ivec2 first = c.xy * stride, lastAnchor = c.zw * stride;
+    ivec2 end = min(lastAnchor + stride - 1, ivec2(w.faceTexels - 1));  // the fine cells' end
+    ivec2 extent = lastAnchor + stride - first;
     int top = max(extent.x, extent.y);
-    int start = min(top > 1 ? findMSB(top - 1) + 1 : 0, levels - 1);  // 2^start >= the kernel's side
-    ivec3 stack[3 * MAX_LEVELS + 1];
-    int size = 0;
-    stack[size++] = ivec3(k.xy, start);
+    int start = clamp(top > 1 ? findMSB(top - 1) + 1 : 0, leaf, levels - 1);  // 2^start >= the side, at most the top
+    ivec2 roots = (extent + (1 << start) - 1) >> start;
     ivec2 atlasSize = pc.atlasSize;
-    while (size > 0) {
-        ivec3 node = stack[--size];
-        if (any(greaterThan(node.xy, k.zw))) continue;  // beyond the kernel
-        int level = node.z;
-        ivec2 last = min(node.xy + (1 << level) - 1, k.zw);
-        vec2 depths = mssmNode(atlasSize, level, w.mssmOrigin + node.xy);
-        ++w.fetches;
-        vec2 reference = referenceRange(w, node.xy, min(last + 1, ivec2(w.faceTexels - 1)));
-        // Fig. 6 cases 4 and 5: every sample behind the receiver, or every one in front.
-        if (depths.y <= reference.x || depths.x > reference.y) continue;
-        if (level == 0) {
-            processCell(w, node.xy);
-            continue;
+    ivec3 stack[3 * MAX_LEVELS + 1];
+    for (int root = 0; root < roots.x * roots.y; ++root) {
+        int size = 0;
+        stack[size++] = ivec3(first + ivec2(root % roots.x, root / roots.x) * (1 << start), start);
+        while (size > 0) {
+            ivec3 node = stack[--size];
+            if (any(greaterThan(node.xy, lastAnchor))) continue;  // beyond the kernel
+            int level = node.z;
+            ivec2 last = min(node.xy + (1 << level) - 1, end);
+            vec2 depths = mssmNode(atlasSize, level, w.mssmOrigin + node.xy);
+            ++w.fetches;
+            vec2 reference = referenceRange(w, node.xy, min(last + 1, ivec2(w.faceTexels - 1)));
+            // Fig. 6 cases 4 and 5: every sample behind the receiver, or every one in front.
+            if (depths.y <= reference.x || depths.x > reference.y) continue;
+            if (level == leaf) {
+                processCell(w, node.xy / stride);
+                continue;
+            }
+            int h = 1 << (level - 1);
+            stack[size++] = ivec3(node.xy + ivec2(h, h), level - 1);
+            stack[size++] = ivec3(node.xy + ivec2(0, h), level - 1);
+            stack[size++] = ivec3(node.xy + ivec2(h, 0), level - 1);
+            stack[size++] = ivec3(node.xy, level - 1);
         }
-        int h = 1 << (level - 1);
-        stack[size++] = ivec3(node.xy + ivec2(h, h), level - 1);
-        stack[size++] = ivec3(node.xy + ivec2(0, h), level - 1);
-        stack[size++] = ivec3(node.xy + ivec2(h, 0), level - 1);
-        stack[size++] = ivec3(node.xy, level - 1);
     }
 #endif
 }
@@ -405,6 +496,7 @@ Walk startWalk(ShadowReceiver r, vec3 p, LightPlane light)
     w.faceTexels = int(shadowFaceTexels());
     w.origin = ivec2(int(r.face % 3u), int(r.face / 3u)) * w.faceTexels;
     w.layer = 0;
+    w.stride = 1;
     w.mssmOrigin = w.origin;
     w.sum = 0.0;
     w.fetches = 0;
@@ -419,17 +511,30 @@ Walk startWalk(ShadowReceiver r, vec3 p, LightPlane light)
 // so no contour and the centre occluded: umbra), -1 when its contour must be walked.
 float receiverKernel(inout Walk w, out ivec4 k)
 {
+    // The kernel is the whole region that can hide the light (at most the face); the
+    // cap bounds the walk, not the region: a kernel wider than the cap is walked on the
+    // coarse grid of the least power-of-two stride that fits it in the cap.
     int cap = max(pc.maxKernel, 1);
+    int whole = 2 * w.faceTexels;
     float wp = axisDistance(w.r.face, w.p, w.range);
     ivec2 centreCell = clamp(ivec2(floor(w.r.uv * float(w.faceTexels) - 0.5)), ivec2(0), ivec2(w.faceTexels - 1));
-    k = kernelAt(w, w.range.x, wp, centreCell, cap);
+    k = kernelAt(w, w.range.x, wp, centreCell, whole);
     vec2 depths = kernelRange(w, k);
     [[unroll]] for (int i = 0; i < kKernelRefinements; ++i) {
         // The nearest sample of the kernel (largest NDC depth) bounds the occluders.
         float nearest = shadowDistanceInRange(w.range, depths.y);
-        k = kernelAt(w, max(nearest, w.range.x), wp, centreCell, cap);
+        k = kernelAt(w, max(nearest, w.range.x), wp, centreCell, whole);
         depths = kernelRange(w, k);
     }
+    // The stride is at most the MSSM's top node (the hierarchical walk's leaves are its
+    // nodes) and 2^kMaxRefinements; a kernel wider than the cap at that stride is cut to
+    // it around the receiver, as the cap alone cut every kernel before.
+    int side = max(k.z - k.x, k.w - k.y) + 1;
+    int most = 1 << min(kMaxRefinements, pc.levels - 1);
+    w.stride = 1;
+    [[dont_unroll]] while ((side + w.stride - 1) / w.stride > cap && w.stride < most) w.stride *= 2;
+    int reach = cap * w.stride;
+    k = ivec4(max(k.xy, centreCell - reach / 2), min(k.zw, centreCell + (reach - 1 - reach / 2)));
     vec2 reference = referenceRange(w, k.xy, min(k.zw + 1, ivec2(w.faceTexels - 1)));
     if (depths.x > reference.y) return 0.0;
     if (depths.y <= reference.x) return 1.0;

@@ -260,7 +260,7 @@ void main()
     bool centre[PACKET_PIXELS];
     int walkers = 0;
     Walk lead;  // the first walker's: the packet's face, and the light of all but point lights
-    bool oneFace = true;
+    bool oneFace = true, fine = true;  // fine: every walker walks the fine grid (stride 1)
     ivec4 k = ivec4(1 << 30, 1 << 30, -(1 << 30), -(1 << 30));
     [[dont_unroll]] for (int i = 0; i < PACKET_PIXELS; ++i) {
         // A packet past the image's edge repeats its last row or column.
@@ -283,6 +283,7 @@ void main()
             res = vec4(v, float(kClassDecided), float(w.fetches), kernelSide(kernel));
             if (walking) {
                 oneFace = oneFace && (walkers == 0 || r.face == lead.r.face);
+                fine = fine && w.stride == 1;
                 if (walkers == 0) lead = w;
                 k = ivec4(min(k.xy, kernel.xy), max(k.zw, kernel.zw));
                 ++walkers;
@@ -307,7 +308,7 @@ void main()
         // A packet walks as one within a face and where its kernel is at most twice the
         // MSSM's top node (walkPacket starts from four of them); a lone walker's packet
         // walk is its own walk.
-        bool joins = oneFace && kernelSide(k) <= float(2 << (pc.levels - 1));
+        bool joins = oneFace && fine && kernelSide(k) <= float(2 << (pc.levels - 1));
         int walkFetches = 0;
         bool classify = pc.classify != 0 && walkers > 1;
         int kind = !joins ? kClassPerPixel : classify ? packetClass(lead, k, walkers, walkFetches) : kClassCoherent;

@@ -118,7 +118,7 @@ protected:
         }
     }
     // The flat walk of `s` on `cfg` (the most loop iterations a walk runs), checking that a
-    // tenth of the pixels or more have kernels at the cap `s.maxKernelTexels`
+    // tenth of the pixels or more have kernels at or past the cap `s.maxKernelTexels`
     // (fenceAtTheCap's scene and light do that).
     std::vector<float> flatWalkAtTheCap(const config::RenderConfig& cfg, BackprojectionSettings s)
     {
@@ -128,8 +128,9 @@ protected:
         render(flat, config::buildScene(flat.scene), {"light0.backprojection.kernel"});
         const std::vector<float> v = frame->checkedVisibility();
         const std::vector<float> kernel = frame->renderer.readImage("light0.backprojection.kernel").values;
-        EXPECT_GT(std::ranges::count(kernel, float(s.maxKernelTexels)), ptrdiff_t(v.size() / 10))
-            << "kernels at the cap";
+        EXPECT_GT(std::ranges::count_if(kernel, [&](float k) { return k >= float(s.maxKernelTexels); }),
+                  ptrdiff_t(v.size() / 10))
+            << "kernels at or past the cap (walked on a coarse grid that fits it)";
         return v;
     }
 };
@@ -456,11 +457,12 @@ TEST_F(BackprojectionTest, NoBlockerIsExactlyLitAtGrazingAngles)
 
 TEST_F(BackprojectionTest, HugeLightIsHeldToTheKernelCap)
 {
-    // A spot light of 1e9 world units: every kernel stops at the cap, so the work per
-    // pixel is bounded (the blocks of a 16 x 16 kernel, its refinements and the centre's
-    // block), and V stays finite and in [0, 1] (checkedVisibility). The contour a capped
-    // kernel cuts is not closed, so V there is not the light's visible part: the cap
-    // protects the frame, not the answer (README, "The kernel cap").
+    // A spot light of 1e9 world units: every kernel is the whole face, wider than the cap
+    // of 16 texels, so it is walked on the coarse grid (stride 2^k) whose cells fit the
+    // cap: the work per pixel is bounded by the cap's cells (four samples each, and up to
+    // kMaxRefinements halvings for each end of an edge), the kernel's three MSSM ranges
+    // (the face's top-level nodes) and the centre's cell, not by the kernel's area; and
+    // V stays finite and in [0, 1] (checkedVisibility).
     config::RenderConfig cfg = test::defaultTestConfig();
     BackprojectionSettings s;
     s.lightSize = 1e9;
@@ -470,14 +472,15 @@ TEST_F(BackprojectionTest, HugeLightIsHeldToTheKernelCap)
     const std::vector<float> v = frame->checkedVisibility();
     const std::vector<float> kernel = frame->renderer.readImage("light0.backprojection.kernel").values;
     const std::vector<float> visited = frame->renderer.readImage("light0.backprojection.visited").values;
-    const float mostVisited = 4.0f * 16.0f * 16.0f + 4.0f * 3.0f + 4.0f;  // flat bound; the hierarchy stays below
-    size_t capped = 0;
+    constexpr float kRefinements = 7.0f;  // contour.glsl kMaxRefinements
+    const float cells = 16.0f * 16.0f;
+    const float mostVisited = cells * (4.0f + 4.0f * 2.0f * kRefinements) + 4.0f * 3.0f + 4.0f * (1.0f + 4.0f * kRefinements);
+    size_t coarse = 0;
     for (size_t i = 0; i < v.size(); ++i) {
-        EXPECT_LE(kernel[i], 16.0f) << "pixel " << i;
-        EXPECT_LE(visited[i], 2.0f * mostVisited) << "pixel " << i;
-        capped += kernel[i] == 16.0f;
+        EXPECT_LE(visited[i], mostVisited) << "pixel " << i;
+        coarse += kernel[i] > 16.0f;
     }
-    EXPECT_GT(capped, v.size() / 4) << "the light's kernels reach the cap";
+    EXPECT_GT(coarse, v.size() / 4) << "the light's kernels are wider than the cap";
 }
 
 TEST_F(BackprojectionTest, BlockerTouchingTheReceiverCastsAHardShadow)

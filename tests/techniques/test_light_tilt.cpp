@@ -252,6 +252,6 @@ INSTANTIATE_TEST_SUITE_P(
     Techniques, WideLightTilt,
     ::testing::Values(WideLightCase{"pcss", "pcss", nlohmann::json::object(), 0.090},
                       WideLightCase{"vssm", "vssm", nlohmann::json::object(), 0.172},
-                      WideLightCase{"backprojection", "backprojection", nlohmann::json::object(), 0.222},
+                      WideLightCase{"backprojection", "backprojection", nlohmann::json::object(), 0.0092},
                       WideLightCase{"reference", "reference", nlohmann::json::object(), 0.0055}),
     [](const ::testing::TestParamInfo<WideLightCase>& info) { return std::string(info.param.name); });
