@@ -13,8 +13,10 @@ packages=(
   libembree-dev libtbb-dev libxxhash-dev libimgui-dev libopenexr-dev xvfb xauth python3-jsonschema
   assimp-testmodels
   # ImageMagick with its own SVG renderer and OpenEXR coder (the -extra coders), and
-  # librsvg: the readers that pareto.svg and the visibility EXR are tested with
-  imagemagick libmagickcore-6.q16-6-extra librsvg2-bin
+  # librsvg: the readers that pareto.svg and the visibility EXR are tested with; the URW
+  # fonts are the ones ImageMagick's SVG coder draws sans-serif with (Helvetica's metrics:
+  # without them it refuses the plot's text)
+  imagemagick libmagickcore-6.q16-6-extra librsvg2-bin fonts-urw-base35
 )
 
 missing=()

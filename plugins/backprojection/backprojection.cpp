@@ -29,6 +29,7 @@
 
 #include <fmt/format.h>
 #include <glm/glm.hpp>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <bit>
@@ -211,7 +212,6 @@ struct LightData {
 static_assert(sizeof(LightData) == 5 * 16 + render::kMaxShadowFaces * 96, "std430 layout of visibility.comp");
 
 struct VisibilityPush {
-    glm::ivec2 atlasSize{0};
     int32_t levels = 1;
     int32_t maxKernel = 1;
     float edgeCost = 0.0f;
@@ -225,7 +225,7 @@ struct MssmPush {
     glm::ivec2 atlasSize{0};
     int32_t faceTexels = 0;
     int32_t level = 0;
-    int32_t layerOffset = 0;  // x of the layer's MSSM in the image (mssm.glsl)
+    int32_t base = 0;  // the depth layer's first array layer (mssm.glsl)
 };
 
 // An orthonormal frame (t, b) with t x b = n.
@@ -455,8 +455,8 @@ private:
     glm::ivec2 atlasSize() const { return {int(firstMap().atlasWidth()), int(firstMap().atlasHeight())}; }
 
     gpu::Context& context_;
-    const Settings settings_;
-    const int levels_;
+    Settings settings_;  // maxKernel: the cap the walks run under (on a CPU device, at most its loops' cap)
+    int levels_ = 1;
     int32_t loopBudget_ = kUnlimitedLoops;  // packets.comp's
     int split_ = 1;                         // S: sub_lights, or 1 for a light without size
     int layers_ = 1;                        // depth layers: layers, or 1 for a light without size
@@ -477,26 +477,29 @@ private:
 BackprojectionShadow::BackprojectionShadow(const plugin::TechniqueSetup& setup)
     : context_(setup.context),
       settings_(readSettings(setup.params)),
-      levels_(mssmLevels(settings_.maxKernel)),
       width_(setup.width),
       height_(setup.height)
 {
+    const LightData whole = lightShape(setup.light, settings_.lightSizeOverride);
+    split_ = splitFor(setup.light, whole, settings_.subLights);
+    layers_ = layersFor(setup.light, whole, settings_, split_);
+    // The cap bounds a walk's cells, not the kernel (a wider kernel is walked on a coarser
+    // grid, receiverKernel): on a CPU device it is held to what llvmpipe's loop limit lets
+    // one invocation walk, and a wider max_kernel only walks coarser, sooner.
+    const int cpuMaxKernel = layers_ > 1 ? kCpuMaxKernelTwoLayers : kCpuMaxKernel;
+    if (context_.deviceInfo().type == "cpu" && settings_.maxKernel > cpuMaxKernel) {
+        spdlog::info("backprojection (light {}): max_kernel is {} texels at resolution {}; a CPU device walks at most "
+                     "{} cells a side{} (llvmpipe stops a shader's loops after 65,535 iterations), so kernels wider "
+                     "than {} are walked on a coarser grid",
+                     setup.lightIndex, settings_.maxKernel, settings_.resolution, cpuMaxKernel,
+                     layers_ > 1 ? fmt::format(" with {} layers", layers_) : "", cpuMaxKernel);
+        settings_.maxKernel = cpuMaxKernel;
+    }
+    levels_ = mssmLevels(settings_.maxKernel);
     if (levels_ > kMaxLevels) {
         throw ConfigError(fmt::format("backprojection: max_kernel: a kernel of {} texels needs {} MSSM levels, more "
                                       "than the traversal holds ({}); lower max_kernel or resolution",
                                       settings_.maxKernel, levels_, kMaxLevels));
-    }
-    const LightData whole = lightShape(setup.light, settings_.lightSizeOverride);
-    split_ = splitFor(setup.light, whole, settings_.subLights);
-    layers_ = layersFor(setup.light, whole, settings_, split_);
-    const int cpuMaxKernel = layers_ > 1 ? kCpuMaxKernelTwoLayers : kCpuMaxKernel;
-    if (context_.deviceInfo().type == "cpu" && settings_.maxKernel > cpuMaxKernel) {
-        throw ConfigError(fmt::format("backprojection: max_kernel: {} texels per side at resolution {}{} is more than "
-                                      "a CPU device's shader loops allow ({} texels: llvmpipe stops a shader's loops "
-                                      "after 65,535 iterations, and a kernel walk iterates once per block); lower "
-                                      "max_kernel or resolution",
-                                      settings_.maxKernel, settings_.resolution,
-                                      layers_ > 1 ? fmt::format(" with {} layers", layers_) : "", cpuMaxKernel));
     }
     // A kernel reaches half the cap (and its one-cell margin) past a cube edge: its
     // samples lie in the receiver's face.
@@ -549,24 +552,30 @@ std::vector<SubLight> BackprojectionShadow::subLights(const scene::Light& light)
     return subs;
 }
 
-// The MSSM's levels, stacked, must fit one image side, and its layers side by side the
-// other.
+// The MSSM is an array of atlas-sized layers (mssm.glsl), so its sides fit wherever the
+// shadow map's do (ShadowMap refuses an atlas past the largest image); what it must fit
+// is the device's largest allocation.
 void BackprojectionShadow::checkDevice() const
 {
-    VkPhysicalDeviceProperties properties{};
-    vkGetPhysicalDeviceProperties(context_.physicalDevice(), &properties);
-    const uint64_t rows = uint64_t(firstMap().atlasHeight()) * uint64_t(levels_);
-    const uint64_t columns = uint64_t(firstMap().atlasWidth()) * uint64_t(layers_);
-    if (rows > properties.limits.maxImageDimension2D || columns > properties.limits.maxImageDimension2D) {
-        const std::string layers =
-            layers_ > 1 ? fmt::format(", {} layers of {} columns", layers_, firstMap().atlasWidth()) : "";
-        const VkDeviceSize bytes = mssmBytes(firstMap().atlasWidth(), firstMap().atlasHeight(), levels_) * layers_;
-        throw ConfigError(fmt::format("backprojection: resolution: {} texels per face with max_kernel {} texels need a "
-                                      "multi-scale shadow map of {} levels of {} rows{} ({} MiB), larger than this "
-                                      "device's largest image ({} texels a side); lower resolution or max_kernel",
-                                      settings_.resolution, settings_.maxKernel, levels_, firstMap().atlasHeight(),
-                                      layers, bytes >> 20, properties.limits.maxImageDimension2D));
-    }
+    const render::ShadowMap& map = firstMap();
+    const VkDeviceSize bytes = mssmBytes(map.atlasWidth(), map.atlasHeight(), levels_ * layers_);
+    const VkDeviceSize largest = context_.maxMemoryAllocationSize();
+    if (bytes <= largest) return;
+    // The atlas holds `faces` faces of faceTexels() (the resolution and its guard texels)
+    // a side: the largest face that fits, less the same guard, is the largest resolution
+    // (a lower resolution's cap has at most as many levels, and the guard never grows).
+    const VkDeviceSize face = VkDeviceSize(map.faceTexels()) * map.faceTexels();
+    const VkDeviceSize faces = std::max<VkDeviceSize>(1, VkDeviceSize(map.atlasWidth()) * map.atlasHeight() / face);
+    const auto largestFace = VkDeviceSize(std::floor(std::sqrt(double(largest / mssmBytes(1, 1, levels_ * layers_) / faces))));
+    const VkDeviceSize guards = map.faceTexels() - settings_.resolution;
+    const VkDeviceSize fits = largestFace > guards ? largestFace - guards : 0;
+    throw ConfigError(fmt::format("backprojection: resolution: {} texels per face with max_kernel {} texels need a "
+                                  "multi-scale shadow map of {} levels{} ({} MiB), more than this device's largest "
+                                  "allocation ({} MiB, maxMemoryAllocationSize); use a resolution of at most {}, or "
+                                  "a lower max_kernel",
+                                  settings_.resolution, settings_.maxKernel, levels_,
+                                  layers_ > 1 ? fmt::format(" for each of {} layers", layers_) : "", bytes >> 20,
+                                  largest >> 20, fits));
 }
 
 void BackprojectionShadow::writeLight(View& view)
@@ -626,9 +635,10 @@ void BackprojectionShadow::addViewPasses(graph::RenderGraph& graph, const plugin
         names.peeled = io.local("layer1.shadow_map");
         map.addPeeledDepthPass(graph, names.peeled, names.map, bias, firstView);
     }
-    // Every layer's MSSM, the second's right of the first's (mssm.glsl).
-    graph.declareImage({names.mssm, map.atlasWidth() * uint32_t(layers_), map.atlasHeight() * uint32_t(levels_),
-                        kMssmFormat});
+    // Every layer's MSSM, an array layer a level, the second's after the first's (mssm.glsl).
+    graph::ImageDesc mssmImage{names.mssm, map.atlasWidth(), map.atlasHeight(), kMssmFormat};
+    mssmImage.layers = uint32_t(levels_ * layers_);
+    graph.declareImage(mssmImage);
     graph::PassBuilder mssm = graph.addPass(names.mssm, graph::QueueKind::Compute);
     mssm.read(names.map, graph::Usage::Sampled).write(names.mssm, graph::Usage::Storage).dependsOn(io.lightState);
     if (!names.peeled.empty()) mssm.read(names.peeled, graph::Usage::Sampled);
@@ -687,7 +697,8 @@ void BackprojectionShadow::recordMssm(const graph::PassContext& pass, const View
 {
     VkCommandBuffer cmd = pass.cmd();
     const glm::ivec2 size = atlasSize();
-    // Layer j's MSSM right of layer j - 1's; level 0 of each from its own depth map.
+    // Layer j's MSSM in the array layers after layer j - 1's; level 0 of each from its own
+    // depth map.
     for (int layer = 0; layer < layers_; ++layer) {
         const std::string& map = layer == 0 ? names.map : names.peeled;
         for (int level = 0; level < levels_; ++level) {
@@ -700,7 +711,7 @@ void BackprojectionShadow::recordMssm(const graph::PassContext& pass, const View
                     descriptors.sampledImage("shadowDepth", pass.image(map), depthSampler_, pass.layout(map));
                 descriptors.storageImage("mssmImage", pass.image(names.mssm)).push(context_, cmd, pipeline);
             }
-            const MssmPush push{size, int32_t(view.shadowMap.faceTexels()), level, layer * size.x};
+            const MssmPush push{size, int32_t(view.shadowMap.faceTexels()), level, layer * levels_};
             pipeline.pushConstants(cmd, &push, sizeof(push));
             pipeline.dispatchOver(cmd, uint32_t(size.x), uint32_t(size.y));
         }
@@ -718,8 +729,7 @@ void BackprojectionShadow::bindVisibility(const graph::PassContext& pass, gpu::D
         .storageBuffer("BackprojectionLight", v.lightBuffer);
     if (!names.peeled.empty())
         descriptors.sampledImage("peeledDepth", pass.image(names.peeled), depthSampler_, pass.layout(names.peeled));
-    const VisibilityPush push{atlasSize(),
-                              levels_,
+    const VisibilityPush push{levels_,
                               settings_.maxKernel,
                               settings_.edgeCost,
                               settings_.visibilityCost,

@@ -83,7 +83,6 @@ layout(std430, binding = 9) readonly buffer BackprojectionLight {
 } bp;
 
 layout(push_constant) uniform Push {
-    ivec2 atlasSize;
     int levels;      // of the MSSM: 2^(levels - 1) >= maxKernel
     int maxKernel;   // the kernel cap: cells per side
     float edgeCost;        // packets.comp: Q_e of eq. 6 (Q_n = 1)
@@ -186,7 +185,7 @@ struct Walk {
     // The samples' spacing in texels (a power of two): 1, or coarser where the kernel is
     // wider than the cap (receiverKernel), so that the walk's cells stay within it.
     int stride;
-    ivec2 mssmOrigin;  // the face's first node in mssmImage: a second layer's MSSM lies right of the first's
+    int mssmBase;    // the layer's first array layer in mssmImage (mssm.glsl)
     float sum;       // of the edges' signed hidden areas (light_area.glsl)
     int fetches;     // depth-map and MSSM reads (the debug image)
 #if LAYERS > 1
@@ -426,7 +425,7 @@ ivec4 kernelAt(inout Walk w, float z, float wp, ivec2 centreCell, int cap)
 vec2 kernelRange(inout Walk w, ivec4 k)
 {
     w.fetches += 4;
-    return mssmRange(pc.atlasSize, pc.levels, w.mssmOrigin + k.xy, w.mssmOrigin + k.zw);
+    return mssmRange(w.mssmBase, pc.levels, w.origin + k.xy, w.origin + k.zw);
 }
 
 // Walks kernel k (fine cells, inclusive) on the grid of the walk's stride: its cells are
@@ -452,7 +451,6 @@ void walkKernel(inout Walk w, ivec4 k, int levels)
     int top = max(extent.x, extent.y);
     int start = clamp(top > 1 ? findMSB(top - 1) + 1 : 0, leaf, levels - 1);  // 2^start >= the side, at most the top
     ivec2 roots = (extent + (1 << start) - 1) >> start;
-    ivec2 atlasSize = pc.atlasSize;
     ivec3 stack[3 * MAX_LEVELS + 1];
     for (int root = 0; root < roots.x * roots.y; ++root) {
         int size = 0;
@@ -462,7 +460,7 @@ void walkKernel(inout Walk w, ivec4 k, int levels)
             if (any(greaterThan(node.xy, lastAnchor))) continue;  // beyond the kernel
             int level = node.z;
             ivec2 last = min(node.xy + (1 << level) - 1, end);
-            vec2 depths = mssmNode(atlasSize, level, w.mssmOrigin + node.xy);
+            vec2 depths = mssmNode(w.mssmBase, level, w.origin + node.xy);
             ++w.fetches;
             vec2 reference = referenceRange(w, node.xy, min(last + 1, ivec2(w.faceTexels - 1)));
             // Fig. 6 cases 4 and 5: every sample behind the receiver, or every one in front.
@@ -497,7 +495,7 @@ Walk startWalk(ShadowReceiver r, vec3 p, LightPlane light)
     w.origin = ivec2(int(r.face % 3u), int(r.face / 3u)) * w.faceTexels;
     w.layer = 0;
     w.stride = 1;
-    w.mssmOrigin = w.origin;
+    w.mssmBase = 0;
     w.sum = 0.0;
     w.fetches = 0;
 #if LAYERS > 1
@@ -574,7 +572,7 @@ float layerVisibility(ShadowReceiver r, vec3 p, LightPlane light, int layer, ino
 {
     w = startWalk(r, p, light);
     w.layer = layer;
-    w.mssmOrigin = w.origin + ivec2(layer * pc.atlasSize.x, 0);
+    w.mssmBase = layer * pc.levels;
     ivec4 k;
     float v = receiverKernel(w, k);
     kernelTexels = max(kernelTexels, kernelSide(k));

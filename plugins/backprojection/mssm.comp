@@ -2,7 +2,7 @@
 // One level of the multi-scale shadow map (mssm.glsl): level 0 from the depth map (each
 // dual cell's 2 x 2 samples), level l >= 1 from four nodes of level l - 1 (Yang et al.
 // 2009 §4.2: the first level over the dual grid, so that nodes match contour blocks).
-// A second depth layer's MSSM is built the same way, one atlas width to the right.
+// A second depth layer's MSSM is built the same way, in the array layers after the first's.
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 0) uniform sampler2D shadowDepth;
@@ -16,7 +16,7 @@ layout(push_constant) uniform Push {
     ivec2 atlasSize;
     int faceTexels;
     int level;
-    int layerOffset;  // x of this layer's MSSM in the image: a second depth layer's lies right of the first's
+    int base;  // the depth layer's first array layer (mssm.glsl): a second depth layer's follow the first's
 } pc;
 
 // Straight-line (docs/performance.md, "Uniform loads"): invocations past the atlas
@@ -39,18 +39,15 @@ void main()
     float d00 = texelFetch(shadowDepth, cell, 0).r, d10 = texelFetch(shadowDepth, ivec2(b.x, cell.y), 0).r;
     float d01 = texelFetch(shadowDepth, ivec2(cell.x, b.y), 0).r, d11 = texelFetch(shadowDepth, b, 0).r;
     vec2 range = vec2(min(min(d00, d10), min(d01, d11)), max(max(d00, d10), max(d01, d11)));
-    if (inAtlas) imageStore(mssmImage, mssmTexel(atlasSize, 0, cell + ivec2(pc.layerOffset, 0)), vec4(range, 0.0, 0.0));
+    if (inAtlas) imageStore(mssmImage, mssmTexel(pc.base, 0, cell), vec4(range, 0.0, 0.0));
 #else
     int level = pc.level;
     ivec2 b = min(cell + (1 << (level - 1)), last);
-    int below = (level - 1) * atlasSize.y;
-    int x0 = pc.layerOffset + cell.x, x1 = pc.layerOffset + b.x;
-    vec2 v00 = imageLoad(mssmImage, ivec2(x0, below + cell.y)).xy;
-    vec2 v10 = imageLoad(mssmImage, ivec2(x1, below + cell.y)).xy;
-    vec2 v01 = imageLoad(mssmImage, ivec2(x0, below + b.y)).xy;
-    vec2 v11 = imageLoad(mssmImage, ivec2(x1, below + b.y)).xy;
+    vec2 v00 = mssmNode(pc.base, level - 1, cell);
+    vec2 v10 = mssmNode(pc.base, level - 1, ivec2(b.x, cell.y));
+    vec2 v01 = mssmNode(pc.base, level - 1, ivec2(cell.x, b.y));
+    vec2 v11 = mssmNode(pc.base, level - 1, b);
     vec2 range = vec2(min(min(v00.x, v10.x), min(v01.x, v11.x)), max(max(v00.y, v10.y), max(v01.y, v11.y)));
-    ivec2 node = mssmTexel(atlasSize, level, cell + ivec2(pc.layerOffset, 0));
-    if (inAtlas) imageStore(mssmImage, node, vec4(range, 0.0, 0.0));
+    if (inAtlas) imageStore(mssmImage, mssmTexel(pc.base, level, cell), vec4(range, 0.0, 0.0));
 #endif
 }

@@ -11,28 +11,31 @@
 // Cells and nodes never cross a face of a cube atlas: a sample or child past the face's
 // last one is clamped to it (that node covers fewer cells).
 //
-// One RG32F storage image, the levels stacked downwards (level l's node for atlas cell c
-// at (c.x, l * atlas height + c.y)): an image is not bound by a device's largest storage
-// buffer range (lavapipe: 128 MiB, which a 1024-texel cube atlas's 7 levels exceed), only
-// by its largest 2-D image side (backprojection.cpp checks both). A second depth layer's
-// MSSM (visibility.comp LAYERS) lies right of the first's, one atlas width along: its
-// readers offset the cells they ask for, its builder (mssm.comp) the nodes it writes.
+// One RG32F storage image array, a layer per level, each as large as the atlas (level
+// l's node for atlas cell c at (c, l)): an image is not bound by a device's largest
+// storage buffer range (lavapipe: 128 MiB, which a 1024-texel cube atlas's 7 levels
+// exceed), and an array's layers are each bound only by the largest 2-D image side, which
+// the atlas already fits; what remains is the device's largest allocation
+// (backprojection.cpp checks it). A second depth layer's MSSM (visibility.comp LAYERS)
+// takes the layers after the first's: its readers and its builder (mssm.comp) start at
+// its first layer, `base`.
 //
 // The including shader defines MSSM_BINDING and MSSM_QUALIFIER first.
 #ifndef PENUMBRA_BACKPROJECTION_MSSM_GLSL
 #define PENUMBRA_BACKPROJECTION_MSSM_GLSL
 
 // (least NDC depth, largest NDC depth) per node.
-layout(binding = MSSM_BINDING, rg32f) uniform MSSM_QUALIFIER image2D mssmImage;
+layout(binding = MSSM_BINDING, rg32f) uniform MSSM_QUALIFIER image2DArray mssmImage;
 
-ivec2 mssmTexel(ivec2 atlasSize, int level, ivec2 cell)
+// `base`: the depth layer's first array layer (its level 0).
+ivec3 mssmTexel(int base, int level, ivec2 cell)
 {
-    return ivec2(cell.x, level * atlasSize.y + cell.y);
+    return ivec3(cell, base + level);
 }
 
-vec2 mssmNode(ivec2 atlasSize, int level, ivec2 cell)
+vec2 mssmNode(int base, int level, ivec2 cell)
 {
-    return imageLoad(mssmImage, mssmTexel(atlasSize, level, cell)).xy;
+    return imageLoad(mssmImage, mssmTexel(base, level, cell)).xy;
 }
 
 // The last cell (and sample) of the face that holds atlas cell `cell`.
@@ -44,8 +47,9 @@ ivec2 mssmFaceLast(ivec2 cell, int faceTexels)
 #ifndef MSSM_WRITES
 // The range of depths over the cells [lo, hi] (inclusive, one face) at the level whose
 // nodes are no wider than the narrower side: at most 2 x 2 fetches for a square, and a
-// few more along the longer side of a rectangle. `levels`: how many the buffer holds.
-vec2 mssmRange(ivec2 atlasSize, int levels, ivec2 lo, ivec2 hi)
+// few more along the longer side of a rectangle. `levels`: how many the image holds a
+// depth layer.
+vec2 mssmRange(int base, int levels, ivec2 lo, ivec2 hi)
 {
     ivec2 extent = max(hi - lo + 1, ivec2(1));
     int level = min(findMSB(min(extent.x, extent.y)), levels - 1);
@@ -55,7 +59,7 @@ vec2 mssmRange(ivec2 atlasSize, int levels, ivec2 lo, ivec2 hi)
     for (int j = 0; j < count.y; ++j)
         for (int i = 0; i < count.x; ++i) {
             ivec2 node = max(min(lo + ivec2(i, j) * step, hi - step + 1), lo);
-            vec2 v = mssmNode(atlasSize, level, node);
+            vec2 v = mssmNode(base, level, node);
             range = vec2(min(range.x, v.x), max(range.y, v.y));
         }
     return range;

@@ -168,7 +168,7 @@ bool walkPacket(Walk lead, ivec4 k, inout int fetches, out bool outOfBudget)
         if (any(greaterThan(node.xy, k.zw))) continue;  // beyond the kernel
         int level = node.z;
         ivec2 last = min(node.xy + (1 << level) - 1, k.zw);
-        vec2 depths = mssmNode(pc.atlasSize, level, lead.origin + node.xy);
+        vec2 depths = mssmNode(0, level, lead.origin + node.xy);
         ++fetches;
         vec2 reference = packetReferenceRange(lead, node.xy, min(last + 1, ivec2(lead.faceTexels - 1)));
         // Fig. 6 cases 4 and 5 for every walker at once.
@@ -228,7 +228,7 @@ int packetClass(Walk lead, ivec4 k, int walkers, inout int fetches)
     // each, so its band is the packet's depth range; ours have planes, which move the
     // band across the kernel with the receivers' slope, so the band is the walkers'
     // spread at one place (packetReferenceSpread) where it meets the kernel's range.
-    vec2 kernelDepths = mssmRange(pc.atlasSize, pc.levels, lead.origin + k.xy, lead.origin + k.zw);
+    vec2 kernelDepths = mssmRange(0, pc.levels, lead.origin + k.xy, lead.origin + k.zw);
     fetches += 4;
     ivec2 far = min(k.zw + 1, ivec2(lead.faceTexels - 1));
     vec2 packetDepths = packetReferenceRange(lead, k.xy, far);

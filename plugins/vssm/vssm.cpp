@@ -278,26 +278,23 @@ void VssmShadow::checkDevice() const
         throw ConfigError("vssm: this device lacks shaderStorageImageExtendedFormats (the min-max hierarchy is an "
                           "RG32F storage image, plugins/vssm/hsm.glsl); choose another technique or device");
     }
-    VkPhysicalDeviceMaintenance3Properties maintenance3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
-    VkPhysicalDeviceProperties2 properties{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
-    properties.pNext = &maintenance3;
-    vkGetPhysicalDeviceProperties2(context_.physicalDevice(), &properties);
+    const VkDeviceSize largest = context_.maxMemoryAllocationSize();
     const VkDeviceSize texels = VkDeviceSize(shadowMap_.atlasWidth()) * shadowMap_.atlasHeight();
-    if (texels * kSatTexelBytes > maintenance3.maxMemoryAllocationSize) {
+    if (texels * kSatTexelBytes > largest) {
         // The atlas holds `faces` faces of faceTexels() (the resolution and its guard
         // texels) a side: the largest face that fits, less the same guard, is the
         // largest resolution (the guard never grows with a lower one).
         const VkDeviceSize face = VkDeviceSize(shadowMap_.faceTexels()) * shadowMap_.faceTexels();
         const VkDeviceSize faces = texels / face;
         const auto largestFace = VkDeviceSize(std::floor(std::sqrt(
-            double(maintenance3.maxMemoryAllocationSize / kSatTexelBytes / faces))));
+            double(largest / kSatTexelBytes / faces))));
         const VkDeviceSize guards = shadowMap_.faceTexels() - settings_.resolution;
         const VkDeviceSize fits = largestFace > guards ? largestFace - guards : 0;
         throw ConfigError(fmt::format("vssm: resolution: {} texels per face need a {} MiB summed-area table, more than "
                                       "this device's largest allocation ({} MiB, maxMemoryAllocationSize); use at "
                                       "most {}",
                                       settings_.resolution, (texels * kSatTexelBytes) >> 20,
-                                      maintenance3.maxMemoryAllocationSize >> 20, fits));
+                                      largest >> 20, fits));
     }
 }
 

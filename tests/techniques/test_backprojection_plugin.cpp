@@ -41,6 +41,9 @@ namespace {
 // hidden area exactly, so away from the kernels the only differences from the rays are
 // the map's sampling of the casters' outlines (a texel).
 constexpr float kAgreementTolerance = 0.02f;
+// The test scene's penumbrae under its spot (light_size 0.6) or its disk light at 1024²
+// are no wider than this band (LightTypes/spot and /disk hold a 16-texel cap's band).
+constexpr double kSpotBandTexels = 0.5 * 16.0 + 3.0;
 
 struct BackprojectionSettings {
     double lightSize = -1.0;
@@ -999,17 +1002,28 @@ INSTANTIATE_TEST_SUITE_P(Backprojection, BackprojectionScales,
                                     std::get<1>(info.param).name;
                          });
 
-TEST_F(BackprojectionTest, CpuDeviceRefusesKernelsPastTheLoopLimit)
+TEST_F(BackprojectionTest, CapPastTheCpuLoopLimitWalksCoarserOnACpuDevice)
 {
-    // 0.25 of a 1024-texel face is a 256-texel kernel: 65,536 blocks flat, past the 65,535
-    // loop iterations llvmpipe allows a shader invocation. The refusal names the parameter.
-    config::RenderConfig cfg = test::defaultTestConfig();
-    BackprojectionSettings s;
-    s.lightSize = 0.6;
-    s.maxKernelTexels = 256.0;
-    applyBackprojection(cfg.lights[0], s);
-    expectRefusal([&] { render(cfg, config::buildScene(cfg.scene)); }, {"max_kernel", "65,535"},
-                  "a 256-texel kernel cap on a CPU device");
+    // 0.25 of a 1024-texel face is a 256-texel cap: 65,536 blocks flat, past the 65,535
+    // loop iterations llvmpipe allows a shader invocation. A CPU device walks at most 104
+    // cells a side, so the cap acts as 104 (kernels past it are walked on a coarser grid):
+    // on the lattice under a wide light, the image of the 104-texel cap; on the test scene,
+    // V agrees with the rays away from penumbrae (the spot's, no wider than
+    // LightTypes/spot's band).
+    if (context->deviceInfo().type != "cpu") GTEST_SKIP() << "a GPU walks the cap it is given";
+    CapCase c = fenceAtTheCap(96, 54, 256.0, 1);
+    const config::RenderConfig& cfg = c.cfg;
+    BackprojectionSettings& s = c.s;
+    const std::vector<float> wide = renderWith(cfg, s);
+    s.maxKernelTexels = 104.0;
+    // The flat walk at 104 (kernels past it are there) gives the hierarchy's image to
+    // rounding: the 256-texel cap walked as 104.
+    EXPECT_LE(agreement(wide, flatWalkAtTheCap(cfg, s)).largest, 2.0f / 65535.0f) << "a 256-texel cap walks as 104";
+    BackprojectionSettings spot;
+    spot.lightSize = 0.6;
+    spot.maxKernelTexels = 256.0;
+    PluginGpuTest::expectRayCastAgreement(renderWith(test::defaultTestConfig(), spot), kSpotBandTexels,
+                                          kAgreementTolerance, "a 256-texel cap on a CPU device");
 }
 
 // At the largest cap a CPU device allows (104 texels) every walk runs to its end: on the
@@ -1034,33 +1048,76 @@ TEST_F(BackprojectionTest, WalksAtTheLargestCpuCapRunToTheirEnd)
     EXPECT_LE(worst, 2.0f / 65535.0f);
 }
 
-// Two layers walk twice per receiver, so their CPU cap is 73 texels: 74 is refused, by
-// name, and at 73 both layers' flat walks and the hierarchy give one image on the lattice.
+// Two layers walk twice per receiver, so their CPU cap is 73 texels: 74 walks as 73, and
+// at 73 both layers' flat walks and the hierarchy give one image on the lattice.
 TEST_F(BackprojectionTest, TwoLayersWalkToTheirEndAtTheirCpuCap)
 {
     CapCase c = fenceAtTheCap(32, 18, 74.0, 2);
     const config::RenderConfig& cfg = c.cfg;
     BackprojectionSettings& s = c.s;
-    expectRefusal([&] { renderWith(cfg, s); }, {"max_kernel", "2 layers"},
-                  "a 74-texel kernel cap with two layers on a CPU device");
+    const std::vector<float> past = renderWith(cfg, s);
     s.maxKernelTexels = 73.0;
+    if (context->deviceInfo().type == "cpu") {
+        EXPECT_EQ(past, renderWith(cfg, s)) << "74 walks as 73 with two layers";
+    }
     const std::vector<float> flat = flatWalkAtTheCap(cfg, s);
     EXPECT_LE(agreement(flat, renderWith(cfg, s)).largest, 2.0f / 65535.0f) << "flat against hierarchical";
 }
 
-TEST_F(BackprojectionTest, MssmTallerThanTheLargestImageIsRefused)
+TEST_F(BackprojectionTest, MssmOfMoreRowsThanTheLargestImageAgreesWithTheRays)
 {
-    // A 2048-texel cube atlas (2 faces of 2048 + guard high) with 7 levels of MSSM is
-    // taller than lavapipe's largest image (16,384): refused before anything renders,
-    // naming the parameter and the sizes. 1024 per face fits (LightTypes/disk).
+    // A disk light's cube atlas is two faces (and their guard texels) high: the first
+    // resolution (in steps of 256) whose 8 MSSM levels (a 100-texel cap), stacked, would
+    // be taller than the device's largest image (lavapipe's 16,384: 1024²). The MSSM is an
+    // array of atlas-sized layers (mssm.glsl), so it renders, and agrees with the rays away
+    // from penumbrae.
+    const VkPhysicalDeviceLimits& limits = context->properties().limits;
+    int resolution = 512;
+    while (2 * (resolution + 50) * 8 <= int(limits.maxImageDimension2D)) resolution += 256;
+    const VkDeviceSize atlasBytes = VkDeviceSize(3) * 2 * (resolution + 64) * (resolution + 64) * 8;
+    if (3 * (resolution + 64) > int(limits.maxImageDimension2D) || atlasBytes * 8 > context->maxMemoryAllocationSize())
+        GTEST_SKIP() << "this device's largest image is taller than the largest MSSM it can allocate";
     config::RenderConfig cfg = test::defaultTestConfig();
     test::setLightType(cfg.lights[0], scene::LightType::Disk);
     BackprojectionSettings s;
-    s.resolution = 2048;
-    s.maxKernelTexels = 64.0;
+    s.resolution = resolution;
+    s.maxKernelTexels = 100.0;
+    const std::vector<float> v = renderWith(cfg, s);
+    PluginGpuTest::expectRayCastAgreement(v, kSpotBandTexels, kAgreementTolerance, fmt::format("disk {}^2", resolution));
+    EXPECT_GT(std::ranges::count_if(v, [](float x) { return x > 0.02f && x < 0.98f; }), 200)
+        << "a light with a size casts penumbrae";
+}
+
+TEST_F(BackprojectionTest, MssmLargerThanTheLargestAllocationIsRefusedWithTheLargestResolutionThatFits)
+{
+    // A disk light's MSSM at 4096² takes six faces of 8 levels (a 128-texel cap) at 8 bytes
+    // a node: 6.4 GiB, more than a device allocates at once (lavapipe: 2 GiB). Refused
+    // before anything renders, naming the limit and the largest resolution that fits.
+    const VkPhysicalDeviceLimits& limits = context->properties().limits;
+    const VkDeviceSize largest = context->maxMemoryAllocationSize();
+    if (VkDeviceSize(6) * 4096 * 4096 * 8 * 8 <= largest || 3 * 4200 > limits.maxImageDimension2D)
+        GTEST_SKIP() << "this device allocates a 4096-texel cube's MSSM, or cannot make its atlas";
+    config::RenderConfig cfg = test::defaultTestConfig();
+    test::setLightType(cfg.lights[0], scene::LightType::Disk);
+    BackprojectionSettings s;
+    s.resolution = 4096;
+    s.maxKernelTexels = 100.0;  // 8 levels, under a CPU device's walk cap too
     applyBackprojection(cfg.lights[0], s);
-    expectRefusal([&] { render(cfg, config::buildScene(cfg.scene)); }, {"resolution: 2048", "largest image"},
-                  "a 2048-texel cube atlas's MSSM");
+    try {
+        render(cfg, config::buildScene(cfg.scene));
+        FAIL() << "a 4096-texel cube's MSSM was not refused";
+    } catch (const Error& e) {  // the registry's PluginError, naming the plugin and the light
+        const std::string what = e.what();
+        EXPECT_NE(what.find("backprojection: resolution: 4096"), std::string::npos) << what;
+        EXPECT_NE(what.find("maxMemoryAllocationSize"), std::string::npos) << what;
+        const size_t at = what.find("at most ");
+        ASSERT_NE(at, std::string::npos) << what;
+        const unsigned long fits = std::stoul(what.substr(at + 8));
+        EXPECT_LT(fits, 4096u) << what;
+        // Its atlas (faces, guard included, of at most fits + 64) holds 8 levels that fit.
+        EXPECT_LE(VkDeviceSize(6) * (fits + 64) * (fits + 64) * 8 * 8, largest * 11 / 10) << what;
+        EXPECT_GT(VkDeviceSize(6) * (fits + 300) * (fits + 300) * 8 * 8, largest) << what << ": the largest, not any";
+    }
 }
 
 // ---------------------------------------------------------------------------------

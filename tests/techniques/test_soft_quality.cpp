@@ -225,9 +225,10 @@ INSTANTIATE_TEST_SUITE_P(
                       QualityCase{"vssm_mixed", "vssm", {{"subdivision", "mixed"}}, vssmTreeHeights()},
                       QualityCase{"vssm_adaptive", "vssm", {{"subdivision", "adaptive"}}, vssmTreeHeights()},
                       QualityCase{"vssm_uniform", "vssm", {{"subdivision", "uniform"}}, vssmSubKernels()},
-                      // Its kernel walk is capped in texels on a CPU device (backprojection.cpp
-                      // kCpuMaxKernel): the default max_kernel (a sixteenth of the face) is
-                      // refused from 2048² on, so the sweep stops at 1024². It has no
-                      // sampling knob (its contour is exact for the map's samples).
-                      QualityCase{"backprojection", "backprojection", nlohmann::json::object(), {}, 1024}),
+                      // On a CPU device its walk's cells are held to 104 a side
+                      // (backprojection.cpp kCpuMaxKernel): the default max_kernel (a
+                      // sixteenth of the face) passes that from 2048² on, where kernels past
+                      // 104 texels are walked on a coarser grid. It has no sampling knob (its
+                      // contour is exact for the map's samples).
+                      QualityCase{"backprojection", "backprojection", nlohmann::json::object(), {}}),
     [](const ::testing::TestParamInfo<QualityCase>& info) { return std::string(info.param.name); });

@@ -557,19 +557,6 @@ TEST_F(VssmTest, LargestMapAgreesWithTheRays)
     expectRayCastAgreement(v, s, "4096^2");
 }
 
-namespace {
-
-VkDeviceSize maxMemoryAllocationSize(const gpu::Context& context)
-{
-    VkPhysicalDeviceMaintenance3Properties maintenance3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
-    VkPhysicalDeviceProperties2 properties{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
-    properties.pNext = &maintenance3;
-    vkGetPhysicalDeviceProperties2(context.physicalDevice(), &properties);
-    return maintenance3.maxMemoryAllocationSize;
-}
-
-} // namespace
-
 TEST_F(VssmTest, RectLightMapLargerThanOneStorageBufferAgreesWithTheRays)
 {
     // A rect light's six faces at the first resolution (in steps of 512) whose min-max
@@ -580,7 +567,7 @@ TEST_F(VssmTest, RectLightMapLargerThanOneStorageBufferAgreesWithTheRays)
     uint32_t resolution = 1024;
     while (6.0 * resolution * resolution / 3.0 * 8.0 <= double(limits.maxStorageBufferRange)) resolution += 512;
     const double satBytes = 6.0 * resolution * resolution * 16.0;
-    if (3 * resolution > limits.maxImageDimension2D || satBytes > double(maxMemoryAllocationSize(*context)))
+    if (3 * resolution > limits.maxImageDimension2D || satBytes > double(context->maxMemoryAllocationSize()))
         GTEST_SKIP() << "this device binds storage buffers as large as the largest atlas it can make";
     config::RenderConfig cfg = test::defaultTestConfig();
     test::setLightType(cfg.lights[0], scene::LightType::Rect);
@@ -599,7 +586,7 @@ TEST_F(VssmTest, TableLargerThanTheLargestAllocationIsRefusedWithTheLargestResol
     // first resolution whose table is more than the device allocates at once, while its
     // atlas is still an image the device can make (lavapipe: 2 GiB, 4736^2).
     const VkPhysicalDeviceLimits& limits = context->properties().limits;
-    const VkDeviceSize largest = maxMemoryAllocationSize(*context);
+    const VkDeviceSize largest = context->maxMemoryAllocationSize();
     uint32_t resolution = 1024;
     while (VkDeviceSize(6) * resolution * resolution * 16 <= largest) resolution += 128;
     if (3 * (resolution + 64) > limits.maxImageDimension2D)

@@ -16,7 +16,7 @@ void transition(VkCommandBuffer cmd, const Image& image, const ImageAccess& befo
     barrier.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
     barrier.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
     barrier.image = image.handle();
-    barrier.subresourceRange = {image.aspect(), 0, 1, 0, 1};
+    barrier.subresourceRange = {image.aspect(), 0, 1, 0, VK_REMAINING_ARRAY_LAYERS};
     VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
     dep.imageMemoryBarrierCount = 1;
     dep.pImageMemoryBarriers = &barrier;

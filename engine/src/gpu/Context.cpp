@@ -349,6 +349,11 @@ void Context::selectPhysicalDevice(const DeviceRequest& request)
     info_ = describe(best);
     vkGetPhysicalDeviceProperties(best, &properties_);
     vkGetPhysicalDeviceMemoryProperties(best, &memoryProperties_);
+    VkPhysicalDeviceMaintenance3Properties maintenance3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
+    VkPhysicalDeviceProperties2 properties2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+    properties2.pNext = &maintenance3;
+    vkGetPhysicalDeviceProperties2(best, &properties2);
+    maxMemoryAllocationSize_ = maintenance3.maxMemoryAllocationSize;
 }
 
 std::optional<uint32_t> Context::queueFamilyOf(VkPhysicalDevice device) const

@@ -147,7 +147,8 @@ uint32_t texelSize(VkFormat format)
 
 std::string describe(const ImageDesc& desc)
 {
-    return fmt::format("image '{}' ({} x {} {})", desc.name, desc.width, desc.height, formatName(desc.format));
+    const std::string layers = desc.layers > 1 ? fmt::format(" x {} layers", desc.layers) : "";
+    return fmt::format("image '{}' ({} x {}{} {})", desc.name, desc.width, desc.height, layers, formatName(desc.format));
 }
 
 namespace {
@@ -203,12 +204,17 @@ void Image::createHandle(Context& context)
         throw GpuError(fmt::format("image '{}': size {}x{} exceeds the device limit {}", desc_.name, desc_.width,
                                    desc_.height, maxDim));
     }
+    const uint32_t maxLayers = context.properties().limits.maxImageArrayLayers;
+    if (desc_.layers == 0 || desc_.layers > maxLayers) {
+        throw GpuError(fmt::format("image '{}': {} array layers, the device allows 1 to {}", desc_.name,
+                                   desc_.layers, maxLayers));
+    }
     VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
     info.imageType = VK_IMAGE_TYPE_2D;
     info.format = desc_.format;
     info.extent = {desc_.width, desc_.height, 1};
     info.mipLevels = 1;
-    info.arrayLayers = 1;
+    info.arrayLayers = desc_.layers;
     info.samples = VK_SAMPLE_COUNT_1_BIT;
     info.tiling = VK_IMAGE_TILING_OPTIMAL;
     info.usage = desc_.usage;
@@ -222,9 +228,9 @@ void Image::createView()
 {
     VkImageViewCreateInfo viewInfo{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
     viewInfo.image = image_;
-    viewInfo.viewType = VK_IMAGE_VIEW_TYPE_2D;
+    viewInfo.viewType = desc_.layers > 1 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY : VK_IMAGE_VIEW_TYPE_2D;
     viewInfo.format = desc_.format;
-    viewInfo.subresourceRange = {aspect(), 0, 1, 0, 1};
+    viewInfo.subresourceRange = {aspect(), 0, 1, 0, desc_.layers};
     check(vkCreateImageView(device_, &viewInfo, nullptr, &view_), "vkCreateImageView " + desc_.name);
 }
 

@@ -41,7 +41,9 @@ const char* kindName(const CompiledResource& res) { return res.isImage ? "image"
 std::string describeResource(const CompiledGraph& graph, uint32_t r)
 {
     const CompiledResource& res = graph.resources[r];
-    const std::string size = res.isImage ? fmt::format("{} x {} {}", res.width, res.height, gpu::formatName(res.format))
+    const std::string size = res.isImage ? fmt::format("{} x {}{} {}", res.width, res.height,
+                                                       res.layers > 1 ? fmt::format(" x {} layers", res.layers) : "",
+                                                       gpu::formatName(res.format))
                                          : fmt::format("{} bytes", uint64_t(res.sizeBytes));
     const std::string pass = res.firstUse >= 0 && size_t(res.firstUse) < graph.passes.size()
                                  ? fmt::format(", first used by pass '{}'", graph.passes[size_t(res.firstUse)].name)
@@ -197,7 +199,7 @@ void GraphExecutor::DeviceResources::createTransients(const CompiledGraph& graph
         try {
             if (res.isImage) {
                 transientImages[r] = gpu::Image::createUnbound(
-                    context, {res.width, res.height, res.format, res.imageUsage, res.name});
+                    context, {res.width, res.height, res.format, res.imageUsage, res.name, res.layers});
                 requirements[r] = transientImages[r].memoryRequirements();
                 images[r] = &transientImages[r];
             } else {
@@ -358,11 +360,13 @@ void GraphExecutor::DeviceResources::resolveImports(const CompiledGraph& graph)
             const auto found = boundImages.find(res.name);
             if (found == boundImages.end()) throw missing();
             const gpu::ImageDesc& desc = found->second->desc();
-            if (desc.width != res.width || desc.height != res.height || desc.format != res.format)
-                throw Error(fmt::format("render graph: imported image '{}' is declared {}x{} {} but the bound image "
-                                        "'{}' is {}x{} {}",
-                                        res.name, res.width, res.height, vk::to_string(vk::Format(res.format)),
-                                        desc.name, desc.width, desc.height, vk::to_string(vk::Format(desc.format))));
+            if (desc.width != res.width || desc.height != res.height || desc.format != res.format ||
+                desc.layers != res.layers)
+                throw Error(fmt::format("render graph: imported image '{}' is declared {}x{}x{} {} but the bound "
+                                        "image '{}' is {}x{}x{} {}",
+                                        res.name, res.width, res.height, res.layers,
+                                        vk::to_string(vk::Format(res.format)), desc.name, desc.width, desc.height,
+                                        desc.layers, vk::to_string(vk::Format(desc.format))));
             if ((desc.usage & res.imageUsage) != res.imageUsage)
                 throw Error(fmt::format("render graph: imported image '{}': the bound image lacks usage {} (needed "
                                         "by the passes {}{})",
@@ -411,7 +415,7 @@ void GraphExecutor::DeviceResources::recordBarriers(VkCommandBuffer cmd, const C
             out.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
             out.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
             out.image = images[b.resource]->handle();
-            out.subresourceRange = {barrierAspect(graph.resources[b.resource].format), 0, 1, 0, 1};
+            out.subresourceRange = {barrierAspect(graph.resources[b.resource].format), 0, 1, 0, VK_REMAINING_ARRAY_LAYERS};
         } else {
             VkBufferMemoryBarrier2& out = bufferBarriers.emplace_back(VkBufferMemoryBarrier2{
                 VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER_2});

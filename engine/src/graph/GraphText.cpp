@@ -25,7 +25,8 @@ std::string mebibytes(VkDeviceSize bytes) { return fmt::format("{:.2f} MiB", dou
 
 std::string describe(const CompiledResource& res)
 {
-    std::string text = res.isImage ? fmt::format("image {}x{} {}", res.width, res.height,
+    std::string text = res.isImage ? fmt::format("image {}x{}{} {}", res.width, res.height,
+                                                 res.layers > 1 ? fmt::format(" x {} layers", res.layers) : "",
                                                  vk::to_string(vk::Format(res.format)))
                                    : std::string("buffer");
     text += fmt::format(", {}", mebibytes(res.sizeBytes));

@@ -68,7 +68,7 @@ VkDeviceSize imageBytes(const ImageDesc& desc)
     if (blockBytes == 0) throw Error(fmt::format("render graph: image '{}': format {} has no known size", desc.name, int(desc.format)));
     const VkDeviceSize blocksX = (desc.width + extent[0] - 1) / extent[0];
     const VkDeviceSize blocksY = (desc.height + extent[1] - 1) / extent[1];
-    return blocksX * blocksY * blockBytes;
+    return blocksX * blocksY * blockBytes * desc.layers;
 }
 
 struct ResourceState {
@@ -246,9 +246,9 @@ void RenderGraph::declare(ResourceDecl decl, const std::string& name)
             const ImageDesc& a = existing->image;
             const ImageDesc& b = decl.image;
             throw Error(fmt::format("render graph: image '{}' declared twice with different descriptions: "
-                                    "{}x{} format {}{} vs {}x{} format {}{}",
-                                    name, a.width, a.height, int(a.format), a.imported ? " imported" : "", b.width,
-                                    b.height, int(b.format), b.imported ? " imported" : ""));
+                                    "{}x{}x{} format {}{} vs {}x{}x{} format {}{}",
+                                    name, a.width, a.height, a.layers, int(a.format), a.imported ? " imported" : "",
+                                    b.width, b.height, b.layers, int(b.format), b.imported ? " imported" : ""));
         }
         if (!existing->isImage && !(existing->buffer == decl.buffer))
             throw Error(fmt::format("render graph: buffer '{}' declared twice with different descriptions: "
@@ -266,6 +266,7 @@ void RenderGraph::declareImage(const ImageDesc& desc)
 {
     if (desc.width == 0 || desc.height == 0)
         throw Error(fmt::format("render graph: image '{}': width and height must be > 0", desc.name));
+    if (desc.layers == 0) throw Error(fmt::format("render graph: image '{}': layers must be > 0", desc.name));
     ResourceDecl decl;
     decl.image = desc;
     declare(std::move(decl), desc.name);
@@ -609,6 +610,7 @@ private:
             if (d.isImage) {
                 res.width = d.image.width;
                 res.height = d.image.height;
+                res.layers = d.image.layers;
                 res.format = d.image.format;
                 res.sizeBytes = imageBytes(d.image);
             } else {

@@ -17,7 +17,7 @@ ClearPass::ClearPass(graph::RenderGraph& graph, std::string name)
     : pass_(graph.addPass(std::move(name), graph::QueueKind::Transfer)), targets_(std::make_shared<Targets>())
 {
     pass_.execute([targets = targets_](graph::PassContext& pass) {
-        const VkImageSubresourceRange all{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+        const VkImageSubresourceRange all{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, VK_REMAINING_ARRAY_LAYERS};
         for (const auto& [name, value] : targets->images)
             vkCmdClearColorImage(pass.cmd(), pass.image(name).handle(), pass.layout(name), &value, 1, &all);
         for (const auto& [name, word] : targets->buffers)

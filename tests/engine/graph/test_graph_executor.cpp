@@ -261,6 +261,58 @@ TEST_F(GraphExecutorTest, DepthImagesTransitionWithTheDepthAspect)
     for (float v : readFloats(*context, executor.buffer("depth copy"))) ASSERT_EQ(v, 0.25f);
 }
 
+TEST_F(GraphExecutorTest, ArrayImagesTransitionEveryLayer)
+{
+    // Three layers: the whole array cleared, layer 1 again to another value, then every
+    // layer copied. A barrier over the first layer alone would leave the others in their
+    // old layout (a validation error, and values lost); each layer's value shows the
+    // order held.
+    constexpr uint32_t kSide = 8, kLayers = 3;
+    constexpr VkDeviceSize kLayerBytes = kSide * kSide * sizeof(float);
+    RenderGraph graph;
+    ImageDesc array{"array", kSide, kSide, VK_FORMAT_R32_SFLOAT};
+    array.layers = kLayers;
+    graph.declareImage(array);
+    graph.declareBuffer({"array copy", kLayers * kLayerBytes, false});
+    graph.addPass("clear", QueueKind::Transfer).write("array", Usage::TransferDst).execute([](PassContext& pass) {
+        const VkClearColorValue half{{0.5f, 0.0f, 0.0f, 0.0f}}, two{{2.0f, 0.0f, 0.0f, 0.0f}};
+        const VkImageSubresourceRange all{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, VK_REMAINING_ARRAY_LAYERS};
+        const VkImageSubresourceRange one{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 1, 1};
+        const gpu::MemoryAccess transfer{VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT};
+        vkCmdClearColorImage(pass.cmd(), pass.image("array").handle(), pass.layout("array"), &half, 1, &all);
+        gpu::memoryBarrier(pass.cmd(), transfer, transfer);
+        vkCmdClearColorImage(pass.cmd(), pass.image("array").handle(), pass.layout("array"), &two, 1, &one);
+    });
+    graph.addPass("copy", QueueKind::Transfer)
+        .read("array", Usage::TransferSrc)
+        .write("array copy", Usage::TransferDst)
+        .execute([&](PassContext& pass) {
+            const gpu::Image& image = pass.image("array");
+            EXPECT_EQ(image.desc().layers, kLayers);
+            VkBufferImageCopy regions[kLayers]{};
+            for (uint32_t l = 0; l < kLayers; ++l) {
+                regions[l].bufferOffset = l * kLayerBytes;
+                regions[l].imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, l, 1};
+                regions[l].imageExtent = {kSide, kSide, 1};
+            }
+            vkCmdCopyImageToBuffer(pass.cmd(), image.handle(), pass.layout("array"), pass.buffer("array copy").handle(),
+                                   kLayers, regions);
+        });
+    graph.markOutput("array copy");
+    const CompiledGraph& compiled = *graph.compile();
+    const int r = resourceIndex(compiled, "array");
+    ASSERT_GE(r, 0);
+    EXPECT_EQ(compiled.resources[size_t(r)].sizeBytes, kLayers * kLayerBytes) << "every layer counts";
+
+    GraphExecutor executor(*context, kNoTimestamps);
+    executor.execute(graph);
+    const std::vector<float> values = readFloats(*context, executor.buffer("array copy"));
+    ASSERT_EQ(values.size(), size_t(kLayers * kSide * kSide));
+    for (size_t i = 0; i < values.size(); ++i)
+        ASSERT_EQ(values[i], i / (kSide * kSide) == 1 ? 2.0f : 0.5f) << "layer " << i / (kSide * kSide);
+    EXPECT_EQ(context->validationMessageCount(), 0u);
+}
+
 TEST_F(GraphExecutorTest, AliasedTransientsShareMemoryWithoutCorruptingLiveData)
 {
     // "first" [0,1] and "second" [2,3] share a slot; "live" [0,3] spans both and must

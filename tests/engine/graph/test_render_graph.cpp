@@ -341,6 +341,13 @@ TEST(RenderGraph, MismatchedRedeclaration)
     expectThrowContaining([&] { graph.declareBuffer({"casters", 128, false}); }, {"'casters'", "64", "128"});
     graph.addPass("gbuffer", QueueKind::Graphics);
     expectThrowContaining([&] { graph.addPass("gbuffer", QueueKind::Compute); }, {"'gbuffer'", "twice"});
+    // An array of layers is another description; no layers is none.
+    ImageDesc layered{"shadow", 2048, 2048, VK_FORMAT_R8G8B8A8_UNORM};
+    layered.layers = 4;
+    expectThrowContaining([&] { graph.declareImage(layered); }, {"'shadow'", "2048x2048x1", "2048x2048x4"});
+    layered.name = "empty";
+    layered.layers = 0;
+    expectThrowContaining([&] { graph.declareImage(layered); }, {"'empty'", "layers must be > 0"});
 }
 
 TEST(RenderGraph, UndeclaredResourceAndWrongUsage)

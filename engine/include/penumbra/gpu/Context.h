@@ -90,6 +90,9 @@ public:
     const DeviceInfo& deviceInfo() const { return info_; }
     const VkPhysicalDeviceProperties& properties() const { return properties_; }
     const VkPhysicalDeviceMemoryProperties& memoryProperties() const { return memoryProperties_; }
+    // The largest single allocation (Vulkan 1.1 maintenance3): what one resource may take
+    // even where its sides fit the image limits (lavapipe: 2 GiB).
+    VkDeviceSize maxMemoryAllocationSize() const { return maxMemoryAllocationSize_; }
     bool validationEnabled() const { return validation_; }
     bool isolatePasses() const { return isolatePasses_; }
     // Created with ContextOptions::presentation: VK_KHR_swapchain is enabled and the queue presents.
@@ -163,6 +166,7 @@ private:
     DeviceInfo info_;
     VkPhysicalDeviceProperties properties_{};
     VkPhysicalDeviceMemoryProperties memoryProperties_{};
+    VkDeviceSize maxMemoryAllocationSize_ = 0;
     bool validation_ = false;
     bool debugUtils_ = false;
     std::atomic<uint32_t> validationMessages_{0};

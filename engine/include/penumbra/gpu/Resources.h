@@ -53,8 +53,11 @@ struct ImageDesc {
     VkFormat format = VK_FORMAT_R8G8B8A8_UNORM;
     VkImageUsageFlags usage = 0;
     std::string name;
+    // Array layers: more than one makes the view a 2-D array (GLSL image2DArray /
+    // sampler2DArray), each layer as large as the device's largest 2-D image.
+    uint32_t layers = 1;
 };
-// "image 'name' (W x H FORMAT)": how messages name an image.
+// "image 'name' (W x H FORMAT)", with "x L layers" for an array: how messages name an image.
 std::string describe(const ImageDesc& desc);
 
 class Image {

@@ -56,6 +56,8 @@ struct ImageDesc {
     // persistent map): they are never aliased and may be read without a writer.
     bool imported = false;
     VkImageLayout initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;  // imported images only
+    // Array layers (gpu::ImageDesc::layers): barriers and clears cover every layer.
+    uint32_t layers = 1;
 
     bool operator==(const ImageDesc&) const = default;
 };
@@ -126,6 +128,7 @@ struct CompiledResource {
     bool imported = false;
     bool markedOutput = false;
     uint32_t width = 0, height = 0;
+    uint32_t layers = 1;  // array layers
     VkFormat format = VK_FORMAT_UNDEFINED;
     VkDeviceSize sizeBytes = 0;  // estimate: texel blocks × block size, or buffer size
     int firstUse = -1;           // pass index in CompiledGraph::passes; -1: unused

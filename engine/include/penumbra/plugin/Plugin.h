@@ -14,7 +14,7 @@
 #include <cstdint>
 #include <iterator>
 
-#define PENUMBRA_PLUGIN_ABI_VERSION 13u
+#define PENUMBRA_PLUGIN_ABI_VERSION 14u
 #define PENUMBRA_PLUGIN_ENTRY_SYMBOL "penumbra_plugin_entry"
 #define PENUMBRA_PLUGIN_EXPORT extern "C" __attribute__((visibility("default")))
 
