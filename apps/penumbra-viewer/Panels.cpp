@@ -832,6 +832,7 @@ void Viewer::drawBusyOverlay(const Session::FrameProgress& progress)
 // The value under the cursor: the colour and every light's V, or the debug image's values.
 void Viewer::drawPixelInspector()
 {
+    inspecting_ = false;
     const ImGuiIO& io = ImGui::GetIO();
     if (io.WantCaptureMouse || viewRect_.extent.width == 0 || session_->framesRendered() == 0) return;
     const float fbScale = io.DisplayFramebufferScale.x > 0.0f ? io.DisplayFramebufferScale.x : 1.0f;
@@ -856,10 +857,14 @@ void Viewer::drawPixelInspector()
         ImGui::SetTooltip("%s (%u, %u)\n%s", session_->shownImage().c_str(), x, y, values.c_str());
         return;
     }
+    // The inspector reads V: the frame is drawn again with its images where it kept none.
+    inspecting_ = true;
     const frame::FrameRenderer& r = session_->renderer();
     const uint32_t x = std::min(uint32_t(fx * float(r.width())), r.width() - 1);
     const uint32_t y = std::min(uint32_t(fy * float(r.height())), r.height() - 1);
-    const std::string text = pixelReport(x, y);
+    const std::string text = session_->visibilityKept()
+                                 ? pixelReport(x, y)
+                                 : fmt::format("pixel ({}, {})\n(drawing the frame again with its visibility images)", x, y);
     ImGui::SetTooltip("%s", text.c_str());
 }
 

@@ -280,6 +280,7 @@ std::unique_ptr<frame::FrameRenderer> Session::build()
               : resources_;
     auto renderer = std::make_unique<frame::FrameRenderer>(resources, strict, newPlugins_ ? *newPlugins_ : *plugins_,
                                                            fresh ? nullptr : renderer_.get());
+    renderer->setVisibilityReadBack(!visibilityWanted_ || visibilityWanted_());
     // The scene's nodes were posed in place: the shared upload, BVH and kept techniques
     // take the instances that moved (a renderer of new resources drew them posed already).
     if (!fresh && !moved.empty()) renderer->update(strict, run_->scene, moved);
@@ -302,10 +303,19 @@ Session::FrameProgress Session::frameProgress() const
     return p;
 }
 
+bool Session::visibilityKept() const
+{
+    if (!renderer_) return false;
+    for (size_t l = 0; l < renderer_->lightCount(); ++l)
+        if (renderer_->visibilityInShading(l)) return false;
+    return true;
+}
+
 bool Session::renderIfChanged(bool always)
 {
     if (!renderer_) return false;
-    if (pending_ == Change::None && !always) return false;
+    const bool wanted = !visibilityWanted_ || visibilityWanted_();
+    if (pending_ == Change::None && !always && !(wanted && !visibilityKept())) return false;
     const Change change = pending_;
     pending_ = Change::None;
     // Long passes report to progress_ (and poll it for a cancel) while the frame draws.
@@ -347,6 +357,9 @@ bool Session::renderIfChanged(bool always)
                 const config::RenderConfig& posed = pose(moved);
                 renderer_->update(posed, run_->scene, moved);
             }
+            // The renderer follows what is wanted only as it draws (a new one is built
+            // so): its images, the colour shown between frames among them, stay until then.
+            renderer_->setVisibilityReadBack(wanted);
             timings_ = renderer_->renderFrame();
         }
         shown_ = config_;

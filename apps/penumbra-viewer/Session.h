@@ -103,7 +103,19 @@ public:
     void showImage(const std::string& name);
     const std::string& shownImage() const { return shownImage_; }
 
-    // Renders a frame when something changed since the last one (or `always`). A failed
+    // Whether the lights' visibility images must be there to read (the pixel inspector, a
+    // comparison, a shown image, `save-visibility`): asked before each frame is drawn.
+    // Where it says no, shading evaluates the visibility of each light whose technique
+    // gives it as a function and no image of it is written
+    // (FrameRenderer::setVisibilityReadBack); where it says yes and the last frame kept
+    // none, renderIfChanged draws the frame again with them. Unset: always yes.
+    void setVisibilityWanted(std::function<bool()> wanted) { visibilityWanted_ = std::move(wanted); }
+    // Whether the last frame kept every light's visibility image (readVisibility and
+    // readPixel work for every light).
+    bool visibilityKept() const;
+
+    // Renders a frame when something changed since the last one (or `always`), or when
+    // the visibility images are wanted and the last frame kept none. A failed
     // rebuild (a shader that does not compile, a technique that refuses a light, a plugin
     // that does not load) keeps the renderer and config of the last good frame, with the
     // message in lastError() ("path:line: error: ..." for a shader). Returns whether a new
@@ -179,6 +191,7 @@ private:
     Change pending_ = Change::None;
     bool reloadAll_ = false;  // the next build starts from new scene resources, keeping no technique
     std::string shownImage_;
+    std::function<bool()> visibilityWanted_;
     frame::FrameTimings timings_;
     uint64_t framesRendered_ = 0;
     std::string lastError_;

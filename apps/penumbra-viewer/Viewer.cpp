@@ -105,6 +105,7 @@ Viewer::Viewer(const ViewerOptions& options)
     plugins_ = std::make_unique<plugin::PluginRegistry>();
     pluginReloader_ = std::make_unique<PluginReloader>(plugin::defaultPluginSearchPath());
     session_ = std::make_unique<Session>(*context_, *plugins_);
+    session_->setVisibilityWanted([this] { return wantsVisibility(); });
     session_->open(options.file);
     homeCamera_ = session_->config().camera;
     savePath_ = options.file.extension() == ".json" ? options.file.string() : options.file.stem().string() + ".json";
@@ -275,6 +276,7 @@ void Viewer::frame()
         ImGui_ImplGlfw_NewFrame();
         ImGui::NewFrame();
         if (showUi_) drawPanels();
+        else inspecting_ = false;  // no pixel inspector without the panels
     }
     double panelsCpuMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - uiStart).count();
     if (panels) {
@@ -606,6 +608,21 @@ bool Viewer::debugImageBlit(VkExtent2D image, VkRect2D& target, VkRect2D& source
     return true;
 }
 
+bool Viewer::wantsVisibility() const
+{
+    return inspecting_ || visibilityPinned_ || comparison_.on() || !session_->shownImage().empty();
+}
+
+void Viewer::drawWithVisibility()
+{
+    visibilityPinned_ = true;
+    struct Unpin {
+        bool& pinned;
+        ~Unpin() { pinned = false; }
+    } unpin{visibilityPinned_};
+    session_->renderIfChanged(false);
+}
+
 void Viewer::startComparison(const std::string& technique)
 {
     if (technique != config::kNoShadowTechnique) session_->plugins().load(technique);  // throws PluginError naming it
@@ -614,7 +631,8 @@ void Viewer::startComparison(const std::string& technique)
 
 void Viewer::updateComparison()
 {
-    if (session_->framesRendered() == 0) return;
+    // The first frame after B starts may have kept no image of V: the next one does.
+    if (session_->framesRendered() == 0 || !session_->visibilityKept()) return;
     const std::string notice = comparison_.update(session_->shownView(), session_->time(), std::chrono::steady_clock::now(), [this] {
         const frame::FrameRenderer& r = session_->renderer();
         std::vector<std::vector<float>> visibility;
@@ -748,6 +766,7 @@ void Viewer::writeScreenshot(const fs::path& file, bool window)
         ImGui_ImplGlfw_NewFrame();
         ImGui::NewFrame();
         if (showUi_) drawPanels();
+        else inspecting_ = false;  // no pixel inspector without the panels
         ImGui::Render();
         std::vector<uint8_t> pixels;
         presenter_->present(viewBlits(), ImGui::GetDrawData(), true, kBackground, &pixels);

@@ -185,6 +185,15 @@ private:
     std::optional<frame::FrameRenderer::Pixel> inspected_;  // the pixel inspector's last read
     std::pair<uint32_t, uint32_t> inspectedAt_{};
     const frame::FrameRenderer* inspectedRenderer_ = nullptr;
+    // What reads the lights' visibility images (Session::setVisibilityWanted): the pixel
+    // inspector while the cursor is over the view, a comparison, a shown image, and a
+    // command that reads them (drawWithVisibility). With none, shading evaluates V and no
+    // image of it is written.
+    bool inspecting_ = false;
+    bool visibilityPinned_ = false;
+    bool wantsVisibility() const;
+    // Draws the frame again if it kept no visibility images (a command about to read them).
+    void drawWithVisibility();
 
     CameraMode cameraMode_ = CameraMode::Orbit;
     scene::Camera homeCamera_;  // as the file gave it: R goes back to it

@@ -117,6 +117,12 @@ void Viewer::printTimings()
                  "frames, panel layer {}), {:.2f} % of the frame",
                  TimingHistory::mean(history_.panelsCpuMs), TimingHistory::mean(history_.panelsGpuMs), built,
                  history_.panelsCpuMs.size(), presenter_->panelLayer() ? "on" : "off", history_.panelsShare());
+    if (session_->framesRendered() == 0) return;
+    const frame::FrameRenderer& r = session_->renderer();
+    for (size_t l = 0; l < r.lightCount() && l < session_->config().lights.size(); ++l) {
+        spdlog::info("timing visibility {}: {}", session_->config().lights[l].name,
+                     r.visibilityInShading(l) ? "evaluated in shading, no image" : "an image");
+    }
 }
 
 const CommandTable<Viewer>& Viewer::commands()
@@ -175,7 +181,7 @@ const CommandTable<Viewer>& Viewer::commands()
           "prints the pixel inspector's text for frame pixel (X, Y), one `inspect` line per row (with B's V and ΔV while B "
           "is of this view)"},
          [](Viewer& v, C c) {
-             v.session_->renderIfChanged(false);
+             v.drawWithVisibility();
              const frame::FrameRenderer& r = v.session_->renderer();
              const uint32_t x = uint32_t(parseInt(c, 1, 0, int(r.width()) - 1));
              const uint32_t y = uint32_t(parseInt(c, 2, 0, int(r.height()) - 1));
@@ -291,7 +297,7 @@ const CommandTable<Viewer>& Viewer::commands()
           "every light's V as 32-bit floats, as `penumbra render --visibility-exr` writes them (one channel `<light name>.V` "
           "per light, and `Y`: the first light's; the README's \"Reading the visibility EXR\")"},
          [](Viewer& v, C c) {
-             v.session_->renderIfChanged(false);
+             v.drawWithVisibility();
              frame::FrameRenderer& r = v.session_->renderer();
              std::vector<std::vector<float>> visibility;
              for (size_t l = 0; l < r.lightCount(); ++l) visibility.push_back(r.readVisibility(l));
@@ -305,7 +311,8 @@ const CommandTable<Viewer>& Viewer::commands()
          }},
         {{"timings", {},
           "logs the rolling medians of every pass, the frame, the viewer's own cost, the shown frame's wall clock and the "
-          "panels' cost (means, how many of the last frames built them, share of the frame)"},
+          "panels' cost (means, how many of the last frames built them, share of the frame), and for each light whether "
+          "the last frame wrote its visibility image or shading evaluated it (only while nothing reads the images)"},
          [](Viewer& v, C) { v.printTimings(); }},
         {{"compare", {"TECHNIQUE|off"}, "B draws every light with TECHNIQUE (`reference`: 16 rays a pixel), or stops"},
          [](Viewer& v, C c) {

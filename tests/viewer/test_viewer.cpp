@@ -737,6 +737,36 @@ TEST_F(ViewerTest, ASmallScreenAFollowedOrFreeCameraTheInspectorAgainstBAndAnExp
     EXPECT_TRUE(config.contains("shadow_focus"));
 }
 
+// Nothing reads the light's visibility image while the view is only looked at: shading
+// evaluates hard's visibility function and no image is written. A command that reads V
+// (inspect) draws the frame again with the image, the same picture; the next frame drawn
+// for a change writes none again. (The panels are off: a cursor over the view would be
+// the pixel inspector reading V.)
+TEST_F(ViewerTest, TheVisibilityImageIsWrittenOnlyWhileSomethingReadsIt)
+{
+    const fs::path before = dir / "before.png", inspected = dir / "inspected.png";
+    const RunResult v = viewer(config("default.json"),
+                               fmt::format("ui off; size 160 90; frames 2; timings; screenshot {}; inspect 80 60; timings; "
+                                           "screenshot {}; orbit 5 0; frames 2; timings; quit",
+                                           before.string(), inspected.string()));
+    ASSERT_EQ(v.exitCode, 0) << v.err;
+    std::vector<std::string> states;
+    std::string inspect;
+    std::istringstream lines(v.out + v.err);
+    for (std::string line; std::getline(lines, line);) {
+        if (const size_t at = line.find("timing visibility "); at != std::string::npos) states.push_back(line.substr(at));
+        if (line.rfind("inspect ", 0) == 0 && line.find(" V ") != std::string::npos) inspect = line;
+    }
+    ASSERT_EQ(states.size(), 3u) << v.out << v.err;
+    EXPECT_NE(states[0].find("evaluated in shading"), std::string::npos) << states[0];
+    EXPECT_NE(states[1].find("an image"), std::string::npos) << states[1];
+    EXPECT_NE(states[2].find("evaluated in shading"), std::string::npos) << states[2];
+    EXPECT_FALSE(inspect.empty()) << "inspect printed the light's V: " << v.out;
+    const Png a = readPng(before), b = readPng(inspected);
+    ASSERT_EQ(a.rgba.size(), b.rgba.size());
+    EXPECT_TRUE(a.rgba == b.rgba) << "the frame drawn with the image is the frame drawn without it";
+}
+
 // A slow frame of A (the reference, traced on the CPU) draws the window meanwhile with its
 // progress, and a cancel leaves the last complete image and the config it drew.
 TEST_F(ViewerTest, ASlowFrameOfAShowsProgressAndACancelKeepsTheLastImage)
