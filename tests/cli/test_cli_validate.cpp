@@ -140,10 +140,15 @@ TEST_F(Cli, TheTradeoffBenchmarkValidatesWithEveryPlugin)
     // takes its parameters; a plugin that failed to load would be a warning.
     const CliResult r = run(fmt::format("validate {}", config("bench/tradeoff.json")));
     ASSERT_EQ(r.exitCode, 0) << r.err;
-    EXPECT_TRUE(r.out.find("sweep: 28 variants") != std::string::npos) << r.out;
-    EXPECT_TRUE(r.out.find("/scene+/camera=pergola, /lights/0/angular_diameter_deg=6° light, /lights/0/shadow=esm") !=
-                std::string::npos)
-        << r.out;
+    EXPECT_TRUE(r.out.find("sweep: 72 variants") != std::string::npos) << r.out;
+    for (const char* variant : {"/scene+/camera+/lights/0/direction=pergola, /lights/0/angular_diameter_deg=6° light, "
+                                "/lights/0/shadow=esm",
+                                "/scene+/camera+/lights/0/direction=box-grid, grazing sun, "
+                                "/lights/0/angular_diameter_deg=1° light, /lights/0/shadow=backprojection",
+                                "/scene+/camera+/lights/0/direction=box's foot, /lights/0/angular_diameter_deg=6° light, "
+                                "/lights/0/shadow=vssm"}) {
+        EXPECT_TRUE(r.out.find(variant) != std::string::npos) << variant << "\n" << r.out;
+    }
     EXPECT_EQ(r.out.find("warning:"), std::string::npos) << r.out;
     EXPECT_TRUE(r.out.find("config ok") != std::string::npos) << r.out;
 }

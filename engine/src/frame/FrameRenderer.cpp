@@ -130,9 +130,12 @@ const gpu::Pipeline& FrameRenderer::shadingPipeline(uint32_t shaded)
 // The rectangles shading covers this frame, each with the lights that can reach it
 // (lightScreenRect): the screen cut along every light's rectangle, cells of one row with
 // the same lights joined.
-std::vector<FrameRenderer::ShadingRegion> FrameRenderer::computeShadingRegions() const
+// Each light's rectangle is also where its technique's per-pixel passes run (LightPassIo::
+// screenRegion).
+void FrameRenderer::decideRegions()
 {
-    std::vector<ScreenRect> rects(lights_.size());
+    std::vector<ScreenRect>& rects = lightRects_;
+    rects.assign(lights_.size(), ScreenRect{});
     std::vector<int32_t> xs = {0, int32_t(width_)}, ys = {0, int32_t(height_)};
     for (size_t i = 0; i < lights_.size(); ++i) {
         if (lights_[i].decision.fate == LightFate::Culled) continue;  // its row's radiance is 0
@@ -162,7 +165,7 @@ std::vector<FrameRenderer::ShadingRegion> FrameRenderer::computeShadingRegions()
             }
         }
     }
-    return regions;
+    shadingRegions_ = std::move(regions);
 }
 
 void FrameRenderer::setCamera(const scene::Camera& camera)
@@ -375,6 +378,14 @@ bool FrameRenderer::registerTechnique(size_t light)
     io.cameraState = render::kCameraState;
     io.bindImage = [this](std::string_view name, const gpu::Image& image) { executor_.bindImage(name, image); };
     io.bindBuffer = [this](std::string_view name, const gpu::Buffer& buffer) { executor_.bindBuffer(name, buffer); };
+    io.screenRegion = [this, light] {
+        const ScreenRect r = light < lightRects_.size() ? lightRects_[light] : ScreenRect{};
+        return r.empty() ? VkRect2D{} : VkRect2D{{r.x0, r.y0}, {uint32_t(r.x1 - r.x0), uint32_t(r.y1 - r.y0)}};
+    };
+    visibilityFillPipeline();  // made with the graph, not as a frame records
+    io.fillOutside = [this](VkCommandBuffer cmd, const gpu::Image& image, VkRect2D inside) {
+        fillVisibility(cmd, image, inside);
+    };
     if (!visibilityReadBack_) {
         io.evaluateInShading = [this, light](const plugin::VisibilityInShading& function) {
             if (!shadingTakesFunction(*function.function)) return false;
@@ -423,10 +434,30 @@ uint32_t FrameRenderer::functionBindingBase(size_t light)
     return kFunctionBindingBase + uint32_t(light) * plugin::kMaxVisibilityFunctionBindings;
 }
 
+const gpu::Pipeline& FrameRenderer::visibilityFillPipeline()
+{
+    gpu::ComputePipelineDesc desc;
+    desc.name = "visibility_fill";
+    desc.shader = "engine/visibility_fill.comp";
+    desc.pushConstantBytes = sizeof(glm::ivec4);
+    return resources_->computePipeline(desc);
+}
+
+void FrameRenderer::fillVisibility(VkCommandBuffer cmd, const gpu::Image& image, VkRect2D inside)
+{
+    const gpu::Pipeline& fill = visibilityFillPipeline();
+    fill.bind(cmd);
+    gpu::DescriptorPush().storageImage("visibilityOut", image).push(context_, cmd, fill);
+    const glm::ivec4 rect{inside.offset.x, inside.offset.y, inside.offset.x + int32_t(inside.extent.width),
+                          inside.offset.y + int32_t(inside.extent.height)};
+    fill.pushConstants(cmd, &rect, sizeof(rect));
+    fill.dispatchOver(cmd, image);
+}
+
 void FrameRenderer::setLightRegions(bool regions)
 {
     lightRegions_ = regions;
-    shadingRegions_ = computeShadingRegions();
+    decideRegions();
 }
 
 void FrameRenderer::setVisibilityReadBack(bool readBack)
@@ -512,7 +543,7 @@ void FrameRenderer::decideLights()
     }
     // Where shading adds each light follows from the same camera, lights and receivers:
     // decided with them, not every frame.
-    shadingRegions_ = computeShadingRegions();
+    decideRegions();
 }
 
 // The versions of the states that passes depend on (FrameChanges.h), for the executor to

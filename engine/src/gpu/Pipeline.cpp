@@ -9,6 +9,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include <utility>
 
 namespace penumbra::gpu {
@@ -91,6 +93,8 @@ Pipeline::Pipeline(Context& context, const ShaderCompiler& compiler, const Compu
         ModuleGuard guard{device_, {createModule(device_, spirv, desc.name)}};
         createLayout(desc.pushConstantBytes);
         VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+        // dispatchOverRegion starts its workgroups past the origin (vkCmdDispatchBase).
+        info.flags = VK_PIPELINE_CREATE_DISPATCH_BASE_BIT;
         info.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
         info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
         info.stage.module = guard.modules[0];
@@ -260,6 +264,20 @@ void Pipeline::dispatchOver(VkCommandBuffer cmd, uint32_t width, uint32_t height
 void Pipeline::dispatchOver(VkCommandBuffer cmd, const Image& image) const
 {
     dispatchOver(cmd, image.desc().width, image.desc().height);
+}
+
+VkRect2D Pipeline::dispatchOverRegion(VkCommandBuffer cmd, VkRect2D region) const
+{
+    if (bindPoint_ != VK_PIPELINE_BIND_POINT_COMPUTE) {
+        throw Error(fmt::format("pipeline '{}': dispatchOverRegion needs a compute pipeline", name_));
+    }
+    const uint32_t lx = interface_.localSize[0], ly = interface_.localSize[1];
+    const uint32_t x0 = uint32_t(std::max(region.offset.x, 0)) / lx, y0 = uint32_t(std::max(region.offset.y, 0)) / ly;
+    const uint32_t x1 = (uint32_t(std::max(region.offset.x, 0)) + region.extent.width + lx - 1) / lx;
+    const uint32_t y1 = (uint32_t(std::max(region.offset.y, 0)) + region.extent.height + ly - 1) / ly;
+    if (x1 <= x0 || y1 <= y0) return VkRect2D{};
+    vkCmdDispatchBase(cmd, x0, y0, 0, x1 - x0, y1 - y0, 1);
+    return VkRect2D{{int32_t(x0 * lx), int32_t(y0 * ly)}, {(x1 - x0) * lx, (y1 - y0) * ly}};
 }
 
 DescriptorPush& DescriptorPush::add(std::string_view name, VkDescriptorType type,

@@ -214,6 +214,9 @@ struct RegionCase {
     float outerConeDeg = 50.0f;
     float intensity = 0.0f;  // 0: the test config's
     bool smallerThanTheScreen = false;  // where the rectangle must leave pixels out
+    // Where the pixels it leaves out show surfaces facing away from the light (V 0 there
+    // from a pass over the whole screen).
+    bool backFacesOutside = false;
 };
 
 std::ostream& operator<<(std::ostream& os, const RegionCase& c) { return os << c.name; }
@@ -263,10 +266,66 @@ TEST_P(LightRegions, ShadingOnlyTheLightsRectangleGivesTheSameFrame)
     }
 }
 
+// Where V is read back (compare, a debug image, the EXR), the technique's visibility pass
+// runs over the light's rectangle only (LightPassIo::screenRegion, grown to whole
+// workgroups): inside it V is the V of the pass over the whole screen, outside it 1 but
+// where the workgroups overhang, and the frame is the same. The pass over the whole
+// screen gives 0 outside on surfaces facing away from the light: where the narrow spot's
+// rectangle leaves such pixels out, they show it was not computed there.
+TEST_P(LightRegions, VisibilityIsComputedOnlyOverTheLightsRectangle)
+{
+    const RegionCase& c = GetParam();
+    config::RenderConfig config = smallDefault("second", {2.0f, 9.0f, 2.0f});
+    config::LightConfig& l = config.lights[1];
+    test::setLightType(l, c.type);
+    l.light.position = c.position;
+    l.light.direction = glm::normalize(c.direction);
+    l.light.outerConeDeg = c.outerConeDeg;
+    l.light.innerConeDeg = std::min(l.light.innerConeDeg, 0.8f * c.outerConeDeg);
+    if (c.intensity > 0.0f) l.light.intensity = c.intensity;
+    test::setShadow(l, "hard", {});
+    const scene::Scene scene = config::buildScene(config);
+    frame::FrameRenderer regions(*context, scene, config, test::plugins());
+    frame::FrameRenderer everywhere(*context, scene, config, test::plugins());
+    everywhere.setLightRegions(false);
+
+    size_t leftOut = 0;  // pixels outside the rectangle where the whole-screen pass gives V != 1
+    for (int f = 0; f < 3; ++f) {
+        SCOPED_TRACE(f);
+        config.camera.target += glm::vec3(1.5f * float(f), 0.0f, -0.7f * float(f));
+        regions.update(config, scene, {});
+        everywhere.update(config, scene, {});
+        const Frame a = draw(regions);
+        const Frame b = draw(everywhere);
+        ASSERT_EQ(a.color, b.color) << "largest difference " << largestDifference(a.color, b.color);
+        std::vector<bool> inside(size_t(config.width) * config.height, false);
+        for (const auto& region : regions.shadingRegions()) {
+            if (!((region.shaded >> 1) & 1u)) continue;
+            for (int32_t y = region.rect.y0; y < region.rect.y1; ++y)
+                for (int32_t x = region.rect.x0; x < region.rect.x1; ++x) inside[size_t(y) * config.width + size_t(x)] = true;
+        }
+        const std::vector<float> va = regions.readVisibility(1), vb = everywhere.readVisibility(1);
+        ASSERT_EQ(va.size(), inside.size());
+        ASSERT_EQ(vb.size(), inside.size());
+        for (size_t i = 0; i < inside.size(); ++i) {
+            if (inside[i]) {
+                ASSERT_EQ(va[i], vb[i]) << "pixel " << i << " inside the rectangle";
+            } else {
+                // 1, or the pass's value where its last workgroups overhang the rectangle.
+                ASSERT_TRUE(va[i] == 1.0f || va[i] == vb[i]) << "pixel " << i << " outside the rectangle: " << va[i];
+                leftOut += va[i] == 1.0f && vb[i] != 1.0f;
+            }
+        }
+    }
+    if (c.backFacesOutside) {
+        EXPECT_GT(leftOut, 0u) << "no pixel shows the pass left the rest of the screen out";
+    }
+}
+
 INSTANTIATE_TEST_SUITE_P(
     SpotsPointsAndAreas, LightRegions,
     ::testing::Values(RegionCase{"narrow_spot", scene::LightType::Spot, {-3.0f, 8.0f, 1.0f}, {0.2f, -1.0f, 0.1f}, 12.0f,
-                                 0.0f, true},
+                                 0.0f, true, true},
                       RegionCase{"spot_at_the_edge", scene::LightType::Spot, {9.0f, 6.0f, 0.0f}, {0.6f, -1.0f, 0.0f}, 25.0f,
                                  0.0f, true},
                       RegionCase{"spot_over_the_camera", scene::LightType::Spot, {0.0f, 9.0f, 14.0f}, {0.0f, -0.5f, -1.0f},

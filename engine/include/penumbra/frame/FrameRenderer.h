@@ -218,7 +218,11 @@ private:
                                                     const config::LightConfig& config,
                                                     const plugin::LoadedPlugin& plugin, const nlohmann::json& params) const;
     const gpu::Pipeline& shadingPipeline(uint32_t shaded);
-    std::vector<ShadingRegion> computeShadingRegions() const;
+    // lightRects_ and shadingRegions_ from the lights' screen rectangles.
+    void decideRegions();
+    // V = 1 over a light's visibility image outside `inside` (LightPassIo::fillOutside).
+    void fillVisibility(VkCommandBuffer cmd, const gpu::Image& image, VkRect2D inside);
+    const gpu::Pipeline& visibilityFillPipeline();
     bool shadingTakesFunction(const plugin::VisibilityFunction& function) const;
     // The first binding of light `light`'s visibility function in shading (engine/shading.glsl
     // uses 0..6).
@@ -259,6 +263,7 @@ private:
     // resources_'s, for this layout of lights, by the lights they add
     std::map<uint32_t, const gpu::Pipeline*> shadingPipelines_;
     std::vector<ShadingRegion> shadingRegions_;  // decideLights's
+    std::vector<ScreenRect> lightRects_;          // each light's, the same decision's (empty: culled)
     std::vector<scene::Aabb> receiversInView_;   // the instances' boxes decideLights saw
     bool lightRegions_ = true;
     std::vector<LightSlot> lights_;

@@ -86,6 +86,11 @@ public:
     void dispatchOver(VkCommandBuffer cmd, uint32_t width, uint32_t height = 1) const;
     // The same over every texel of `image` (its full size).
     void dispatchOver(VkCommandBuffer cmd, const Image& image) const;
+    // Only the workgroups that cover `region` (vkCmdDispatchBase: gl_GlobalInvocationID
+    // counts from the image's origin, as with dispatchOver, so a shader needs no offset).
+    // Returns the invocations it ran: `region` grown to whole workgroups (empty for an
+    // empty region, when nothing runs).
+    VkRect2D dispatchOverRegion(VkCommandBuffer cmd, VkRect2D region) const;
 
 private:
     void reflect(const std::vector<uint32_t>& spirv, VkShaderStageFlagBits stage, const std::filesystem::path& shader);

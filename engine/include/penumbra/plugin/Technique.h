@@ -97,6 +97,15 @@ struct LightPassIo {
     // into shading (true), and io.visibility is then not written at all. Called by
     // addVisibilityFunction (plugin/VisibilityFunction.h), not by techniques.
     std::function<bool(const VisibilityInShading& function)> evaluateInShading;
+    // The pixels the light can light this frame (frame/LightInfluence.h lightScreenRect):
+    // shading reads V_l nowhere else. Asked as a pass records, so it follows the camera and
+    // the light without the graph being declared again; unset means the whole screen.
+    // addVisibilityStepPass runs the technique's per-pixel passes only over it.
+    std::function<VkRect2D()> screenRegion;
+    // Writes V = 1 over `image` (a VISIBILITY_FORMAT storage image) outside `inside`, in a
+    // compute pass's command buffer: the rest of V_l where the visibility pass ran over
+    // screenRegion only.
+    std::function<void(VkCommandBuffer cmd, const gpu::Image& image, VkRect2D inside)> fillOutside;
 };
 
 // One figure of a technique's last frame (memory it used, work it did, what it had to
