@@ -80,7 +80,8 @@ Settings readSettings(const plugin::ParamValues& params)
 // visibility.glsl's PcssLight (std140): what follows the light.
 struct PcssLight {
     float lightSize = 0.0f;  // render::softShadowLightSize()
-    float pad[3] = {};
+    float ownShape = 1.0f;   // 1: the light's own shape (penumbra_estimate.glsl shadowLightExtent); 0: light_size's square
+    float pad[2] = {};
 };
 static_assert(sizeof(PcssLight) == 16);
 
@@ -147,7 +148,9 @@ void PcssShadow::update(const scene::Light& light, const scene::Aabb& sceneBound
 void PcssShadow::setLightSize(float lightSize)
 {
     lightSize_ = lightSize;
-    static_cast<PcssLight*>(lightBuffer_.mapped())->lightSize = lightSize;
+    auto* light = static_cast<PcssLight*>(lightBuffer_.mapped());
+    light->lightSize = lightSize;
+    light->ownShape = settings_.lightSizeOverride < 0.0f ? 1.0f : 0.0f;
     fitFootprint();
 }
 

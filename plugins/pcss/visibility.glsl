@@ -33,8 +33,12 @@ layout(binding = VISIBILITY_BINDING(1)) uniform sampler2D shadowDepth;  // the s
 // What follows the light (pcss.cpp PcssLight): lights at a position: w_light in world
 // units; directional lights: the penumbra width per unit of receiver-blocker distance,
 // 2 tan(angular diameter / 2).
+// ownShape: 1 where the size is the light's own (a rect or disk light's shape then shapes
+// the kernels: common/penumbra_estimate.glsl shadowLightExtent), 0 for the light_size
+// parameter's square.
 layout(std140, binding = VISIBILITY_BINDING(2)) uniform PcssLight {
     float lightSize;
+    float ownShape;
 } pcssLight;
 
 #define SHADOW_MAP_BINDING VISIBILITY_BINDING(3)
@@ -44,13 +48,13 @@ layout(std140, binding = VISIBILITY_BINDING(2)) uniform PcssLight {
 
 // Step 1: the mean distance of the blockers among `samples` search taps; false when
 // there is none (the receiver sees the whole light). `range`: the face's depthRange.
-bool averageBlockerDistance(ShadowReceiver r, vec4 range, mat2 rotation, float radiusTexels, uint samples,
+bool averageBlockerDistance(ShadowReceiver r, vec4 range, mat2 rotation, vec2 radiusTexels, uint samples,
                             out float dBlocker)
 {
     float sum = 0.0;
     uint count = 0u;
     for (uint i = 0u; i < samples; ++i) {
-        vec2 uv = shadowTapUv(r, rotation * kPoissonDisk[i] * radiusTexels);
+        vec2 uv = shadowTapUv(r, (rotation * kPoissonDisk[i]) * radiusTexels);
         float depth = textureLod(shadowDepth, shadowAtlasUv(r.face, uv), 0.0).r;
         // The exact negation of the compare sampler's "lit": reference >= depth.
         bool blocker = depth > shadowReferenceDepth(r, uv);
@@ -64,10 +68,11 @@ bool averageBlockerDistance(ShadowReceiver r, vec4 range, mat2 rotation, float r
 
 // Branch-free outside its loops, and the light's size and the face are loaded before
 // them (common/shadow_map.glsl: uniform loads): every case is computed and selected.
-float pcssVisibility(ShadowReceiver r, ivec2 pixel)
+float pcssVisibility(ShadowReceiver r, ivec2 pixel, vec3 position)
 {
     ShadowFace face = shadowMapData.faces[r.face];
     float lightSize = pcssLight.lightSize;
+    vec2 lightExtent = shadowLightExtent(face, position, lightSize, pcssLight.ownShape > 0.5);
     float maxSearchTexels = MAX_SEARCH_TEXELS;
     float maxFilterTexels = MAX_FILTER_TEXELS;
     uint blockerSamples = clamp(uint(BLOCKER_SAMPLES), 1u, uint(kPoissonDisk.length()));
@@ -76,12 +81,12 @@ float pcssVisibility(ShadowReceiver r, ivec2 pixel)
     float dReceiver = shadowDistanceInRange(face.depthRange, r.depth);
     mat2 rotation = poissonRotation(pixel);
     float dBlocker;
-    float search = shadowSearchRadiusTexels(face, lightSize, dReceiver, maxSearchTexels);
+    vec2 search = shadowSearchRadiusTexels(face, lightExtent, dReceiver, maxSearchTexels);
     bool blocked = averageBlockerDistance(r, face.depthRange, rotation, search, blockerSamples, dBlocker);
 
-    float radius = shadowFilterRadiusTexels(face, lightSize, dReceiver, dBlocker, maxFilterTexels);
+    vec2 radius = shadowFilterRadiusTexels(face, lightExtent, dReceiver, dBlocker, maxFilterTexels);
     float lit = 0.0;
-    for (uint i = 0u; i < filterSamples; ++i) lit += shadowCompareTap(shadowCompare, r, rotation * kPoissonDisk[i] * radius);
+    for (uint i = 0u; i < filterSamples; ++i) lit += shadowCompareTap(shadowCompare, r, (rotation * kPoissonDisk[i]) * radius);
     float soft = blocked ? lit / float(filterSamples) : 1.0;  // no blocker: the whole light
     // A light of size 0 (or a degenerate map) casts a hard shadow: exactly hard's one
     // nearest compare.
@@ -95,6 +100,6 @@ float techniqueVisibility(ivec2 pixel, vec3 position, vec3 normal)
 {
     ShadowReceiver r;
     bool inMap = makeShadowReceiver(pixel, position, 0.0, r);
-    float pcss = pcssVisibility(r, pixel);
+    float pcss = pcssVisibility(r, pixel, position);
     return shadowVisibilityAboveHorizon(inMap ? pcss : 1.0, position, normal);
 }

@@ -105,6 +105,7 @@ layout(push_constant) uniform Push {
     int filterSubdivisions;   // n (uniform)
     int treeHeight;           // H (adaptive)
     float subkernelScale;     // 1 / the most sub-kernels a pixel can visit (DEBUG_IMAGES)
+    float ownShape;           // 1: the light's own shape (penumbra_estimate.glsl shadowLightExtent); 0: a square
 } pc;
 
 // Per-pixel classification (DEBUG_IMAGES: classificationOut shows these values).
@@ -398,10 +399,10 @@ float bilinearCompare(vec2 offsetTexels)
 
 // 3 x 3 bilinear PCF over the penumbra kernel (half-width `radius` texels), the grid
 // rotated per pixel (jittered, Bavoil 2008).
-float contactPcf(float radius, ivec2 pixel)
+float contactPcf(vec2 radius, ivec2 pixel)
 {
     mat2 rotation = poissonRotation(pixel);
-    float spacing = 2.0 * radius / 3.0;
+    vec2 spacing = 2.0 * radius / 3.0;
     float lit = 0.0;
     for (int j = -1; j <= 1; ++j)
         for (int i = -1; i <= 1; ++i) lit += bilinearCompare(rotation * (vec2(i, j) * spacing));
@@ -416,7 +417,7 @@ struct Result {
     float classification;
 };
 
-Result vssmVisibility(ivec2 pixel)
+Result vssmVisibility(ivec2 pixel, vec3 position)
 {
     Result res = Result(1.0, 0.0, kClassLit);
     ShadowFace face = shadowMapData.faces[gReceiver.face];
@@ -439,7 +440,8 @@ Result vssmVisibility(ivec2 pixel)
     float tReceiver = referenceT(centre);
 
     // 1-2. The search kernel and the HSM's early-out: nodeDepths over the whole kernel.
-    float search = max(shadowSearchRadiusTexels(face, pc.lightSize, dReceiver, pc.maxSearchTexels), 0.5);
+    vec2 lightExtent = shadowLightExtent(face, position, pc.lightSize, pc.ownShape > 0.5);
+    vec2 search = max(shadowSearchRadiusTexels(face, lightExtent, dReceiver, pc.maxSearchTexels), vec2(0.5));
     vec2 lo = centre - search, hi = centre + search;
     vec2 cutLo = clamp(lo, vec2(0.0), vec2(gFaceTexels)), cutHi = clamp(hi, vec2(0.0), vec2(gFaceTexels));
     NodeDepths kernel = nodeDepths(lo, hi);
@@ -464,8 +466,8 @@ Result vssmVisibility(ivec2 pixel)
 
     // 4. The penumbra kernel.
     float dBlocker = face.depthRange.x + zOcc * depthRange;
-    float radius = max(shadowFilterRadiusTexels(face, pc.lightSize, dReceiver, dBlocker, pc.maxFilterTexels), 0.5);
-    res.kernelTexels = radius;
+    vec2 radius = max(shadowFilterRadiusTexels(face, lightExtent, dReceiver, dBlocker, pc.maxFilterTexels), vec2(0.5));
+    res.kernelTexels = max(radius.x, radius.y);
     if (tReceiver - zOcc < contactT) {
         res.v = contactPcf(radius, pixel);
         res.classification = kClassContact;
@@ -502,7 +504,7 @@ void main()
     gFaceTexels = shadowFaceTexels();
     gFaceOrigin = shadowFaceCount() == 6u ? vec2(float(gReceiver.face % 3u), float(gReceiver.face / 3u)) * gFaceTexels
                                           : vec2(0.0);
-    Result res = vssmVisibility(pixel);
+    Result res = vssmVisibility(pixel, position.xyz);
     res = inMap ? res : Result(VISIBILITY_NO_GEOMETRY, 0.0, kClassLit);
 #ifdef DEBUG_IMAGES
     bool geometry = position.w != 0.0;

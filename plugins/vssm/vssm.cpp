@@ -155,8 +155,9 @@ struct VisibilityPush {
     int32_t filterSubdivisions = 1;
     int32_t treeHeight = 0;
     float subkernelScale = 0.0f;
+    float ownShape = 1.0f;  // 1: the light's own shape (penumbra_estimate.glsl shadowLightExtent); 0: light_size's square
 };
-static_assert(sizeof(VisibilityPush) == 48);
+static_assert(sizeof(VisibilityPush) == 52);
 
 struct SatPush {
     glm::ivec2 size{0};
@@ -416,7 +417,8 @@ void VssmShadow::bindVisibility(const graph::PassContext& pass, gpu::DescriptorP
                               settings_.blockerSubdivisions,
                               settings_.filterSubdivisions,
                               settings_.treeHeight,
-                              1.0f / float(std::max(most, 1))};
+                              1.0f / float(std::max(most, 1)),
+                              settings_.lightSizeOverride < 0.0f ? 1.0f : 0.0f};
     pipeline.pushConstants(pass.cmd(), &push, sizeof(push));
 }
 

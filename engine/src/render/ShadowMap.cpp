@@ -22,6 +22,24 @@ uint32_t shadowFaceCount(scene::LightType type)
 
 namespace {
 
+// The most a rect or disk light's own extent along a face axis, as a receiver sees it
+// (common/penumbra_estimate.glsl shadowLightExtent), can be over softShadowLightSize:
+// (w + h) / sqrt(w h) for the rect's sides, times sqrt(1 + m^2) for a receiver at m =
+// tan of its angle off the face's axis, at most 1.5 on a cube face with its guard
+// (kernelGuardTexels: a quarter of the face each side). Capped: a rect a million times
+// longer than wide reaches no further than the clamps in texels anyway.
+float lightShapeBound(const ShadowMapData& data)
+{
+    constexpr float kMostObliqueness = 1.8028f;  // sqrt(1 + 1.5^2)
+    constexpr float kMostRatio = 1000.0f;
+    if (data.lightType == uint32_t(scene::LightType::Disk)) return kMostObliqueness;
+    if (data.lightType != uint32_t(scene::LightType::Rect)) return 1.0f;
+    const float w = 2.0f * data.lightAxis.w, h = 2.0f * data.lightTangent.w;
+    const float area = std::sqrt(std::max(w * h, 0.0f));
+    if (!(area > 0.0f)) return 1.0f;
+    return std::min((w + h) / area, kMostRatio) * kMostObliqueness;
+}
+
 // World size of one texel per unit of clip w (ShadowFaceData::texel). A texel spans
 // 2 / R of NDC and NDC x = P00 · x_view / w (orthographic: w = 1), so at clip w it spans
 // 2 w / (P00 · R) of the world; the larger of the x and y sizes (an orthographic box
@@ -415,6 +433,7 @@ float softShadowLightSize(const scene::Light& light, float overrideSize)
 float softShadowKernelReach(const ShadowMapData& data, float lightSize)
 {
     float reach = 0.0f;
+    const float shape = lightShapeBound(data);
     const uint32_t faces = std::min(data.faceCount, kMaxShadowFaces);
     for (uint32_t f = 0; f < faces; ++f) {
         const ShadowFaceData& face = data.faces[f];
@@ -423,7 +442,11 @@ float softShadowKernelReach(const ShadowMapData& data, float lightSize)
         if (!(texel > 0.0f)) continue;  // a degenerate face: the techniques take one compare there
         // Written as the shaders divide, so that an inf or a NaN lands where theirs does:
         // a NaN (0 * inf, 0 / 0) counts 0, an inf stays and the limit clamps it.
-        const float extent = orthographic ? std::max(far - near, 0.0f) * lightSize : lightSize / near;
+        // The light's longest extent as any receiver sees it (lightShapeBound), at least
+        // the square's: a light_size override is a square, and a reach too long only keeps
+        // more casters.
+        const float size = lightSize * shape;
+        const float extent = orthographic ? std::max(far - near, 0.0f) * size : size / near;
         const float texels = 0.5f * extent / texel;
         if (texels > reach) reach = texels;
     }
