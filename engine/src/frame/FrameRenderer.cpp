@@ -379,7 +379,9 @@ bool FrameRenderer::registerTechnique(size_t light)
     io.bindImage = [this](std::string_view name, const gpu::Image& image) { executor_.bindImage(name, image); };
     io.bindBuffer = [this](std::string_view name, const gpu::Buffer& buffer) { executor_.bindBuffer(name, buffer); };
     io.screenRegion = [this, light] {
-        const ScreenRect r = light < lightRects_.size() ? lightRects_[light] : ScreenRect{};
+        // Not decided yet (no frame's lights): the whole screen, as without regions.
+        if (light >= lightRects_.size()) return VkRect2D{{0, 0}, {width_, height_}};
+        const ScreenRect r = lightRects_[light];
         return r.empty() ? VkRect2D{} : VkRect2D{{r.x0, r.y0}, {uint32_t(r.x1 - r.x0), uint32_t(r.y1 - r.y0)}};
     };
     visibilityFillPipeline();  // made with the graph, not as a frame records
