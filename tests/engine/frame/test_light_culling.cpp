@@ -223,11 +223,10 @@ std::ostream& operator<<(std::ostream& os, const RegionCase& c) { return os << c
 
 class LightRegions : public test::GpuTest, public ::testing::WithParamInterface<RegionCase> {};
 
-} // namespace
-
-TEST_P(LightRegions, ShadingOnlyTheLightsRectangleGivesTheSameFrame)
+// The small default scene with a second light, of the case's type and placement, under
+// hard shadows.
+config::RenderConfig regionConfig(const RegionCase& c)
 {
-    const RegionCase& c = GetParam();
     config::RenderConfig config = smallDefault("second", {2.0f, 9.0f, 2.0f});
     config::LightConfig& l = config.lights[1];
     test::setLightType(l, c.type);
@@ -237,6 +236,15 @@ TEST_P(LightRegions, ShadingOnlyTheLightsRectangleGivesTheSameFrame)
     l.light.innerConeDeg = std::min(l.light.innerConeDeg, 0.8f * c.outerConeDeg);
     if (c.intensity > 0.0f) l.light.intensity = c.intensity;
     test::setShadow(l, "hard", {});
+    return config;
+}
+
+} // namespace
+
+TEST_P(LightRegions, ShadingOnlyTheLightsRectangleGivesTheSameFrame)
+{
+    const RegionCase& c = GetParam();
+    config::RenderConfig config = regionConfig(c);
     const scene::Scene scene = config::buildScene(config);
     frame::FrameRenderer regions(*context, scene, config, test::plugins());
     frame::FrameRenderer everywhere(*context, scene, config, test::plugins());
@@ -275,15 +283,7 @@ TEST_P(LightRegions, ShadingOnlyTheLightsRectangleGivesTheSameFrame)
 TEST_P(LightRegions, VisibilityIsComputedOnlyOverTheLightsRectangle)
 {
     const RegionCase& c = GetParam();
-    config::RenderConfig config = smallDefault("second", {2.0f, 9.0f, 2.0f});
-    config::LightConfig& l = config.lights[1];
-    test::setLightType(l, c.type);
-    l.light.position = c.position;
-    l.light.direction = glm::normalize(c.direction);
-    l.light.outerConeDeg = c.outerConeDeg;
-    l.light.innerConeDeg = std::min(l.light.innerConeDeg, 0.8f * c.outerConeDeg);
-    if (c.intensity > 0.0f) l.light.intensity = c.intensity;
-    test::setShadow(l, "hard", {});
+    config::RenderConfig config = regionConfig(c);
     const scene::Scene scene = config::buildScene(config);
     frame::FrameRenderer regions(*context, scene, config, test::plugins());
     frame::FrameRenderer everywhere(*context, scene, config, test::plugins());
